@@ -1,0 +1,56 @@
+"""Errors raised by urdf2links.
+
+Every error that comes from a robot description is a :class:`URDFError`
+(a ``ValueError``), so ``except ValueError`` still catches them. Messages name
+the file, the element (link, joint, attribute) and the value, and say what would
+fix the input.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "URDFError",
+    "URDFSyntaxError",
+    "URDFStructureError",
+    "URDFValueError",
+    "InertiaError",
+    "MeshError",
+    "DynamicsError",
+]
+
+
+class URDFError(ValueError):
+    """Base class of every error raised while importing a robot description."""
+
+
+class URDFSyntaxError(URDFError):
+    """The file is not well-formed XML, or not a URDF ``<robot>`` document."""
+
+
+class URDFStructureError(URDFError):
+    """The links and joints do not form a tree (unknown names, cycles, two roots, duplicates)."""
+
+
+class URDFValueError(URDFError):
+    """An attribute holds a value that cannot be used (NaN, negative mass, unknown joint type, ...)."""
+
+
+class InertiaError(URDFError):
+    """An inertia is not physically consistent and the policy is ``inertia="strict"``."""
+
+
+class MeshError(URDFError):
+    """A mesh named by the description cannot be found or read."""
+
+
+class DynamicsError(ArithmeticError):
+    """The equations of motion cannot be solved at a state (mass matrix not positive definite).
+
+    Attributes ``q`` (the configuration) and ``coordinates`` (names of the coordinates
+    involved) say where.
+    """
+
+    def __init__(self, message: str, *, q=None, coordinates: tuple[str, ...] = ()):
+        super().__init__(message)
+        self.q = q
+        self.coordinates = tuple(coordinates)
