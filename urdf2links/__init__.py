@@ -1,0 +1,38 @@
+"""urdf2links: URDF robots as trees of links of the trace method, simulated and checked against MuJoCo.
+
+This package never imports MuJoCo; the comparison lives in the ``compare`` package.
+"""
+
+from .errors import (
+    DynamicsError,
+    InertiaError,
+    MeshError,
+    URDFError,
+    URDFStructureError,
+    URDFSyntaxError,
+    URDFValueError,
+)
+from .loads import Wrench
+from .model import Model
+from .transforms import BaseState, base_transforms
+from .tree import LinkSpec, LinkTree, build_tree, pseudo_inertia_from
+
+__all__ = [
+    "Model",
+    "LinkSpec",
+    "LinkTree",
+    "build_tree",
+    "pseudo_inertia_from",
+    "Wrench",
+    "BaseState",
+    "base_transforms",
+    "URDFError",
+    "URDFSyntaxError",
+    "URDFStructureError",
+    "URDFValueError",
+    "InertiaError",
+    "MeshError",
+    "DynamicsError",
+]
+
+__version__ = "0.1.0"

@@ -1,0 +1,33 @@
+"""Applied forces and moments on links, the inputs of the generalized forces Q, (5.23)-(5.28)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["Wrench"]
+
+FRAMES = ("link", "world")
+
+
+@dataclass(frozen=True)
+class Wrench:
+    """A force ``force`` (3,) applied at ``point`` (3,) (in the link's own frame, the vector r~ of
+    (5.26)) and a moment ``moment`` (3,) acting on link ``link``. ``frame`` says in which axes
+    ``force`` and ``moment`` are given: ``"link"`` (F~, M~ of (5.23)-(5.24)) or ``"world"`` {0}."""
+
+    link: str
+    force: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    moment: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    point: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    frame: str = "link"
+
+    def __post_init__(self):
+        for name in ("force", "moment", "point"):
+            v = np.asarray(getattr(self, name), dtype=float)
+            if v.shape != (3,) or not np.all(np.isfinite(v)):
+                raise ValueError(f"Wrench on link {self.link!r}: {name} must be 3 finite numbers, got {getattr(self, name)!r}")
+            object.__setattr__(self, name, v)
+        if self.frame not in FRAMES:
+            raise ValueError(f"Wrench on link {self.link!r}: frame must be one of {FRAMES}, got {self.frame!r}")

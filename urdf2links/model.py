@@ -1,0 +1,250 @@
+"""The model users hold: a tree of links plus the solver, with the public API of the project.
+
+``Model`` composes :mod:`urdf2links.recursive` (default) and :mod:`urdf2links.literal` (the oracle,
+``method="literal"``). Every dynamics call takes optional keyword arguments ``t`` (time) and
+``base`` (None for a fixed base, a :class:`~urdf2links.transforms.BaseState`, or a callable
+``t -> BaseState``, the prescribed motion of {A}); a fixed base computes no base terms at all.
+
+Coupled coordinates (mimic joints loaded with ``mimic="coupled"``) are a constant linear map
+``q_tree = C q + d`` from the model's ``n`` coordinates to the tree's; then
+``A = C^T A_tree C``, ``e = C^T e_tree``, ``G = C^T G_tree``, ``Q = C^T Q_tree`` (C constant, so no
+extra velocity terms).
+"""
+
+from __future__ import annotations
+
+from typing import Iterable, Sequence
+
+import numpy as np
+import scipy.linalg
+
+from .errors import DynamicsError
+from .literal import literal_terms
+from .loads import Wrench
+from .recursive import RecursivePlan
+from .transforms import resolve_base
+from .tree import LinkTree
+
+__all__ = ["Model"]
+
+METHODS = ("recursive", "literal")
+DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
+
+
+class Model:
+    """A robot as a tree of links, with the trace-method dynamics.
+
+    Parameters
+    ----------
+    tree : LinkTree
+    gravity : (3,) gravitational acceleration in {0} used by :meth:`gravity` and
+        :meth:`potential_energy`; default ``(0, 0, -9.81)`` (DESIGN.md: Z up, g = 9.81).
+    coupling : optional ``(C (n_tree, n), d (n_tree,), names (n,))`` for coupled coordinates.
+    name, source : the robot's name and where it came from.
+    audit : findings of the importer's inertia audit (a list of records).
+    """
+
+    def __init__(self, tree: LinkTree, *, gravity=DEFAULT_GRAVITY, coupling=None, name: str = "",
+                 source: str | None = None, audit: Sequence = (), info: dict | None = None):
+        self.tree = tree
+        g = np.asarray(gravity, float)
+        if g.shape != (3,) or not np.all(np.isfinite(g)):
+            raise ValueError(f"gravity must be 3 finite numbers, got {gravity!r}")
+        g.setflags(write=False)
+        self.gravity_vector = g
+        self.name = name
+        self.source = source
+        self.audit = list(audit)
+        self.info = dict(info or {})
+        self._plan = RecursivePlan(tree)
+        if coupling is None:
+            self._C = None
+            self._d = None
+            self._names = tree.coordinate_names
+        else:
+            C, d, names = coupling
+            C = np.asarray(C, float)
+            d = np.asarray(d, float)
+            if C.shape != (tree.n, len(names)) or d.shape != (tree.n,):
+                raise ValueError(f"coupling shapes {C.shape}, {d.shape} do not fit a tree of {tree.n} coordinates")
+            self._C, self._d, self._names = C, d, tuple(names)
+
+    # -- identity --------------------------------------------------------------------------------
+    @property
+    def n(self) -> int:
+        """Number of generalized coordinates."""
+        return len(self._names)
+
+    @property
+    def coordinate_names(self) -> tuple[str, ...]:
+        return self._names
+
+    @property
+    def link_names(self) -> tuple[str, ...]:
+        return self.tree.link_names
+
+    def __repr__(self) -> str:
+        return f"<Model {self.name!r}: {self.tree.n_links} links, {self.n} coordinates>"
+
+    # -- plumbing --------------------------------------------------------------------------------
+    def _vec(self, x, what: str) -> np.ndarray:
+        a = np.asarray(x, dtype=float)
+        if a.shape != (self.n,):
+            raise ValueError(f"{what} must have shape ({self.n},) for coordinates {self._names}; got shape {a.shape}")
+        return a
+
+    def _tree_state(self, q, qd=None):
+        q = self._vec(q, "q")
+        qd = None if qd is None else self._vec(qd, "qd")
+        if self._C is None:
+            return q, qd
+        return self._C @ q + self._d, (None if qd is None else self._C @ qd)
+
+    def _reduce(self, x):
+        if self._C is None:
+            return x
+        return self._C.T @ x if x.ndim == 1 else self._C.T @ x @ self._C
+
+    @staticmethod
+    def _check_method(method):
+        if method not in METHODS:
+            raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+
+    def _wrenches(self, loads: Iterable[Wrench]):
+        out = []
+        for w in loads:
+            if not isinstance(w, Wrench):
+                raise TypeError(f"loads must be Wrench objects, got {type(w).__name__}")
+            out.append((self.tree.link_index(w.link), w.force, w.moment, w.point, w.frame))
+        return out
+
+    def _literal(self, q, qd, t, base, wrenches=()):
+        qt, qdt = self._tree_state(q, np.zeros(self.n) if qd is None else qd)
+        return literal_terms(self.tree, qt, qdt, base_T=resolve_base(base, t),
+                             gravity_vector=self.gravity_vector, wrenches=wrenches)
+
+    # -- the public API --------------------------------------------------------------------------
+    def mass_matrix(self, q, *, t: float = 0.0, base=None, method: str = "recursive") -> np.ndarray:
+        """A (n, n), (5.19): ``a_il = sum_p tr(T_i H T_l^T)``."""
+        self._check_method(method)
+        if method == "literal":
+            return self._reduce(self._literal(q, None, t, base)["A"])
+        qt, _ = self._tree_state(q)
+        kin = self._plan.kinematics(qt, None, resolve_base(base, t))
+        return self._reduce(self._plan.mass_matrix(kin))
+
+    def bias(self, q, qd, *, t: float = 0.0, base=None, method: str = "recursive") -> np.ndarray:
+        """e (n,), (5.18): velocity terms and base-motion terms (5.17.1); no gravity."""
+        self._check_method(method)
+        if method == "literal":
+            return self._reduce(self._literal(q, qd, t, base)["e"])
+        qt, qdt = self._tree_state(q, qd)
+        kin = self._plan.kinematics(qt, qdt, resolve_base(base, t), acceleration=True)
+        return self._reduce(self._plan.bias(kin))
+
+    def gravity(self, q, *, t: float = 0.0, base=None, method: str = "recursive") -> np.ndarray:
+        """G (n,), (5.22): ``g_i = m g theta_3 T_i r_C`` summed over links, for ``self.gravity_vector``."""
+        self._check_method(method)
+        if method == "literal":
+            return self._reduce(self._literal(q, None, t, base)["G"])
+        qt, _ = self._tree_state(q)
+        kin = self._plan.kinematics(qt, None, resolve_base(base, t))
+        return self._reduce(self._plan.gravity(kin, self.gravity_vector))
+
+    def generalized_forces(self, q, loads: Iterable[Wrench], *, t: float = 0.0, base=None,
+                           method: str = "recursive") -> np.ndarray:
+        """Q (n,), (5.27)-(5.28): generalized forces of applied forces and moments on links."""
+        self._check_method(method)
+        wr = self._wrenches(loads)
+        if method == "literal":
+            return self._reduce(self._literal(q, None, t, base, wr)["Q"])
+        qt, _ = self._tree_state(q)
+        kin = self._plan.kinematics(qt, None, resolve_base(base, t))
+        return self._reduce(self._plan.generalized_forces(kin, wr))
+
+    def kinetic_energy(self, q, qd, *, t: float = 0.0, base=None, method: str = "recursive") -> float:
+        """E, (5.10)/(5.35): ``0.5 sum_p tr(T' H T'^T)``, base motion included."""
+        self._check_method(method)
+        if method == "literal":
+            return float(self._literal(q, qd, t, base)["E"])
+        qt, qdt = self._tree_state(q, qd)
+        kin = self._plan.kinematics(qt, qdt, resolve_base(base, t))
+        return self._plan.kinetic_energy(kin)
+
+    def potential_energy(self, q, *, t: float = 0.0, base=None, method: str = "recursive") -> float:
+        """V of gravity, (5.21): ``sum_p m_p g z_C`` (for ``self.gravity_vector``)."""
+        self._check_method(method)
+        if method == "literal":
+            return float(self._literal(q, None, t, base)["V"])
+        qt, _ = self._tree_state(q)
+        kin = self._plan.kinematics(qt, None, resolve_base(base, t))
+        return self._plan.potential_energy(kin, self.gravity_vector)
+
+    def link_poses(self, q, *, t: float = 0.0, base=None) -> np.ndarray:
+        """(L, 4, 4): the {0}-pose ``T^(p)`` of every link (5.34)."""
+        qt, _ = self._tree_state(q)
+        return self._plan.kinematics(qt, None, resolve_base(base, t)).T
+
+    def forward_dynamics(self, q, qd, tau=None, *, loads: Iterable[Wrench] = (), t: float = 0.0,
+                         base=None, gravity: bool = True) -> np.ndarray:
+        """q'' (n,) from (5.29), ``A q'' = Q - G - e``, by Cholesky.
+
+        ``tau`` (n,) are generalized forces added to Q (joint torques and forces); ``loads`` applied
+        wrenches; ``gravity=False`` leaves G out. Raises :class:`~urdf2links.errors.DynamicsError`
+        naming the configuration and the coordinates when A is not positive definite.
+        """
+        qt, qdt = self._tree_state(q, qd)
+        base_T = resolve_base(base, t)
+        plan = self._plan
+        wr = self._wrenches(loads)
+        kin = plan.kinematics(qt, qdt, base_T, acceleration=True)
+        Hc = plan.composite_inertia(kin)
+        A = self._reduce(plan.mass_matrix(kin, Hc))
+        rhs = -plan.bias(kin)
+        if gravity:
+            rhs -= plan.gravity(kin, self.gravity_vector, Hc)
+        if wr:
+            rhs += plan.generalized_forces(kin, wr)
+        rhs = self._reduce(rhs)
+        if tau is not None:
+            rhs = rhs + self._vec(tau, "tau")
+        return self.solve_mass_matrix(A, rhs, q=q)
+
+    def solve_mass_matrix(self, A: np.ndarray, rhs: np.ndarray, *, q=None) -> np.ndarray:
+        """``A^{-1} rhs`` by Cholesky; a matrix that is not positive definite raises DynamicsError."""
+        try:
+            c, low = scipy.linalg.cho_factor(A, lower=True, check_finite=True)
+        except (np.linalg.LinAlgError, ValueError) as err:
+            raise self._not_positive_definite(A, q) from err
+        pivots = np.diag(c) ** 2
+        scale = max(float(np.max(np.abs(np.diag(A)))), np.finfo(float).tiny)
+        if np.min(pivots) <= 1e3 * np.finfo(float).eps * scale * len(pivots):
+            # A semi-definite matrix can pass the factorization on rounding; its pivots give it away.
+            raise self._not_positive_definite(A, q)
+        return scipy.linalg.cho_solve((c, low), rhs, check_finite=False)
+
+    def _not_positive_definite(self, A, q) -> DynamicsError:
+        if not np.all(np.isfinite(A)):
+            bad = sorted({self._names[i] for i, j in zip(*np.nonzero(~np.isfinite(A)))})
+            return DynamicsError(f"mass matrix A has non-finite entries at q={_fmt(q)} in coordinates {bad}",
+                                 q=q, coordinates=tuple(bad))
+        w, V = np.linalg.eigh(A)
+        vec = V[:, 0]
+        big = np.nonzero(np.abs(vec) > 0.1 * np.abs(vec).max())[0]
+        names = tuple(self._names[i] for i in big)
+        parts = ", ".join(f"{self._names[i]} ({vec[i]:+.2f})" for i in big)
+        links = sorted({self.tree.link_names[self.tree.coord_link[self.tree.coordinate_index(nm)]]
+                        for nm in names if nm in self.tree.coordinate_names})
+        return DynamicsError(
+            f"mass matrix A of model {self.name!r} is not positive definite at q={_fmt(q)}: smallest "
+            f"eigenvalue {w[0]:.3e} (largest {w[-1]:.3e}); its eigenvector moves coordinates {parts}, "
+            f"of links {links}. A moving link (or subtree) without mass or without inertia about its "
+            f"joint axis does this; load with inertia='repair' or give the link an inertia.",
+            q=q, coordinates=names,
+        )
+
+
+def _fmt(q) -> str:
+    if q is None:
+        return "?"
+    return np.array2string(np.asarray(q, float), precision=4, separator=", ", max_line_width=10_000)
