@@ -13,9 +13,12 @@ from urdf2links import LinkSpec, Model, build_tree
 from urdf2links.transforms import PARAMETERS
 
 
-def rod_H(mass, com, Ixx=0.0, Iyy=0.0, Izz=0.0):
-    """H (4, 4) of a body with diagonal inertia (about its COM, link axes) and COM ``com``."""
-    I = np.diag([Ixx, Iyy, Izz])
+def rod_H(mass, com, Ixx=0.0, Iyy=0.0, Izz=0.0, *, roll=0.0):
+    """H (4, 4) of a body with COM ``com`` and diagonal inertia (about its COM) in axes rolled by
+    ``roll`` about x relative to the link's (the URDF ``<inertial><origin rpy="roll 0 0">``)."""
+    c_, s_ = np.cos(roll), np.sin(roll)
+    R = np.array([[1, 0, 0], [0, c_, -s_], [0, s_, c_]])
+    I = R @ np.diag([Ixx, Iyy, Izz]) @ R.T
     c = np.asarray(com, float)
     S = 0.5 * np.trace(I) * np.eye(3) - I + mass * np.outer(c, c)
     H = np.zeros((4, 4))
@@ -35,16 +38,16 @@ def pendulum(**kw):
     """Single pendulum about x: COM at (0, 0, -c), inertia I about the COM's x axis."""
     p = {**PENDULUM, **kw}
     return Model(build_tree([
-        LinkSpec("rod", None, coordinates={"phi_x": "hinge"}, H=rod_H(p["m"], (0, 0, -p["c"]), Ixx=p["I"])),
+        LinkSpec("rod", None, coordinates={"phi_x": "hinge"}, H=rod_H(p["m"], (0, 0, -p["c"]), p["I"], p["I"], 0.1 * p["I"])),
     ]), name="pendulum")
 
 
 def double_pendulum(**kw):
     p = {**DOUBLE, **kw}
     return Model(build_tree([
-        LinkSpec("upper", None, coordinates={"phi_x": "shoulder"}, H=rod_H(p["m1"], (0, 0, -p["c1"]), Ixx=p["I1"])),
+        LinkSpec("upper", None, coordinates={"phi_x": "shoulder"}, H=rod_H(p["m1"], (0, 0, -p["c1"]), p["I1"], p["I1"], 0.1 * p["I1"])),
         LinkSpec("lower", "upper", params=(0, 0, -p["l1"], 0, 0, 0), coordinates={"phi_x": "elbow"},
-                 H=rod_H(p["m2"], (0, 0, -p["c2"]), Ixx=p["I2"])),
+                 H=rod_H(p["m2"], (0, 0, -p["c2"]), p["I2"], p["I2"], 0.1 * p["I2"], roll=0.3)),
     ]), name="double_pendulum")
 
 
@@ -53,7 +56,7 @@ def prismatic_revolute(**kw):
     p = {**PRISMATIC_REVOLUTE, **kw}
     return Model(build_tree([
         LinkSpec("carriage", None, coordinates={"x": "slide"}, H=rod_H(p["m1"], (0, 0, 0), 0.01, 0.01, 0.01)),
-        LinkSpec("arm", "carriage", coordinates={"phi_y": "swing"}, H=rod_H(p["m2"], (p["c"], 0, 0), Iyy=p["I"])),
+        LinkSpec("arm", "carriage", coordinates={"phi_y": "swing"}, H=rod_H(p["m2"], (p["c"], 0, 0), 0.1 * p["I"], p["I"], p["I"])),
     ]), name="prismatic_revolute")
 
 
