@@ -36,7 +36,7 @@ from .rotations import axis_alignment, homogeneous, matrix_to_xyz_angles, rpy_to
 from .transforms import PARAMETERS
 from .tree import LinkSpec, build_tree
 
-__all__ = ["load_urdf", "load_urdf_string", "AuditRecord", "INERTIA_POLICIES", "MIMIC_POLICIES"]
+__all__ = ["load_urdf", "load_urdf_string", "urdf_link_poses", "AuditRecord", "INERTIA_POLICIES", "MIMIC_POLICIES"]
 
 INERTIA_POLICIES = ("audit", "strict", "repair")
 MIMIC_POLICIES = ("independent", "coupled")
@@ -247,11 +247,12 @@ class _Importer:
             if j.mimic is None:
                 continue
             leader = joints[j.mimic.joint]
-            for jj in (j, leader):
-                if jj.type not in ("revolute", "continuous", "prismatic"):
-                    raise URDFValueError(f"{self.desc.source}: joint {j.name!r} <mimic joint={leader.name!r}>: "
-                                         f"joint {jj.name!r} is {jj.type}; mimic='coupled' needs one-coordinate joints "
-                                         f"(load with mimic='independent')")
+            odd = [jj for jj in (j, leader) if jj.type not in ("revolute", "continuous", "prismatic")]
+            if odd:
+                # Real files keep <mimic> on joints they have made fixed (Talos' reduced grippers).
+                self.notes.append(f"mimic of joint {j.name!r} on {leader.name!r} ignored: joint {odd[0].name!r} is "
+                                  f"{odd[0].type}, only one-coordinate joints can be coupled")
+                continue
             followers[j.name] = (leader.name, j.mimic.multiplier, j.mimic.offset)
         if not followers:
             return None
@@ -277,7 +278,11 @@ class _Importer:
         return C, d, tuple(names)
 
     def _joint_findings(self, tree) -> list[AuditRecord]:
-        """Moving joints that move no mass or no inertia: ``A_ii`` ~ 0 at two configurations."""
+        """Moving joints that move no mass or no inertia: ``A_ii`` ~ 0 at two configurations.
+
+        "~ 0" is ``A_ii <= 1e-10 max_k A_kk``: below that, the coordinate's acceleration carries a
+        condition number above 1e10 (ten digits lost), which no real link should cause.
+        """
         probe = Model(tree)
         rng = np.random.default_rng(0)
         diag = np.maximum(np.abs(np.diag(probe.mass_matrix(np.zeros(tree.n)))),
@@ -286,13 +291,14 @@ class _Importer:
         out = []
         mass_c = _subtree_mass(tree)
         for i, nm in enumerate(tree.coordinate_names):
-            if diag[i] > 1e-12 * scale and scale > 0:
+            if diag[i] > 1e-10 * scale and scale > 0:
                 continue
             link = tree.link_names[tree.coord_link[i]]
             if mass_c[tree.coord_link[i]] <= 0.0:
                 kind, what = "massless_moving_subtree", "moves no mass (no link after it has mass)"
             else:
-                kind, what = "zero_axis_inertia", "moves no inertia about its axis (all mass after it lies on the axis)"
+                kind, what = "zero_axis_inertia", (f"moves (almost) no inertia about its axis: A_ii = {diag[i]:.3g}, "
+                                                  f"{diag[i] / scale:.2g} of the largest")
             out.append(AuditRecord(link, kind, f"{self.desc.source}: coordinate {nm!r} of link {link!r} {what}; "
                                    f"A is singular", values={"coordinate": nm, "A_ii": float(diag[i])}))
         return out
@@ -340,6 +346,14 @@ class _Importer:
         self.H_link[name] = H + self._small_body(name) if mass > 0 else self._small_body(name)
         return _replace(rec, f"a small sphere (mass {self._small_body(name)[3, 3]:.3g} kg, radius 0.01 m) added at "
                              f"link {name!r}; {how}")
+
+
+def urdf_link_poses(model: Model, q, **kw) -> dict[str, np.ndarray]:
+    """{0}-pose (4, 4) of every URDF link of an imported model at ``q`` (keyword arguments as
+    :meth:`Model.link_poses`): the pose of its tree link times its constant placement ``X``."""
+    T = model.link_poses(q, **kw)
+    index = {name: i for i, name in enumerate(model.link_names)}
+    return {name: T[index[t]] @ np.asarray(X) for name, (t, X) in model.info["frame_of"].items()}
 
 
 def _replace(rec: AuditRecord, fix: str) -> AuditRecord:

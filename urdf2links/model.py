@@ -218,8 +218,9 @@ class Model:
             raise self._not_positive_definite(A, q) from err
         pivots = np.diag(c) ** 2
         scale = max(float(np.max(np.abs(np.diag(A)))), np.finfo(float).tiny)
-        if np.min(pivots) <= 1e3 * np.finfo(float).eps * scale * len(pivots):
-            # A semi-definite matrix can pass the factorization on rounding; its pivots give it away.
+        if np.min(pivots) <= 10.0 * np.finfo(float).eps * scale * len(pivots):
+            # A semi-definite matrix can pass the factorization on rounding: a pivot at the level of
+            # the rounding error of A's entries (n eps max|A_ii|) means a zero eigenvalue.
             raise self._not_positive_definite(A, q)
         return scipy.linalg.cho_solve((c, low), rhs, check_finite=False)
 

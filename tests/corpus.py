@@ -1,0 +1,46 @@
+"""Where the optional example-robot-data corpus is, and the robots the tests use from it."""
+
+from __future__ import annotations
+
+from importlib.metadata import PackageNotFoundError, distribution
+from pathlib import Path
+
+import pytest
+
+
+def corpus_root() -> Path | None:
+    try:
+        root = Path(distribution("example-robot-data").locate_file("cmeel.prefix/share/example-robot-data/robots"))
+    except PackageNotFoundError:
+        return None
+    return root if root.is_dir() else None
+
+
+ROOT = corpus_root()
+SKIP_REASON = "example-robot-data is not installed (pip install -e '.[test]' installs it)"
+needs_corpus = pytest.mark.skipif(ROOT is None, reason=SKIP_REASON)
+
+# Files of example-robot-data 6.0.0 that are broken as shipped (see tests/test_parse.py).
+KNOWN_BAD = {
+    "ur_description/urdf/ur3.urdf": "no <link> elements",
+    "alex_description/urdf/alex_psyonic_hands.urdf": "mimic names a joint that does not exist",
+}
+
+NAMED = {
+    "ur5": "ur_description/urdf/ur5_robot.urdf",
+    "panda": "panda_description/urdf/panda.urdf",
+    "talos": "talos_data/robots/talos_reduced.urdf",
+    "g1": "g1_description/urdf/g1_29dof_rev_1_0.urdf",
+}
+
+
+def corpus_files() -> list[str]:
+    if ROOT is None:
+        return []
+    return sorted(str(p.relative_to(ROOT)) for p in ROOT.rglob("*.urdf"))
+
+
+def path(rel: str) -> Path:
+    if ROOT is None:
+        pytest.skip(SKIP_REASON)
+    return ROOT / rel
