@@ -12,12 +12,17 @@ from .errors import (
     URDFSyntaxError,
     URDFValueError,
 )
+from .importer import AuditRecord, load_urdf, load_urdf_string, urdf_link_poses
 from .loads import Wrench
 from .model import Model
 from .transforms import BaseState, base_transforms
 from .tree import LinkSpec, LinkTree, build_tree, pseudo_inertia_from
 
 __all__ = [
+    "load_urdf",
+    "load_urdf_string",
+    "urdf_link_poses",
+    "AuditRecord",
     "Model",
     "LinkSpec",
     "LinkTree",
