@@ -16,6 +16,7 @@ __all__ = [
     "InertiaError",
     "MeshError",
     "DynamicsError",
+    "SceneError",
 ]
 
 
@@ -54,3 +55,10 @@ class DynamicsError(ArithmeticError):
         super().__init__(message)
         self.q = q
         self.coordinates = tuple(coordinates)
+
+
+class SceneError(ValueError):
+    """A scene file cannot be used: unknown key, link or coordinate, wrong type or unit.
+
+    Messages name the file, the key and the valid choices.
+    """
