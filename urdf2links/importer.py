@@ -326,7 +326,11 @@ class _Importer:
                           f"(links {sorted({r.link for r in self.records})}); see model.audit, or load with "
                           f"inertia='repair'", UserWarning, stacklevel=3)
         coupling = self._coupling(tree)
-        info = {"coordinates": self.coord_info, "notes": self.notes, "frame_of": {
+        repaired = sorted({r.link for r in self.records if r.action == "repaired"})
+        info = {"coordinates": self.coord_info, "notes": self.notes,
+                # URDF-link inertias after repair (link frame H (4, 4)), to write a repaired URDF for other tools
+                "repaired_H": {k: self.H_link[k].tolist() for k in repaired if k in self.H_link},
+                "frame_of": {
             k: (tree.link_names[t], X.tolist()) for k, (t, X) in self.frame_of.items()}}
         return Model(tree, coupling=coupling, name=self.desc.name, source=self.desc.source,
                      audit=self.records, info=info)
