@@ -1,5 +1,7 @@
 """compare: cross-checks of urdf2links against MuJoCo (this package may import mujoco)."""
 
+from .mjcf import MjcfModel, mjcf_from_model, mjcf_from_scene
+from .mujoco_run import MujocoRun, mujoco_accelerations, run_mujoco
 from .mujoco_urdf import (
     FREE_DOF_LABELS,
     MujocoRefused,
@@ -9,8 +11,15 @@ from .mujoco_urdf import (
     mujoco_from_urdf,
     mujoco_terms,
 )
+from .terms import TermsComparison, compare_terms_urdf, massless_moving_links, repaired_urdf_text
 
 __all__ = [
+    "MjcfModel",
+    "MujocoRun",
+    "mjcf_from_model",
+    "mjcf_from_scene",
+    "mujoco_accelerations",
+    "run_mujoco",
     "FREE_DOF_LABELS",
     "MujocoRefused",
     "MujocoURDF",
@@ -18,4 +27,8 @@ __all__ = [
     "mujoco_data_at",
     "mujoco_from_urdf",
     "mujoco_terms",
+    "TermsComparison",
+    "compare_terms_urdf",
+    "massless_moving_links",
+    "repaired_urdf_text",
 ]
