@@ -258,3 +258,17 @@ def test_bad_shapes_are_named():
         build_tree([LinkSpec("a", "nowhere")])
     with pytest.raises(KeyError, match="no link named 'hand'"):
         model.generalized_forces(np.zeros(2), [Wrench("hand", force=np.ones(3))])
+
+
+def test_explicit_time_rates_of_the_base_against_finite_differences():
+    """dE/dt and dV/dt at fixed (q, qd), used for the work done by a moving base."""
+    model = random_tree(2, links=5, min_coords=1, massless=(3,))
+    rng = np.random.default_rng(21)
+    base = _moving_base(rng)
+    q, qd, t = rng.normal(size=model.n), rng.normal(size=model.n), 0.7
+    kin = model._plan.kinematics(q, qd, base_transforms(base(t)))
+    dE, dV = model._plan.explicit_time_rates(kin, base_transforms(base(t)), model.gravity_vector)
+    fd_E = _five_point(lambda s: model.kinetic_energy(q, qd, t=t + s, base=base), 1e-3)
+    fd_V = _five_point(lambda s: model.potential_energy(q, t=t + s, base=base), 1e-3)
+    assert dE == pytest.approx(fd_E, rel=1e-8)
+    assert dV == pytest.approx(fd_V, rel=1e-8)

@@ -1,4 +1,4 @@
-"""Command line: ``urdf2links inspect FILE.urdf`` (later issues add simulate, compare, report)."""
+"""Command line: ``urdf2links inspect FILE.urdf|SCENE.toml``, ``urdf2links simulate SCENE.toml``."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import warnings
 
 import numpy as np
 
-from .errors import URDFError
+from .errors import DynamicsError, SceneError, URDFError
 from .transforms import PARAMETERS
 
 __all__ = ["main", "format_tree"]
@@ -49,11 +49,49 @@ def format_tree(model) -> str:
 def _inspect(args) -> int:
     from .importer import load_urdf
 
+    if str(args.file).endswith(".toml"):
+        from .plan import compile_plan
+        from .scene import load_scene
+
+        scene = load_scene(args.file)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            model = scene.model()
+        print(compile_plan(scene, model).describe())
+        return 0
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the findings are printed in the table below
         model = load_urdf(args.file, floating_base=args.floating_base, inertia=args.inertia,
                           mimic=args.mimic, package_dirs=args.package_dir)
     print(format_tree(model))
+    return 0
+
+
+def _simulate(args) -> int:
+    from pathlib import Path
+
+    from .scene import load_scene
+    from .simulate import simulate
+
+    scene = load_scene(args.scene)
+    model = scene.model()
+    traj = simulate(scene, model=model, t_end=args.t_end, method=args.method, rtol=args.rtol, dt=args.dt,
+                    progress=False if args.quiet else None)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    npz = traj.save_npz(out / f"{scene.name}.npz")
+    csv_path = traj.save_csv(out / f"{scene.name}.csv")
+    s = traj.stats
+    print(f"{scene.name}: {model.name}, {model.n} coordinates, t = 0..{traj.t[-1]:g} s, {s['method']}"
+          f" (rtol {s['rtol']:g}" + (f", dt {s['dt']:g}" if s["dt"] else "") + f"): {s['nsteps']} steps, "
+          f"{s['nfev']} evaluations, {s['wall_time']:.3f} s wall")
+    print(f"  terms: {', '.join(s['terms'])}; energy balance error {traj.energy_error:.2e} (relative)")
+    print(f"  wrote {npz} and {csv_path}")
+    if args.plot:
+        from .plots import plot_trajectory
+
+        png = plot_trajectory(traj, out / f"{scene.name}.png")
+        print(f"  plot {png}")
     return 0
 
 
@@ -67,10 +105,20 @@ def main(argv=None) -> int:
     p.add_argument("--mimic", choices=("independent", "coupled"), default="independent")
     p.add_argument("--package-dir", action="append", default=[], help="folder searched for package:// meshes")
     p.set_defaults(func=_inspect)
+    p = sub.add_parser("simulate", help="simulate a scene (TOML) and save the trajectory")
+    p.add_argument("scene", help="a scene .toml file")
+    p.add_argument("--t-end", type=float, help="override [run] t_end (s)")
+    p.add_argument("--method", help="RK45, DOP853, Radau, BDF, LSODA, RK4 or midpoint")
+    p.add_argument("--rtol", type=float)
+    p.add_argument("--dt", type=float, help="step for RK4 and midpoint (s)")
+    p.add_argument("--out", default="out", help="folder for .npz, .csv and .png (default: out)")
+    p.add_argument("--plot", action="store_true", help="also plot coordinates and energy against time (PNG)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=_simulate)
     args = parser.parse_args(argv)
     try:
         return args.func(args)
-    except URDFError as err:
+    except (URDFError, SceneError, DynamicsError) as err:
         print(f"urdf2links {args.command}: error: {err}", file=sys.stderr)
         return 2
 

@@ -35,6 +35,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.interpolate import CubicSpline, make_interp_spline
 
+from .errors import SceneError
+
 __all__ = ["SceneValueError", "TimeFunction", "Constant", "Sines", "Table", "VectorFunction",
            "parse_function", "vector_function"]
 
@@ -42,7 +44,7 @@ TABLE_KINDS = ("cubic", "quintic")
 _MIN_SAMPLES = {"cubic": 2, "quintic": 6}
 
 
-class SceneValueError(ValueError):
+class SceneValueError(SceneError):
     """A scene (TOML) value cannot be turned into what it describes; the message says where."""
 
 

@@ -209,6 +209,27 @@ class RecursivePlan:
         fc = self.subtree_sum(fn)[self.coord_link]
         return np.einsum("ij,ij->i", kin.twist[:, 3:], fc[:, :3]) + np.einsum("ij,ij->i", kin.twist[:, :3], fc[:, 3:])
 
+    def explicit_time_rates(self, kin: Kinematics, base_T, gravity_vector) -> tuple[float, float]:
+        """``(dE/dt, dV/dt)`` at fixed ``(q, qd)``: the rates due to the base motion alone.
+
+        With ``T = B Tbar``: ``dT/dt = W1 T`` and ``dT'/dt = (W2 - W1 W1) T + W1 T'``, where
+        ``W1 = B' B^-1``, ``W2 = B'' B^-1``; then ``dE/dt = sum tr(dT'/dt H T'^T)`` (5.35) and
+        ``dV/dt = -g . sum (W1 T H e4)`` (5.21). Needs ``kin.Td``.
+        """
+        B, Bd, Bdd = base_T
+        Binv = np.eye(4)
+        Binv[:3, :3] = B[:3, :3].T
+        Binv[:3, 3] = -B[:3, :3].T @ B[:3, 3]
+        W1, W2 = Bd @ Binv, Bdd @ Binv
+        THTd = np.einsum("pab,pbc,pdc->ad", kin.T, self.H, kin.Td)      # sum T H T'^T
+        TdHTd = np.einsum("pab,pbc,pdc->ad", kin.Td, self.H, kin.Td)    # sum T' H T'^T
+        dE = float(np.trace((W2 - W1 @ W1) @ THTd) + np.trace(W1 @ TdHTd))
+        dV = 0.0
+        if gravity_vector is not None:
+            first = np.einsum("pab,pb->a", kin.T, self.H[:, :, 3])     # sum T H e4
+            dV = -float(np.asarray(gravity_vector, float) @ (W1 @ first)[:3])
+        return dE, dV
+
     def kinetic_energy(self, kin: Kinematics) -> float:
         """E (5.35)+(5.46): ``0.5 sum_p tr(T' H T'^T)``."""
         return 0.5 * float(np.einsum("pab,pbc,pac->", kin.Td, self.H, kin.Td))

@@ -1,0 +1,362 @@
+"""Scenes: a TOML file that names a robot, the effects that act on it, its initial state and the run.
+
+Schema (every table optional except ``[robot]``; an effect that is not named does not act and is
+not computed, see :mod:`urdf2links.plan`)::
+
+    description = "what the scene shows"
+    chaotic = false                         # the comparison reports a divergence time, not an error
+
+    [robot]
+    urdf = "double_pendulum.urdf"           # path relative to this file; or
+    # shipped = "double_pendulum"           # a robot of robots/; or
+    # example_robot_data = "ur_description/urdf/ur5_robot.urdf"
+    floating_base = false
+    inertia = "audit"                       # audit | strict | repair
+    mimic = "independent"                   # independent | coupled
+
+    [gravity]                               # absent: no gravity
+    magnitude = 9.81                        # m/s^2
+    direction = [0, 0, -1]
+
+    [base]                                  # prescribed motion of {A}: x, y, z [m], phi_x, phi_y, phi_z [rad]
+    z = { sines = [[0.8, 0.1, 0.0]] }       # each a function of time (urdf2links.functions)
+
+    [[force]]                               # (5.27): a force on a link
+    link = "lower"; point = [0, 0, -1.0]    # application point in the link's (URDF) frame [m]
+    frame = "world"                         # axes of the vector: link | world
+    value = [0, 0, { sines = [[2.0, 0.5]] }]   # N, three functions of time
+
+    [[moment]]                              # (5.28): link, frame, value [N m]
+    [[torque]]                              # coordinate = "shoulder"; value = function [N m or N]
+    [[spring]]                              # coordinate, stiffness [N m/rad], rest [rad], damping [N m s/rad]
+
+    [initial]
+    q = { shoulder = 1.2 }                  # by coordinate name; unnamed coordinates start at 0
+    qd = {}
+
+    [run]
+    t_end = 10.0; method = "DOP853"; rtol = 1e-10; atol = 1e-12; dt = 1e-3; samples = 1001
+
+    [record]
+    link_poses = ["lower"]                  # {0}-poses of these links at every sample
+"""
+
+from __future__ import annotations
+
+import difflib
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .errors import SceneError
+from .functions import Constant, SceneValueError, TimeFunction, VectorFunction, parse_function, vector_function
+from .integrators import METHODS
+from .transforms import PARAMETERS
+
+__all__ = ["Scene", "AppliedLoad", "Spring", "RunSettings", "load_scene", "shipped_robots_dir"]
+
+_TOP = ("description", "chaotic", "robot", "gravity", "base", "force", "moment", "torque", "spring",
+        "initial", "run", "record")
+_ROBOT = ("urdf", "shipped", "example_robot_data", "floating_base", "inertia", "mimic", "package_dirs")
+_RUN = ("t_end", "method", "rtol", "atol", "dt", "samples")
+
+
+def shipped_robots_dir() -> Path:
+    """The project's ``robots/`` folder (next to the package in a checkout or editable install)."""
+    return Path(__file__).resolve().parent.parent / "robots"
+
+
+@dataclass(frozen=True)
+class AppliedLoad:
+    """A force (``kind="force"``, at ``point`` (3,) in the link frame) or moment on URDF link ``link``;
+    ``value`` gives its three components in ``frame`` axes (``"link"`` or ``"world"``) at time t."""
+
+    kind: str
+    link: str
+    frame: str
+    value: VectorFunction
+    point: np.ndarray = field(default_factory=lambda: np.zeros(3))
+
+
+@dataclass(frozen=True)
+class Spring:
+    """Joint spring and damper on ``coordinate``: force ``-stiffness (q - rest) - damping qd``,
+    i.e. V += 0.5 k (q - rest)^2 and the dissipation function D = 0.5 c qd^2 of (5.1)."""
+
+    coordinate: str
+    stiffness: float = 0.0
+    rest: float = 0.0
+    damping: float = 0.0
+
+
+@dataclass(frozen=True)
+class RunSettings:
+    t_end: float = 5.0
+    method: str = "DOP853"
+    rtol: float = 1e-10
+    atol: float = 1e-12
+    dt: float | None = None
+    samples: int = 501
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A parsed, validated scene. ``base`` is None or six functions (x, y, z, phi_x, phi_y, phi_z)."""
+
+    name: str
+    path: Path | None
+    robot: Path
+    load_options: dict
+    description: str = ""
+    chaotic: bool = False
+    gravity: np.ndarray | None = None
+    base: tuple[TimeFunction, ...] | None = None
+    loads: tuple[AppliedLoad, ...] = ()
+    torques: tuple[tuple[str, TimeFunction], ...] = ()
+    springs: tuple[Spring, ...] = ()
+    q0: dict = field(default_factory=dict)
+    qd0: dict = field(default_factory=dict)
+    run: RunSettings = RunSettings()
+    link_poses: tuple[str, ...] = ()
+
+    def model(self):
+        """Load the scene's robot with its options (a :class:`~urdf2links.model.Model`)."""
+        from .importer import load_urdf
+
+        model = load_urdf(self.robot, **self.load_options)
+        self.check_names(model)
+        return model
+
+    def check_names(self, model) -> None:
+        """Every link and coordinate the scene names exists in ``model`` (SceneError otherwise)."""
+        where = self.path or "<scene>"
+        links = set(model.info.get("frame_of", {}) or model.link_names)
+        for load in self.loads:
+            if load.link not in links:
+                raise SceneError(f"{where}: [[{load.kind}]] link = {load.link!r} is not a link of robot "
+                                 f"{model.name!r}{_hint(load.link, links)}; links are {sorted(links)}")
+        for link in self.link_poses:
+            if link not in links:
+                raise SceneError(f"{where}: [record] link_poses names {link!r}, not a link of {model.name!r}"
+                                 f"{_hint(link, links)}")
+        names = model.coordinate_names
+        for what, coord in ([("torque", c) for c, _ in self.torques] + [("spring", s.coordinate) for s in self.springs]
+                            + [("initial.q", c) for c in self.q0] + [("initial.qd", c) for c in self.qd0]):
+            if coord not in names:
+                raise SceneError(f"{where}: [{what}] coordinate {coord!r} is not a coordinate of robot {model.name!r}"
+                                 f"{_hint(coord, names)}; coordinates are {list(names)}")
+
+    def initial_state(self, model) -> tuple[np.ndarray, np.ndarray]:
+        names = model.coordinate_names
+        q = np.array([float(self.q0.get(n, 0.0)) for n in names])
+        qd = np.array([float(self.qd0.get(n, 0.0)) for n in names])
+        return q, qd
+
+
+def _hint(name, choices) -> str:
+    close = difflib.get_close_matches(str(name), [str(c) for c in choices], n=1)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+class _Reader:
+    def __init__(self, where: str):
+        self.where = where
+
+    def fail(self, key: str, problem: str):
+        raise SceneError(f"{self.where}: {key}: {problem}")
+
+    def keys(self, table, allowed, key):
+        if not isinstance(table, dict):
+            self.fail(key, f"must be a table, got {type(table).__name__} {table!r}")
+        for k in table:
+            if k not in allowed:
+                self.fail(f"{key}.{k}" if key else k, f"unknown key{_hint(k, allowed)}; valid keys are {list(allowed)}")
+
+    def number(self, value, key, *, positive=False, nonnegative=False):
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
+            self.fail(key, f"must be a finite number, got {value!r}")
+        if positive and value <= 0:
+            self.fail(key, f"must be positive, got {value!r}")
+        if nonnegative and value < 0:
+            self.fail(key, f"must not be negative, got {value!r}")
+        return float(value)
+
+    def vector(self, value, key):
+        if not isinstance(value, list) or len(value) != 3:
+            self.fail(key, f"must be a list of 3 numbers, got {value!r}")
+        return np.array([self.number(v, f"{key}[{i}]") for i, v in enumerate(value)])
+
+    def choice(self, value, key, choices):
+        if value not in choices:
+            self.fail(key, f"{value!r} is not one of {list(choices)}{_hint(value, choices)}")
+        return value
+
+    def function(self, spec, key) -> TimeFunction:
+        try:
+            return parse_function(spec, where=f"{self.where}: {key}")
+        except SceneValueError as err:
+            raise SceneError(str(err)) from None
+
+    def vector_function(self, spec, key) -> VectorFunction:
+        try:
+            return vector_function(spec, where=f"{self.where}: {key}", length=3)
+        except SceneValueError as err:
+            raise SceneError(str(err)) from None
+
+
+def load_scene(path) -> Scene:
+    """Read and validate a scene file (names of links and coordinates are checked by :meth:`Scene.model`)."""
+    path = Path(path)
+    where = str(path)
+    try:
+        data = tomllib.loads(path.read_text())
+    except FileNotFoundError:
+        raise SceneError(f"scene file {where} does not exist") from None
+    except tomllib.TOMLDecodeError as err:
+        raise SceneError(f"{where}: not valid TOML: {err}") from None
+    return scene_from_dict(data, where=where, directory=path.parent, name=path.stem, path=path)
+
+
+def scene_from_dict(data: dict, *, where: str = "<scene>", directory: Path | None = None, name: str = "scene",
+                    path: Path | None = None) -> Scene:
+    r = _Reader(where)
+    r.keys(data, _TOP, "")
+    if "robot" not in data:
+        r.fail("[robot]", "missing: name the robot with urdf = 'file.urdf', shipped = 'name' or example_robot_data = '...'")
+    robot_t = data["robot"]
+    r.keys(robot_t, _ROBOT, "robot")
+    robot = _robot_path(r, robot_t, directory)
+    options = {}
+    if "floating_base" in robot_t:
+        if not isinstance(robot_t["floating_base"], bool):
+            r.fail("robot.floating_base", f"must be true or false, got {robot_t['floating_base']!r}")
+        options["floating_base"] = robot_t["floating_base"]
+    if "inertia" in robot_t:
+        options["inertia"] = r.choice(robot_t["inertia"], "robot.inertia", ("audit", "strict", "repair"))
+    if "mimic" in robot_t:
+        options["mimic"] = r.choice(robot_t["mimic"], "robot.mimic", ("independent", "coupled"))
+    if "package_dirs" in robot_t:
+        options["package_dirs"] = tuple((directory or Path.cwd()) / p for p in robot_t["package_dirs"])
+
+    gravity = None
+    if "gravity" in data:
+        g = data["gravity"]
+        r.keys(g, ("magnitude", "direction"), "gravity")
+        mag = r.number(g.get("magnitude", 9.81), "gravity.magnitude", nonnegative=True)
+        d = r.vector(g.get("direction", [0, 0, -1]), "gravity.direction")
+        if np.linalg.norm(d) == 0:
+            r.fail("gravity.direction", "must not be the zero vector")
+        gravity = mag * d / np.linalg.norm(d)
+
+    base = None
+    if "base" in data:
+        r.keys(data["base"], PARAMETERS, "base")
+        base = tuple(r.function(data["base"][p], f"base.{p}") if p in data["base"] else Constant(0.0)
+                     for p in PARAMETERS)
+
+    loads = []
+    for kind in ("force", "moment"):
+        items = data.get(kind, [])
+        if not isinstance(items, list):
+            r.fail(f"[[{kind}]]", "must be an array of tables ([[force]] blocks)")
+        for i, item in enumerate(items):
+            key = f"{kind}[{i}]"
+            allowed = ("link", "point", "frame", "value") if kind == "force" else ("link", "frame", "value")
+            r.keys(item, allowed, key)
+            if not isinstance(item.get("link"), str):
+                r.fail(f"{key}.link", "must name a link")
+            if "value" not in item:
+                r.fail(f"{key}.value", "missing: three functions of time (N or N m)")
+            loads.append(AppliedLoad(
+                kind=kind, link=item["link"],
+                frame=r.choice(item.get("frame", "link"), f"{key}.frame", ("link", "world")),
+                value=r.vector_function(item["value"], f"{key}.value"),
+                point=r.vector(item["point"], f"{key}.point") if "point" in item else np.zeros(3)))
+
+    torques = []
+    for i, item in enumerate(data.get("torque", [])):
+        r.keys(item, ("coordinate", "value"), f"torque[{i}]")
+        if not isinstance(item.get("coordinate"), str) or "value" not in item:
+            r.fail(f"torque[{i}]", "needs coordinate = 'name' and value = a function of time")
+        torques.append((item["coordinate"], r.function(item["value"], f"torque[{i}].value")))
+
+    springs = []
+    for i, item in enumerate(data.get("spring", [])):
+        key = f"spring[{i}]"
+        r.keys(item, ("coordinate", "stiffness", "rest", "damping"), key)
+        if not isinstance(item.get("coordinate"), str):
+            r.fail(f"{key}.coordinate", "must name a coordinate")
+        springs.append(Spring(item["coordinate"],
+                              r.number(item.get("stiffness", 0.0), f"{key}.stiffness", nonnegative=True),
+                              r.number(item.get("rest", 0.0), f"{key}.rest"),
+                              r.number(item.get("damping", 0.0), f"{key}.damping", nonnegative=True)))
+
+    q0, qd0 = {}, {}
+    if "initial" in data:
+        r.keys(data["initial"], ("q", "qd"), "initial")
+        for target, key in ((q0, "q"), (qd0, "qd")):
+            table = data["initial"].get(key, {})
+            r.keys(table, tuple(table), f"initial.{key}")
+            for coord, v in table.items():
+                target[coord] = r.number(v, f"initial.{key}.{coord}")
+
+    run = RunSettings()
+    if "run" in data:
+        t = data["run"]
+        r.keys(t, _RUN, "run")
+        run = RunSettings(
+            t_end=r.number(t.get("t_end", run.t_end), "run.t_end", positive=True),
+            method=r.choice(t.get("method", run.method), "run.method", METHODS),
+            rtol=r.number(t.get("rtol", run.rtol), "run.rtol", positive=True),
+            atol=r.number(t.get("atol", run.atol), "run.atol", positive=True),
+            dt=r.number(t["dt"], "run.dt", positive=True) if "dt" in t else None,
+            samples=int(r.number(t.get("samples", run.samples), "run.samples", positive=True)))
+        if run.method in ("RK4", "midpoint") and run.dt is None:
+            r.fail("run.dt", f"method {run.method!r} takes a fixed step: give dt (seconds)")
+
+    link_poses = ()
+    if "record" in data:
+        r.keys(data["record"], ("link_poses",), "record")
+        link_poses = tuple(data["record"].get("link_poses", ()))
+
+    description = data.get("description", "")
+    chaotic = data.get("chaotic", False)
+    if not isinstance(description, str):
+        r.fail("description", "must be a string")
+    if not isinstance(chaotic, bool):
+        r.fail("chaotic", f"must be true or false, got {chaotic!r}")
+    return Scene(name=name, path=path, robot=robot, load_options=options, description=description,
+                 chaotic=chaotic, gravity=gravity, base=base, loads=tuple(loads), torques=tuple(torques),
+                 springs=tuple(springs), q0=q0, qd0=qd0, run=run, link_poses=link_poses)
+
+
+def _robot_path(r: _Reader, t: dict, directory) -> Path:
+    given = [k for k in ("urdf", "shipped", "example_robot_data") if k in t]
+    if len(given) != 1:
+        r.fail("robot", f"name the robot exactly one way: urdf = 'path', shipped = 'name' or "
+                        f"example_robot_data = 'path inside its robots/ folder'; got {given or 'none'}")
+    key = given[0]
+    value = t[key]
+    if not isinstance(value, str):
+        r.fail(f"robot.{key}", f"must be a string, got {value!r}")
+    if key == "urdf":
+        p = Path(value)
+        p = p if p.is_absolute() else (directory or Path.cwd()) / p
+    elif key == "shipped":
+        folder = shipped_robots_dir()
+        p = folder / f"{value}.urdf"
+        if not p.is_file():
+            names = sorted(x.stem for x in folder.glob("*.urdf"))
+            r.fail("robot.shipped", f"no shipped robot {value!r}{_hint(value, names)}; shipped robots are {names}")
+    else:
+        from importlib.metadata import PackageNotFoundError, distribution
+        try:
+            root = Path(distribution("example-robot-data").locate_file("cmeel.prefix/share/example-robot-data/robots"))
+        except PackageNotFoundError:
+            r.fail("robot.example_robot_data", "the example-robot-data package is not installed (pip install example-robot-data)")
+        p = root / value
+    if not p.is_file():
+        r.fail(f"robot.{key}", f"file {p} does not exist")
+    return p

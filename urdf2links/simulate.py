@@ -1,0 +1,171 @@
+"""Simulation: a scene (or a bare model) integrated in time, with its own energy bookkeeping.
+
+``simulate(scene_or_model, ...) -> Trajectory``. The right-hand side is the compiled
+:class:`~urdf2links.plan.Plan` (only the scene's terms); the integrator is any of
+:data:`urdf2links.integrators.METHODS`. The trajectory records coordinates, velocities, energies,
+the work of non-potential forces, and the power-balance error ``h - h(0) - W`` at every sample.
+"""
+
+from __future__ import annotations
+
+import csv
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .integrators import integrate
+from .model import Model
+from .plan import compile_plan
+from .scene import RunSettings, Scene
+
+__all__ = ["Trajectory", "simulate", "Progress"]
+
+
+@dataclass(frozen=True, eq=False)
+class Trajectory:
+    """Result of :func:`simulate`.
+
+    ``t`` (m,), ``q`` and ``qd`` (m, n) with columns ``coordinate_names``; ``energy`` dict of (m,)
+    arrays: ``kinetic`` E, ``potential`` V (gravity and springs), ``work`` W (non-potential forces
+    and base), ``function`` h (E + V for a fixed base), ``error`` ``h - h(0) - W``;
+    ``poses`` dict link -> (m, 4, 4); ``stats`` (method, rtol, atol, dt, nfev, nsteps, wall_time);
+    ``sol`` the integrator's dense interpolant ``t -> (q, qd, W)`` or None.
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    coordinate_names: tuple[str, ...]
+    energy: dict
+    poses: dict = field(default_factory=dict)
+    stats: dict = field(default_factory=dict)
+    scene: str = ""
+    robot: str = ""
+    sol: object = None
+
+    @property
+    def energy_error(self) -> float:
+        """max |h - h(0) - W| over the run, relative to the energy scale max(|E|, |V - V(0)|, |W|)."""
+        e = self.energy
+        scale = max(np.abs(e["kinetic"]).max(), np.abs(e["potential"] - e["potential"][0]).max(),
+                    np.abs(e["work"]).max(), 1e-300)
+        return float(np.abs(e["error"]).max() / scale)
+
+    def save_npz(self, path) -> Path:
+        path = Path(path)
+        arrays = {"t": self.t, "q": self.q, "qd": self.qd, "coordinate_names": np.array(self.coordinate_names)}
+        arrays.update({f"energy_{k}": v for k, v in self.energy.items()})
+        arrays.update({f"pose_{k}": v for k, v in self.poses.items()})
+        np.savez_compressed(path, **arrays, stats=np.array(repr(self.stats)))
+        return path
+
+    def save_csv(self, path) -> Path:
+        path = Path(path)
+        with path.open("w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(["t", *self.coordinate_names, *(f"d_{c}" for c in self.coordinate_names),
+                        *(f"energy_{k}" for k in self.energy)])
+            for i in range(len(self.t)):
+                w.writerow([repr(float(self.t[i])), *map(repr, self.q[i].tolist()), *map(repr, self.qd[i].tolist()),
+                            *(repr(float(v[i])) for v in self.energy.values())])
+        return path
+
+
+class Progress:
+    """A one-line progress bar on stderr, redrawn at most 10 times a second; silent when stderr is
+    not a terminal or ``enabled`` is False."""
+
+    def __init__(self, t_end: float, *, label: str = "", enabled: bool | None = None, stream=None):
+        self.stream = stream or sys.stderr
+        self.enabled = (self.stream.isatty() if enabled is None else enabled)
+        self.t_end, self.label = t_end, label
+        self.start = time.perf_counter()
+        self.last = 0.0
+
+    def __call__(self, t, y=None):
+        if not self.enabled:
+            return
+        now = time.perf_counter()
+        if now - self.last < 0.1 and t < self.t_end:
+            return
+        self.last = now
+        frac = min(max(t / self.t_end, 0.0), 1.0) if self.t_end > 0 else 1.0
+        bar = "#" * int(30 * frac)
+        self.stream.write(f"\r{self.label} [{bar:<30}] {100 * frac:5.1f}%  t = {t:.4g} s  {now - self.start:.1f} s wall")
+        self.stream.flush()
+
+    def close(self):
+        if self.enabled:
+            self(self.t_end)
+            self.stream.write("\n")
+            self.stream.flush()
+
+
+def simulate(scene_or_model, *, t_end: float | None = None, method: str | None = None, rtol: float | None = None,
+             atol: float | None = None, dt: float | None = None, samples: int | None = None, q0=None, qd0=None,
+             progress: bool | None = None, model: Model | None = None) -> Trajectory:
+    """Integrate a scene (a :class:`~urdf2links.scene.Scene`, a path to a scene file) or a bare
+    :class:`~urdf2links.model.Model` (gravity as the model says, nothing else acting).
+
+    Keyword arguments override the scene's ``[run]`` and ``[initial]``; ``model`` reuses an already
+    loaded model of the scene's robot; ``progress`` forces the progress bar on or off (default: on
+    for a terminal).
+    """
+    from .scene import load_scene, scene_from_dict
+
+    if isinstance(scene_or_model, (str, Path)):
+        scene_or_model = load_scene(scene_or_model)
+    if isinstance(scene_or_model, Model):
+        model = scene_or_model
+        scene = Scene(name=model.name or "model", path=None, robot=Path(model.source or "."), load_options={},
+                      gravity=np.asarray(model.gravity_vector))
+    elif isinstance(scene_or_model, Scene):
+        scene = scene_or_model
+        if model is None:
+            model = scene.model()
+    else:
+        raise TypeError(f"simulate takes a Scene, a scene file path or a Model; got {type(scene_or_model).__name__}")
+    run = scene.run
+    run = RunSettings(t_end=run.t_end if t_end is None else float(t_end), method=method or run.method,
+                      rtol=run.rtol if rtol is None else rtol, atol=run.atol if atol is None else atol,
+                      dt=run.dt if dt is None else dt, samples=run.samples if samples is None else int(samples))
+    plan = compile_plan(scene, model)
+    q, qd = scene.initial_state(model)
+    if q0 is not None:
+        q = model._vec(q0, "q0").copy()
+    if qd0 is not None:
+        qd = model._vec(qd0, "qd0").copy()
+    n = model.n
+    y0 = np.r_[q, qd, 0.0]
+    t_eval = np.linspace(0.0, run.t_end, max(run.samples, 2))
+    bar = Progress(run.t_end, label=f"{scene.name} {run.method}", enabled=progress)
+    try:
+        res = integrate(plan.rhs, (0.0, run.t_end), y0, method=run.method, rtol=run.rtol, atol=run.atol,
+                        dt=run.dt if run.method in ("RK4", "midpoint") else None, t_eval=t_eval,
+                        dense=True, callback=bar)
+    finally:
+        bar.close()
+    t = np.asarray(res.t)
+    Y = np.asarray(res.y)
+    qs, qds, W = Y[:, :n], Y[:, n:2 * n], Y[:, 2 * n]
+    E = np.array([plan.kinetic_energy(ti, a, b) for ti, a, b in zip(t, qs, qds)])
+    V = np.array([plan.potential_energy(ti, a) for ti, a in zip(t, qs)])
+    h = E + V if scene.base is None else np.array([plan.energy_function(ti, a, b) for ti, a, b in zip(t, qs, qds)])
+    poses = {}
+    if scene.link_poses:
+        from .importer import urdf_link_poses
+        for link in scene.link_poses:
+            poses[link] = np.empty((len(t), 4, 4))
+        for i, (ti, a) in enumerate(zip(t, qs)):
+            P = urdf_link_poses(model, a, t=ti, base=plan.base_state(ti))
+            for link in scene.link_poses:
+                poses[link][i] = P[link]
+    stats = {"method": run.method, "rtol": run.rtol, "atol": run.atol, "dt": run.dt, "nfev": res.nfev,
+             "nsteps": res.nsteps, "wall_time": res.wall_time, "terms": plan.terms, "success": res.success,
+             "message": res.message}
+    return Trajectory(t=t, q=qs, qd=qds, coordinate_names=model.coordinate_names,
+                      energy={"kinetic": E, "potential": V, "work": W, "function": h, "error": h - h[0] - W},
+                      poses=poses, stats=stats, scene=scene.name, robot=model.name, sol=res.sol)
