@@ -223,7 +223,7 @@ def test_corpus_loads_or_refuses_clearly(rel):
     # every finding of the audit is repaired (repairs may uncover more, e.g. a joint whose subtree
     # had only a broken inertia)
     assert {(r.link, r.kind) for r in audited.audit} <= {(r.link, r.kind) for r in repaired.audit}
-    assert all(r.action == "repaired" for r in repaired.audit)
+    assert all(r.action == "repaired" for r in repaired.audit), [str(r) for r in repaired.audit if r.action != "repaired"]
     rng = np.random.default_rng(0)
     for _ in range(2):
         q = rng.uniform(-1, 1, repaired.n)

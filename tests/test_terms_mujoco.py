@@ -29,18 +29,10 @@ ROBOTS_DIR = Path(__file__).resolve().parent.parent / "robots"
 ROBOTS = sorted(p.name for p in ROBOTS_DIR.glob("*.urdf"))
 FLOATING_ONLY = {"free_body.urdf": "one free body: no joint, nothing to compare with a fixed base"}
 
-# MuJoCo refuses the original AND the project's repaired text: the importer's repair leaves
-# inertias MuJoCo cannot load (importer issues, to be fixed in urdf2links/importer.py):
-#  - l_ankle_2/r_ankle_2 (0.2675 kg, tensor all zero but ixz = 1.35525e-20 = 2**-66): the
-#    "nearest consistent" repair keeps that rounding noise as the body's size, principal moments
-#    1.4e-26 and 6.8e-21 kg m^2 (MuJoCo needs > mjMINVAL = 1e-15);
-#  - l_wrist_1, r_wrist_1, torso (0.1 kg point masses): replaced by "small spheres" of 1e-9,
-#    1e-12, 1e-15 kg (the link's 0.1 kg is dropped, and each repair takes 1e-3 of the smallest
-#    mass INCLUDING the spheres made before it), inertia 4e-17 and 4e-20 kg m^2 < mjMINVAL.
-REPAIR_REFUSED_BY_MUJOCO = {
-    "icub_description/robots/icub.urdf": "importer repair of icub's l_ankle_2 / *_wrist_1 / torso",
-    "icub_description/robots/icub_reduced.urdf": "same links as icub.urdf",
-}
+# Files where MuJoCo refuses even the project's repaired text. icub's repairs once fell below
+# mjMINVAL (a point mass losing its mass, repair spheres shrinking, rounding noise kept as a size);
+# the importer now re-audits every repair, keeps a point mass's mass and sizes spheres once.
+REPAIR_REFUSED_BY_MUJOCO: dict[str, str] = {}  # none since the importer re-audits its repairs
 # MuJoCo refuses massless MOVING links that the project accepts (their subtree has mass): the
 # ball joints of human.urdf are three revolute joints through massless "virtual" links. Compared
 # with a 1e-6 kg sphere on those links on both sides (compare_terms_urdf(massless_moving=...)).
@@ -283,19 +275,7 @@ READABLE = [rel for rel in corpus.corpus_files() if rel not in corpus.KNOWN_BAD]
 
 
 # The repaired model is not clean by the importer's own audit, so its text fails inertia="strict":
-ROUND_TRIP_FAILS = {
-    # l_ankle_2's "nearest consistent" H keeps COM second moments of 1.4e-26 and 6.8e-21 kg m^2,
-    # below the rounding of m c c^T ~ 8e-4 kg m^2: it reads back as not positive definite
-    # (the repaired H already fails audit_pseudo_inertia; it is not re-audited after repair)
-    **{rel: ("l_ankle_2", "importer: repaired l_ankle_2 not positive definite to rounding")
-       for rel in REPAIR_REFUSED_BY_MUJOCO},
-    # r_gripper_joint still moves A_ii = 3.0e-12 (2.3e-12 of the largest, the threshold is 1e-10)
-    # after the 3 rounds of joint repair (spheres of 7.6e-8 then 7.6e-11 kg: each sphere is 1e-3
-    # of the smallest mass INCLUDING earlier spheres); the leftover finding is neither repaired
-    # nor reported
-    "romeo_description/urdf/romeo_laas_small.urdf": (
-        "r_gripper_joint", "importer: joint repair gives up with r_gripper_joint still singular"),
-}
+ROUND_TRIP_FAILS: dict[str, tuple[str, str]] = {}  # none since the importer re-audits its repairs
 
 
 @pytest.mark.parametrize("rel", READABLE)

@@ -108,6 +108,9 @@ class _Importer:
         self.records: list[AuditRecord] = []
         self.notes: list[str] = []
         self.H_link = {name: self._inertial_H(link) for name, link in desc.links.items()}
+        # The scale of repair spheres, fixed before any repair (so that repairs do not shrink it).
+        masses = [float(h[3, 3]) for h in self.H_link.values() if h[3, 3] > 0]
+        self.small_mass = 1e-3 * (min(masses) if masses else 1.0)
 
     # -- inertia ------------------------------------------------------------------------------------
     @staticmethod
@@ -154,24 +157,27 @@ class _Importer:
             self.H_link[name] = Hg
             return _replace(rec, how)
         try:
-            self.H_link[name] = nearest_consistent(H, link=name)
-            m, c, I = inertial_from_pseudo(self.H_link[name])
+            fixed = nearest_consistent(H, link=name)
+        except InertiaError:
+            fixed = None
+        if fixed is not None and not audit_pseudo_inertia(fixed, link=name):
+            self.H_link[name] = fixed
+            m, c, I = inertial_from_pseudo(fixed)
             return _replace(rec, f"principal moments raised to the nearest consistent values, mass {m:.6g} and COM kept "
                                  f"(new diagonal {np.diag(I).round(12).tolist()}); {how}")
-        except InertiaError:
-            pass
-        # No mass or no size to keep: a small sphere, so that the link can move.
-        self.H_link[name] = self._small_body(name)
-        return _replace(rec, f"replaced by a small sphere (mass {self.H_link[name][3, 3]:.3g} kg, radius 0.01 m) at the "
-                             f"link origin; {how}")
+        # No size to keep (a point mass, or rounding noise as its tensor), or no mass: a small sphere
+        # with the link's own mass and COM when it has a mass.
+        sphere = self._small_body(H)
+        self.H_link[name] = sphere
+        return _replace(rec, f"replaced by a sphere of radius 0.01 m (mass {sphere[3, 3]:.3g} kg"
+                             f"{', the link mass, COM kept' if mass > 0 else ''}) ; {how}")
 
-    def _small_body(self, name) -> np.ndarray:
-        masses = [float(h[3, 3]) for h in self.H_link.values() if h[3, 3] > 0]
-        m = 1e-3 * (min(masses) if masses else 1.0)
-        I = 0.4 * m * 0.01**2
-        old = self.H_link[name]
+    def _small_body(self, old: np.ndarray) -> np.ndarray:
+        """A sphere of radius 0.01 m at the COM of ``old`` (origin if massless), with the mass of
+        ``old`` when it has one, else :attr:`small_mass`."""
+        m = float(old[3, 3]) if old[3, 3] > 0 else self.small_mass
         com = old[:3, 3] / old[3, 3] if old[3, 3] > 0 else np.zeros(3)
-        return pseudo_inertia(m, com, np.eye(3) * I)
+        return pseudo_inertia(m, com, np.eye(3) * 0.4 * m * 0.01**2)
 
     # -- frames and coordinates ---------------------------------------------------------------------
     def _build(self):
@@ -317,6 +323,13 @@ class _Importer:
             tree = self._build()
         if self.policy != "repair":
             self.records += joint_records
+        else:
+            left = self._joint_findings(tree)
+            if left:  # never silently: what three rounds of repair did not fix stays a finding
+                self.records += [AuditRecord(r.link, r.kind, r.message + " (not repaired after 3 rounds)", "reported",
+                                             values=r.values) for r in left]
+                warnings.warn(f"{self.desc.source}: {len(left)} finding(s) remain after repair: "
+                              + "; ".join(r.message for r in left), UserWarning, stacklevel=3)
         if self.records and self.policy == "strict":
             raise InertiaError(f"{self.desc.source}: {len(self.records)} inertia finding(s) (inertia='strict'):\n  "
                                + "\n  ".join(r.message for r in self.records)
@@ -347,8 +360,9 @@ class _Importer:
         if Hg is not None and not audit_pseudo_inertia(Hg, link=name):
             self.H_link[name] = Hg
             return _replace(rec, how)
-        self.H_link[name] = H + self._small_body(name) if mass > 0 else self._small_body(name)
-        return _replace(rec, f"a small sphere (mass {self._small_body(name)[3, 3]:.3g} kg, radius 0.01 m) added at "
+        sphere = self._small_body(np.zeros((4, 4)))
+        self.H_link[name] = H + sphere
+        return _replace(rec, f"a sphere of radius 0.01 m and mass {sphere[3, 3]:.3g} kg added at the origin of "
                              f"link {name!r}; {how}")
 
 
