@@ -1,0 +1,396 @@
+"""Run the route-1 MJCF model (:mod:`compare.mjcf`) in MuJoCo: trajectories, energies, time.
+
+Everything time-dependent is applied from MuJoCo's control callback (``mujoco.set_mjcb_control``),
+which ``mj_forward`` calls after positions and velocities are computed and before the
+accelerations -- at every stage of RK4 too, with ``d.time`` set to the stage's time. So ``qM``
+(through ``mj_fullM``), ``qfrc_bias`` and ``qfrc_passive`` are current when it runs:
+
+* joint torques ``tau(t)`` (n,) of the project's coordinates -> ``qfrc_applied`` on their dofs;
+* loads on links (force at a point, moment; link or world axes) -> ``xfrc_applied`` of the link's
+  body as a world-frame force and a moment about the body's COM ``d.xipos``. A load on a folded
+  massless link (it has no body, see :mod:`compare.mjcf`) is mapped with the host body's Jacobian
+  at the point, restricted to the dofs that move that link, into ``qfrc_applied``;
+* the prescribed base {A} (``moving_base=True``): with ``a_b`` the base parameters' second
+  derivatives at ``d.time``, ``f`` every generalized force but the bias and the base's own
+  ``qfrc_applied`` (``qfrc_applied`` + loads + ``qfrc_passive``), the robot's accelerations are
+  ``a_r = M_rr^{-1} (f_r - bias_r - M_rb a_b)`` and the base gets
+  ``qfrc_applied_b = M_bb a_b + M_br a_r + bias_b - f_b``: MuJoCo's own ``M qacc = f - bias``
+  then yields ``qacc_b = a_b`` exactly and the robot's motion of the prescribed base. Exact for
+  RK4 and for Euler without dampers (Euler with dampers, and the implicit integrators, change
+  the acceleration after the callback: the base then only approximately follows;
+  ``base_tracking_error`` shows by how much).
+
+The callback is process-global: it is installed for the run only, acts only on the run's own
+``MjData`` and is always removed afterwards (the previous callback, normally None, is restored),
+also when something raises.
+
+Sampling: the run takes ``K = round(t_end / timestep)`` steps and records at the steps nearest to
+``linspace(0, t_end, samples)``; ``MujocoRun.t`` holds the actual times (``d.time``), equal to
+the requested ones when the timestep divides the sample interval (otherwise ``notes`` gives the
+largest offset). Energies are MuJoCo's (``mjENBL_ENERGY``), evaluated by an ``mj_forward`` at each
+sample; with a moving base the ``base_A`` body's own kinetic and potential energy is removed, so
+they are the robot's energies in {0} like the project's ``E`` and ``V`` (spring energy
+``0.5 k (q - rest)^2`` included in the potential).
+"""
+
+from __future__ import annotations
+
+import copy
+import time as _time
+from dataclasses import dataclass, field
+from typing import Callable, Iterable
+
+import mujoco
+import numpy as np
+
+from urdf2links.loads import Wrench
+from urdf2links.transforms import BaseState
+
+from .mjcf import INTEGRATORS, MjcfModel
+
+__all__ = ["MujocoRun", "run_mujoco", "mujoco_accelerations", "ENERGY_COLUMNS"]
+
+ENERGY_COLUMNS = ("kinetic", "potential")
+
+_INTEGRATOR_ENUM = {
+    "Euler": mujoco.mjtIntegrator.mjINT_EULER,
+    "RK4": mujoco.mjtIntegrator.mjINT_RK4,
+    "implicit": mujoco.mjtIntegrator.mjINT_IMPLICIT,
+    "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST,
+}
+
+
+@dataclass(frozen=True)
+class MujocoRun:
+    """A MuJoCo trajectory of the route-1 model, in the project's coordinate order.
+
+    ``t`` (m,) actual sample times; ``q``, ``qd`` (m, n); ``energy`` (m, 2) columns
+    :data:`ENERGY_COLUMNS` (kinetic, potential; see module doc); ``base_tracking_error``: max over
+    samples of ``|base qpos - prescribed pose|`` (0.0 for a fixed base); ``wall_time`` (s) of the
+    stepping loop (sampling included); ``nsteps`` MuJoCo steps; ``timestep``, ``integrator``.
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    energy: np.ndarray
+    base_tracking_error: float
+    wall_time: float
+    nsteps: int
+    timestep: float
+    integrator: str
+    coordinate_names: tuple[str, ...]
+    base_pose: np.ndarray | None = None
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def kinetic(self) -> np.ndarray:
+        return self.energy[:, 0]
+
+    @property
+    def potential(self) -> np.ndarray:
+        return self.energy[:, 1]
+
+    @property
+    def total_energy(self) -> np.ndarray:
+        return self.energy.sum(axis=1)
+
+
+# --------------------------------------------------------------------------- the callback
+
+
+def _as_base_fn(base) -> Callable[[float], BaseState] | None:
+    if base is None:
+        return None
+    if isinstance(base, BaseState):
+        return lambda t, _b=base: _b
+    if callable(base):
+        return base
+    raise TypeError(f"base must be None, a BaseState or a callable t -> BaseState; got {type(base).__name__}")
+
+
+class _Driver:
+    """What the control callback does for one ``MjData``: torques, loads, prescribed base."""
+
+    def __init__(self, mj: MjcfModel, m: mujoco.MjModel, d: mujoco.MjData, *, base=None, torques=None,
+                 loads=None):
+        self.mj, self.m, self.d = mj, m, d
+        self.base = _as_base_fn(base)
+        if self.base is not None and not mj.moving_base:
+            raise ValueError("a base motion was given but the MJCF model has no base_A body: build it "
+                             "with mjcf_from_model(..., moving_base=True)")
+        if self.base is None and mj.moving_base:
+            self.base = lambda t: _HELD  # base_A exists: hold it at the origin
+        self.torques = torques
+        self.loads = loads
+        tree = mj.source.tree
+        self.n = mj.n
+        self._M = np.zeros((m.nv, m.nv))
+        self._fx = np.zeros(m.nv)
+        self._jacp = np.zeros((3, m.nv))
+        self._jacr = np.zeros((3, m.nv))
+        # dofs that move each tree link (its own coordinates and its ancestors'), for folded links
+        anc = tree.ancestor
+        self._moving_dofs = []
+        for p in range(tree.n_links):
+            coords = [c for c in range(tree.n) if anc[p, tree.coord_link[c]]]
+            dofs = list(mj.dof_index[coords]) + list(mj.base_dofs)
+            self._moving_dofs.append(np.array(sorted(dofs), dtype=np.int64))
+        b, r = mj.base_dofs, mj.dof_index
+        self._rr, self._rb, self._bb, self._br = np.ix_(r, r), np.ix_(r, b), np.ix_(b, b), np.ix_(b, r)
+        self.active = bool(self.base is not None or torques is not None or loads is not None)
+        self.error: BaseException | None = None
+
+    def __call__(self, m, d):
+        if d is not self.d:  # the callback is global: leave other MjData alone
+            return
+        self.apply(d)
+
+    def apply(self, d) -> None:
+        m, mj = self.m, self.mj
+        t = float(d.time)
+        d.qfrc_applied[:] = 0.0
+        d.xfrc_applied[:] = 0.0
+        if self.torques is not None:
+            tau = np.asarray(self.torques(t), float)
+            if tau.shape != (self.n,):
+                raise ValueError(f"torques(t) must return shape ({self.n},), got {tau.shape}")
+            d.qfrc_applied[mj.dof_index] += tau
+        if self.loads is not None:
+            self._apply_loads(d, t)
+        if self.base is not None:
+            self._prescribe_base(d, t)
+
+    def _apply_loads(self, d, t) -> None:
+        mj, tree = self.mj, self.mj.source.tree
+        for w in self.loads(t):
+            if isinstance(w, Wrench):
+                p, force, moment, point, frame = tree.link_index(w.link), w.force, w.moment, w.point, w.frame
+            else:
+                p, force, moment, point, frame = w
+            T = mj.link_pose(d, int(p))
+            R = T[:3, :3]
+            F = np.asarray(force, float)
+            Mo = np.asarray(moment, float)
+            if frame == "link":
+                F, Mo = R @ F, R @ Mo
+            elif frame != "world":
+                raise ValueError(f"load frame must be 'link' or 'world', got {frame!r}")
+            x = T[:3, 3] + R @ np.asarray(point, float)
+            b = int(mj.body_of_link[p])
+            if b >= 0:
+                d.xfrc_applied[b, :3] += F
+                d.xfrc_applied[b, 3:] += Mo + np.cross(x - d.xipos[b], F)
+            else:  # folded massless link: its host body's Jacobian, on the dofs that move the link
+                hb = int(mj.host_body[p])
+                mujoco.mj_jac(self.m, d, self._jacp, self._jacr, x, hb)
+                dofs = self._moving_dofs[p]
+                d.qfrc_applied[dofs] += self._jacp[:, dofs].T @ F + self._jacr[:, dofs].T @ Mo
+
+    def _prescribe_base(self, d, t) -> None:
+        m, mj = self.m, self.mj
+        a_b = np.asarray(self.base(t).accel, float)
+        M = self._M
+        mujoco.mj_fullM(m, d, M)
+        # every generalized force except the bias and the base's own qfrc_applied
+        f = d.qfrc_applied + d.qfrc_passive + d.qfrc_actuator
+        if self.loads is not None:
+            fx = self._fx
+            fx[:] = 0.0
+            for body in np.nonzero(np.any(d.xfrc_applied != 0.0, axis=1))[0]:
+                mujoco.mj_applyFT(m, d, np.array(d.xfrc_applied[body, :3]), np.array(d.xfrc_applied[body, 3:]),
+                                  np.array(d.xipos[body]), int(body), fx)
+            f += fx
+        rhs = f - d.qfrc_bias
+        b, r = mj.base_dofs, mj.dof_index
+        if r.size:
+            a_r = np.linalg.solve(M[self._rr], rhs[r] - M[self._rb] @ a_b)
+            d.qfrc_applied[b] += M[self._bb] @ a_b + M[self._br] @ a_r - rhs[b]
+        else:
+            d.qfrc_applied[b] += M[self._bb] @ a_b - rhs[b]
+
+
+_HELD = BaseState.fixed()
+
+
+class _Installed:
+    """Context manager: install the driver as MuJoCo's control callback, always restore."""
+
+    def __init__(self, driver: _Driver):
+        self.driver = driver
+        self.previous = None
+
+    def __enter__(self):
+        if self.driver.active:
+            self.previous = mujoco.get_mjcb_control()
+            mujoco.set_mjcb_control(self.driver)
+        return self
+
+    def __exit__(self, *exc):
+        if self.driver.active:
+            mujoco.set_mjcb_control(self.previous)
+        return False
+
+
+# --------------------------------------------------------------------------- public
+
+
+def mujoco_accelerations(mj: MjcfModel, q, qd, *, t: float = 0.0, base=None, tau=None,
+                         loads: Iterable = ()) -> np.ndarray:
+    """MuJoCo's ``qacc`` (n,) of the robot's coordinates at one state, in the project's order.
+
+    ``base``: a :class:`BaseState` (or callable ``t -> BaseState``) imposed on ``base_A`` exactly as
+    in :func:`run_mujoco` (pose, rate and acceleration); ``tau`` (n,) joint forces; ``loads``
+    :class:`~urdf2links.loads.Wrench` objects or ``(link index, force, moment, point, frame)``.
+    Compare with ``model.forward_dynamics(q, qd, tau, loads=..., t=t, base=base)``.
+    """
+    m = mj.model
+    d = mujoco.MjData(m)
+    d.time = float(t)
+    fn = _as_base_fn(base)
+    mj.set_state(d, q, qd, base=None if fn is None else fn(float(t)))
+    loads = list(loads)
+    tau_a = None if tau is None else np.asarray(tau, float)
+    driver = _Driver(mj, m, d, base=fn, torques=None if tau_a is None else (lambda _t: tau_a),
+                     loads=(lambda _t: loads) if loads else None)
+    with _Installed(driver):
+        mujoco.mj_forward(m, d)
+    return np.array(d.qacc[mj.dof_index])
+
+
+def _robot_energy(mj: MjcfModel, m, d) -> tuple[float, float]:
+    pot, kin = float(d.energy[0]), float(d.energy[1])  # MuJoCo's order: potential, kinetic
+    if mj.moving_base:  # remove base_A's own energies
+        b = mj.base_body
+        mass = float(m.body_mass[b])
+        vel = np.zeros(6)
+        mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_BODY, b, vel, 1)  # local: (rot, lin) at COM
+        I = np.asarray(m.body_inertia[b])
+        kin -= 0.5 * mass * float(vel[3:] @ vel[3:]) + 0.5 * float(vel[:3] @ (I * vel[:3]))
+        pot += mass * float(m.opt.gravity @ d.xipos[b])
+    return kin, pot
+
+
+def run_mujoco(mj: MjcfModel, scene=None, *, q0=None, qd0=None, t_end: float | None = None,
+               timestep: float | None = None, integrator: str | None = None, samples: int | None = None,
+               base=None, torques: Callable | None = None, loads: Callable | None = None) -> MujocoRun:
+    """Integrate the route-1 model in MuJoCo and sample the trajectory (see module doc).
+
+    Parameters
+    ----------
+    mj : MjcfModel from :func:`compare.mjcf.mjcf_from_model` (or ``mjcf_from_scene``).
+    scene : optional :class:`urdf2links.scene.Scene`: supplies the initial state, ``t_end``,
+        ``samples``, the base motion, joint torques and loads (through
+        :func:`urdf2links.plan.compile_plan`) unless given explicitly here. Its gravity and springs
+        must be the ones ``mj`` was built with (ValueError otherwise).
+    q0, qd0 : (n,) initial state in the project's order (default: the scene's, else zeros).
+    t_end, samples : run length (s) and number of samples (default the scene's, else 1 s, 101).
+    timestep, integrator : override ``mj``'s (the model is copied; ``mj`` is not changed).
+    base : BaseState or callable ``t -> BaseState`` of {A}; needs ``moving_base=True``.
+    torques : callable ``t -> (n,)`` generalized joint forces.
+    loads : callable ``t -> iterable`` of Wrench or ``(tree link index, force, moment, point, frame)``.
+    """
+    model = mj.source
+    notes: list[str] = []
+    if scene is not None:
+        _check_scene(mj, scene)
+        from urdf2links.plan import compile_plan
+
+        plan = compile_plan(scene, model)
+        sq, sqd = scene.initial_state(model)
+        q0 = sq if q0 is None else q0
+        qd0 = sqd if qd0 is None else qd0
+        t_end = scene.run.t_end if t_end is None else t_end
+        samples = scene.run.samples if samples is None else samples
+        if base is None and scene.base is not None:
+            base = plan.base_state
+        if torques is None and plan.torque_funcs:
+            idx, funcs = plan.torque_index, plan.torque_funcs
+
+            def torques(t, _idx=idx, _f=funcs, _n=model.n):
+                tau = np.zeros(_n)
+                np.add.at(tau, _idx, [g(t) for g in _f])
+                return tau
+        if loads is None and plan.loads:
+            loads = plan._wrenches
+    n = mj.n
+    q0 = np.zeros(n) if q0 is None else np.asarray(q0, float)
+    qd0 = np.zeros(n) if qd0 is None else np.asarray(qd0, float)
+    t_end = 1.0 if t_end is None else float(t_end)
+    samples = 101 if samples is None else int(samples)
+    if samples < 1 or not t_end >= 0:
+        raise ValueError(f"need samples >= 1 and t_end >= 0, got {samples}, {t_end}")
+
+    m = copy.deepcopy(mj.model)
+    if timestep is not None:
+        m.opt.timestep = float(timestep)
+    if integrator is not None:
+        if integrator not in INTEGRATORS:
+            raise ValueError(f"integrator must be one of {INTEGRATORS}, got {integrator!r}")
+        m.opt.integrator = int(_INTEGRATOR_ENUM[integrator])
+    integ = mujoco.mjtIntegrator(int(m.opt.integrator)).name.removeprefix("mjINT_")
+    integ = {"EULER": "Euler", "RK4": "RK4", "IMPLICIT": "implicit", "IMPLICITFAST": "implicitfast"}.get(integ, integ)
+    m.opt.enableflags |= int(mujoco.mjtEnableBit.mjENBL_ENERGY)
+    dt = float(m.opt.timestep)
+
+    t_req = np.linspace(0.0, t_end, samples)
+    ks = np.rint(t_req / dt).astype(np.int64)
+    K = int(ks[-1])
+    offset = float(np.max(np.abs(ks * dt - t_req)))
+    if offset > 1e-9 * dt:
+        notes.append(f"timestep {dt:g} s does not divide the sample interval: samples taken at the nearest "
+                     f"steps (largest offset {offset:.3g} s); MujocoRun.t holds the actual times")
+
+    d = mujoco.MjData(m)
+    base_fn = _as_base_fn(base)
+    if mj.moving_base and base_fn is None:
+        notes.append("the model has a base_A body but no base motion was given: base held at the origin")
+    driver = _Driver(mj, m, d, base=base_fn, torques=torques, loads=loads)
+    st0 = driver.base(0.0) if driver.base is not None else None
+    mj.set_state(d, q0, qd0, base=st0)
+    if mj.moving_base and integ not in ("RK4",):
+        notes.append(f"integrator {integ}: the prescribed base is exact only when nothing changes the "
+                     "acceleration after the control callback (RK4; Euler without dampers)")
+
+    m_s = len(ks)
+    t_out = np.empty(m_s)
+    q_out = np.empty((m_s, n))
+    qd_out = np.empty((m_s, n))
+    energy = np.empty((m_s, 2))
+    base_pose = np.empty((m_s, 6)) if mj.moving_base else None
+    track = 0.0
+    j = 0
+    with _Installed(driver):
+        start = _time.perf_counter()
+        for k in range(K + 1):
+            while j < m_s and ks[j] == k:
+                mujoco.mj_forward(m, d)
+                t_out[j] = d.time
+                q_out[j] = d.qpos[mj.qpos_index]
+                qd_out[j] = d.qvel[mj.dof_index]
+                energy[j] = _robot_energy(mj, m, d)
+                if mj.moving_base:
+                    bp = np.array(d.qpos[mj.base_qpos])
+                    base_pose[j] = bp
+                    track = max(track, float(np.max(np.abs(bp - np.asarray(driver.base(float(d.time)).pose)))))
+                j += 1
+            if k < K:
+                mujoco.mj_step(m, d)
+        wall = _time.perf_counter() - start
+    if not np.all(np.isfinite(q_out)):
+        notes.append("MuJoCo's state became non-finite")
+    return MujocoRun(t=t_out, q=q_out, qd=qd_out, energy=energy, base_tracking_error=track, wall_time=wall,
+                     nsteps=K, timestep=dt, integrator=integ, coordinate_names=mj.coordinate_names,
+                     base_pose=base_pose, notes=notes)
+
+
+def _check_scene(mj: MjcfModel, scene) -> None:
+    g_scene = None if scene.gravity is None else np.asarray(scene.gravity, float)
+    if (g_scene is None) != (mj.gravity is None) or (g_scene is not None and not np.allclose(g_scene, mj.gravity, rtol=0, atol=0)):
+        raise ValueError(f"the scene's gravity {None if g_scene is None else g_scene.tolist()} is not the MJCF "
+                         f"model's {None if mj.gravity is None else mj.gravity.tolist()}: build it with mjcf_from_scene")
+    key = lambda s: (s.coordinate, s.stiffness, s.rest, s.damping)  # noqa: E731
+    if sorted(map(key, scene.springs)) != sorted(map(key, mj.springs)):
+        raise ValueError("the scene's springs are not the MJCF model's: build it with mjcf_from_scene")
+    if (scene.base is not None) and not mj.moving_base:
+        raise ValueError("the scene moves the base but the MJCF model has no base_A: build it with mjcf_from_scene")
