@@ -37,7 +37,11 @@ def plot_trajectory(traj, path) -> Path:
     ax.legend(loc="upper right", fontsize=8)
     ax.grid(alpha=0.3)
     ax = axes[2]
-    ax.semilogy(traj.t, np.maximum(np.abs(e["error"]), 1e-300), color="tab:red")
+    err = np.abs(e["error"])
+    positive = err[err > 0]
+    floor = positive.min() / 10 if positive.size else 1e-16
+    ax.semilogy(traj.t[1:], np.maximum(err[1:], floor), color="tab:red")  # h - h(0) - W is 0 at t = 0
+    ax.set_ylim(bottom=floor)
     ax.set_ylabel("|h - h(0) - W| (J)")
     ax.set_xlabel("time (s)")
     ax.grid(alpha=0.3, which="both")

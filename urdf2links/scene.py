@@ -345,11 +345,14 @@ def _robot_path(r: _Reader, t: dict, directory) -> Path:
         p = Path(value)
         p = p if p.is_absolute() else (directory or Path.cwd()) / p
     elif key == "shipped":
-        folder = shipped_robots_dir()
-        p = folder / f"{value}.urdf"
-        if not p.is_file():
-            names = sorted(x.stem for x in folder.glob("*.urdf"))
+        # the scene's own folder (shipped scenes live next to the robots), then the project's robots/
+        # (checkout or editable install), then ./robots
+        folders = [f for f in (directory, shipped_robots_dir(), Path.cwd() / "robots") if f is not None and f.is_dir()]
+        found = [f / f"{value}.urdf" for f in folders if (f / f"{value}.urdf").is_file()]
+        if not found:
+            names = sorted({x.stem for f in folders for x in f.glob("*.urdf")})
             r.fail("robot.shipped", f"no shipped robot {value!r}{_hint(value, names)}; shipped robots are {names}")
+        p = found[0]
     else:
         from importlib.metadata import PackageNotFoundError, distribution
         try:
