@@ -243,3 +243,33 @@ def test_corpus_kinematics_against_yourdfpy(name):
     rng = np.random.default_rng(3)
     for _ in range(3):
         assert _against_yourdfpy(model, robot, rng.uniform(-1.5, 1.5, model.n)) < 1e-10
+
+
+PLANAR_FLOATING = """<robot name="sled">
+  <link name="ground"/>
+  <joint name="table" type="planar"><parent link="ground"/><child link="puck"/>
+    <origin xyz="0 0 0.5" rpy="0.4 0 0"/><axis xyz="0 0 1"/></joint>
+  <link name="puck"><inertial><mass value="2.0"/>
+    <inertia ixx="0.1" iyy="0.2" izz="0.25" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="drone" type="floating"><parent link="ground"/><child link="body"/>
+    <origin xyz="1 0 0" rpy="0 0 0.3"/></joint>
+  <link name="body"><inertial><mass value="1.5"/>
+    <inertia ixx="0.01" iyy="0.02" izz="0.025" ixy="0" ixz="0" iyz="0"/></inertial></link>
+</robot>"""
+
+
+def test_planar_and_floating_joints():
+    """Planar: x, y in the plane normal to the axis and a turn about it; floating: six coordinates.
+    At zero angles with the COM at the link origin, A is diag(m, m, I_axis) and diag(m, m, m, I)."""
+    model = load_urdf_string(PLANAR_FLOATING, inertia="strict")
+    assert model.coordinate_names == ("table.x", "table.y", "table.phi_z",
+                                      "drone.x", "drone.y", "drone.z", "drone.phi_x", "drone.phi_y", "drone.phi_z")
+    A = model.mass_matrix(np.zeros(model.n))
+    np.testing.assert_allclose(A, np.diag([2.0, 2.0, 0.25, 1.5, 1.5, 1.5, 0.01, 0.02, 0.025]), atol=1e-14)
+    # the planar joint's plane is tilted by the origin's roll: sliding along table.y climbs
+    poses = urdf_link_poses(model, np.r_[0.0, 1.0, 0.0, np.zeros(6)])
+    np.testing.assert_allclose(poses["puck"][:3, 3], [0.0, np.cos(0.4), 0.5 + np.sin(0.4)], atol=1e-14)
+    # the floating joint's translations are along the joint frame's axes (origin yaw 0.3)
+    poses = urdf_link_poses(model, np.r_[np.zeros(3), 1.0, 0.0, 0.0, 0, 0, 0])
+    np.testing.assert_allclose(poses["body"][:3, 3], [1 + np.cos(0.3), np.sin(0.3), 0.0], atol=1e-14)
+    assert np.linalg.eigvalsh(model.mass_matrix(np.random.default_rng(1).uniform(-1, 1, model.n))).min() > 0

@@ -248,3 +248,19 @@ def test_shipped_scenes_run_and_balance_energy(scene_file):
     assert traj.stats["success"]
     # the scenes run DOP853 at rtol <= 1e-9: the balance holds far below that
     assert traj.energy_error < 1e-8
+
+
+def test_progress_bar_draws_only_when_enabled():
+    import io
+
+    from urdf2links.simulate import Progress
+    stream = io.StringIO()
+    bar = Progress(2.0, label="run", enabled=True, stream=stream)
+    bar(1.0)
+    bar.close()
+    assert "100.0%" in stream.getvalue() and "run [" in stream.getvalue()
+    quiet = io.StringIO()
+    off = Progress(2.0, stream=quiet)  # a StringIO is not a terminal: silent
+    off(1.0)
+    off.close()
+    assert quiet.getvalue() == ""
