@@ -10,22 +10,18 @@ joint type...).  A summary groups the refusals by reason.
 from __future__ import annotations
 
 import argparse
-import importlib.metadata
 import re
 import sys
 from collections import Counter
 from pathlib import Path
 
+from urdf2links.locations import example_robot_data_dir
+
 from .mujoco_urdf import MujocoRefused, mujoco_from_urdf
 
 
 def corpus_root() -> Path | None:
-    try:
-        dist = importlib.metadata.distribution("example-robot-data")
-    except importlib.metadata.PackageNotFoundError:
-        return None
-    root = Path(dist.locate_file("cmeel.prefix/share/example-robot-data/robots"))
-    return root if root.is_dir() else None
+    return example_robot_data_dir()
 
 
 def _reason_kind(reason: str) -> str:

@@ -2,21 +2,14 @@
 
 from __future__ import annotations
 
-from importlib.metadata import PackageNotFoundError, distribution
 from pathlib import Path
 
 import pytest
 
-
-def corpus_root() -> Path | None:
-    try:
-        root = Path(distribution("example-robot-data").locate_file("cmeel.prefix/share/example-robot-data/robots"))
-    except PackageNotFoundError:
-        return None
-    return root if root.is_dir() else None
+from urdf2links.locations import example_robot_data_dir
 
 
-ROOT = corpus_root()
+ROOT = example_robot_data_dir()
 SKIP_REASON = "example-robot-data is not installed (pip install -e '.[test]' installs it)"
 needs_corpus = pytest.mark.skipif(ROOT is None, reason=SKIP_REASON)
 

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
-import importlib.metadata
 import logging
 from pathlib import Path
 
 import numpy as np
 import pytest
+
+from urdf2links.locations import example_robot_data_dir
 
 from urdf2links.errors import (
     MeshError,
@@ -410,12 +411,7 @@ def test_parse_resolves_package_meshes_and_require_mesh(workspace):
 
 
 def _corpus_root() -> Path | None:
-    try:
-        dist = importlib.metadata.distribution("example-robot-data")
-    except importlib.metadata.PackageNotFoundError:
-        return None
-    root = Path(dist.locate_file("cmeel.prefix/share/example-robot-data/robots"))
-    return root if root.is_dir() else None
+    return example_robot_data_dir()
 
 
 CORPUS = _corpus_root()

@@ -22,11 +22,9 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass, field
-from pathlib import Path
-
 import numpy as np
 
-from .description import JointDescription, RobotDescription
+from .description import RobotDescription
 from .errors import InertiaError, MeshError, URDFError, URDFValueError
 from .inertia import (audit_pseudo_inertia, combined_geometry_inertia, inertial_from_pseudo,
                       nearest_consistent, pseudo_inertia)

@@ -53,6 +53,7 @@ import numpy as np
 from .errors import SceneError
 from .functions import Constant, SceneValueError, TimeFunction, VectorFunction, parse_function, vector_function
 from .integrators import METHODS
+from .locations import example_robot_data_dir, shipped_robots_dir
 from .transforms import PARAMETERS
 
 __all__ = ["Scene", "AppliedLoad", "Spring", "RunSettings", "load_scene", "shipped_robots_dir"]
@@ -61,11 +62,6 @@ _TOP = ("description", "chaotic", "robot", "gravity", "base", "force", "moment",
         "initial", "run", "record")
 _ROBOT = ("urdf", "shipped", "example_robot_data", "floating_base", "inertia", "mimic", "package_dirs")
 _RUN = ("t_end", "method", "rtol", "atol", "dt", "samples")
-
-
-def shipped_robots_dir() -> Path:
-    """The project's ``robots/`` folder (next to the package in a checkout or editable install)."""
-    return Path(__file__).resolve().parent.parent / "robots"
 
 
 @dataclass(frozen=True)
@@ -354,10 +350,8 @@ def _robot_path(r: _Reader, t: dict, directory) -> Path:
             r.fail("robot.shipped", f"no shipped robot {value!r}{_hint(value, names)}; shipped robots are {names}")
         p = found[0]
     else:
-        from importlib.metadata import PackageNotFoundError, distribution
-        try:
-            root = Path(distribution("example-robot-data").locate_file("cmeel.prefix/share/example-robot-data/robots"))
-        except PackageNotFoundError:
+        root = example_robot_data_dir()
+        if root is None:
             r.fail("robot.example_robot_data", "the example-robot-data package is not installed (pip install example-robot-data)")
         p = root / value
     if not p.is_file():

@@ -114,7 +114,7 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
     loaded model of the scene's robot; ``progress`` forces the progress bar on or off (default: on
     for a terminal).
     """
-    from .scene import load_scene, scene_from_dict
+    from .scene import load_scene
 
     if isinstance(scene_or_model, (str, Path)):
         scene_or_model = load_scene(scene_or_model)

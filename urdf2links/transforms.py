@@ -11,8 +11,6 @@ Every elementary matrix is a one-parameter group ``E_k(v) = exp(v * D_k)``, so
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable
-
 import numpy as np
 
 __all__ = [
