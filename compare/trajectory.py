@@ -1,0 +1,518 @@
+"""One scene run by both engines and compared: terms, trajectories, energies, base, wall time.
+
+:func:`compare_scene` is the MuJoCo cross-validation of one scene (DESIGN.md, "MuJoCo comparison"):
+
+1. **Terms at identical states.** At ``states`` seeded random states (``q`` uniform in
+   [-1, 1] rad or m, ``qd`` standard normal; with a moving base also a random base pose
+   (uniform in [-1, 1]) and rate (standard normal), accelerations zero since ``qfrc_bias``
+   holds none), ``A`` against ``mj_fullM`` and ``e + G`` (the scene's gravity) against
+   ``qfrc_bias``, as ``max|ours - MuJoCo| / max|MuJoCo|``:
+
+   * route 1: the project's own tree written as MJCF (:mod:`compare.mjcf`), built for the scene
+     (its gravity, springs, moving base);
+   * route 2: MuJoCo's own URDF import of the robot's file (:func:`compare.terms.compare_terms_urdf`),
+     only for a fixed-base robot. When MuJoCo refuses the file, its reason is recorded and the
+     comparison is repeated with the project's repair (the repaired inertias written into the
+     text; a 1 g sphere on each massless moving link on BOTH sides when MuJoCo refuses those),
+     labelled as such.
+
+2. **Trajectories.** The project's :func:`urdf2links.simulate.simulate` and MuJoCo
+   (:func:`compare.mujoco_run.run_mujoco`, route 1, base motion prescribed, the scene's torques
+   and loads) from the same initial state; ``|q_ours - q_MuJoCo|`` per coordinate at MuJoCo's
+   sample times (the project's dense output when the times differ). For every scene the
+   divergence time (first time the largest coordinate error exceeds ``threshold``, default
+   :data:`DIVERGENCE_THRESHOLD`); for a chaotic scene (``scene.chaotic``) also a fitted
+   exponential growth rate (:func:`growth_fit`), reported as chaos, not as failure.
+
+3. **Energy.** ``E + V`` of both engines (MuJoCo's ``mjENBL_ENERGY``) against time, and the drift
+   of each: ``max |h - h(0) - W|`` (``h = E + V`` for a fixed base, ``W`` the work of torques,
+   forces, dampers and the base). With no work terms, MuJoCo's drift is ``max |(E + V) - (E +
+   V)(0)|`` of its own numbers; with work terms the project's ``W`` (integrated along its own
+   trajectory) is used for both, and ``notes`` says so. With a moving base ``h`` is the energy
+   function ``E2 - E0 + V`` (the conserved quantity's generalization), for MuJoCo from its own
+   kinetic energies at ``qd``, ``-qd`` and ``0`` (``h = (E(qd) + E(-qd)) / 2 - 2 E(0) + V``) at its
+   states and the prescribed base.
+
+4. **Base tracking** (moving base): how far MuJoCo's ``base_A`` is from the prescribed pose.
+
+5. **Wall time** of each engine's integration loop (not checked against baselines).
+
+:meth:`SceneComparison.summary` is the JSON-ready dictionary; the report is written by
+:mod:`compare.report`.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import time
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import mujoco
+import numpy as np
+
+from urdf2links.plan import compile_plan
+from urdf2links.scene import Scene, load_scene
+from urdf2links.simulate import Trajectory, simulate
+from urdf2links.transforms import BaseState
+
+from .mjcf import MjcfModel, mjcf_from_scene
+from .mujoco_run import MujocoRun, _robot_energy, run_mujoco
+from .mujoco_urdf import MujocoRefused
+from .terms import compare_terms_urdf
+
+__all__ = [
+    "SceneComparison",
+    "compare_scene",
+    "route1_terms",
+    "route2_terms",
+    "growth_fit",
+    "divergence_time",
+    "scene_key",
+    "DIVERGENCE_THRESHOLD",
+    "ROUTE1_LABEL",
+    "MASSLESS_SPHERE_KG",
+]
+
+#: Error (rad or m, largest over the coordinates) whose first crossing is the divergence time.
+DIVERGENCE_THRESHOLD = 1e-3
+#: Mass (kg) of the sphere put on each massless moving link when MuJoCo refuses them (route 2).
+MASSLESS_SPHERE_KG = 1e-3
+ROUTE1_LABEL = "route 1: the project's tree as MJCF (same frames, H, coordinates; only the scene's effects)"
+
+
+def scene_key(scene: Scene) -> str:
+    """``"<robot>/<scene>"``: the URDF file's stem and the scene's name (the baselines' key and the
+    report's folder)."""
+    return f"{Path(scene.robot).stem}/{scene.name}"
+
+
+# --------------------------------------------------------------------------- terms
+
+
+def _rel(ours, theirs, floor: float = 0.0) -> float:
+    theirs = np.asarray(theirs, float)
+    if theirs.size == 0:
+        return 0.0
+    diff = float(np.max(np.abs(np.asarray(ours, float) - theirs)))
+    scale = float(np.max(np.abs(theirs)))
+    if scale <= 1e-12 * floor:
+        scale = floor
+    if scale == 0.0:
+        return 0.0 if diff == 0.0 else math.inf
+    return diff / scale
+
+
+def _with_gravity(model, gravity):
+    """A shallow copy of ``model`` whose gravity is ``gravity`` (zero when None)."""
+    g = np.zeros(3) if gravity is None else np.asarray(gravity, float)
+    if np.array_equal(np.asarray(model.gravity_vector), g):
+        return model
+    out = copy.copy(model)
+    g = g.copy()
+    g.setflags(write=False)
+    out.gravity_vector = g
+    return out
+
+
+def route1_terms(mj: MjcfModel, model, scene: Scene, *, states: int = 8, seed: int = 0) -> dict:
+    """Route 1: ``A`` vs ``mj_fullM`` and ``e + G`` vs ``qfrc_bias`` of the scene's MJCF model at
+    seeded random states (see the module doc). Returns a JSON-ready dict."""
+    ours = _with_gravity(model, scene.gravity)
+    rng = np.random.default_rng(seed)
+    n = model.n
+    err_A = err_b = 0.0
+    per_state = []
+    start = time.perf_counter()
+    for _ in range(states):
+        q = rng.uniform(-1.0, 1.0, n)
+        qd = rng.standard_normal(n)
+        bs = None
+        if mj.moving_base:
+            bs = BaseState(rng.uniform(-1.0, 1.0, 6), rng.standard_normal(6), np.zeros(6))
+        M, bias = mj.terms(q, qd, base=bs)
+        A = ours.mass_matrix(q, base=bs)
+        eG = ours.bias(q, qd, base=bs)
+        if scene.gravity is not None:
+            eG = eG + ours.gravity(q, base=bs)
+        floor = float(np.max(np.abs(M))) * max(1.0, float(np.max(np.abs(qd))) ** 2) if n else 0.0
+        ra, rb = _rel(A, M), _rel(eG, bias, floor)
+        per_state.append([ra, rb])
+        err_A, err_b = max(err_A, ra), max(err_b, rb)
+    return {
+        "label": ROUTE1_LABEL,
+        "route": "mjcf",
+        "max_rel_error_A": err_A,
+        "max_rel_error_bias": err_b,
+        "max_rel_error": max(err_A, err_b),
+        "states": states,
+        "seed": seed,
+        "moving_base": bool(mj.moving_base),
+        "per_state": per_state,
+        "wall_time_s": time.perf_counter() - start,
+        "notes": list(mj.notes),
+    }
+
+
+def route2_terms(scene: Scene, *, states: int = 8, seed: int = 0) -> dict:
+    """Route 2: MuJoCo's own URDF import of the scene's robot file against the project's import.
+
+    Tried in order until MuJoCo accepts a text: the file as the scene loads it; the project's
+    repair (``inertia="repair"``) written into the text; that plus a
+    :data:`MASSLESS_SPHERE_KG` sphere on each massless moving link on both sides. Every refusal
+    is recorded (``refusals``); ``label`` says which route produced the figures. A floating-base
+    robot is skipped (``skipped`` says why); so is a file MuJoCo refuses in every form
+    (``error``). Returns a JSON-ready dict."""
+    opts = dict(scene.load_options)
+    if opts.get("floating_base"):
+        return {"route": None, "label": "route 2: skipped", "skipped":
+                "floating base: route 2 (MuJoCo's URDF import) is compared for fixed-base robots only"}
+    from urdf2links import load_urdf
+
+    base_opts = {k: v for k, v in opts.items() if k in ("package_dirs",)}
+    inertia = opts.get("inertia", "audit")
+    attempts = [(inertia, None)]
+    if inertia != "repair":
+        attempts.append(("repair", None))
+    attempts.append(("repair", MASSLESS_SPHERE_KG))
+    refusals: list[dict] = []
+    start = time.perf_counter()
+    result = None
+    for how, sphere in attempts:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            try:
+                model = load_urdf(scene.robot, floating_base=False, inertia=how, mimic="independent", **base_opts)
+            except Exception as err:  # strict import refuses: try the next form
+                refusals.append({"attempt": _attempt(how, sphere), "by": "urdf2links", "reason": str(err)})
+                continue
+        model = _with_gravity(model, scene.gravity)
+        try:
+            result = compare_terms_urdf(scene.robot, model, states=states, seed=seed, massless_moving=sphere)
+            break
+        except MujocoRefused as err:
+            refusals.append({"attempt": _attempt(how, sphere), "by": "MuJoCo", "reason": err.reason})
+        except ValueError as err:
+            return {"route": None, "label": "route 2: not applicable", "skipped": str(err),
+                    "wall_time_s": time.perf_counter() - start}
+    if result is None:
+        return {"route": None, "label": "route 2: MuJoCo refuses the file", "error": refusals[-1]["reason"] if refusals
+                else "no attempt", "refusals": refusals, "wall_time_s": time.perf_counter() - start}
+    if result.route == "mujoco-urdf":
+        label = "route 2: MuJoCo's own URDF import of the file as written"
+    elif sphere is None:
+        label = "route 2, REPAIRED: MuJoCo refused the file; compared on the project's repaired text"
+    else:
+        label = (f"route 2, REPAIRED: MuJoCo refused the file; compared on the project's repaired text with a "
+                 f"{sphere * 1e3:g} g sphere on each massless moving link on both sides")
+    return {
+        "label": label,
+        "route": result.route,
+        "refusal": result.refusal,
+        "refusals": refusals,
+        "max_rel_error_A": result.max_rel_error_A,
+        "max_rel_error_bias": result.max_rel_error_bias,
+        "max_rel_error": result.max_rel_error,
+        "states": result.states,
+        "seed": seed,
+        "notes": list(result.notes),
+        "wall_time_s": time.perf_counter() - start,
+    }
+
+
+def _attempt(how: str, sphere: float | None) -> str:
+    if sphere is not None:
+        return (f"the project's repair (inertia='repair') plus a {sphere * 1e3:g} g sphere on each massless "
+                "moving link, on both sides")
+    return "the file as written" if how != "repair" else "the project's repair written into the text (inertia='repair')"
+
+
+# --------------------------------------------------------------------------- trajectory analysis
+
+
+def divergence_time(t, err, threshold: float = DIVERGENCE_THRESHOLD) -> float | None:
+    """First time at which ``err`` (m,) exceeds ``threshold``; None if it never does."""
+    above = np.nonzero(np.asarray(err) > threshold)[0]
+    return float(t[above[0]]) if above.size else None
+
+
+def growth_fit(t, err, *, end_time: float | None = None, rise: float = 10.0, min_samples: int = 10) -> dict | None:
+    """Exponential growth ``err ~ C exp(rate t)`` fitted by least squares to ``log`` of the error's
+    running maximum (its envelope; a difference that oscillates through zero has no log) over
+    the growth phase: from the first time the envelope exceeds ``rise`` times the noise level
+    (the envelope over the first 5 % of the run, the integrators' own error) up to ``end_time``
+    (the divergence time; else the end of the run). None when the error never rises out of the
+    noise or the phase has fewer than ``min_samples`` samples. Returns ``rate`` (1/s),
+    ``e_folding_time`` (s), ``log10_intercept``, ``window`` [t0, t1], ``samples``, ``decades``."""
+    t = np.asarray(t, float)
+    env = np.maximum.accumulate(np.abs(np.asarray(err, float)))
+    if t.size < min_samples or not np.any(env > 0):
+        return None
+    k0 = max(3, int(0.05 * t.size))
+    early = env[:k0]
+    noise = float(early[early > 0].max()) if np.any(early > 0) else float(env[env > 0].min())
+    start = np.nonzero(env > rise * noise)[0]
+    if not start.size:
+        return None
+    i0 = int(start[0])
+    i1 = t.size - 1 if end_time is None else int(np.searchsorted(t, end_time, side="right") - 1)
+    if i1 - i0 + 1 < min_samples:
+        return None
+    tt, yy = t[i0:i1 + 1], np.log(env[i0:i1 + 1])
+    rate, intercept = np.polyfit(tt, yy, 1)
+    return {"rate": float(rate), "e_folding_time": float(1.0 / rate) if rate > 0 else None,
+            "log10_intercept": float(intercept / np.log(10.0)), "window": [float(tt[0]), float(tt[-1])],
+            "samples": int(tt.size), "decades": float((yy[-1] - yy[0]) / np.log(10.0))}
+
+
+# --------------------------------------------------------------------------- the comparison
+
+
+@dataclass(eq=False)
+class SceneComparison:
+    """Everything :func:`compare_scene` measured, with the arrays the report plots.
+
+    ``t`` (m,) MuJoCo's sample times; ``q_ours``/``q_mujoco`` (m, n) there; ``error`` (m, n)
+    ``|q_ours - q_mujoco|``; ``energy``: dict of (m,) arrays ``ours_EV``, ``mujoco_EV``
+    (kinetic + potential), ``ours_balance``, ``mujoco_balance`` (``h - h(0) - W``), ``work``;
+    ``terms``: ``{"route1": ..., "route2": ...}``; ``growth``: :func:`growth_fit` or None;
+    ``info``: settings and notes. :meth:`summary` is the JSON contract.
+    """
+
+    scene: Scene
+    model: object
+    mj: MjcfModel
+    traj: Trajectory
+    run: MujocoRun
+    t: np.ndarray
+    q_ours: np.ndarray
+    q_mujoco: np.ndarray
+    error: np.ndarray
+    energy: dict
+    terms: dict
+    growth: dict | None
+    threshold: float
+    info: dict = field(default_factory=dict)
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def key(self) -> str:
+        return scene_key(self.scene)
+
+    @property
+    def coordinate_names(self) -> tuple[str, ...]:
+        return tuple(self.model.coordinate_names)
+
+    def summary(self) -> dict:
+        """The JSON-ready summary. Contract keys (nested): ``terms.max_rel_error``,
+        ``trajectory.max_abs_error``, ``trajectory.divergence_time`` (None if none),
+        ``energy.project_drift``, ``energy.mujoco_drift``, ``wall_time.project_s``,
+        ``wall_time.mujoco_s``, ``mujoco.integrator``, ``mujoco.timestep``, ``route``."""
+        sc, run, traj = self.scene, self.run, self.traj
+        err_max = self.error.max(axis=1) if self.error.size else np.zeros(len(self.t))
+        div = divergence_time(self.t, err_max, self.threshold)
+        r1, r2 = self.terms["route1"], self.terms["route2"]
+        term_max = max([r["max_rel_error"] for r in (r1, r2) if "max_rel_error" in r])
+        by_coord = {c: float(v) for c, v in zip(self.coordinate_names, self.error.max(axis=0))} if self.error.size else {}
+        e = self.energy
+        trajectory = {
+            "max_abs_error": float(err_max.max()) if err_max.size else 0.0,
+            "max_abs_error_by_coordinate": by_coord,
+            "final_abs_error": float(err_max[-1]) if err_max.size else 0.0,
+            "divergence_time": div,
+            "divergence_threshold": self.threshold,
+            "chaotic": bool(sc.chaotic),
+            "growth_rate": None if self.growth is None else self.growth["rate"],
+            "growth": self.growth,
+            "units": "rad for angles, m for translations",
+        }
+        if sc.chaotic:
+            g = self.growth
+            trajectory["verdict"] = (
+                "chaotic scene: the engines' difference grows exponentially"
+                + (f" (rate {g['rate']:.3g} /s, e-folding {g['e_folding_time']:.3g} s, fitted over "
+                   f"t = {g['window'][0]:.3g}..{g['window'][1]:.3g} s)" if g and g.get("e_folding_time") else "")
+                + (f"; they diverge (error > {self.threshold:g}) at t = {div:.4g} s" if div is not None else
+                   f"; no divergence (error > {self.threshold:g}) within the run")
+                + ". This is chaos, not a failure.")
+        else:
+            trajectory["verdict"] = (f"the engines agree to {trajectory['max_abs_error']:.2e} over the run"
+                                     if div is None else
+                                     f"the engines DIVERGE at t = {div:.4g} s (error > {self.threshold:g}) in a "
+                                     "scene that is not marked chaotic")
+        energy = {
+            "project_drift": float(np.max(np.abs(e["ours_balance"]))),
+            "mujoco_drift": float(np.max(np.abs(e["mujoco_balance"]))),
+            "scale": float(self.info["energy_scale"]),
+            "project_drift_rel": float(np.max(np.abs(e["ours_balance"])) / self.info["energy_scale"]),
+            "mujoco_drift_rel": float(np.max(np.abs(e["mujoco_balance"])) / self.info["energy_scale"]),
+            "max_engine_difference": float(np.max(np.abs(e["ours_EV"] - e["mujoco_EV"]))),
+            "quantity": self.info["energy_quantity"],
+            "work_terms": bool(self.info["work_terms"]),
+            "units": "J",
+            "note": self.info["energy_note"],
+        }
+        moving = self.mj.moving_base
+        return {
+            "schema": 1,
+            "key": self.key,
+            "robot": Path(sc.robot).stem,
+            "robot_name": self.model.name,
+            "scene": sc.name,
+            "scene_file": str(sc.path) if sc.path else None,
+            "description": sc.description,
+            "chaotic": bool(sc.chaotic),
+            "effects": list(self.info["effects"]),
+            "coordinates": list(self.coordinate_names),
+            "route": "route 1 (the project's tree as MJCF)",
+            "route_description": ROUTE1_LABEL + ("; base motion prescribed" if moving else ""),
+            "t_end": float(self.info["t_end"]),
+            "t_end_scene": float(sc.run.t_end),
+            "t_end_note": self.info.get("t_end_note"),
+            "samples": int(len(self.t)),
+            "initial": {"q": self.info["q0"], "qd": self.info["qd0"]},
+            "project": {"method": traj.stats["method"], "rtol": traj.stats["rtol"], "atol": traj.stats["atol"],
+                        "dt": traj.stats["dt"], "nsteps": int(traj.stats["nsteps"]), "nfev": int(traj.stats["nfev"]),
+                        "terms": list(traj.stats["terms"])},
+            "mujoco": {"integrator": run.integrator, "timestep": float(run.timestep), "nsteps": int(run.nsteps),
+                       "version": mujoco.__version__, "folded_links": list(self.mj.folded_links),
+                       "tiny_mass_links": list(self.mj.tiny_mass_links), "notes": list(run.notes)},
+            "terms": {"max_rel_error": float(term_max),
+                      "max_rel_error_route1": float(r1["max_rel_error"]),
+                      "max_rel_error_route2": r2.get("max_rel_error"),
+                      "route1": r1, "route2": r2},
+            "trajectory": trajectory,
+            "energy": energy,
+            "base": {"moving": bool(moving),
+                     "tracking_error": float(run.base_tracking_error) if moving else None},
+            "wall_time": {"project_s": float(traj.stats["wall_time"]), "mujoco_s": float(run.wall_time),
+                          "terms_s": float(r1.get("wall_time_s", 0.0) + r2.get("wall_time_s", 0.0)),
+                          "total_s": float(self.info["total_s"]),
+                          "note": "integration loops only (sampling included); not checked against baselines"},
+            "notes": list(self.notes),
+        }
+
+
+def _mujoco_energy_function(mj: MjcfModel, run: MujocoRun, plan) -> np.ndarray:
+    """MuJoCo's energy function ``h = (E(qd) + E(-qd)) / 2 - 2 E(0) + V`` at its own states, with
+    the prescribed base's pose and rate (moving base only)."""
+    m = copy.deepcopy(mj.model)
+    m.opt.enableflags |= int(mujoco.mjtEnableBit.mjENBL_ENERGY)
+    d = mujoco.MjData(m)
+    h = np.empty(len(run.t))
+    for i, t in enumerate(run.t):
+        bs = plan.base_state(float(t))
+        kin = []
+        for v in (-run.qd[i], np.zeros_like(run.qd[i])):
+            mj.set_state(d, run.q[i], v, base=bs)
+            mujoco.mj_forward(m, d)
+            kin.append(_robot_energy(mj, m, d)[0])
+        h[i] = 0.5 * (run.kinetic[i] + kin[0]) - 2.0 * kin[1] + run.potential[i]
+    return h
+
+
+def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str = "RK4", mujoco_dt: float = 1e-4,
+                  method: str | None = None, rtol: float | None = None, atol: float | None = None,
+                  samples: int | None = None, states: int = 8, seed: int = 0,
+                  threshold: float = DIVERGENCE_THRESHOLD, t_end_note: str | None = None,
+                  progress: bool | None = None, log: Callable[[str], None] | None = None) -> SceneComparison:
+    """Run ``scene`` (a :class:`~urdf2links.scene.Scene` or a path to its TOML) with the project's
+    integrator (the scene's ``[run]`` unless ``method``/``rtol``/``atol`` say otherwise) and with
+    MuJoCo (``mujoco_integrator``, ``mujoco_dt``) over ``t_end`` (default the scene's) and compare
+    them (module doc). ``samples`` defaults to the scene's, scaled down with a shortened
+    ``t_end`` (at least 101). ``t_end_note`` is recorded when the caller capped ``t_end``.
+    ``log(message)`` receives stage messages; ``progress`` the project's progress bar."""
+    start = time.perf_counter()
+    say = log or (lambda _m: None)
+    if isinstance(scene, (str, Path)):
+        scene = load_scene(scene)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # audit findings: the scene chose how to load its robot
+        model = scene.model()
+    T = float(scene.run.t_end if t_end is None else t_end)
+    if samples is None:
+        s = scene.run.samples
+        samples = s if T >= scene.run.t_end else max(101, int(round((s - 1) * T / scene.run.t_end)) + 1)
+    plan = compile_plan(scene, model)
+    notes: list[str] = []
+
+    say(f"terms at {states} seeded states (route 1" + (", route 2)" if not scene.load_options.get("floating_base")
+                                                       else ")"))
+    mj = mjcf_from_scene(scene, model, timestep=mujoco_dt, integrator=mujoco_integrator)
+    terms = {"route1": route1_terms(mj, model, scene, states=states, seed=seed),
+             "route2": route2_terms(scene, states=states, seed=seed)}
+
+    meth = method or scene.run.method
+    say(f"project: {meth}" + (f" rtol {rtol or scene.run.rtol:g}" if meth not in ("RK4", "midpoint") else "")
+        + f", t = 0..{T:g} s")
+    traj = simulate(scene, model=model, t_end=T, method=method, rtol=rtol, atol=atol, samples=samples,
+                    progress=progress)
+    say(f"MuJoCo: {mujoco_integrator} dt {mujoco_dt:g}, {int(round(T / mujoco_dt))} steps")
+    run = run_mujoco(mj, scene, t_end=T, samples=samples)
+
+    # the project's state at MuJoCo's sample times
+    t = np.asarray(run.t, float)
+    n = model.n
+    if traj.t.shape == t.shape and np.max(np.abs(traj.t - t)) <= 1e-12 * max(1.0, T):
+        q_o, qd_o, W = traj.q, traj.qd, traj.energy["work"]
+        EV_o = traj.energy["kinetic"] + traj.energy["potential"]
+        h_o = traj.energy["function"]
+    else:
+        if traj.sol is None:
+            raise RuntimeError("the project's run has no dense output to sample at MuJoCo's times")
+        Y = traj.sol(np.clip(t, traj.t[0], traj.t[-1]))
+        q_o, qd_o, W = Y[:, :n], Y[:, n:2 * n], Y[:, 2 * n]
+        E = np.array([plan.kinetic_energy(ti, a, b) for ti, a, b in zip(t, q_o, qd_o)])
+        V = np.array([plan.potential_energy(ti, a) for ti, a in zip(t, q_o)])
+        EV_o = E + V
+        h_o = EV_o if scene.base is None else np.array([plan.energy_function(ti, a, b)
+                                                          for ti, a, b in zip(t, q_o, qd_o)])
+        notes.append("MuJoCo's sample times differ from the project's: the project's dense output was "
+                     "evaluated at MuJoCo's times")
+
+    error = np.abs(q_o - run.q)
+    err_max = error.max(axis=1) if n else np.zeros(len(t))
+    div = divergence_time(t, err_max, threshold)
+    growth = growth_fit(t, err_max, end_time=div) if scene.chaotic else None
+
+    work_terms = any(term in plan.terms for term in ("Q", "tau", "damper", "base"))
+    EV_m = run.total_energy
+    if scene.base is not None:
+        h_m = _mujoco_energy_function(mj, run, plan)
+        quantity, sym = "h = E2 - E0 + V (energy function; moving base)", "h"
+    else:
+        h_m = EV_m
+        quantity, sym = "E + V", "(E + V)"
+    bal_o = h_o - h_o[0] - W
+    if work_terms:
+        bal_m = h_m - h_m[0] - W
+        what = [w for w, on in (("forces/moments", "Q" in plan.terms), ("joint torques", "tau" in plan.terms),
+                                ("dampers", "damper" in plan.terms), ("the moving base", "base" in plan.terms)) if on]
+        energy_note = (f"work terms present ({', '.join(what)}): both drifts use the project's work W "
+                       f"(integrated along the project's trajectory): max |{sym} - {sym}(0) - W|")
+        if scene.base is not None:
+            energy_note += ("; MuJoCo's h from its own kinetic energies at qd, -qd and 0 at its states and the "
+                            "prescribed base")
+    else:
+        bal_m = h_m - h_m[0]
+        energy_note = "no work terms: MuJoCo's drift is max |(E + V) - (E + V)(0)| of its own energies"
+    scale = max(float(np.abs(traj.energy["kinetic"]).max()),
+                float(np.abs(traj.energy["potential"] - traj.energy["potential"][0]).max()),
+                float(np.abs(traj.energy["work"]).max()), 1e-300)
+    notes += [f"MJCF: {x}" for x in mj.notes] + [f"MuJoCo run: {x}" for x in run.notes]
+    if t_end_note:
+        notes.insert(0, t_end_note)
+    q0, qd0 = scene.initial_state(model)
+    info = {"t_end": T, "t_end_note": t_end_note, "effects": plan.terms, "energy_scale": scale,
+            "energy_quantity": quantity, "energy_note": energy_note, "work_terms": work_terms,
+            "q0": dict(zip(model.coordinate_names, q0.tolist())),
+            "qd0": dict(zip(model.coordinate_names, qd0.tolist())),
+            "total_s": time.perf_counter() - start}
+    return SceneComparison(
+        scene=scene, model=model, mj=mj, traj=traj, run=run, t=t, q_ours=q_o, q_mujoco=run.q, error=error,
+        energy={"ours_EV": EV_o, "mujoco_EV": EV_m, "ours_h": h_o, "mujoco_h": h_m, "ours_balance": bal_o,
+                "mujoco_balance": bal_m, "work": W},
+        terms=terms, growth=growth, threshold=threshold, info=info, notes=notes)
