@@ -11,7 +11,9 @@ from .mujoco_urdf import (
     mujoco_from_urdf,
     mujoco_terms,
 )
+from .report import CheckResult, check_baseline, load_baselines, write_baselines, write_index, write_report
 from .terms import TermsComparison, compare_terms_urdf, massless_moving_links, repaired_urdf_text
+from .trajectory import DIVERGENCE_THRESHOLD, SceneComparison, compare_scene, growth_fit, scene_key
 
 __all__ = [
     "MjcfModel",
@@ -31,4 +33,15 @@ __all__ = [
     "compare_terms_urdf",
     "massless_moving_links",
     "repaired_urdf_text",
+    "SceneComparison",
+    "compare_scene",
+    "growth_fit",
+    "scene_key",
+    "DIVERGENCE_THRESHOLD",
+    "CheckResult",
+    "check_baseline",
+    "load_baselines",
+    "write_baselines",
+    "write_index",
+    "write_report",
 ]

@@ -1,4 +1,6 @@
-"""Command line: ``urdf2links inspect FILE.urdf|SCENE.toml``, ``urdf2links simulate SCENE.toml``."""
+"""Command line: ``urdf2links inspect FILE.urdf|SCENE.toml``, ``urdf2links simulate SCENE.toml``,
+``urdf2links compare SCENE.toml`` and ``urdf2links report`` (the MuJoCo comparison: the handlers import
+the ``compare`` package, and with it MuJoCo, only when they run)."""
 
 from __future__ import annotations
 
@@ -95,6 +97,29 @@ def _simulate(args) -> int:
     return 0
 
 
+def _compare(args) -> int:
+    from compare.cli import compare_command
+
+    return compare_command(args)
+
+
+def _report(args) -> int:
+    from compare.cli import report_command
+
+    return report_command(args)
+
+
+def _add_mujoco_options(p) -> None:
+    p.add_argument("--mujoco-integrator", default="RK4", choices=("RK4", "Euler", "implicit", "implicitfast"),
+                   help="MuJoCo's integrator (default RK4)")
+    p.add_argument("--mujoco-dt", type=float, default=1e-4, help="MuJoCo's timestep in s (default 1e-4)")
+    p.add_argument("--t-end", type=float, help="run length in s (default: the scene's [run] t_end)")
+    p.add_argument("--states", type=int, default=8, help="seeded random states for the terms (default 8)")
+    p.add_argument("--factor", type=float, help="allowed growth of an error over its baseline (default: the "
+                   "baselines file's factor, 10)")
+    p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="urdf2links", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
@@ -115,6 +140,33 @@ def main(argv=None) -> int:
     p.add_argument("--plot", action="store_true", help="also plot coordinates and energy against time (PNG)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_simulate)
+    p = sub.add_parser("compare", help="run a scene with urdf2links and MuJoCo and write the comparison report",
+                       description="Run a scene with urdf2links and with MuJoCo (route 1: the project's tree as MJCF, "
+                                   "base motion prescribed) from the same initial state; compare the terms at identical "
+                                   "states (routes 1 and 2), the trajectories, the energies and the wall times; write "
+                                   "report.html, summary.json and summary.md.")
+    p.add_argument("scene", help="a scene .toml file")
+    _add_mujoco_options(p)
+    p.add_argument("--method", help="the project's integrator (default: the scene's)")
+    p.add_argument("--rtol", type=float, help="the project's rtol (default: the scene's)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the random states (default 0)")
+    p.add_argument("--out", help="folder of the report (default reports/<robot>/<scene>/)")
+    p.add_argument("--json", help="also write the summary JSON to this file")
+    p.add_argument("--check", metavar="BASELINE.json", help="exit 1, naming the figure, when a discrepancy grew "
+                   "past its baseline (wall times are not checked)")
+    p.set_defaults(func=_compare)
+    p = sub.add_parser("report", help="compare every shipped scene with MuJoCo; reports and an index page",
+                       description="Run `compare` on every shipped scene (robots/*.toml, or the scenes given) and "
+                                   "write reports/<robot>/<scene>/ and reports/index.html. Progress on stderr.")
+    p.add_argument("scenes", nargs="*", help="scene files (default: robots/*.toml)")
+    p.add_argument("--out", default="reports", help="folder of the reports and index.html (default reports)")
+    _add_mujoco_options(p)
+    p.add_argument("--cap", type=float, default=5.0, help="cap (s) on t_end of scenes that drive MuJoCo from Python "
+                   "(moving base, torques, loads); 0: none (default 5)")
+    p.add_argument("--check", metavar="BASELINE.json", help="baselines to check every scene against (default "
+                   "<out>/baselines.json when it exists); exit 1 on a failure")
+    p.add_argument("--write-baselines", action="store_true", help="write <out>/baselines.json from this run")
+    p.set_defaults(func=_report)
     args = parser.parse_args(argv)
     try:
         return args.func(args)

@@ -1,0 +1,224 @@
+"""The ``compare`` and ``report`` commands of ``urdf2links`` (their arguments are declared in
+:mod:`urdf2links.cli`, which imports this module only when one of them runs, so that the
+``urdf2links`` package never imports MuJoCo).
+
+``urdf2links compare SCENE.toml``: one scene against MuJoCo, a report in
+``reports/<robot>/<scene>/`` (or ``--out``), the summary also to ``--json``, and with
+``--check BASELINES.json`` a non-zero exit naming every figure that grew past its baseline.
+
+``urdf2links report``: every shipped scene (``robots/*.toml``) and ``reports/index.html``.
+Scenes whose MuJoCo run is driven from Python at every integrator stage (a moving base, joint
+torques, loads) are capped at ``--cap`` seconds (default :data:`REPORT_CAP_S`), as MuJoCo then
+costs ~0.2-0.4 ms per step at dt 1e-4 s; the report says so. ``--t-end`` sets every scene's
+``t_end`` instead. With ``<out>/baselines.json`` present (or ``--check FILE``) every scene is
+checked against it (exit 1 on a failure); ``--write-baselines`` writes it from this run.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+from pathlib import Path
+
+__all__ = ["compare_command", "report_command", "shipped_scenes", "report_t_end", "REPORT_CAP_S", "main"]
+
+#: Default cap (s) of ``urdf2links report`` on scenes that drive MuJoCo from Python every stage.
+REPORT_CAP_S = 5.0
+
+
+def _err(msg: str) -> None:
+    print(msg, file=sys.stderr, flush=True)
+
+
+def _rel(path) -> str:
+    p = Path(path)
+    try:
+        return os.path.relpath(p.resolve(), Path.cwd())
+    except ValueError:
+        return str(p)
+
+
+def shipped_scenes() -> list[Path]:
+    """The shipped scene files: ``./robots/*.toml`` when run in a checkout, else the package's."""
+    from urdf2links.locations import shipped_robots_dir
+
+    for folder in (Path.cwd() / "robots", shipped_robots_dir()):
+        found = sorted(folder.glob("*.toml")) if folder.is_dir() else []
+        if found:
+            return found
+    return []
+
+
+def _driven(scene) -> list[str]:
+    return [w for w, on in (("the moving base", scene.base is not None), ("joint torques", bool(scene.torques)),
+                            ("loads", bool(scene.loads))) if on]
+
+
+def report_t_end(scene, *, t_end: float | None, cap: float) -> tuple[float, str | None]:
+    """The ``t_end`` ``urdf2links report`` uses for ``scene`` and the note that says why, if it is
+    not the scene's own."""
+    if t_end is not None:
+        return float(t_end), (f"t_end set to {t_end:g} s by --t-end (the scene's is {scene.run.t_end:g} s)"
+                              if t_end != scene.run.t_end else None)
+    driven = _driven(scene)
+    if cap and cap > 0 and driven and scene.run.t_end > cap:
+        return float(cap), (
+            f"t_end capped at {cap:g} s (the scene's is {scene.run.t_end:g} s) by `urdf2links report` to keep it "
+            f"CI-friendly: MuJoCo applies {', '.join(driven)} from a Python control callback at every RK4 stage, "
+            f"about 0.2-0.4 ms per step. `urdf2links compare {_rel(scene.path)}` runs the whole scene.")
+    return float(scene.run.t_end), None
+
+
+def _print_headline(s: dict, stream=sys.stdout) -> None:
+    tr, en, te, wt = s["trajectory"], s["energy"], s["terms"], s["wall_time"]
+    r2 = te["route2"]
+    print(f"{s['key']}: t = 0..{s['t_end']:g} s, urdf2links {s['project']['method']} vs MuJoCo "
+          f"{s['mujoco']['integrator']} dt {s['mujoco']['timestep']:g}", file=stream)
+    print(f"  terms      max rel. error {te['max_rel_error']:.2e} (route 1 {te['max_rel_error_route1']:.2e}; "
+          + (f"route 2 {te['max_rel_error_route2']:.2e}" if te["max_rel_error_route2"] is not None else "route 2 skipped")
+          + (", REPAIRED: MuJoCo refused the file" if "REPAIRED" in r2.get("label", "") else "") + ")", file=stream)
+    print(f"  trajectory max |dq| {tr['max_abs_error']:.2e}, divergence "
+          + ("none" if tr["divergence_time"] is None else f"at {tr['divergence_time']:.4g} s")
+          + (f", growth rate {tr['growth_rate']:.3g} /s (chaotic)" if tr.get("growth_rate") is not None else ""),
+          file=stream)
+    print(f"  energy     drift urdf2links {en['project_drift']:.2e} J, MuJoCo {en['mujoco_drift']:.2e} J "
+          f"(relative {en['project_drift_rel']:.1e}, {en['mujoco_drift_rel']:.1e})", file=stream)
+    if s["base"]["moving"]:
+        print(f"  base       tracking error {s['base']['tracking_error']:.2e}", file=stream)
+    print(f"  wall time  urdf2links {wt['project_s']:.2f} s, MuJoCo {wt['mujoco_s']:.2f} s", file=stream)
+
+
+def _compare_cmd(args) -> str:
+    parts = ["urdf2links compare", _rel(args.scene)]
+    for flag, value, default in (("--t-end", args.t_end, None), ("--mujoco-integrator", args.mujoco_integrator, "RK4"),
+                                 ("--mujoco-dt", args.mujoco_dt, 1e-4), ("--method", args.method, None),
+                                 ("--rtol", args.rtol, None), ("--states", args.states, 8), ("--seed", args.seed, 0)):
+        if value is not None and value != default:
+            parts.append(f"{flag} {value:g}" if isinstance(value, float) else f"{flag} {value}")
+    return " ".join(parts)
+
+
+def compare_command(args) -> int:
+    from urdf2links.scene import load_scene
+
+    from .report import check_baseline, json_ready, load_baselines, write_report
+    from .trajectory import compare_scene
+
+    scene = load_scene(args.scene)
+    quiet = getattr(args, "quiet", False)
+    log = (lambda m: None) if quiet else (lambda m: _err(f"  {scene.name}: {m}"))
+    baselines = None
+    if args.check:
+        try:
+            baselines = load_baselines(args.check)
+        except (OSError, ValueError) as err:
+            _err(f"urdf2links compare: error: cannot read baselines {args.check}: {err}")
+            return 2
+    c = compare_scene(scene, t_end=args.t_end, mujoco_integrator=args.mujoco_integrator, mujoco_dt=args.mujoco_dt,
+                      method=args.method, rtol=args.rtol, states=args.states, seed=args.seed,
+                      progress=False if quiet else None, log=log)
+    summary = json_ready(c.summary())
+    check = None
+    if baselines is not None:
+        try:
+            check = check_baseline(summary, baselines, factor=args.factor, source=_rel(args.check))
+        except KeyError as err:
+            _err(f"urdf2links compare: error: {err.args[0]}")
+            return 2
+    paths = write_report(c, args.out, json_path=args.json, command=_compare_cmd(args), check=check)
+    _print_headline(paths["summary"])
+    print(f"  report     {_rel(paths['html'])} (summary.json, summary.md)" + (f"; JSON also {args.json}" if args.json else ""))
+    if check is not None:
+        print(check.text())
+        if not check.ok:
+            _err(f"urdf2links compare: {summary['key']}: figure(s) grew past the baseline: {', '.join(check.failures)}")
+            return 1
+    return 0
+
+
+def report_command(args) -> int:
+    from urdf2links.scene import load_scene
+
+    from .report import (check_baseline, json_ready, load_baselines, write_baselines, write_index,
+                         write_report)
+    from .trajectory import compare_scene
+
+    out = Path(args.out)
+    files = [Path(p) for p in args.scenes] if args.scenes else shipped_scenes()
+    if not files:
+        _err("urdf2links report: error: no scenes found (robots/*.toml)")
+        return 2
+    baselines_path = Path(args.check) if args.check else out / "baselines.json"
+    baselines = None
+    if not args.write_baselines and (args.check or baselines_path.is_file()):
+        try:
+            baselines = load_baselines(baselines_path)
+        except (OSError, ValueError) as err:
+            _err(f"urdf2links report: error: cannot read baselines {baselines_path}: {err}")
+            return 2
+    entries, summaries, failed, errors = [], [], [], []
+    start = time.perf_counter()
+    for i, f in enumerate(files, 1):
+        t0 = time.perf_counter()
+        scene = load_scene(f)
+        T, note = report_t_end(scene, t_end=args.t_end, cap=args.cap)
+        _err(f"[{i}/{len(files)}] {Path(scene.robot).stem}/{scene.name}: t = 0..{T:g} s"
+             + (f" (capped; scene {scene.run.t_end:g} s)" if note and args.t_end is None else ""))
+        try:
+            c = compare_scene(scene, t_end=T, mujoco_integrator=args.mujoco_integrator, mujoco_dt=args.mujoco_dt,
+                              states=args.states, t_end_note=note, progress=False if args.quiet else None,
+                              log=(lambda m: None) if args.quiet else (lambda m: _err(f"    {m}")))
+        except Exception as err:  # keep going: one broken scene must not hide the others
+            _err(f"    FAILED: {type(err).__name__}: {err}")
+            errors.append(f"{f}: {err}")
+            continue
+        summary = json_ready(c.summary())
+        check = None
+        if baselines is not None:
+            try:
+                check = check_baseline(summary, baselines, factor=args.factor, source=_rel(baselines_path))
+            except KeyError as err:
+                _err(f"    no baseline: {err.args[0]}")
+            if check is not None and not check.ok:
+                failed.append(f"{summary['key']}: {', '.join(check.failures)}")
+        cmd = f"urdf2links compare {_rel(f)}" + (f" --t-end {T:g}" if T != scene.run.t_end else "")
+        write_report(c, out / summary["robot"] / summary["scene"], command=cmd, check=check,
+                     index_link="../../index.html")
+        summaries.append(summary)
+        entries.append({"summary": summary, "link": f"{summary['robot']}/{summary['scene']}/report.html", "check": check})
+        tr, en = summary["trajectory"], summary["energy"]
+        _err(f"    done in {time.perf_counter() - t0:.1f} s: terms {summary['terms']['max_rel_error']:.1e}, "
+             f"max |dq| {tr['max_abs_error']:.1e}, drift {en['project_drift_rel']:.1e} / {en['mujoco_drift_rel']:.1e}"
+             + ("" if check is None else f", baseline {'ok' if check.ok else 'FAILED: ' + ', '.join(check.failures)}"))
+    note = ""
+    if args.t_end is not None:
+        note = f"Every scene run for t_end = {args.t_end:g} s (--t-end)."
+    elif args.cap and args.cap > 0:
+        note = (f"Scenes whose MuJoCo run is driven from a Python callback at every RK4 stage (moving base, joint "
+                f"torques, loads) are capped at t_end = {args.cap:g} s; the others run their whole t_end. "
+                "`urdf2links compare SCENE.toml` runs any scene in full.")
+    if baselines is not None:
+        note += f" Baseline check against {_rel(baselines_path)} (errors may grow {baselines.get('factor', 10):g}x)."
+    idx = write_index(entries, out, note=note.strip(), command="urdf2links report" + (f" --out {args.out}" if str(args.out) != "reports" else ""))
+    if args.write_baselines:
+        bp = write_baselines(summaries, out / "baselines.json", factor=args.factor or 10.0)
+        _err(f"wrote {_rel(bp)}")
+    print(idx["table"])
+    print(f"\n{_rel(idx['html'])}: {len(entries)} scene(s) in {time.perf_counter() - start:.0f} s")
+    for e in errors:
+        _err(f"urdf2links report: scene failed: {e}")
+    for f in failed:
+        _err(f"urdf2links report: baseline check FAILED for {f}")
+    return 1 if (errors or failed) else 0
+
+
+def main(argv=None) -> int:
+    """``python -m compare.cli compare|report ...``: the same as ``urdf2links compare|report``."""
+    from urdf2links.cli import main as _main
+
+    return _main(argv)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
