@@ -362,7 +362,7 @@ class SceneComparison:
             "robot": Path(sc.robot).stem,
             "robot_name": self.model.name,
             "scene": sc.name,
-            "scene_file": str(sc.path) if sc.path else None,
+            "scene_file": _shown_path(sc.path),
             "description": sc.description,
             "chaotic": bool(sc.chaotic),
             "effects": list(self.info["effects"]),
@@ -394,6 +394,16 @@ class SceneComparison:
                           "note": "integration loops only (sampling included); not checked against baselines"},
             "notes": list(self.notes),
         }
+
+
+def _shown_path(path) -> str | None:
+    """``path`` relative to the working folder when it lies inside it (reports are committed)."""
+    if path is None:
+        return None
+    try:
+        return str(Path(path).resolve().relative_to(Path.cwd().resolve()))
+    except ValueError:
+        return str(path)
 
 
 def _mujoco_energy_function(mj: MjcfModel, run: MujocoRun, plan) -> np.ndarray:
