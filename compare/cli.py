@@ -11,7 +11,8 @@ Scenes whose MuJoCo run is driven from Python at every integrator stage (a movin
 torques, loads) are capped at ``--cap`` seconds (default :data:`REPORT_CAP_S`), as MuJoCo then
 costs ~0.2-0.4 ms per step at dt 1e-4 s; the report says so. ``--t-end`` sets every scene's
 ``t_end`` instead. With ``<out>/baselines.json`` present (or ``--check FILE``) every scene is
-checked against it (exit 1 on a failure); ``--write-baselines`` writes it from this run.
+checked against it (exit 1 on a failure); ``--write-baselines [FILE]`` adds this run's figures
+to it (or to FILE), replacing an accepted run of the same length and MuJoCo setting.
 """
 
 from __future__ import annotations
@@ -55,6 +56,10 @@ def _driven(scene) -> list[str]:
                             ("loads", bool(scene.loads))) if on]
 
 
+def _words(items: list[str]) -> str:
+    return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
+
+
 def report_t_end(scene, *, t_end: float | None, cap: float) -> tuple[float, str | None]:
     """The ``t_end`` ``urdf2links report`` uses for ``scene`` and the note that says why, if it is
     not the scene's own."""
@@ -65,7 +70,7 @@ def report_t_end(scene, *, t_end: float | None, cap: float) -> tuple[float, str 
     if cap and cap > 0 and driven and scene.run.t_end > cap:
         return float(cap), (
             f"t_end capped at {cap:g} s (the scene's is {scene.run.t_end:g} s) by `urdf2links report` to keep it "
-            f"CI-friendly: MuJoCo applies {', '.join(driven)} from a Python control callback at every RK4 stage, "
+            f"CI-friendly: MuJoCo applies {_words(driven)} from a Python control callback at every RK4 stage, "
             f"about 0.2-0.4 ms per step. `urdf2links compare {_rel(scene.path)}` runs the whole scene.")
     return float(scene.run.t_end), None
 
@@ -149,6 +154,8 @@ def report_command(args) -> int:
     if not files:
         _err("urdf2links report: error: no scenes found (robots/*.toml)")
         return 2
+    if args.write_baselines is True:
+        args.write_baselines = out / "baselines.json"
     baselines_path = Path(args.check) if args.check else out / "baselines.json"
     baselines = None
     if not args.write_baselines and (args.check or baselines_path.is_file()):
@@ -202,7 +209,7 @@ def report_command(args) -> int:
         note += f" Baseline check against {_rel(baselines_path)} (errors may grow {baselines.get('factor', 10):g}x)."
     idx = write_index(entries, out, note=note.strip(), command="urdf2links report" + (f" --out {args.out}" if str(args.out) != "reports" else ""))
     if args.write_baselines:
-        bp = write_baselines(summaries, out / "baselines.json", factor=args.factor or 10.0)
+        bp = write_baselines(summaries, args.write_baselines, factor=args.factor)
         _err(f"wrote {_rel(bp)}")
     print(idx["table"])
     print(f"\n{_rel(idx['html'])}: {len(entries)} scene(s) in {time.perf_counter() - start:.0f} s")

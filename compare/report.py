@@ -37,6 +37,7 @@ __all__ = [
     "baseline_entry",
     "write_baselines",
     "load_baselines",
+    "select_run",
     "check_baseline",
     "CheckResult",
     "CHECKED_FIGURES",
@@ -383,13 +384,13 @@ def render_html(c, summary: dict, *, command: str | None = None, check: "CheckRe
                  + ("; a random base pose and rate, no base acceleration" if r1.get("moving_base") else "")
                  + "): the project's <code>A</code> against MuJoCo's <code>mj_fullM</code> and <code>e + G</code> "
                    "against <code>qfrc_bias</code>, as max|ours &minus; MuJoCo| / max|MuJoCo|.</p>")
-    rows = [["route 1", e(r1["label"]), *_route_rows(r1)]]
+    rows = [["route&nbsp;1", e(r1["label"]), *_route_rows(r1)]]
     r2_label = e(r2.get("label", "route 2"))
     if r2.get("skipped"):
         r2_label += f"<br><span class='small'>{e(r2['skipped'])}</span>"
     if r2.get("error"):
         r2_label += f"<br><span class='small'>{e(r2['error'])}</span>"
-    rows.append(["route 2", r2_label, *_route_rows(r2)])
+    rows.append(["route&nbsp;2", r2_label, *_route_rows(r2)])
     parts.append(_rows(rows, ["", "what MuJoCo loaded", "A", "e + G", "max"], num_cols=(2, 3, 4)))
     if r2.get("refusals"):
         parts.append("<p><b>MuJoCo refused the original file.</b> Attempts, in order:</p><ul class='notes'>")
@@ -598,21 +599,59 @@ def baseline_entry(summary: dict) -> dict:
     }
 
 
-def write_baselines(summaries, path, *, factor: float = DEFAULT_FACTOR) -> Path:
-    """Write ``baselines.json``: ``{"factor", "floors", "about", "scenes": {"<robot>/<scene>": entry}}``."""
+def _runs(scene_entry: dict) -> list[dict]:
+    """The accepted runs of one scene: ``{"runs": [...]}``, or a single flat entry."""
+    return list(scene_entry["runs"]) if "runs" in scene_entry else [scene_entry]
+
+
+def _run_id(entry: dict) -> tuple:
+    st = entry.get("settings", {})
+    return (st.get("t_end"), st.get("mujoco.integrator"), st.get("mujoco.timestep"))
+
+
+def write_baselines(summaries, path, *, factor: float | None = None) -> Path:
+    """Write ``baselines.json``: ``{"about", "factor", "floors", "scenes": {"<robot>/<scene>":
+    {"runs": [entry, ...]}}}``, one entry (:func:`baseline_entry`) per accepted run length and MuJoCo
+    setting. Runs already in an existing file are kept unless this run replaces them (same
+    ``t_end``, integrator and timestep): a capped run and a whole-scene run can both be accepted."""
     path = Path(path)
+    old = load_baselines(path) if path.is_file() else {"scenes": {}}
+    scenes = {k: {"runs": _runs(v)} for k, v in old.get("scenes", {}).items()}
+    for summ in summaries:
+        entry = baseline_entry(summ)
+        runs = [r for r in scenes.get(summ["key"], {"runs": []})["runs"] if _run_id(r) != _run_id(entry)]
+        runs.append(entry)
+        runs.sort(key=lambda r: (r["settings"].get("t_end") or 0.0))
+        scenes[summ["key"]] = {"runs": runs}
     data = {
-        "about": ("Accepted figures of the MuJoCo cross-validation per shipped scene (urdf2links report "
-                  "--write-baselines). `urdf2links compare SCENE --check THIS_FILE` fails when a figure grows past "
-                  "factor x max(baseline, floor) or a divergence comes earlier than the baseline's by more than "
-                  "ln(factor) / growth rate. Wall times are recorded, not checked."),
-        "factor": factor,
+        "about": ("Accepted figures of the MuJoCo cross-validation per shipped scene and run length (urdf2links "
+                  "report --write-baselines). `urdf2links compare SCENE --check THIS_FILE` compares a run with the "
+                  "shortest accepted run at least as long (same MuJoCo integrator and timestep preferred) and fails "
+                  "when a figure grows past factor x max(baseline, floor) or a divergence comes earlier than the "
+                  "baseline's by more than ln(factor) / growth rate. Wall times are recorded, not checked."),
+        "factor": float(factor if factor is not None else old.get("factor", DEFAULT_FACTOR)),
         "floors": {k: (f"{v[1]:g} x energy.scale" if isinstance(v, tuple) else v) for k, v in CHECKED_FIGURES.items()},
-        "scenes": {s["key"]: baseline_entry(s) for s in summaries},
+        "scenes": dict(sorted(scenes.items())),
     }
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(json_ready(data), indent=2) + "\n")
     return path
+
+
+def select_run(summary: dict, scene_entry: dict) -> tuple[dict, list[str]]:
+    """The accepted run to compare ``summary`` with: among the runs with the same MuJoCo integrator
+    and timestep (else all), the shortest whose ``t_end`` is at least the summary's (errors and
+    drifts grow with time, so it bounds a shorter run); else the longest, with a warning."""
+    runs = _runs(scene_entry)
+    same = [r for r in runs if _run_id(r)[1:] == (summary["mujoco"]["integrator"], summary["mujoco"]["timestep"])]
+    pool = same or runs
+    T = float(summary["t_end"])
+    longer = [r for r in pool if (r.get("settings", {}).get("t_end") or 0.0) >= T * (1 - 1e-9)]
+    if longer:
+        return min(longer, key=lambda r: r["settings"]["t_end"]), []
+    chosen = max(pool, key=lambda r: r.get("settings", {}).get("t_end") or 0.0)
+    return chosen, [f"this run ({T:g} s) is longer than every accepted run: compared with the longest "
+                    f"({chosen.get('settings', {}).get('t_end')} s)"]
 
 
 def load_baselines(path) -> dict:
@@ -654,15 +693,16 @@ def _number(v):
 
 def check_baseline(summary: dict, baselines: dict, *, factor: float | None = None, source: str = "") -> CheckResult:
     """Compare ``summary`` with its entry (key ``summary["key"]``) of ``baselines`` (see module doc).
-    A missing entry raises ``KeyError``."""
+    The accepted run is chosen by :func:`select_run`. A missing entry raises ``KeyError``."""
     key = summary["key"]
     scenes = baselines.get("scenes", {})
     if key not in scenes:
         raise KeyError(f"no baseline for {key!r} in {source or 'the baselines'} (it has {sorted(scenes)})")
-    base = scenes[key]
+    base, warn = select_run(summary, scenes[key])
     f = float(factor if factor is not None else baselines.get("factor", DEFAULT_FACTOR))
-    res = CheckResult(ok=True, source=f"{source}: {key}, factor {f:g}" if source else f"{key}, factor {f:g}")
     st = base.get("settings", {})
+    what = f"{key} (accepted run of {st.get('t_end', '?')} s), factor {f:g}"
+    res = CheckResult(ok=True, source=f"{source}: {what}" if source else what, warnings=warn)
     now = {"t_end": summary["t_end"], "mujoco.integrator": summary["mujoco"]["integrator"],
            "mujoco.timestep": summary["mujoco"]["timestep"], "project.method": summary["project"]["method"],
            "project.rtol": summary["project"]["rtol"]}

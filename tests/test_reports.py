@@ -140,13 +140,35 @@ def test_growth_fit_and_divergence_time():
 
 
 def test_committed_baselines_cover_every_shipped_scene():
-    data = load_baselines(BASELINES)
-    keys = set(data["scenes"])
-    for toml in ROBOTS.glob("*.toml"):
-        from urdf2links.scene import load_scene
+    from compare.cli import report_t_end
+    from urdf2links.scene import load_scene
 
+    scenes = load_baselines(BASELINES)["scenes"]
+    for toml in ROBOTS.glob("*.toml"):
         sc = load_scene(toml)
-        assert f"{Path(sc.robot).stem}/{sc.name}" in keys
+        runs = scenes[f"{Path(sc.robot).stem}/{sc.name}"]["runs"]
+        lengths = {r["settings"]["t_end"] for r in runs}
+        # the report's (capped) run and the whole scene (urdf2links compare) are both accepted
+        assert report_t_end(sc, t_end=None, cap=5.0)[0] in lengths and sc.run.t_end in lengths
+
+
+def test_baseline_run_selection_and_merge(pendulum, tmp_path):
+    from compare.report import select_run, write_baselines
+
+    s = pendulum[1]  # a 1 s run
+    path = tmp_path / "b.json"
+    write_baselines([s], path)
+    longer = copy.deepcopy(s)
+    longer["t_end"] = 5.0
+    longer["trajectory"]["max_abs_error"] = 1.0
+    write_baselines([longer], path)  # added next to the 1 s run, not replacing it
+    entry = load_baselines(path)["scenes"][s["key"]]
+    assert [r["settings"]["t_end"] for r in entry["runs"]] == [1.0, 5.0]
+    assert select_run(s, entry)[0]["settings"]["t_end"] == 1.0
+    mid = dict(s, t_end=3.0)
+    assert select_run(mid, entry)[0]["settings"]["t_end"] == 5.0  # the shortest run at least as long
+    run, warn = select_run(dict(s, t_end=9.0), entry)
+    assert run["settings"]["t_end"] == 5.0 and "longer than every accepted run" in warn[0]
 
 
 @pytest.mark.parametrize("which", ["pendulum", "crane"])
@@ -161,19 +183,21 @@ def test_check_passes_against_committed_baselines(which, request):
 def test_check_fails_naming_the_figure(pendulum, crane):
     s = pendulum[1]
     base = copy.deepcopy(load_baselines(BASELINES))
-    figs = base["scenes"][s["key"]]["figures"]
+    (accepted,) = base["scenes"][s["key"]]["runs"]  # the pendulum runs in full in the report: one run
+    figs = accepted["figures"]
     figs["trajectory.max_abs_error"] = 1e-13  # allowed 10 x max(1e-13, floor 1e-12) = 1e-11 < 3.6e-10
     figs["terms.max_rel_error"] = 1e-30  # rounding level: the floor (1e-14) keeps it from jittering into a failure
     res = check_baseline(s, base)
     assert not res.ok and res.failures == ["trajectory.max_abs_error"]
     assert "FAIL  trajectory.max_abs_error" in res.text()
     ship = crane[1]
-    base["scenes"][ship["key"]]["figures"]["energy.mujoco_drift"] = 1e-12  # floor: 1e-13 x energy scale
+    for run in base["scenes"][ship["key"]]["runs"]:
+        run["figures"]["energy.mujoco_drift"] = 1e-12  # floor: 1e-13 x energy scale
     assert check_baseline(ship, base).failures == ["energy.mujoco_drift"]
     s2 = copy.deepcopy(s)  # a divergence much earlier than the baseline's fails too
     s2["trajectory"]["divergence_time"] = 0.5
-    base["scenes"][s["key"]]["trajectory.divergence_time"] = 4.0
-    base["scenes"][s["key"]]["trajectory.growth_rate"] = 2.0
+    accepted["trajectory.divergence_time"] = 4.0
+    accepted["trajectory.growth_rate"] = 2.0
     assert "trajectory.divergence_time" in check_baseline(s2, base).failures
     s2["trajectory"]["divergence_time"] = 3.0  # within ln(10)/2 = 1.15 s of it: accepted
     assert "trajectory.divergence_time" not in check_baseline(s2, base).failures
@@ -200,7 +224,7 @@ def test_compare_cli_runs_and_checks(tmp_path):
     assert (tmp_path / "ok" / "report.html").is_file() and (tmp_path / "ok" / "summary.md").is_file()
 
     shrunk = load_baselines(BASELINES)
-    shrunk["scenes"]["double_pendulum/double_pendulum_chaos"]["figures"]["trajectory.max_abs_error"] = 1e-13
+    shrunk["scenes"]["double_pendulum/double_pendulum_chaos"]["runs"][0]["figures"]["trajectory.max_abs_error"] = 1e-13
     bad = tmp_path / "shrunk.json"
     bad.write_text(json.dumps(shrunk))
     out = cli(*common, "--out", str(tmp_path / "bad"), "--check", str(bad))

@@ -165,7 +165,9 @@ def main(argv=None) -> int:
                    "(moving base, torques, loads); 0: none (default 5)")
     p.add_argument("--check", metavar="BASELINE.json", help="baselines to check every scene against (default "
                    "<out>/baselines.json when it exists); exit 1 on a failure")
-    p.add_argument("--write-baselines", action="store_true", help="write <out>/baselines.json from this run")
+    p.add_argument("--write-baselines", nargs="?", const=True, metavar="FILE",
+                   help="accept this run's figures: add them to <out>/baselines.json (or FILE), replacing a run of "
+                        "the same t_end and MuJoCo setting")
     p.set_defaults(func=_report)
     args = parser.parse_args(argv)
     try:
