@@ -9,7 +9,7 @@ from urdf2links import BaseState, DynamicsError, LinkSpec, Model, Wrench, build_
 from urdf2links.transforms import base_transforms, elementary, link_transform
 
 from builders import (DOUBLE, FREE_BODY, PENDULUM, PRISMATIC_REVOLUTE, double_pendulum, free_body,
-                      pendulum, prismatic_revolute, random_H, random_tree, rod_H)
+                      pendulum, prismatic_revolute, random_tree, rod_H)
 
 G0 = 9.81
 
