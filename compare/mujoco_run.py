@@ -147,7 +147,7 @@ class _Driver:
         self.apply(d)
 
     def apply(self, d) -> None:
-        mj = self.mj
+        m, mj = self.m, self.mj
         t = float(d.time)
         d.qfrc_applied[:] = 0.0
         d.xfrc_applied[:] = 0.0
@@ -188,7 +188,7 @@ class _Driver:
                 d.qfrc_applied[dofs] += self._jacp[:, dofs].T @ F + self._jacr[:, dofs].T @ Mo
 
     def _prescribe_base(self, d, t) -> None:
-        mj = self.mj
+        m, mj = self.m, self.mj
         a_b = np.asarray(self.base(t).accel, float)
         M = self._M
         mujoco.mj_fullM(m, d, M)
