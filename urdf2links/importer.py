@@ -146,14 +146,23 @@ class _Importer:
         which = "collision" if link.collisions else "visual"
         return gi.H, f"inertia from {which} geometry ({gi.method}; {gi.note})"
 
-    def _repair_link(self, rec: AuditRecord) -> AuditRecord:
-        name = rec.link
-        H = self.H_link[name]
-        mass = float(H[3, 3])
+    def _repair_from_geometry(self, rec: AuditRecord, name: str) -> tuple[AuditRecord | None, str]:
+        """First choice of every repair: the link's own geometry (keeping its mass when it has one),
+        if that gives a consistent inertia. Returns the repaired record (or None) and what was tried."""
+        mass = float(self.H_link[name][3, 3])
         Hg, how = self._geometry_H(name, mass=mass if mass > 0 else None)
         if Hg is not None and not audit_pseudo_inertia(Hg, link=name):
             self.H_link[name] = Hg
-            return _replace(rec, how)
+            return _replace(rec, how), how
+        return None, how
+
+    def _repair_link(self, rec: AuditRecord) -> AuditRecord:
+        name = rec.link
+        done, how = self._repair_from_geometry(rec, name)
+        if done is not None:
+            return done
+        H = self.H_link[name]
+        mass = float(H[3, 3])
         try:
             fixed = nearest_consistent(H, link=name)
         except InertiaError:
@@ -347,19 +356,13 @@ class _Importer:
                      audit=self.records, info=info)
 
     def _repair_joint(self, rec: AuditRecord) -> AuditRecord:
-        # The URDF links that make up the tree link of the coordinate: give the joint's child inertia.
-        tree_link = rec.link
-        urdf_links = [k for k, (t, _) in self.frame_of.items() if self._tree_names[t] == tree_link] \
-            if hasattr(self, "_tree_names") else [tree_link]
-        name = tree_link if tree_link in self.desc.links else urdf_links[0]
-        H = self.H_link[name]
-        mass = float(H[3, 3])
-        Hg, how = self._geometry_H(name, mass=mass if mass > 0 else None)
-        if Hg is not None and not audit_pseudo_inertia(Hg, link=name):
-            self.H_link[name] = Hg
-            return _replace(rec, how)
+        # Joint findings are on tree links that carry coordinates; those are named after the URDF child.
+        name = rec.link
+        done, how = self._repair_from_geometry(rec, name)
+        if done is not None:
+            return done
         sphere = self._small_body(np.zeros((4, 4)))
-        self.H_link[name] = H + sphere
+        self.H_link[name] = self.H_link[name] + sphere
         return _replace(rec, f"a sphere of radius 0.01 m and mass {sphere[3, 3]:.3g} kg added at the origin of "
                              f"link {name!r}; {how}")
 
