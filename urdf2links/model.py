@@ -194,21 +194,30 @@ class Model:
         naming the configuration and the coordinates when A is not positive definite.
         """
         qt, qdt = self._tree_state(q, qd)
-        base_T = resolve_base(base, t)
+        A, rhs, _ = self.equation(qt, qdt, resolve_base(base, t),
+                                  gravity_vector=self.gravity_vector if gravity else None,
+                                  wrenches=self._wrenches(loads))
+        if tau is not None:
+            rhs = rhs + self._vec(tau, "tau")
+        return self.solve_mass_matrix(A, rhs, q=q)
+
+    def equation(self, qt, qdt, base_T, *, gravity_vector=None, wrenches=()):
+        """The two sides of (5.29) without ``q''`` at a tree state: ``A`` (n, n) and
+        ``Q - G - e`` (n,) in the model's coordinates, and the kinematics they came from.
+
+        ``gravity_vector`` None computes no G; empty ``wrenches`` no Q. Used by
+        :meth:`forward_dynamics` and by the scene plans (:mod:`urdf2links.plan`).
+        """
         plan = self._plan
-        wr = self._wrenches(loads)
         kin = plan.kinematics(qt, qdt, base_T, acceleration=True)
         Hc = plan.composite_inertia(kin)
         A = self._reduce(plan.mass_matrix(kin, Hc))
         rhs = -plan.bias(kin)
-        if gravity:
-            rhs -= plan.gravity(kin, self.gravity_vector, Hc)
-        if wr:
-            rhs += plan.generalized_forces(kin, wr)
-        rhs = self._reduce(rhs)
-        if tau is not None:
-            rhs = rhs + self._vec(tau, "tau")
-        return self.solve_mass_matrix(A, rhs, q=q)
+        if gravity_vector is not None:
+            rhs -= plan.gravity(kin, gravity_vector, Hc)
+        if wrenches:
+            rhs += plan.generalized_forces(kin, wrenches)
+        return A, self._reduce(rhs), kin
 
     def solve_mass_matrix(self, A: np.ndarray, rhs: np.ndarray, *, q=None) -> np.ndarray:
         """``A^{-1} rhs`` by Cholesky; a matrix that is not positive definite raises DynamicsError."""

@@ -105,17 +105,12 @@ class Plan:
         """q'' of (5.29) with exactly the scene's terms; with ``with_power`` also the power of the
         non-potential forces and of the base (see :meth:`power`), from the same kinematics."""
         self.nfev += 1
-        model, rp = self.model, self.rp
+        model = self.model
         qt, qdt = model._tree_state(q, qd)
         base_T = _base_T(self.base_state(t))
-        kin = rp.kinematics(qt, qdt, base_T, acceleration=True)
-        Hc = rp.composite_inertia(kin)
-        A = model._reduce(rp.mass_matrix(kin, Hc))
-        rhs = -rp.bias(kin)
-        if self.gravity_vector is not None:
-            rhs -= rp.gravity(kin, self.gravity_vector, Hc)
+        A, rhs, kin = model.equation(qt, qdt, base_T, gravity_vector=self.gravity_vector)
         f = self.generalized_forces(t, q, qd, kin)
-        qdd = model.solve_mass_matrix(A, model._reduce(rhs) + f, q=q)
+        qdd = model.solve_mass_matrix(A, rhs + f, q=q)
         if not with_power:
             return qdd
         return qdd, self._power(qd, q, f, kin, base_T)
