@@ -367,3 +367,22 @@ def test_rk4_non_finite_and_scipy_failure():
         integrate(lambda t, y: y * y, (0.0, 2.0), [1.0], method="RK4", dt=0.1)
     res = integrate(lambda t, y: y * y, (0.0, 2.0), [1.0], method="RK45")   # blows up at 1
     assert not res.success and "RK45 failed at t=" in res.message and res.t[-1] < 1.0
+
+
+@pytest.mark.parametrize("method", ["DOP853", "RK45", "Radau", "RK4", "midpoint"])
+def test_stop_ends_the_run_at_the_first_step_past_the_guard(method):
+    """y' = 1 from 0: AngleGuard(cos_min=0.5) fires on the first accepted step with y > arccos(0.5);
+    the step sizes bound how far past it the run may go (dt 0.01; adaptive steps on y' = 1 are
+    capped by dt as max step)."""
+    from urdf2links.integrators import AngleGuard
+
+    res = integrate(lambda t, y: np.array([1.0]), (0.0, 3.0), [0.0], method=method, dt=0.01,
+                    stop=AngleGuard([0], 0.5))
+    assert res.stopped and res.success and "stopped" in res.message
+    assert np.arccos(0.5) < res.y[-1, 0] <= np.arccos(0.5) + 0.01 + 1e-12
+    assert res.t[-1] < 3.0
+
+
+def test_stop_must_be_callable():
+    with pytest.raises(TypeError, match="stop"):
+        integrate(lambda t, y: -y, (0.0, 1.0), [1.0], stop=3)

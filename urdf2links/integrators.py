@@ -46,7 +46,7 @@ from typing import Any, Callable
 import numpy as np
 from scipy.integrate import BDF, DOP853, LSODA, RK45, OdeSolution, Radau
 
-__all__ = ["METHODS", "IntegrationError", "IntegrationResult", "DenseOutput", "integrate"]
+__all__ = ["METHODS", "IntegrationError", "IntegrationResult", "DenseOutput", "AngleGuard", "integrate"]
 
 METHODS = ("RK45", "DOP853", "Radau", "BDF", "LSODA", "RK4", "midpoint")
 _SCIPY = {"RK45": RK45, "DOP853": DOP853, "Radau": Radau, "BDF": BDF, "LSODA": LSODA}
@@ -86,6 +86,7 @@ class IntegrationResult:
     sol: "DenseOutput | None"
     success: bool
     message: str
+    stopped: bool = False
 
 
 class DenseOutput:
@@ -123,6 +124,23 @@ class DenseOutput:
             out = ((1.0 + 2.0 * s) * r2 * self._ys[i] + s2 * (3.0 - 2.0 * s) * self._ys[i + 1]
                    + h[:, None] * (s * r2 * self._fs[i] - s2 * r * self._fs[i + 1]))
         return out[0] if scalar else out
+
+
+class AngleGuard:
+    """A ``stop`` test: True once ``|cos(y[j])| < cos_min`` for any ``j`` in ``indices``, i.e. an
+    angle (a ZYX ``phi_y``) came within ``arccos(cos_min)`` of ``+-pi/2``, where its chart is
+    singular. Compiled integration loops recognise it and test it without calling Python."""
+
+    __slots__ = ("indices", "cos_min")
+
+    def __init__(self, indices, cos_min: float):
+        self.indices = np.asarray(indices, dtype=np.int64).ravel()
+        if not 0.0 < float(cos_min) < 1.0:
+            raise ValueError(f"cos_min must be in (0, 1), got {cos_min!r}")
+        self.cos_min = float(cos_min)
+
+    def __call__(self, t, y) -> bool:
+        return bool(self.indices.size) and bool(np.any(np.abs(np.cos(y[self.indices])) < self.cos_min))
 
 
 class _Counted:
@@ -188,7 +206,7 @@ def _validate(rhs, t_span, y0, method, rtol, atol, dt, t_eval, callback, max_ste
 def integrate(rhs: Callable, t_span, y0, *, method: str = "DOP853", rtol: float = 1e-9,
               atol=1e-12, dt: float | None = None, t_eval=None, dense: bool = False,
               callback: Callable | None = None, max_steps: int | None = None,
-              jac=None) -> IntegrationResult:
+              jac=None, stop: Callable | None = None) -> IntegrationResult:
     """Integrate ``y' = rhs(t, y)`` over ``t_span = (t0, t_end)`` from ``y0`` (dim,).
 
     ``method`` one of :data:`METHODS`; ``rtol``/``atol`` the adaptive methods' tolerances
@@ -197,10 +215,15 @@ def integrate(rhs: Callable, t_span, y0, *, method: str = "DOP853", rtol: float 
     is sampled from the dense interpolant (otherwise at the steps); ``dense`` returns the
     interpolant as ``sol``; ``callback(t, y)`` is called after each accepted step (do not
     modify ``y``); ``max_steps`` stops with ``success=False`` after that many accepted steps;
-    ``jac`` (callable ``jac(t, y)`` or constant matrix) for Radau, BDF, LSODA and midpoint.
+    ``jac`` (callable ``jac(t, y)`` or constant matrix) for Radau, BDF, LSODA and midpoint;
+    ``stop(t, y) -> bool`` is asked after each accepted step (after ``callback``): True ends the
+    integration there with ``success=True`` and ``stopped=True`` (an :class:`AngleGuard` is such a
+    test).
     """
     t0, t1, y0, atol, dt, t_eval = _validate(rhs, t_span, y0, method, rtol, atol, dt, t_eval,
                                              callback, max_steps, jac)
+    if stop is not None and not callable(stop):
+        raise TypeError(f"stop must be callable stop(t, y) -> bool or None, got {stop!r}")
     need_dense = dense or t_eval is not None
     start = time.perf_counter()
     fun = _Counted(rhs)
@@ -210,6 +233,17 @@ def integrate(rhs: Callable, t_span, y0, *, method: str = "DOP853", rtol: float 
                          f"{f0.shape} at t0={t0!r}")
     if not np.all(np.isfinite(f0)):
         raise ValueError(f"rhs(t0, y0) is not finite at t0={t0!r}: {f0!r}")
+    halted = []
+    if callback is not None or stop is not None:
+        user_callback = callback
+
+        def callback(t, y):
+            if user_callback is not None:
+                user_callback(t, y)
+            if stop is not None and stop(t, y):
+                halted.append(float(t))
+                return True
+            return False
     if method in _SCIPY:
         out = _run_scipy(_SCIPY[method], fun, t0, t1, y0, rtol, atol, dt, jac, callback,
                          max_steps, need_dense)
@@ -219,6 +253,8 @@ def integrate(rhs: Callable, t_span, y0, *, method: str = "DOP853", rtol: float 
         out = _run_midpoint(fun, f0, t0, t1, y0, dt, float(rtol), atol, jac, callback,
                             max_steps, need_dense)
     ts, ys, sol, njev, nrejected, success, message = out
+    if halted:
+        message = f"stopped by stop(t, y) at t={halted[0]!r}"
     nsteps = ts.size - 1
     if t_eval is not None:
         te = t_eval[t_eval <= ts[-1]]
@@ -226,7 +262,8 @@ def integrate(rhs: Callable, t_span, y0, *, method: str = "DOP853", rtol: float 
     wall = time.perf_counter() - start
     return IntegrationResult(t=ts, y=ys, method=method, rtol=float(rtol), atol=atol, dt=dt,
                              nfev=fun.n, njev=int(njev), nsteps=nsteps, nrejected=nrejected,
-                             wall_time=wall, sol=sol if dense else None, success=success, message=message)
+                             wall_time=wall, sol=sol if dense else None, success=success, message=message,
+                             stopped=bool(halted))
 
 
 def _run_scipy(cls, fun, t0, t1, y0, rtol, atol, dt, jac, callback, max_steps, need_dense):
@@ -253,8 +290,8 @@ def _run_scipy(cls, fun, t0, t1, y0, rtol, atol, dt, jac, callback, max_steps, n
         ys.append(y)
         if need_dense:
             interps.append(solver.dense_output())
-        if callback is not None:
-            callback(solver.t, y)
+        if callback is not None and callback(solver.t, y):
+            break
         if max_steps is not None and len(ts) > max_steps and solver.status == "running":
             success, message = False, f"max_steps={max_steps} reached at t={float(solver.t)!r}"
             break
@@ -296,8 +333,9 @@ def _run_rk4(fun, f0, t0, t1, y0, dt, callback, max_steps, need_dense):
             raise IntegrationError(f"RK4: non-finite state or rhs at t={float(ts[i + 1])!r} "
                                    f"(step {i + 1}, dt={dt!r})")
         fs[i + 1] = f1
-        if callback is not None:
-            callback(ts[i + 1], y1)
+        if callback is not None and callback(ts[i + 1], y1):
+            n = i + 1
+            break
         if _stopped(i + 1, max_steps, ts[i + 1], t1):
             n = i + 1
             success, message = False, f"max_steps={max_steps} reached at t={float(ts[n])!r}"
@@ -408,13 +446,15 @@ def _run_midpoint(fun, f0, t0, t1, y0, dt, rtol, atol, jac, callback, max_steps,
             if not jac_fresh:               # slow convergence: fresh Jacobian next step
                 need_jac = rate is not None and rate > 0.2
             jac_fresh = jac_const
-            if callback is not None:
-                callback(t, y)
+            if callback is not None and callback(t, y):
+                success = None
+                break
             if _stopped(n, max_steps, t, t1):
                 success, message = False, f"max_steps={max_steps} reached at t={float(t)!r}"
                 break
         if not success:
             break
+    success = True if success is None else success
     ts, ys, ks = ts[:n + 1], ys[:n + 1], ks[:n]
     sol = None
     if need_dense:
