@@ -1,7 +1,8 @@
 """The model users hold: a tree of links plus the solver, with the public API of the project.
 
-``Model`` composes :mod:`urdf2links.recursive` (default) and :mod:`urdf2links.literal` (the oracle,
-``method="literal"``). Every dynamics call takes optional keyword arguments ``t`` (time) and
+``Model`` composes the recursive form compiled with numba (:mod:`urdf2links.kernels`, the default
+``method="recursive"``), the same form in numpy (:mod:`urdf2links.recursive`, ``method="numpy"``)
+and :mod:`urdf2links.literal` (the oracle, ``method="literal"``). Every dynamics call takes optional keyword arguments ``t`` (time) and
 ``base`` (None for a fixed base, a :class:`~urdf2links.transforms.BaseState`, or a callable
 ``t -> BaseState``, the prescribed motion of {A}); a fixed base computes no base terms at all.
 
@@ -19,15 +20,20 @@ import numpy as np
 import scipy.linalg
 
 from .errors import DynamicsError
+from .kernels import CompiledTree, forward_dynamics as _fd_kernel
 from .literal import literal_terms
 from .loads import Wrench
 from .recursive import RecursivePlan
-from .transforms import resolve_base
+from .transforms import BaseState, resolve_base
 from .tree import LinkTree
 
 __all__ = ["Model"]
 
-METHODS = ("recursive", "literal")
+METHODS = ("recursive", "numpy", "literal")
+_NO_BASE = np.zeros(18)
+_NO_BASE.setflags(write=False)
+_NO_G = np.zeros(3)
+_NO_G.setflags(write=False)
 DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
 
 
@@ -57,6 +63,7 @@ class Model:
         self.audit = list(audit)
         self.info = dict(info or {})
         self._plan = RecursivePlan(tree)
+        self._fast = CompiledTree(tree)
         if coupling is None:
             self._C = None
             self._d = None
@@ -118,6 +125,24 @@ class Model:
             out.append((self.tree.link_index(w.link), w.force, w.moment, w.point, w.frame))
         return out
 
+    @staticmethod
+    def _base18(base, t) -> np.ndarray:
+        """(18,) pose, rate and acceleration of {A} for the kernels (zeros for a fixed base)."""
+        if base is None:
+            return _NO_BASE
+        state = base(t) if callable(base) else base
+        if not isinstance(state, BaseState):
+            raise TypeError(f"base must be None, a BaseState or a callable t -> BaseState; got {type(state).__name__}")
+        return np.concatenate([np.asarray(state.pose, float), np.asarray(state.rate, float),
+                               np.asarray(state.accel, float)])
+
+    def _compiled_terms(self, q, qd, t, base, g, want_A):
+        qt, qdt = self._tree_state(q, qd)
+        if qdt is None:
+            qdt = np.zeros(self.tree.n)
+        b18 = self._base18(base, t)
+        return self._fast.terms(qt, qdt, b18, _NO_G if g is None else self.gravity_vector, want_A=want_A)
+
     def _literal(self, q, qd, t, base, wrenches=()):
         qt, qdt = self._tree_state(q, np.zeros(self.n) if qd is None else qd)
         return literal_terms(self.tree, qt, qdt, base_T=resolve_base(base, t),
@@ -129,6 +154,8 @@ class Model:
         self._check_method(method)
         if method == "literal":
             return self._reduce(self._literal(q, None, t, base)["A"])
+        if method == "recursive":
+            return self._reduce(self._compiled_terms(q, None, t, base, None, True)[0])
         qt, _ = self._tree_state(q)
         kin = self._plan.kinematics(qt, None, resolve_base(base, t))
         return self._reduce(self._plan.mass_matrix(kin))
@@ -138,6 +165,8 @@ class Model:
         self._check_method(method)
         if method == "literal":
             return self._reduce(self._literal(q, qd, t, base)["e"])
+        if method == "recursive":
+            return self._reduce(-self._compiled_terms(q, qd, t, base, None, False)[1])
         qt, qdt = self._tree_state(q, qd)
         kin = self._plan.kinematics(qt, qdt, resolve_base(base, t), acceleration=True)
         return self._reduce(self._plan.bias(kin))
@@ -147,6 +176,10 @@ class Model:
         self._check_method(method)
         if method == "literal":
             return self._reduce(self._literal(q, None, t, base)["G"])
+        if method == "recursive":  # at rest relative to a base at rest: b = -G
+            state = base(t) if callable(base) else base
+            still = None if state is None else BaseState.fixed(state.pose)
+            return self._reduce(-self._compiled_terms(q, None, t, still, True, False)[1])
         qt, _ = self._tree_state(q)
         kin = self._plan.kinematics(qt, None, resolve_base(base, t))
         return self._reduce(self._plan.gravity(kin, self.gravity_vector))
@@ -167,6 +200,9 @@ class Model:
         self._check_method(method)
         if method == "literal":
             return float(self._literal(q, qd, t, base)["E"])
+        if method == "recursive":
+            qt, qdt = self._tree_state(q, qd)
+            return float(self._fast.energies(qt, qdt, self._base18(base, t), _NO_G)[0])
         qt, qdt = self._tree_state(q, qd)
         kin = self._plan.kinematics(qt, qdt, resolve_base(base, t))
         return self._plan.kinetic_energy(kin)
@@ -176,6 +212,10 @@ class Model:
         self._check_method(method)
         if method == "literal":
             return float(self._literal(q, None, t, base)["V"])
+        if method == "recursive":
+            qt, _ = self._tree_state(q)
+            return float(self._fast.energies(qt, np.zeros(self.tree.n), self._base18(base, t),
+                                             self.gravity_vector)[1])
         qt, _ = self._tree_state(q)
         kin = self._plan.kinematics(qt, None, resolve_base(base, t))
         return self._plan.potential_energy(kin, self.gravity_vector)
@@ -193,6 +233,19 @@ class Model:
         wrenches; ``gravity=False`` leaves G out. Raises :class:`~urdf2links.errors.DynamicsError`
         naming the configuration and the coordinates when A is not positive definite.
         """
+        if not loads and self._C is None:
+            q = np.asarray(q, dtype=float)
+            qd = np.asarray(qd, dtype=float)
+            n = self.n
+            if q.shape != (n,) or qd.shape != (n,):
+                self._vec(q, "q"), self._vec(qd, "qd")
+            tau_v = np.zeros(n) if tau is None else self._vec(tau, "tau")
+            out = np.empty(n)
+            fast = self._fast
+            pivot = _fd_kernel(fast.I, fast.F, fast.W, q, qd, tau_v, self._base18(base, t),
+                               self.gravity_vector if gravity else _NO_G, out)
+            if pivot < 0:
+                return out
         qt, qdt = self._tree_state(q, qd)
         A, rhs, _ = self.equation(qt, qdt, resolve_base(base, t),
                                   gravity_vector=self.gravity_vector if gravity else None,
