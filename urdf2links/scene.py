@@ -36,6 +36,7 @@ not computed, see :mod:`urdf2links.plan`)::
 
     [run]
     t_end = 10.0; method = "DOP853"; rtol = 1e-10; atol = 1e-12; dt = 1e-3; samples = 1001
+    recharting = true                       # floating links pass phi_y = +-pi/2 (urdf2links.charts)
 
     [record]
     link_poses = ["lower"]                  # {0}-poses of these links at every sample
@@ -61,7 +62,7 @@ __all__ = ["Scene", "AppliedLoad", "Spring", "RunSettings", "load_scene", "shipp
 _TOP = ("description", "chaotic", "robot", "gravity", "base", "force", "moment", "torque", "spring",
         "initial", "run", "record")
 _ROBOT = ("urdf", "shipped", "example_robot_data", "floating_base", "inertia", "mimic", "package_dirs")
-_RUN = ("t_end", "method", "rtol", "atol", "dt", "samples")
+_RUN = ("t_end", "method", "rtol", "atol", "dt", "samples", "recharting")
 
 
 @dataclass(frozen=True)
@@ -95,6 +96,7 @@ class RunSettings:
     atol: float = 1e-12
     dt: float | None = None
     samples: int = 501
+    recharting: bool = True
 
 
 @dataclass(frozen=True)
@@ -308,7 +310,10 @@ def scene_from_dict(data: dict, *, where: str = "<scene>", directory: Path | Non
             rtol=r.number(t.get("rtol", run.rtol), "run.rtol", positive=True),
             atol=r.number(t.get("atol", run.atol), "run.atol", positive=True),
             dt=r.number(t["dt"], "run.dt", positive=True) if "dt" in t else None,
-            samples=int(r.number(t.get("samples", run.samples), "run.samples", positive=True)))
+            samples=int(r.number(t.get("samples", run.samples), "run.samples", positive=True)),
+            recharting=t.get("recharting", True))
+        if not isinstance(run.recharting, bool):
+            r.fail("run.recharting", f"must be true or false, got {run.recharting!r}")
         if run.method in ("RK4", "midpoint") and run.dt is None:
             r.fail("run.dt", f"method {run.method!r} takes a fixed step: give dt (seconds)")
 

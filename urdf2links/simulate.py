@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .integrators import integrate
+from .charts import integrate_charted, link_poses
 from .model import Model
 from .plan import compile_plan
 from .scene import RunSettings, Scene
@@ -32,7 +32,9 @@ class Trajectory:
     arrays: ``kinetic`` E, ``potential`` V (gravity and springs), ``work`` W (non-potential forces
     and base), ``function`` h (E + V for a fixed base), ``error`` ``h - h(0) - W``;
     ``poses`` dict link -> (m, 4, 4); ``stats`` (method, rtol, atol, dt, nfev, nsteps, wall_time);
-    ``sol`` the integrator's dense interpolant ``t -> (q, qd, W)`` or None.
+    ``sol`` the integrator's dense interpolant ``t -> (q, qd, W)`` or None; ``charts`` the
+    :class:`~urdf2links.charts.ChartedRun` (segments, states in each chart) when floating links were
+    re-charted, else None.
     """
 
     t: np.ndarray
@@ -45,6 +47,7 @@ class Trajectory:
     scene: str = ""
     robot: str = ""
     sol: object = None
+    charts: object = None
 
     @property
     def energy_error(self) -> float:
@@ -106,13 +109,19 @@ class Progress:
 
 def simulate(scene_or_model, *, t_end: float | None = None, method: str | None = None, rtol: float | None = None,
              atol: float | None = None, dt: float | None = None, samples: int | None = None, q0=None, qd0=None,
-             progress: bool | None = None, model: Model | None = None) -> Trajectory:
+             progress: bool | None = None, model: Model | None = None, recharting: bool | None = None) -> Trajectory:
     """Integrate a scene (a :class:`~urdf2links.scene.Scene`, a path to a scene file) or a bare
     :class:`~urdf2links.model.Model` (gravity as the model says, nothing else acting).
 
     Keyword arguments override the scene's ``[run]`` and ``[initial]``; ``model`` reuses an already
     loaded model of the scene's robot; ``progress`` forces the progress bar on or off (default: on
     for a terminal).
+
+    Floating links (three angle coordinates) are re-charted when they approach ``phi_y = +-pi/2``
+    (:mod:`urdf2links.charts`; ``recharting`` overrides the scene's ``[run] recharting``, default
+    on): the run is then integrated in segments, ``q``/``qd`` are reported in the loaded model's
+    coordinates, the re-charted links' poses are recorded, and ``stats['recharts']`` lists the
+    switches. Without re-charting, reaching the singularity raises a DynamicsError.
     """
     from .scene import load_scene
 
@@ -131,7 +140,8 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
     run = scene.run
     run = RunSettings(t_end=run.t_end if t_end is None else float(t_end), method=method or run.method,
                       rtol=run.rtol if rtol is None else rtol, atol=run.atol if atol is None else atol,
-                      dt=run.dt if dt is None else dt, samples=run.samples if samples is None else int(samples))
+                      dt=run.dt if dt is None else dt, samples=run.samples if samples is None else int(samples),
+                      recharting=run.recharting if recharting is None else bool(recharting))
     plan = compile_plan(scene, model)
     q, qd = scene.initial_state(model)
     if q0 is not None:
@@ -142,30 +152,35 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
     y0 = np.r_[q, qd, 0.0]
     t_eval = np.linspace(0.0, run.t_end, max(run.samples, 2))
     bar = Progress(run.t_end, label=f"{scene.name} {run.method}", enabled=progress)
+    # torques and springs act on coordinates: their links keep their chart
+    exclude = {c for c, _ in scene.torques} | {sp.coordinate for sp in scene.springs}
     try:
-        res = integrate(plan.rhs, (0.0, run.t_end), y0, method=run.method, rtol=run.rtol, atol=run.atol,
-                        dt=run.dt if run.method in ("RK4", "midpoint") else None, t_eval=t_eval,
-                        dense=True, callback=bar)
+        res = integrate_charted(model, lambda m: plan if m is model else compile_plan(scene, m), y0,
+                                (0.0, run.t_end), t_eval=t_eval, method=run.method, rtol=run.rtol, atol=run.atol,
+                                dt=run.dt if run.method in ("RK4", "midpoint") else None, callback=bar,
+                                recharting=run.recharting, exclude=exclude, base_state=plan.base_state)
     finally:
         bar.close()
-    t = np.asarray(res.t)
-    Y = np.asarray(res.y)
-    qs, qds, W = Y[:, :n], Y[:, n:2 * n], Y[:, 2 * n]
-    E = np.array([plan.kinetic_energy(ti, a, b) for ti, a, b in zip(t, qs, qds)])
-    V = np.array([plan.potential_energy(ti, a) for ti, a in zip(t, qs)])
-    h = E + V if scene.base is None else np.array([plan.energy_function(ti, a, b) for ti, a, b in zip(t, qs, qds)])
-    poses = {}
-    if scene.link_poses:
-        from .importer import urdf_link_poses
-        for link in scene.link_poses:
-            poses[link] = np.empty((len(t), 4, 4))
-        for i, (ti, a) in enumerate(zip(t, qs)):
-            P = urdf_link_poses(model, a, t=ti, base=plan.base_state(ti))
-            for link in scene.link_poses:
-                poses[link][i] = P[link]
+    t = res.t
+    qs, qds, W = res.y[:, :n], res.y[:, n:2 * n], res.y[:, 2 * n]
+    # energies and poses in the chart that computed each sample (regular there)
+    plans = [res.segments[k].plan for k in res.segment_of]
+    qc, qdc = res.y_chart[:, :n], res.y_chart[:, n:2 * n]
+    E = np.array([p.kinetic_energy(ti, a, b) for p, ti, a, b in zip(plans, t, qc, qdc)])
+    V = np.array([p.potential_energy(ti, a) for p, ti, a in zip(plans, t, qc)])
+    h = E + V if scene.base is None else np.array([p.energy_function(ti, a, b)
+                                                   for p, ti, a, b in zip(plans, t, qc, qdc)])
+    recorded = list(dict.fromkeys([*scene.link_poses, *(r["link"] for r in res.recharts)]))
+    poses = {link: np.empty((len(t), 4, 4)) for link in recorded}
+    for i, (p, ti, a) in enumerate(zip(plans, t, qc)):
+        P = link_poses(p.model, recorded, a, t=ti, base=p.base_state(ti))
+        for link in recorded:
+            poses[link][i] = P[link]
     stats = {"method": run.method, "rtol": run.rtol, "atol": run.atol, "dt": run.dt, "nfev": res.nfev,
              "nsteps": res.nsteps, "wall_time": res.wall_time, "terms": plan.terms, "success": res.success,
-             "message": res.message}
+             "message": res.message, "recharting": run.recharting, "n_recharts": len(res.recharts),
+             "recharts": res.recharts, "segments": len(res.segments)}
     return Trajectory(t=t, q=qs, qd=qds, coordinate_names=model.coordinate_names,
                       energy={"kinetic": E, "potential": V, "work": W, "function": h, "error": h - h[0] - W},
-                      poses=poses, stats=stats, scene=scene.name, robot=model.name, sol=res.sol)
+                      poses=poses, stats=stats, scene=scene.name, robot=model.name, sol=res.sol,
+                      charts=res if res.recharts else None)
