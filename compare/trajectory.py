@@ -512,6 +512,10 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     scale = max(float(np.abs(traj.energy["kinetic"]).max()),
                 float(np.abs(traj.energy["potential"] - traj.energy["potential"][0]).max()),
                 float(np.abs(traj.energy["work"]).max()), 1e-300)
+    if traj.stats.get("n_recharts"):
+        notes.append(f"the project re-charted the ZYX angles of {sorted({r['link'] for r in traj.stats['recharts']})} "
+                     f"{traj.stats['n_recharts']} times near phi_y = +-pi/2 (urdf2links.charts); its q are converted "
+                     "back to the loaded model's coordinates, which MuJoCo integrates as hinges through the singularity")
     notes += [f"MJCF: {x}" for x in mj.notes] + [f"MuJoCo run: {x}" for x in run.notes]
     if t_end_note:
         notes.insert(0, t_end_note)
