@@ -52,6 +52,7 @@ METHODS = ("RK45", "DOP853", "Radau", "BDF", "LSODA", "RK4", "midpoint")
 _SCIPY = {"RK45": RK45, "DOP853": DOP853, "Radau": Radau, "BDF": BDF, "LSODA": LSODA}
 _USES_JAC = ("Radau", "BDF", "LSODA", "midpoint")
 _FIXED = ("RK4", "midpoint")
+_COMPILED = ("RK45", "DOP853", "RK4", "midpoint")   # compiled loops for a compiled scene
 EPS = np.finfo(float).eps
 MAX_HALVINGS = 4          # midpoint: step halvings before giving up
 NEWTON_MAXITER = 8        # midpoint: simplified Newton iterations per attempt
@@ -94,10 +95,10 @@ class DenseOutput:
     times of shape ``(k,)`` -> ``(k, dim)``. Cubic Hermite from ``(ts, ys, fs)``, or a
     wrapped scipy ``OdeSolution``."""
 
-    __slots__ = ("t_min", "t_max", "_ts", "_ys", "_fs", "_ode")
+    __slots__ = ("t_min", "t_max", "_ts", "_ys", "_fs", "_ode", "_poly")
 
-    def __init__(self, ts, ys=None, fs=None, ode: OdeSolution | None = None):
-        self._ts, self._ys, self._fs, self._ode = ts, ys, fs, ode
+    def __init__(self, ts, ys=None, fs=None, ode: OdeSolution | None = None, poly=None):
+        self._ts, self._ys, self._fs, self._ode, self._poly = ts, ys, fs, ode, poly
         self.t_min, self.t_max = float(ts[0]), float(ts[-1])
 
     def __call__(self, t):
@@ -114,6 +115,8 @@ class DenseOutput:
         tt = np.clip(tt, self.t_min, self.t_max)
         if self._ode is not None:
             out = self._ode(tt).T
+        elif self._poly is not None:
+            out = self._poly_eval(tt)
         else:
             ts = self._ts
             i = np.clip(np.searchsorted(ts, tt, side="right") - 1, 0, ts.size - 2)
@@ -124,6 +127,28 @@ class DenseOutput:
             out = ((1.0 + 2.0 * s) * r2 * self._ys[i] + s2 * (3.0 - 2.0 * s) * self._ys[i + 1]
                    + h[:, None] * (s * r2 * self._fs[i] - s2 * r * self._fs[i + 1]))
         return out[0] if scalar else out
+
+    def _poly_eval(self, tt):
+        """Compiled loops' dense output: ``poly = (method, coefficients (m, r, dim))``, row ``i + 1``
+        for the step from ``ts[i]``: DOP853's seventh-degree form or RK45's quartic (scipy's)."""
+        method, C = self._poly
+        ts, ys = self._ts, self._ys
+        i = np.clip(np.searchsorted(ts, tt, side="right") - 1, 0, ts.size - 2)
+        h = (ts[i + 1] - ts[i])[:, None]
+        x = (tt - ts[i])[:, None] / h
+        rows = C[i + 1]                                   # (k, r, dim)
+        if method == "DOP853":
+            y = np.zeros((tt.size, ys.shape[1]))
+            for j, r in enumerate(range(rows.shape[1] - 1, -1, -1)):
+                y += rows[:, r]
+                y *= x if j % 2 == 0 else (1.0 - x)
+            return y + ys[i]
+        y = np.zeros((tt.size, ys.shape[1]))
+        p = np.ones_like(x)
+        for r in range(rows.shape[1]):
+            p = p * x
+            y += rows[:, r] * p
+        return ys[i] + h * y
 
 
 class AngleGuard:
@@ -233,6 +258,22 @@ def integrate(rhs: Callable, t_span, y0, *, method: str = "DOP853", rtol: float 
                          f"{f0.shape} at t0={t0!r}")
     if not np.all(np.isfinite(f0)):
         raise ValueError(f"rhs(t0, y0) is not finite at t0={t0!r}: {f0!r}")
+    compiled = (getattr(rhs, "args", None) is not None and method in _COMPILED and jac is None
+                and (stop is None or isinstance(stop, AngleGuard)))
+    if compiled:
+        from .compiled_integrators import run as run_compiled
+
+        grid = _grid(t0, t1, dt) if method in _FIXED else None
+        ts, ys, sol, nfev, njev, nrejected, success, message, stopped = run_compiled(
+            method, rhs, f0, t0, t1, y0, float(rtol), atol, dt, callback, max_steps, need_dense, stop, grid)
+        nsteps = ts.size - 1
+        if t_eval is not None:
+            te = t_eval[t_eval <= ts[-1]]
+            ts, ys = te, (sol(te) if sol is not None else np.tile(y0, (te.size, 1)))
+        return IntegrationResult(t=ts, y=ys, method=method, rtol=float(rtol), atol=atol, dt=dt,
+                                 nfev=fun.n + nfev, njev=njev, nsteps=nsteps,
+                                 nrejected=nrejected, wall_time=time.perf_counter() - start,
+                                 sol=sol if dense else None, success=success, message=message, stopped=stopped)
     halted = []
     if callback is not None or stop is not None:
         user_callback = callback

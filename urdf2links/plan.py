@@ -15,6 +15,10 @@ spring          ``-k (q - rest)`` (a potential)                     a ``[[spring
 damper          ``-c qd`` (dissipation D, (5.1))                    a ``[[spring]]`` with c > 0
 ==============  ==================================================  ==============================
 
+``plan.rhs`` is the compiled right-hand side (:class:`~urdf2links.scene_kernels.CompiledScene`,
+with the same flags: a term the scene does not call for is switched off there too);
+``plan.python_rhs`` the same in numpy, its readable twin and oracle.
+
 The state integrated is ``y = (q, qd, W)``: ``W`` is the work done on the system by everything
 that is not a potential (Q, tau, dampers, and the moving base through ``-dL/dt``), so that
 ``h(t) - h(0) - W(t)`` (``h`` the energy function, ``E + V`` for a fixed base) measures the
@@ -62,6 +66,11 @@ class Plan:
             ("Q", bool(self.loads)), ("tau", len(self.torque_funcs) > 0), ("spring", len(springs) > 0),
             ("damper", len(dampers) > 0)) if on)
         self.nfev = 0
+        from .scene_kernels import CompiledScene
+
+        self.rhs = CompiledScene(self)
+        """``y' = (qd, q'', P)`` for ``y = (q, qd, W)`` (2n + 1,): the compiled right-hand side
+        (:mod:`urdf2links.scene_kernels`), equal to :meth:`python_rhs` to rounding."""
 
     # -- pieces ----------------------------------------------------------------------------------
     def base_state(self, t) -> BaseState | None:
@@ -127,8 +136,9 @@ class Plan:
             P -= dE - dV  # -dL/dt
         return P
 
-    def rhs(self, t, y) -> np.ndarray:
-        """``y' = (qd, q'', P)`` for ``y = (q, qd, W)`` (2n + 1,)."""
+    def python_rhs(self, t, y) -> np.ndarray:
+        """``y' = (qd, q'', P)`` for ``y = (q, qd, W)`` (2n + 1,), in Python (numpy recursive form):
+        the readable twin of the compiled ``rhs``."""
         n = self.n
         q, qd = y[:n], y[n:2 * n]
         out = np.empty(2 * n + 1)
