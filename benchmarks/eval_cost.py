@@ -2,9 +2,11 @@
 mj_forward on the same model (route 1: the project's tree as MJCF), in the same process.
 
 Prints a table of median times over interleaved repetitions and the ratios project / MuJoCo, for
-n-link chains and for the shipped and (when installed) real robots. Usage:
+n-link chains and for the shipped and (when installed) real robots; both are called from Python
+the same way (one call per evaluation, arguments already in arrays). With ``--out`` it also writes
+the JSON (machine and versions included) and a plot of cost against n with fitted slopes. Usage:
 
-    python benchmarks/eval_cost.py [--reps 200] [--out reports/benchmarks/eval_cost.json]
+    python benchmarks/eval_cost.py [--reps 300] [--out reports/benchmarks/eval_cost.json]
 """
 
 from __future__ import annotations
@@ -55,7 +57,8 @@ def measure(model: Model, reps: int) -> dict:
     d.qpos[mj.qpos_index] = q
     d.qvel[mj.dof_index] = qd
     fd, mm, mf = [], [], []
-    for _ in range(5):  # interleaved rounds, median of each
+    model.forward_dynamics(q, qd), model.mass_matrix(q)      # compile / load the kernels first
+    for _ in range(7):  # interleaved rounds, median of each
         fd.append(median_time(lambda: model.forward_dynamics(q, qd), reps))
         mm.append(median_time(lambda: model.mass_matrix(q), reps))
         mf.append(median_time(lambda: mujoco.mj_forward(mj.model, d), reps))
@@ -64,9 +67,39 @@ def measure(model: Model, reps: int) -> dict:
             "mj_forward_s": mf, "ratio_forward": fd / mf, "ratio_mass_matrix": mm / mf}
 
 
+def plot(rows, slope, slope_mj, path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    chains = [r for r in rows if r["robot"].startswith("chain")]
+    n = np.array([r["n"] for r in chains])
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    ax.loglog(n, [1e6 * r["forward_dynamics_s"] for r in chains], "o-", color="C0",
+              label=f"urdf2links forward_dynamics (slope {slope:.2f})")
+    ax.loglog(n, [1e6 * r["mass_matrix_s"] for r in chains], "s--", color="C0", alpha=0.6,
+              label="urdf2links mass_matrix")
+    ax.loglog(n, [1e6 * r["mj_forward_s"] for r in chains], "o-", color="C3",
+              label=f"MuJoCo mj_forward (slope {slope_mj:.2f})")
+    for r in rows:
+        if not r["robot"].startswith("chain"):
+            ax.plot(r["n"], 1e6 * r["forward_dynamics_s"], "^", color="C0")
+            ax.plot(r["n"], 1e6 * r["mj_forward_s"], "^", color="C3")
+            ax.annotate(r["robot"], (r["n"], 1e6 * r["forward_dynamics_s"]), fontsize=7,
+                        xytext=(3, 3), textcoords="offset points")
+    ax.set_xlabel("degrees of freedom n (chains: lines; real robots: triangles)")
+    ax.set_ylabel("time per evaluation [us] (median)")
+    ax.set_title("Cost of one dynamics evaluation, same process")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--reps", type=int, default=200)
+    parser.add_argument("--reps", type=int, default=300)
     parser.add_argument("--out", default=None)
     args = parser.parse_args(argv)
     models = [chain(n) for n in (2, 4, 8, 16, 32, 64)]
@@ -90,11 +123,16 @@ def main(argv=None):
     slope_mj = np.polyfit(np.log([r["n"] for r in chains]), np.log([r["mj_forward_s"] for r in chains]), 1)[0]
     print(f"cost growth in a chain (log-log slope): urdf2links {slope:.2f}, MuJoCo {slope_mj:.2f}")
     if args.out:
+        import numba
+
         out = Path(args.out)
         out.parent.mkdir(parents=True, exist_ok=True)
-        out.write_text(json.dumps({"machine": platform.platform(), "python": platform.python_version(),
-                                   "numpy": np.__version__, "mujoco": mujoco.__version__, "rows": rows,
+        out.write_text(json.dumps({"machine": platform.platform(), "processor": platform.processor(),
+                                   "python": platform.python_version(), "numpy": np.__version__,
+                                   "numba": numba.__version__, "mujoco": mujoco.__version__, "rows": rows,
                                    "slope_project": slope, "slope_mujoco": slope_mj}, indent=2))
+        plot(rows, slope, slope_mj, out.with_suffix(".png"))
+        print(f"wrote {out} and {out.with_suffix('.png')}")
 
 
 if __name__ == "__main__":
