@@ -6,6 +6,8 @@
   ``summary.json`` (:meth:`compare.trajectory.SceneComparison.summary`, non-finite numbers
   written as the strings ``"nan"``/``"inf"``) and ``summary.md`` into
   ``<root>/<robot>/<scene>/`` (or a given folder).
+  When the folder holds a ``tradeoff.json`` (``urdf2links tradeoff``), the page gets its
+  work-precision section (:func:`compare.tradeoff_plots.render_section`).
 * :func:`write_index` writes ``index.html`` and ``index.md``: one row per robot and scene with the
   headline figures and links.
 * :func:`check_baseline` compares a summary with the accepted figures of ``baselines.json``
@@ -23,6 +25,7 @@ import html
 import io
 import json
 import math
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -503,6 +506,13 @@ def write_report(c, out_dir=None, *, root="reports", json_path=None, command: st
         jp.write_text(text)
     (out / "summary.md").write_text(render_markdown(summary))
     (out / "report.html").write_text(render_html(c, summary, command=command, check=check, index_link=index_link))
+    if (out / "tradeoff.json").is_file():  # a work-precision study of this scene (urdf2links tradeoff): its section
+        from .tradeoff_plots import insert_section
+
+        try:
+            insert_section(out / "report.html", json.loads((out / "tradeoff.json").read_text()))
+        except (ValueError, KeyError, TypeError) as err:  # an unreadable study must not break the report
+            print(f"report: {out / 'tradeoff.json'} not included: {type(err).__name__}: {err}", file=sys.stderr)
     return {"dir": out, "html": out / "report.html", "json": out / "summary.json", "md": out / "summary.md",
             "summary": summary}
 

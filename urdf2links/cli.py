@@ -1,6 +1,7 @@
 """Command line: ``urdf2links inspect FILE.urdf|SCENE.toml``, ``urdf2links simulate SCENE.toml``,
-``urdf2links compare SCENE.toml`` and ``urdf2links report`` (the MuJoCo comparison: the handlers import
-the ``compare`` package, and with it MuJoCo, only when they run)."""
+``urdf2links compare SCENE.toml``, ``urdf2links report`` and ``urdf2links tradeoff SCENE.toml`` (the
+MuJoCo comparison and the work-precision study: the handlers import the ``compare`` package, and with
+it MuJoCo, only when they run)."""
 
 from __future__ import annotations
 
@@ -109,6 +110,12 @@ def _report(args) -> int:
     return report_command(args)
 
 
+def _tradeoff(args) -> int:
+    from compare.tradeoff import tradeoff_command
+
+    return tradeoff_command(args)
+
+
 def _add_mujoco_options(p) -> None:
     p.add_argument("--mujoco-integrator", default="RK4", choices=("RK4", "Euler", "implicit", "implicitfast"),
                    help="MuJoCo's integrator (default RK4)")
@@ -169,6 +176,26 @@ def main(argv=None) -> int:
                    help="accept this run's figures: add them to <out>/baselines.json (or FILE), replacing a run of "
                         "the same t_end and MuJoCo setting")
     p.set_defaults(func=_report)
+    p = sub.add_parser("tradeoff", help="work-precision study of a scene: error against wall time, both engines",
+                       description="Run a scene with every method of urdf2links over a ladder of tolerances or steps "
+                                   "and with MuJoCo's Euler, implicitfast and RK4 over a ladder of timesteps, against a "
+                                   "reference (DOP853 rtol 1e-13, checked by a second method); errors, energy drift, "
+                                   "median wall time of interleaved rounds, evaluations; the crossover. Writes "
+                                   "tradeoff.json, tradeoff.md, work_precision.png, energy_drift.png (and the section "
+                                   "of report.html when the folder has one). Progress on stderr.")
+    p.add_argument("scene", help="a scene .toml file")
+    p.add_argument("--t-end", type=float, help="run length in s (default: the scene's, at most 2 s)")
+    p.add_argument("--out", help="output folder (default reports/<robot>/<scene>/)")
+    p.add_argument("--quick", action="store_true", help="short ladders, one timing round, DOP853 rtol 1e-12 as the "
+                   "reference's check (instead of Radau rtol 1e-13)")
+    p.add_argument("--repeats", type=int, help="timing rounds, median kept (default 3; --quick 1)")
+    p.add_argument("--budget", type=float, help="skip a run predicted to take longer than this many seconds "
+                   "(default 30; --quick 5)")
+    p.add_argument("--methods", help="comma-separated project methods (default all: RK45,DOP853,Radau,BDF,LSODA,RK4,"
+                   "midpoint)")
+    p.add_argument("--mujoco-integrators", help="comma-separated MuJoCo integrators (default Euler,implicitfast,RK4)")
+    p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    p.set_defaults(func=_tradeoff)
     args = parser.parse_args(argv)
     try:
         return args.func(args)

@@ -1,0 +1,583 @@
+"""Work-precision study of one scene: what each level of accuracy costs, in both engines.
+
+:func:`run_study` runs, on the same scene from the same initial state over ``t = 0..T``:
+
+1. **the reference**: DOP853 at rtol 1e-13, atol 1e-14, checked against a second run (default:
+   Radau at rtol 1e-13, atol 1e-14, an implicit method of another family; ``quick``: DOP853 at
+   rtol 1e-12, cheaper, whose difference bounds the reference's error from above when the
+   method converges regularly). The largest coordinate difference of the two over the samples is
+   the reference's **error estimate**; errors below it are not resolved by the study.
+2. **every method of the project** (:data:`urdf2links.integrators.METHODS`): the adaptive ones
+   over a ladder of rtol (``atol = 1e-2 rtol``), ``RK4`` and ``midpoint`` (Newton tolerance rtol
+   1e-10, atol 1e-12) over a ladder of steps ``dt``;
+3. **MuJoCo's** ``Euler``, ``implicitfast`` and ``RK4`` over a ladder of timesteps (route 1: the
+   project's tree as MJCF, :func:`compare.mjcf.mjcf_from_scene`, run by
+   :func:`compare.mujoco_run.run_mujoco`).
+
+For each run: the error against the reference in the coordinates (max over coordinates of
+``|q - q_ref|``, rad or m) at the final time and the maximum over the common sample times (the
+reference's dense output at MuJoCo's actual sample times); the energy drift, ``max |h - h(0) - W|``
+over the reference's energy scale (project: its own power balance; MuJoCo: ``h`` from its own
+energies as :mod:`compare.trajectory` does, ``W`` the reference's work when work acts); the wall
+time; the dynamics evaluations (project: every call of the right-hand side, Jacobian differences
+included; MuJoCo: steps x stages, Euler 1, implicitfast 1, RK4 4).
+
+**Timing.** Every run is first made once, with samples, for its errors (not timed). Then
+``repeats`` rounds run every configuration that succeeded once more each, with two samples only
+(start and end), engines interleaved and the order reversed every other round; the median is
+kept. The project's time is the integrator's own ``wall_time`` (``Trajectory.stats``: the
+integration loop and the dense output at the two sample times; not the plan compilation nor the
+energies); MuJoCo's is ``MujocoRun.wall_time`` (its stepping loop with two ``mj_forward`` samples).
+Both engines run in this one process.
+
+**Budget.** A configuration whose predicted wall time exceeds ``budget`` seconds (evaluations x
+the measured cost of one, extrapolated from the looser rungs for the adaptive methods) is skipped,
+and so are the tighter rungs of the same method (a failed rung does not stop the ladder); so are the rungs after one whose error came within
+:data:`FLOOR_STOP` times the reference's error estimate (they would not be resolved); runs that fail (step underflow, non-finite
+state, failed factorization, MuJoCo's instability reset) are recorded as failed with the reason.
+
+**Crossover** (:func:`crossover`): at each error level, the fastest run of each engine reaching
+it; the level below which the project is faster than MuJoCo, or the statement that it is not.
+
+Plots and the report section: :mod:`compare.tradeoff_plots`. Command: ``urdf2links tradeoff``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import time
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+import mujoco
+import numpy as np
+
+from urdf2links.integrators import METHODS
+from urdf2links.plan import compile_plan
+from urdf2links.scene import Scene, load_scene
+from urdf2links.simulate import simulate
+
+from .mjcf import mjcf_from_scene
+from .mujoco_run import run_mujoco
+from .report import json_ready
+from .trajectory import _mujoco_energy_function, _shown_path, scene_key
+
+__all__ = ["run_study", "crossover", "render_markdown", "write_study", "tradeoff_command", "STAGES",
+           "MUJOCO_INTEGRATORS", "ADAPTIVE", "FIXED"]
+
+ADAPTIVE = tuple(m for m in METHODS if m not in ("RK4", "midpoint"))
+FIXED = ("RK4", "midpoint")
+MUJOCO_INTEGRATORS = ("Euler", "implicitfast", "RK4")
+#: Dynamics evaluations per MuJoCo step.
+STAGES = {"Euler": 1, "implicitfast": 1, "implicit": 1, "RK4": 4}
+
+RTOLS = (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12)
+QUICK_RTOLS = (1e-4, 1e-6, 1e-8)
+DTS = (1e-2, 5e-3, 2e-3, 1e-3, 5e-4, 2e-4, 1e-4, 5e-5, 2e-5, 1e-5)
+QUICK_DTS = (1e-2, 5e-3, 2.5e-3)
+MUJOCO_DTS = (1e-2, 5e-3, 2e-3, 1e-3, 5e-4, 2e-4, 1e-4, 5e-5, 2e-5, 1e-5, 5e-6, 2e-6, 1e-6)
+QUICK_MUJOCO_DTS = (8e-3, 4e-3, 2e-3, 1e-3)
+REFERENCE = {"method": "DOP853", "rtol": 1e-13, "atol": 1e-14}
+CHECK = {"method": "Radau", "rtol": 1e-13, "atol": 1e-14}
+QUICK_CHECK = {"method": "DOP853", "rtol": 1e-12, "atol": 1e-13}
+MIDPOINT_NEWTON = {"rtol": 1e-10, "atol": 1e-12}
+DEFAULT_T_CAP = 2.0
+#: A method's ladder stops once a run's error is within this factor of the reference's error estimate.
+FLOOR_STOP = 3.0
+#: The crossover's level must see the project faster at this share of the levels below it.
+MAJORITY = 0.75
+DEFAULT_BUDGET = 30.0
+QUICK_BUDGET = 5.0
+
+
+@dataclass(frozen=True)
+class Config:
+    engine: str       # "urdf2links" | "MuJoCo"
+    method: str
+    param: str        # "rtol" | "dt"
+    value: float
+
+    @property
+    def label(self) -> str:
+        return f"{self.engine} {self.method} {self.param} {self.value:g}"
+
+
+def _say(log, msg):
+    if log is not None:
+        log(msg)
+
+
+def _qerr(q, q_ref) -> tuple[float, float]:
+    """(final, max over samples) of the largest coordinate error."""
+    e = np.abs(np.asarray(q, float) - np.asarray(q_ref, float))
+    e = e.max(axis=1) if e.ndim == 2 and e.shape[1] else np.zeros(len(e))
+    return float(e[-1]), float(e.max())
+
+
+def _project(scene, model, T, S, cfg: Config, repeat_only=False):
+    kw = {"method": cfg.method}
+    if cfg.param == "dt":
+        kw["dt"] = cfg.value
+        if cfg.method == "midpoint":
+            kw.update(MIDPOINT_NEWTON)
+    else:
+        kw.update(rtol=cfg.value, atol=1e-2 * cfg.value)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return simulate(scene, model=model, t_end=T, samples=2 if repeat_only else S, progress=False, **kw)
+
+
+def _mujoco(mj, scene, T, S, cfg: Config, repeat_only=False):
+    return run_mujoco(mj, scene, t_end=T, timestep=cfg.value, integrator=cfg.method, samples=2 if repeat_only else S)
+
+
+def _mujoco_failure(run, T) -> str | None:
+    if not (np.all(np.isfinite(run.q)) and np.all(np.isfinite(run.qd))):
+        return "MuJoCo's state became non-finite"
+    if np.any(np.diff(run.t) < 0) or abs(run.t[-1] - run.nsteps * run.timestep) > 1e-6 * max(T, 1.0):
+        return "MuJoCo reset the simulation (unstable: bad acceleration)"
+    return None
+
+
+def _predict(cfg: Config, T, done: list[dict], cost: dict, n: int) -> float:
+    """Predicted wall time (s) of ``cfg`` from the cost of one evaluation or step and the looser
+    rungs of the same method already run (``done``: their rows, loosest first)."""
+    if cfg.engine == "MuJoCo":
+        return math.ceil(T / cfg.value) * cost["mujoco_step_s"][cfg.method]
+    per_eval = cost["project_eval_s"]
+    prev = [r for r in done if r["status"] == "ok" and r.get("nfev")]
+    if prev and prev[-1].get("first_run_s"):  # this method's own cost per evaluation
+        per_eval = prev[-1]["first_run_s"] / prev[-1]["nfev"]
+    if cfg.param == "dt":
+        if prev:
+            p = prev[-1]
+            return p["nfev"] * p["value"] / cfg.value * per_eval
+        per_step = 4 if cfg.method == "RK4" else 3
+        return per_step * math.ceil(T / cfg.value) * per_eval
+    if len(prev) >= 2:  # evaluations grow geometrically per decade of rtol: extrapolate
+        a, b = prev[-2], prev[-1]
+        per_decade = max(b["nfev"] / a["nfev"], 1.0) ** (1.0 / max(math.log10(a["value"] / b["value"]), 1e-9))
+        return b["nfev"] * max(per_decade, 1.2) ** math.log10(b["value"] / cfg.value) * per_eval
+    if prev:
+        return prev[-1]["nfev"] * 2.0 ** math.log10(prev[-1]["value"] / cfg.value) * per_eval
+    return 0.0
+
+
+def _ladder(quick, methods, mujoco_integrators):
+    cfgs = []
+    for m in methods:
+        if m in FIXED:
+            cfgs += [Config("urdf2links", m, "dt", v) for v in (QUICK_DTS if quick else DTS)]
+        else:
+            cfgs += [Config("urdf2links", m, "rtol", v) for v in (QUICK_RTOLS if quick else RTOLS)]
+    for m in mujoco_integrators:
+        cfgs += [Config("MuJoCo", m, "dt", v) for v in (QUICK_MUJOCO_DTS if quick else MUJOCO_DTS)]
+    return cfgs
+
+
+def _machine() -> dict:
+    import matplotlib
+    import scipy
+
+    try:
+        from importlib.metadata import version
+        u2l = version("urdf2links")
+    except Exception:
+        u2l = None
+    try:
+        commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
+                                timeout=5, cwd=Path(__file__).resolve().parent).stdout.strip() or None
+    except Exception:
+        commit = None
+    return {"platform": platform.platform(), "processor": platform.processor() or platform.machine(),
+            "cpu_count": os.cpu_count(), "python": sys.version.split()[0], "numpy": np.__version__,
+            "scipy": scipy.__version__, "mujoco": mujoco.__version__, "matplotlib": matplotlib.__version__,
+            "urdf2links": u2l, "git_commit": commit}
+
+
+def run_study(scene, *, t_end: float | None = None, quick: bool = False, repeats: int | None = None,
+              budget: float | None = None, samples: int | None = None, methods=None, mujoco_integrators=None,
+              check: dict | None = None, log: Callable[[str], None] | None = None) -> dict:
+    """The work-precision study of ``scene`` (a Scene or a path): see the module doc. Returns the
+    JSON-ready dictionary that :func:`write_study` writes (``rows``, ``reference``, ``crossover``,
+    ``timing``, ``machine``, ...). ``t_end`` defaults to the scene's, capped at
+    :data:`DEFAULT_T_CAP`; ``quick``: short ladders, one timing round, a cheaper check run."""
+    start = time.perf_counter()
+    if isinstance(scene, (str, Path)):
+        scene = load_scene(scene)
+    methods = tuple(METHODS if methods is None else methods)
+    mujoco_integrators = tuple(MUJOCO_INTEGRATORS if mujoco_integrators is None else mujoco_integrators)
+    for m in methods:
+        if m not in METHODS:
+            raise ValueError(f"methods: unknown method {m!r}; expected some of {', '.join(METHODS)}")
+    for m in mujoco_integrators:
+        if m not in STAGES:
+            raise ValueError(f"mujoco_integrators: unknown integrator {m!r}; expected some of {', '.join(STAGES)}")
+    repeats = (1 if quick else 3) if repeats is None else int(repeats)
+    if repeats < 1:
+        raise ValueError(f"repeats must be >= 1, got {repeats!r}")
+    budget = (QUICK_BUDGET if quick else DEFAULT_BUDGET) if budget is None else float(budget)
+    if t_end is None:
+        T = min(scene.run.t_end, DEFAULT_T_CAP)
+        t_note = (f"t_end {T:g} s: the scene's {scene.run.t_end:g} s capped at {DEFAULT_T_CAP:g} s by default "
+                  "(--t-end to change)") if T < scene.run.t_end else None
+    else:
+        T = float(t_end)
+        if not (math.isfinite(T) and T > 0):
+            raise ValueError(f"t_end must be a finite number > 0, got {t_end!r}")
+        t_note = None if T == scene.run.t_end else f"t_end {T:g} s set by --t-end (the scene's is {scene.run.t_end:g} s)"
+    S = int(samples) if samples is not None else int(min(2001, max(51, round(T / 0.01) + 1)))
+    check = dict(check or (QUICK_CHECK if quick else CHECK))
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = scene.model()
+    plan = compile_plan(scene, model)
+    mj = mjcf_from_scene(scene, model)
+    n = model.n
+
+    # warm-up: compiled code is compiled at its first call, which must not be timed nor predict costs
+    for m in methods + (REFERENCE["method"], check["method"]):
+        try:
+            simulate(scene, model=model, t_end=min(T, 0.02), samples=2, progress=False, method=m,
+                     **({"dt": 0.01} if m in FIXED else {"rtol": 1e-6, "atol": 1e-8}))
+        except Exception:  # noqa: BLE001 -- a method that fails here fails (and is recorded) below
+            pass
+    _say(log, f"reference: {REFERENCE['method']} rtol {REFERENCE['rtol']:g}, t = 0..{T:g} s, {S} samples")
+    ref = simulate(scene, model=model, t_end=T, samples=S, progress=False, method=REFERENCE["method"],
+                   rtol=REFERENCE["rtol"], atol=REFERENCE["atol"])
+    if not ref.stats["success"]:
+        raise RuntimeError(f"the reference run failed: {ref.stats['message']}")
+    _say(log, f"  {ref.stats['nsteps']} steps, {ref.stats['nfev']} evaluations, {ref.stats['wall_time']:.2f} s; "
+              f"check: {check['method']} rtol {check['rtol']:g}")
+    chk = simulate(scene, model=model, t_end=T, samples=S, progress=False, method=check["method"],
+                   rtol=check["rtol"], atol=check["atol"])
+    est_final, est_max = _qerr(chk.q, ref.q)
+    _say(log, f"  check {chk.stats['nfev']} evaluations, {chk.stats['wall_time']:.2f} s: reference error estimate "
+              f"{est_max:.2e} (max over the run), {est_final:.2e} (final)")
+    en = ref.energy
+    scale = max(float(np.abs(en["kinetic"]).max()), float(np.abs(en["potential"] - en["potential"][0]).max()),
+                float(np.abs(en["work"]).max()), 1e-300)
+    work_terms = any(t in plan.terms for t in ("Q", "tau", "damper", "base"))
+
+    # cost of one evaluation (project) and of one step (MuJoCo), for the budget
+    cost = {"project_eval_s": ref.stats["wall_time"] / max(ref.stats["nfev"], 1), "mujoco_step_s": {}}
+    for m in mujoco_integrators:
+        dt_probe = 1e-3
+        probe = run_mujoco(mj, scene, t_end=min(T, 200 * dt_probe), timestep=dt_probe, integrator=m, samples=2)
+        cost["mujoco_step_s"][m] = probe.wall_time / max(probe.nsteps, 1)
+
+    cfgs = _ladder(quick, methods, mujoco_integrators)
+    rows: list[dict] = []
+    by_method: dict[tuple, list[dict]] = {}
+    for k, cfg in enumerate(cfgs, 1):
+        key = (cfg.engine, cfg.method)
+        done = by_method.setdefault(key, [])
+        row = {"engine": cfg.engine, "method": cfg.method, "param": cfg.param, "value": cfg.value,
+               "status": "ok", "reason": None, "error_final": None, "error_max": None, "energy_drift_rel": None,
+               "wall_time_s": None, "wall_times_s": [], "nfev": None, "nsteps": None, "notes": []}
+        if cfg.engine == "urdf2links" and cfg.method == "midpoint":
+            row["notes"].append(f"Newton tolerance rtol {MIDPOINT_NEWTON['rtol']:g}, atol {MIDPOINT_NEWTON['atol']:g}")
+        if cfg.engine == "urdf2links" and cfg.param == "rtol":
+            row["atol"] = 1e-2 * cfg.value
+        # over budget: the tighter rungs cost more still. A failure does not stop the ladder (a
+        # coarse step that blows up or whose Newton iteration fails says nothing of finer ones)
+        stop = next((r for r in done if r["status"] == "skipped" and "budget" in (r["reason"] or "")), None)
+        floored = next((r for r in done if r["status"] == "ok" and r["error_max"] <= FLOOR_STOP * est_max), None)
+        pred = _predict(cfg, T, done, cost, n)
+        row["predicted_s"] = pred
+        if stop is not None:
+            row.update(status="skipped", reason=f"a looser rung ({stop['param']} {stop['value']:g}) was over "
+                                                "the budget")
+        elif floored is not None:
+            row.update(status="skipped", reason=f"a looser rung ({floored['param']} {floored['value']:g}) already "
+                                                f"reached the reference's error estimate (error {floored['error_max']:.1e}"
+                                                f" <= {FLOOR_STOP:g} x {est_max:.1e}): tighter runs are not resolved")
+        elif pred > budget:
+            row.update(status="skipped", reason=f"predicted {pred:.3g} s > budget {budget:g} s")
+        else:
+            try:
+                if cfg.engine == "urdf2links":
+                    tr = _project(scene, model, T, S, cfg)
+                    if not tr.stats["success"]:
+                        row.update(status="failed", reason=str(tr.stats["message"]))
+                    elif not np.all(np.isfinite(tr.q)):
+                        row.update(status="failed", reason="non-finite state")
+                    else:
+                        row["error_final"], row["error_max"] = _qerr(tr.q, ref.q)
+                        row["energy_drift_rel"] = float(np.abs(tr.energy["error"]).max() / scale)
+                    row.update(nfev=int(tr.stats["nfev"]), nsteps=int(tr.stats["nsteps"]),
+                               first_run_s=float(tr.stats["wall_time"]))
+                else:
+                    run = _mujoco(mj, scene, T, S, cfg)
+                    row.update(nsteps=int(run.nsteps), nfev=int(run.nsteps) * STAGES[cfg.method],
+                               first_run_s=float(run.wall_time))
+                    row["notes"] += list(run.notes)
+                    bad = _mujoco_failure(run, T)
+                    if bad:
+                        row.update(status="failed", reason=bad)
+                    else:
+                        Y = ref.sol(np.clip(run.t, 0.0, T))
+                        row["error_final"], row["error_max"] = _qerr(run.q, Y[:, :n])
+                        h = run.total_energy if scene.base is None else _mujoco_energy_function(mj, run, plan)
+                        bal = h - h[0] - (Y[:, 2 * n] if work_terms else 0.0)
+                        row["energy_drift_rel"] = float(np.abs(bal).max() / scale)
+            except Exception as err:  # a failed run is a result, not a crash of the study
+                row.update(status="failed", reason=f"{type(err).__name__}: {err}")
+        done.append(row)
+        rows.append(row)
+        _say(log, f"[{k}/{len(cfgs)}] {cfg.label}: " + (
+            f"error {row['error_max']:.2e} (final {row['error_final']:.2e}), {row['nfev']} evaluations, "
+            f"{row['first_run_s']:.3g} s" if row["status"] == "ok" else f"{row['status'].upper()}: {row['reason']}"))
+
+    # timing rounds: engines interleaved, order reversed every other round, median kept
+    ok = [(cfg, row) for cfg, row in zip(cfgs, rows) if row["status"] == "ok"]
+    proj = [x for x in ok if x[0].engine == "urdf2links"]
+    mjc = [x for x in ok if x[0].engine == "MuJoCo"]
+    order = [x for pair in zip(proj, mjc) for x in pair] + proj[len(mjc):] + mjc[len(proj):]
+    for r in range(repeats):
+        t0 = time.perf_counter()
+        for cfg, row in (order if r % 2 == 0 else order[::-1]):
+            try:
+                if cfg.engine == "urdf2links":
+                    row["wall_times_s"].append(float(_project(scene, model, T, S, cfg, True).stats["wall_time"]))
+                else:
+                    row["wall_times_s"].append(float(_mujoco(mj, scene, T, S, cfg, True).wall_time))
+            except Exception as err:
+                row["notes"].append(f"timing round {r + 1} failed: {type(err).__name__}: {err}")
+        _say(log, f"timing round {r + 1}/{repeats}: {len(order)} runs in {time.perf_counter() - t0:.1f} s")
+    for _, row in ok:
+        if row["wall_times_s"]:
+            row["wall_time_s"] = float(statistics.median(row["wall_times_s"]))
+
+    reference = {
+        "method": REFERENCE["method"], "rtol": REFERENCE["rtol"], "atol": REFERENCE["atol"],
+        "nsteps": int(ref.stats["nsteps"]), "nfev": int(ref.stats["nfev"]), "wall_time_s": float(ref.stats["wall_time"]),
+        "energy_drift_rel": float(np.abs(ref.energy["error"]).max() / scale),
+        "check": {**check, "nsteps": int(chk.stats["nsteps"]), "nfev": int(chk.stats["nfev"]),
+                  "wall_time_s": float(chk.stats["wall_time"]), "success": bool(chk.stats["success"])},
+        "error_estimate": est_max, "error_estimate_final": est_final,
+        "note": (f"error estimate: max over the samples and coordinates of |q_ref - q_check|, the check run being "
+                 f"{check['method']} at rtol {check['rtol']:g}; errors below it are not resolved"),
+    }
+    data = {
+        "schema": 1, "kind": "work-precision", "key": scene_key(scene), "robot": Path(scene.robot).stem,
+        "robot_name": model.name, "scene": scene.name, "scene_file": _shown_path(scene.path),
+        "description": scene.description, "chaotic": bool(scene.chaotic), "coordinates": list(model.coordinate_names),
+        "effects": list(plan.terms), "t_end": T, "t_end_scene": float(scene.run.t_end), "t_end_note": t_note,
+        "samples": S, "quick": bool(quick), "budget_s": budget, "reference": reference,
+        "error": {"metric": "max over coordinates of |q - q_ref| (rad or m); 'max' over the common sample times, "
+                            "'final' at the end", "floor": est_max},
+        "energy": {"scale_J": scale, "work_terms": bool(work_terms),
+                   "metric": "max |h - h(0) - W| / scale (h = E + V for a fixed base; MuJoCo: its own energies"
+                             + ("; W: the reference's work along the reference trajectory" if work_terms else "") + ")"},
+        "timing": {"repeats": repeats, "statistic": "median", "interleaved": True,
+                   "project": "the integrator's wall_time (Trajectory.stats): integration loop and dense output at "
+                              "the 2 sample times of a timing run; not the plan compilation nor the energies",
+                   "mujoco": "MujocoRun.wall_time: the mj_step loop with 2 mj_forward samples",
+                   "same_process": True},
+        "ladders": {"rtol": list(QUICK_RTOLS if quick else RTOLS), "atol": "1e-2 x rtol",
+                    "dt": list(QUICK_DTS if quick else DTS), "mujoco_dt": list(QUICK_MUJOCO_DTS if quick else MUJOCO_DTS),
+                    "midpoint_newton": MIDPOINT_NEWTON},
+        "cost": {"project_eval_us": cost["project_eval_s"] * 1e6,
+                 "mujoco_step_us": {k: v * 1e6 for k, v in cost["mujoco_step_s"].items()}},
+        "evaluations": "project: calls of the right-hand side (Jacobian differences included); MuJoCo: steps x "
+                       "stages (Euler 1, implicitfast 1, RK4 4)",
+        "rows": rows,
+        "machine": _machine(),
+        "total_s": None,
+    }
+    data["crossover"] = crossover(rows, est_max)
+    data["total_s"] = time.perf_counter() - start
+    _say(log, data["crossover"]["statement"])
+    return json_ready(data)
+
+
+def _front(rows, engine, level) -> tuple[float, dict | None]:
+    best, who = math.inf, None
+    for r in rows:
+        if r["engine"] == engine and r["status"] == "ok" and r["wall_time_s"] is not None and r["error_max"] <= level:
+            if r["wall_time_s"] < best:
+                best, who = r["wall_time_s"], r
+    return best, who
+
+
+def crossover(rows: list[dict], floor: float = 0.0, *, majority: float = MAJORITY) -> dict:
+    """Where the project becomes faster than MuJoCo. At each error level ``e`` (the errors the runs
+    reached, max over the run; errors below ``floor``, the reference's error estimate, count as
+    ``floor``) that both engines reach, the fastest run of each engine with an error <= e. The
+    crossover ``e*`` is the largest such level at which the project is faster and is faster at
+    no fewer than ``majority`` of the levels <= e* (timing jitter and a single lucky rung must not
+    move it; the levels where MuJoCo is faster below ``e*`` are counted and the tightest named).
+    Returns ``statement`` (a sentence), ``error_level`` (e* or None), ``levels`` (every level's
+    fastest runs), the speed ratios (MuJoCo / project wall time) at e* and at the tightest level
+    both reach, and the tightest error each engine reached."""
+    def err(r):
+        return max(r["error_max"], floor)
+    ok = [dict(r, error_max=err(r)) for r in rows if r["status"] == "ok" and r["wall_time_s"] is not None]
+    best = {e: min((r["error_max"] for r in ok if r["engine"] == e), default=None) for e in ("urdf2links", "MuJoCo")}
+    out = {"metric": "error = max over the run; faster = smaller median wall time", "error_level": None,
+           "tightest_error": best, "ratio_at_crossover": None, "ratio_at_tightest_common": None, "levels": []}
+    if best["urdf2links"] is None or best["MuJoCo"] is None:
+        out["statement"] = "no crossover: one of the engines has no successful run"
+        return out
+    common = sorted(e for e in {r["error_max"] for r in ok} if e >= max(best["urdf2links"], best["MuJoCo"]))
+    for e in common:
+        tp, rp = _front(ok, "urdf2links", e)
+        tm, rm = _front(ok, "MuJoCo", e)
+        out["levels"].append({"error": e, "project_s": tp, "mujoco_s": tm, "project_faster": tp < tm,
+                              "project_run": f"{rp['method']} {rp['param']} {rp['value']:g}",
+                              "mujoco_run": f"{rm['method']} dt {rm['value']:g}"})
+    lv = out["levels"]
+    star = None
+    for k in range(len(lv) - 1, -1, -1):  # from the loosest level down
+        below = [x["project_faster"] for x in lv[:k + 1]]
+        if lv[k]["project_faster"] and sum(below) >= majority * len(below):
+            star = k
+            break
+
+    def ratio_words(x):
+        r = x["mujoco_s"] / x["project_s"]
+        return r, (f"MuJoCo {1 / r:.3g}x faster" if r < 1 else f"urdf2links {r:.3g}x faster")
+
+    def at(x):
+        return (f"at {x['error']:.1e} MuJoCo ({x['mujoco_run']}) takes {x['mujoco_s']:.3g} s and urdf2links "
+                f"({x['project_run']}) {x['project_s']:.3g} s")
+
+    r0, w0 = ratio_words(lv[0])
+    out["ratio_at_tightest_common"] = r0
+    extra = ""
+    if best["urdf2links"] < best["MuJoCo"]:
+        extra = (f"; only urdf2links reached errors below {best['MuJoCo']:.1e} within the ladder and budget "
+                 f"(down to {best['urdf2links']:.1e})")
+    elif best["MuJoCo"] < best["urdf2links"]:
+        extra = (f"; only MuJoCo reached errors below {best['urdf2links']:.1e} within the ladder and budget "
+                 f"(down to {best['MuJoCo']:.1e})")
+    if star is None:
+        wins = sum(x["project_faster"] for x in lv)
+        out["statement"] = (f"urdf2links is not (yet) faster than MuJoCo at the accuracies both reach "
+                            f"({wins} of {len(lv)} levels): at the tightest, {at(lv[0])} ({w0})" + extra)
+        return out
+    x = lv[star]
+    out["error_level"] = x["error"]
+    out["ratio_at_crossover"], ws = ratio_words(x)
+    below = lv[:star + 1]
+    wins = sum(y["project_faster"] for y in below)
+    top = max(below, key=lambda y: y["mujoco_s"] / y["project_s"])
+    out["largest_speedup"] = {"error": top["error"], "ratio": top["mujoco_s"] / top["project_s"]}
+    losses = [y for y in below if not y["project_faster"]]
+    out["statement"] = (
+        f"urdf2links is faster than MuJoCo for errors below {x['error']:.1e}"
+        + ("" if star == len(lv) - 1 else " (MuJoCo is faster above it)")
+        + f", at {wins} of the {len(below)} error levels below it that both engines reach"
+        + (f" (MuJoCo is faster at {len(losses)}, e.g. {at(losses[0])})" if losses else "")
+        + f"; at the crossover {at(x)} ({ws}); largest advantage {at(top)} "
+        f"(urdf2links {top['mujoco_s'] / top['project_s']:.3g}x faster)" + extra)
+    return out
+
+
+# --------------------------------------------------------------------------- output
+
+
+def _fmt(x, d=2):
+    return "-" if x is None else (f"{x:.{d}e}" if isinstance(x, float) else str(x))
+
+
+def render_markdown(data: dict) -> str:
+    ref = data["reference"]
+    lines = [f"# {data['robot']} / {data['scene']}: accuracy against wall time", "",
+             f"t = 0..{data['t_end']:g} s, {data['samples']} samples"
+             + (f" ({data['t_end_note']})" if data.get("t_end_note") else "") + ".", "",
+             f"**Crossover:** {data['crossover']['statement']}.", "",
+             f"Reference: {ref['method']} rtol {ref['rtol']:g} atol {ref['atol']:g} ({ref['nsteps']} steps, "
+             f"{ref['nfev']} evaluations); checked against {ref['check']['method']} rtol {ref['check']['rtol']:g}: "
+             f"error estimate {ref['error_estimate']:.2e} (max over the run), {ref['error_estimate_final']:.2e} (final).",
+             "", f"Error: {data['error']['metric']}. Energy drift: {data['energy']['metric']}. Wall time: median of "
+             f"{data['timing']['repeats']} interleaved rounds; urdf2links: {data['timing']['project']}; MuJoCo: "
+             f"{data['timing']['mujoco']}. Budget {data['budget_s']:g} s per run.", "",
+             "| engine | method | setting | status | error max | error final | energy drift | wall s | evaluations | steps |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in data["rows"]:
+        st = r["status"] if r["status"] == "ok" else f"{r['status']}: {r['reason']}"
+        wt = "-" if r["wall_time_s"] is None else f"{r['wall_time_s']:.3g}"
+        lines.append(f"| {r['engine']} | {r['method']} | {r['param']} {r['value']:g} | {st} | {_fmt(r['error_max'])} | "
+                     f"{_fmt(r['error_final'])} | {_fmt(r['energy_drift_rel'], 1)} | {wt} | {_fmt(r['nfev'])} | "
+                     f"{_fmt(r['nsteps'])} |")
+    m = data["machine"]
+    lines += ["", f"Machine: {m['platform']}, {m['cpu_count']} CPUs, Python {m['python']}, numpy {m['numpy']}, "
+                  f"scipy {m['scipy']}, MuJoCo {m['mujoco']}; commit {m['git_commit']}.", ""]
+    return "\n".join(lines)
+
+
+def write_study(data: dict, out_dir, *, command: str | None = None) -> dict:
+    """Write ``tradeoff.json``, ``tradeoff.md``, ``work_precision.png`` and ``energy_drift.png`` into
+    ``out_dir``, and put the section into ``report.html`` there when it exists. Returns the paths."""
+    from .tradeoff_plots import insert_section, plot_energy_drift, plot_work_precision
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    if command:
+        data = dict(data, command=command)
+    paths = {"dir": out, "json": out / "tradeoff.json", "md": out / "tradeoff.md",
+             "work_precision": out / "work_precision.png", "energy_drift": out / "energy_drift.png"}
+    paths["json"].write_text(json.dumps(json_ready(data), indent=2) + "\n")
+    paths["md"].write_text(render_markdown(data))
+    plot_work_precision(data, paths["work_precision"])
+    plot_energy_drift(data, paths["energy_drift"])
+    report = out / "report.html"
+    paths["report"] = report if report.is_file() and insert_section(report, data) else None
+    return paths
+
+
+def tradeoff_command(args) -> int:
+    """``urdf2links tradeoff SCENE.toml``: the study, its files, the crossover on stdout."""
+    from .cli import _err, _rel
+
+    scene = load_scene(args.scene)
+
+    def names(text, what, allowed):
+        if text is None:
+            return None
+        items = tuple(x.strip() for x in text.split(",") if x.strip())
+        bad = [x for x in items if x not in allowed]
+        if bad or not items:
+            raise ValueError(f"{what}={text!r}: unknown {bad or 'empty list'}; choose from {', '.join(allowed)}")
+        return items
+
+    try:
+        methods = names(args.methods, "--methods", METHODS)
+        integrators = names(args.mujoco_integrators, "--mujoco-integrators", tuple(STAGES))
+        if args.t_end is not None and not (math.isfinite(args.t_end) and args.t_end > 0):
+            raise ValueError(f"--t-end={args.t_end!r}: must be a finite number of seconds > 0")
+        if args.repeats is not None and args.repeats < 1:
+            raise ValueError(f"--repeats={args.repeats!r}: must be at least 1")
+        if args.budget is not None and not args.budget > 0:
+            raise ValueError(f"--budget={args.budget!r}: must be a number of seconds > 0")
+    except ValueError as err:
+        _err(f"urdf2links tradeoff: error: {err}")
+        return 2
+    log = (lambda m: None) if args.quiet else (lambda m: _err(f"  {scene.name}: {m}"))
+    data = run_study(scene, t_end=args.t_end, quick=args.quick, repeats=args.repeats, budget=args.budget,
+                     methods=methods, mujoco_integrators=integrators, log=log)
+    out = Path(args.out) if args.out else Path("reports") / data["robot"] / data["scene"]
+    cmd = " ".join(["urdf2links tradeoff", _rel(args.scene)] + (["--quick"] if args.quick else [])
+                   + ([f"--t-end {args.t_end:g}"] if args.t_end is not None else []))
+    paths = write_study(data, out, command=cmd)
+    ref = data["reference"]
+    print(f"{data['key']}: work-precision, t = 0..{data['t_end']:g} s; reference {ref['method']} rtol {ref['rtol']:g}, "
+          f"error estimate {ref['error_estimate']:.1e} (check {ref['check']['method']} rtol {ref['check']['rtol']:g})")
+    ok = sum(r["status"] == "ok" for r in data["rows"])
+    print(f"  {ok} runs, {sum(r['status'] == 'failed' for r in data['rows'])} failed, "
+          f"{sum(r['status'] == 'skipped' for r in data['rows'])} skipped (budget {data['budget_s']:g} s)")
+    print(f"  crossover: {data['crossover']['statement']}")
+    print(f"  wrote {_rel(paths['json'])}, tradeoff.md, work_precision.png, energy_drift.png"
+          + (f"; section in {_rel(paths['report'])}" if paths["report"] else ""))
+    return 0

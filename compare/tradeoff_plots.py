@@ -1,0 +1,198 @@
+"""Figures and the report section of a work-precision study (:mod:`compare.tradeoff`).
+
+* :func:`plot_work_precision`: error (max over the run) against wall time, log-log, every method a
+  line, both engines on one figure (urdf2links: solid lines, cool colours, round markers; MuJoCo:
+  dashed lines, warm colours, square markers); beside it the same errors against dynamics
+  evaluations. The band under the reference's error estimate is shaded: errors there are not
+  resolved. The crossover level, if any, is a dotted line.
+* :func:`plot_energy_drift`: relative energy drift against wall time, same styles.
+* :func:`render_section`: the HTML section of the scene's report (figures embedded as base64 PNG);
+  :func:`insert_section` puts it into an existing ``report.html`` (between markers, replacing an
+  earlier one).
+"""
+
+from __future__ import annotations
+
+import html
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["plot_work_precision", "plot_energy_drift", "render_section", "insert_section", "section_from_dir",
+           "style", "BEGIN", "END"]
+
+BEGIN = "<!-- tradeoff:begin -->"
+END = "<!-- tradeoff:end -->"
+
+_PROJECT_COLOURS = {"RK45": "#08306b", "DOP853": "#2171b5", "Radau": "#17becf", "BDF": "#238b45",
+                    "LSODA": "#74c476", "RK4": "#6a51a3", "midpoint": "#9e9ac8"}
+_MUJOCO_COLOURS = {"Euler": "#cb181d", "implicitfast": "#fd8d3c", "RK4": "#8c2d04", "implicit": "#e7298a"}
+
+
+def style(engine: str, method: str) -> dict:
+    """Line style of one method: urdf2links solid/cool/round, MuJoCo dashed/warm/square."""
+    if engine == "MuJoCo":
+        return {"color": _MUJOCO_COLOURS.get(method, "#d95f0e"), "ls": (0, (5, 2.5)), "marker": "s", "ms": 5,
+                "lw": 1.8, "label": f"MuJoCo {method} (dt ladder)"}
+    fixed = method in ("RK4", "midpoint")
+    return {"color": _PROJECT_COLOURS.get(method, "#3182bd"), "ls": "-", "marker": "D" if fixed else "o", "ms": 5,
+            "lw": 1.8, "label": f"urdf2links {method} ({'dt' if fixed else 'rtol'} ladder)"}
+
+
+def _series(data, key):
+    """{(engine, method): (rows sorted loosest first)} of the runs that succeeded and were timed."""
+    out = {}
+    for r in data["rows"]:
+        if r["status"] == "ok" and r.get("wall_time_s") is not None and r.get(key) is not None:
+            out.setdefault((r["engine"], r["method"]), []).append(r)
+    return out
+
+
+def _figure(w, h):
+    from matplotlib.figure import Figure
+
+    return Figure(figsize=(w, h), dpi=100, layout="constrained")
+
+
+def _floor(ax, data):
+    f = data["reference"]["error_estimate"]
+    if f and f > 0:
+        ax.axhspan(1e-300, f, color="0.85", alpha=0.6, lw=0,
+                   label=f"below the reference's error estimate {f:.1e}")
+
+
+def _finish(fig, axes, data, title):
+    fails = [r for r in data["rows"] if r["status"] == "failed"]
+    skips = [r for r in data["rows"] if r["status"] == "skipped"]
+    ref = data["reference"]
+    sub = (f"t = 0..{data['t_end']:g} s; reference {ref['method']} rtol {ref['rtol']:g}; wall time: median of "
+           f"{data['timing']['repeats']} interleaved rounds, same process; {len(fails)} failed and {len(skips)} "
+           f"skipped runs not drawn (see the table)")
+    fig.suptitle(f"{data['robot']} / {data['scene']}: {title}\n{sub}", fontsize=10)
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside right center", fontsize=8, frameon=False)
+
+
+def plot_work_precision(data: dict, path=None):
+    """Error against wall time (and against evaluations); writes ``path`` (PNG) if given, returns
+    the Figure."""
+    fig = _figure(13.5, 5.6)
+    ax, bx = fig.subplots(1, 2, width_ratios=[1.35, 1])
+    series = _series(data, "error_max")
+    lo = []
+    for (engine, method), rows in series.items():
+        st = style(engine, method)
+        err = np.array([max(r["error_max"], 1e-17) for r in rows])
+        lo.append(err.min())
+        ax.loglog([r["wall_time_s"] for r in rows], err, **st)
+        bx.loglog([r["nfev"] for r in rows], err, **{k: v for k, v in st.items() if k != "label"})
+    for a in (ax, bx):
+        a.grid(alpha=0.3, which="both")
+        if lo:
+            a.set_ylim(max(min(lo) / 5, 1e-17), None)
+        _floor(a, data)
+    lvl = data["crossover"].get("error_level")
+    if lvl:
+        ax.axhline(lvl, color="k", ls=":", lw=1.3, label=f"crossover: urdf2links faster below {lvl:.1e}")
+    ax.set_xlabel("wall time (s, median)")
+    ax.set_ylabel("error: max over the run of max |q - q_ref| (rad or m)")
+    bx.set_xlabel("dynamics evaluations (MuJoCo: steps x stages)")
+    bx.set_title("the same errors against evaluations", fontsize=9)
+    _finish(fig, [ax], data, "work-precision (error against wall time)")
+    if path is not None:
+        fig.savefig(Path(path), metadata={"Software": None})
+    return fig
+
+
+def plot_energy_drift(data: dict, path=None):
+    """Relative energy drift against wall time; writes ``path`` (PNG) if given, returns the Figure."""
+    fig = _figure(11.5, 5.2)
+    ax = fig.subplots()
+    for (engine, method), rows in _series(data, "energy_drift_rel").items():
+        ax.loglog([r["wall_time_s"] for r in rows], [max(r["energy_drift_rel"], 1e-17) for r in rows],
+                  **style(engine, method))
+    d = data["reference"]["energy_drift_rel"]
+    ax.axhline(max(d, 1e-17), color="0.4", ls=":", lw=1.2, label=f"the reference's own drift {d:.1e}")
+    ax.grid(alpha=0.3, which="both")
+    ax.set_xlabel("wall time (s, median)")
+    ax.set_ylabel("energy drift: max |h - h(0) - W| / energy scale")
+    _finish(fig, [ax], data, "energy drift against wall time")
+    if path is not None:
+        fig.savefig(Path(path), metadata={"Software": None})
+    return fig
+
+
+def _b64(fig) -> str:
+    from .report import _png
+
+    return _png(fig)
+
+
+def _num(x, d=2):
+    return "&ndash;" if x is None else f"{x:.{d}e}"
+
+
+def render_section(data: dict) -> str:
+    """The report's work-precision section (HTML, between :data:`BEGIN` and :data:`END`)."""
+    e = html.escape
+    ref, co = data["reference"], data["crossover"]
+    rows = []
+    for r in data["rows"]:
+        cls = "" if r["status"] == "ok" else " class='small'"
+        status = "ok" if r["status"] == "ok" else f"<span class='fail'>{e(r['status'])}</span>: {e(str(r['reason']))}"
+        wt = "&ndash;" if r.get("wall_time_s") is None else f"{r['wall_time_s']:.3g}"
+        rows.append(f"<tr{cls}><td>{e(r['engine'])}</td><td>{e(r['method'])}</td><td class='num'>{e(r['param'])} "
+                    f"{r['value']:g}</td><td class='num'>{_num(r.get('error_max'))}</td><td class='num'>"
+                    f"{_num(r.get('error_final'))}</td><td class='num'>{_num(r.get('energy_drift_rel'), 1)}</td>"
+                    f"<td class='num'>{wt}</td><td class='num'>{'&ndash;' if r.get('nfev') is None else r['nfev']}"
+                    f"</td><td>{status}</td></tr>")
+    wp = _b64(plot_work_precision(data))
+    ed = _b64(plot_energy_drift(data))
+    m = data["machine"]
+    parts = [BEGIN, "<h2>Accuracy against wall time (work-precision)</h2>",
+             f"<div class='box'><b>Crossover:</b> {e(co['statement'])}.</div>",
+             f"<p>Every method of both engines on this scene from the same initial state, t = 0..{data['t_end']:g} s"
+             + (f" ({e(data['t_end_note'])})" if data.get("t_end_note") else "") + ", against a reference: "
+             f"{e(ref['method'])} rtol {ref['rtol']:g} ({ref['nsteps']} steps), checked against {e(ref['check']['method'])} "
+             f"rtol {ref['check']['rtol']:g}; the reference's <b>error estimate</b> (their largest difference) is "
+             f"<b>{ref['error_estimate']:.1e}</b> (final {ref['error_estimate_final']:.1e}): smaller errors are not "
+             f"resolved (grey band). Error: {e(data['error']['metric'])}. Wall time: median of "
+             f"{data['timing']['repeats']} interleaved rounds in one process; urdf2links: {e(data['timing']['project'])}; "
+             f"MuJoCo: {e(data['timing']['mujoco'])}. Runs predicted to exceed {data['budget_s']:g} s are skipped.</p>",
+             f"<img alt='work-precision diagram' src='data:image/png;base64,{wp}'>",
+             f"<img alt='energy drift against wall time' src='data:image/png;base64,{ed}'>",
+             "<details><summary>all runs</summary><table><tr><th>engine</th><th>method</th><th>setting</th>"
+             "<th>error max</th><th>error final</th><th>energy drift</th><th>wall s</th><th>evaluations</th>"
+             "<th>status</th></tr>" + "\n".join(rows) + "</table></details>",
+             f"<p class='small'>Energy drift: {e(data['energy']['metric'])}. Evaluations: {e(data['evaluations'])}. "
+             f"Machine: {e(m['platform'])}, {m['cpu_count']} CPUs, Python {e(m['python'])}, numpy {e(m['numpy'])}, "
+             f"MuJoCo {e(m['mujoco'])}. Figures: <a href='tradeoff.json'>tradeoff.json</a>, "
+             f"<a href='tradeoff.md'>tradeoff.md</a>"
+             + (f". Regenerate: <code>{e(data['command'])}</code>" if data.get("command") else "") + ".</p>", END]
+    return "\n".join(parts)
+
+
+def insert_section(report: Path, data: dict) -> bool:
+    """Put the section into an existing report page (replacing an earlier one); False when the
+    page has no place for it."""
+    text = Path(report).read_text()
+    if BEGIN in text and END in text:
+        text = text[:text.index(BEGIN)] + text[text.index(END) + len(END):]
+    section = render_section(data)
+    for anchor in ("<h2>Notes</h2>", "<p class='small'>Figures:", "</body>"):
+        if anchor in text:
+            i = text.index(anchor)
+            Path(report).write_text(text[:i] + section + "\n" + text[i:])
+            return True
+    return False
+
+
+def section_from_dir(out_dir) -> str:
+    """The section for the scene folder ``out_dir`` when it holds a ``tradeoff.json``, else ''."""
+    import json
+
+    p = Path(out_dir) / "tradeoff.json"
+    if not p.is_file():
+        return ""
+    return render_section(json.loads(p.read_text()))
+

@@ -1,0 +1,216 @@
+"""The work-precision study (compare.tradeoff, `urdf2links tradeoff`).
+
+One short study of the double pendulum (t_end 0.5 s, the --quick ladders, one timing round) is shared
+by the module: reference and check, convergence orders of RK4 (both engines) and Euler, monotone
+errors, the JSON contract, the files, the report section. The crossover is tested on synthetic rows.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("mujoco")
+
+from compare.tradeoff import crossover, run_study, write_study  # noqa: E402
+from compare.tradeoff_plots import BEGIN, END, insert_section, render_section  # noqa: E402
+from urdf2links.cli import main  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+SCENE = ROOT / "robots" / "double_pendulum_chaos.toml"
+ROW_KEYS = ("engine", "method", "param", "value", "status", "reason", "error_final", "error_max",
+            "energy_drift_rel", "wall_time_s", "wall_times_s", "nfev", "nsteps")
+
+
+@pytest.fixture(scope="module")
+def study():
+    return run_study(SCENE, t_end=0.5, quick=True, repeats=1, methods=("RK4", "DOP853", "midpoint"),
+                     mujoco_integrators=("Euler", "RK4"))
+
+
+def series(data, engine, method):
+    rows = [r for r in data["rows"] if r["engine"] == engine and r["method"] == method]
+    assert rows, f"no rows for {engine} {method}"
+    return rows
+
+
+def slope(rows, floor):
+    """Least-squares slope of log(final error) against log(dt), over the runs whose error is well
+    above the reference's error estimate (10x: below that the reference's own error matters)."""
+    pts = [(r["value"], r["error_final"]) for r in rows if r["status"] == "ok" and r["error_final"] > 10 * floor]
+    assert len(pts) >= 3, f"too few resolved points for a slope: {pts}"
+    x, y = np.log([p[0] for p in pts]), np.log([p[1] for p in pts])
+    return float(np.polyfit(x, y, 1)[0])
+
+
+def test_reference_error_estimate_is_small(study):
+    ref = study["reference"]
+    assert ref["method"] == "DOP853" and ref["rtol"] == 1e-13
+    assert ref["check"]["method"] == "DOP853" and ref["check"]["rtol"] == 1e-12  # --quick's check run
+    # DOP853 at rtol 1e-12 / 1e-13 over 0.5 s: differences ~1e-12; 1e-9 leaves room for a slower
+    # machine's different step sequence, and fails if the check or the reference went wrong
+    assert 0.0 <= ref["error_estimate"] < 1e-9
+    assert ref["error_estimate_final"] <= ref["error_estimate"]
+    assert study["error"]["floor"] == ref["error_estimate"]
+
+
+def test_errors_decrease_as_tolerances_tighten(study):
+    floor = study["reference"]["error_estimate"]
+    for (engine, method) in {(r["engine"], r["method"]) for r in study["rows"]}:
+        rows = [r for r in series(study, engine, method) if r["status"] == "ok"]
+        assert len(rows) >= 3, f"{engine} {method}: runs failed or were skipped: {series(study, engine, method)}"
+        errs = [max(r["error_max"], floor) for r in rows]
+        # adaptive error control is not strictly monotone; each rung tightens by 100x (rtol) or
+        # 2x (dt), so a factor 3 of slack only forgives jitter, and the ladder must gain 3x overall
+        for a, b in zip(errs, errs[1:]):
+            assert b <= 3.0 * a, f"{engine} {method}: error grew from {a:.2e} to {b:.2e}: {errs}"
+        assert errs[-1] < errs[0] / 3.0, f"{engine} {method}: no convergence {errs}"
+
+
+def test_rk4_is_fourth_order_in_both_engines(study):
+    floor = study["reference"]["error_estimate"]
+    for engine in ("urdf2links", "MuJoCo"):
+        p = slope(series(study, engine, "RK4"), floor)
+        # classic RK4: global error ~ dt^4; 3.5..4.5 allows for pre-asymptotic terms at the coarsest step
+        assert 3.5 <= p <= 4.5, f"{engine} RK4: error ~ dt^{p:.2f}"
+
+
+def test_euler_is_first_order_and_midpoint_second(study):
+    floor = study["reference"]["error_estimate"]
+    p = slope(series(study, "MuJoCo", "Euler"), floor)
+    assert 0.8 <= p <= 1.2, f"MuJoCo Euler: error ~ dt^{p:.2f}"  # first order, +-0.2 as for RK4
+    p = slope(series(study, "urdf2links", "midpoint"), floor)
+    assert 1.7 <= p <= 2.3, f"implicit midpoint: error ~ dt^{p:.2f}"  # second order
+
+
+def test_rows_have_costs_and_timing(study):
+    assert study["timing"]["repeats"] == 1 and study["timing"]["statistic"] == "median"
+    for r in study["rows"]:
+        assert set(ROW_KEYS) <= set(r)
+        assert r["status"] == "ok", r
+        assert r["wall_time_s"] > 0 and len(r["wall_times_s"]) == 1
+        assert r["nfev"] >= r["nsteps"] > 0
+        if r["engine"] == "MuJoCo":
+            stages = {"Euler": 1, "RK4": 4}[r["method"]]
+            assert r["nfev"] == stages * r["nsteps"] == stages * round(0.5 / r["value"])
+        assert 0.0 <= r["energy_drift_rel"] < 1.0
+        assert r["error_final"] <= r["error_max"] + 1e-15
+
+
+def test_files_json_contract_and_report_section(study, tmp_path):
+    report = tmp_path / "report.html"
+    report.write_text("<html><body><h1>x</h1><p class='small'>Figures: ...</p></body></html>")
+    paths = write_study(study, tmp_path, command="urdf2links tradeoff x --quick")
+    data = json.loads(paths["json"].read_text())
+    for key in ("reference", "rows", "crossover", "timing", "machine", "error", "energy", "t_end", "key", "budget_s"):
+        assert key in data
+    assert "statement" in data["crossover"] and "error_level" in data["crossover"]
+    assert {"platform", "python", "numpy", "mujoco", "cpu_count"} <= set(data["machine"])
+    for name in ("work_precision.png", "energy_drift.png"):
+        assert (tmp_path / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    md = paths["md"].read_text()
+    assert "Crossover" in md and md.count("\n| ") >= len(study["rows"]) + 1
+    # the section went in before the footer, once; writing again replaces it
+    assert paths["report"] == report
+    write_study(study, tmp_path)
+    text = report.read_text()
+    assert text.count(BEGIN) == 1 and text.count(END) == 1
+    assert text.index(END) < text.index("<p class='small'>Figures: ...")
+    assert "data:image/png;base64," in text and "Crossover" in text
+
+
+def synthetic(project, mujoco):
+    """Rows from ((error, seconds), ...) per engine."""
+    rows = []
+    for engine, pts in (("urdf2links", project), ("MuJoCo", mujoco)):
+        for i, (err, s) in enumerate(pts):
+            rows.append({"engine": engine, "method": "RK4", "param": "dt", "value": 10.0 ** -i, "status": "ok",
+                         "error_max": err, "wall_time_s": s})
+    return rows
+
+
+def test_crossover_where_the_project_wins_tight_accuracy():
+    # MuJoCo: cheap and coarse; urdf2links: dearer at 1e-4, cheaper from 1e-8 down
+    rows = synthetic([(1e-4, 1.0), (1e-8, 2.0), (1e-11, 3.0)], [(1e-4, 0.1), (1e-8, 5.0), (1e-10, 50.0)])
+    c = crossover(rows)
+    assert c["error_level"] == 1e-8
+    assert "faster than MuJoCo for errors below 1.0e-08 (MuJoCo is faster above it)" in c["statement"]
+    assert c["ratio_at_tightest_common"] == pytest.approx(50.0 / 3.0)
+    assert c["ratio_at_crossover"] == pytest.approx(5.0 / 2.0)
+    assert "only urdf2links reached errors below 1.0e-10" in c["statement"]
+
+
+def test_crossover_is_not_moved_by_one_level():
+    # the project wins from 1e-6 to 1e-10 but loses at the tightest level (timing jitter, or a
+    # fixed-step rung against an adaptive one), and loses at the loose levels
+    rows = synthetic([(1e-2, 1e-3), (1e-3, 1.0), (1e-6, 0.01), (1e-8, 0.02), (1e-10, 0.03), (1e-11, 10.0)],
+                     [(1e-2, 1e-4), (1e-3, 5e-3), (1e-6, 1.0), (1e-8, 2.0), (1e-10, 3.0), (1e-11, 5.0)])
+    c = crossover(rows)
+    assert c["error_level"] == 1e-6  # 3 of the 4 levels <= 1e-6: the majority rule (75 %) holds
+    assert "at 3 of the 4 error levels below it" in c["statement"] and "MuJoCo is faster at 1" in c["statement"]
+    assert c["largest_speedup"]["ratio"] == pytest.approx(100.0)
+    assert [x["project_faster"] for x in c["levels"]] == [False, True, True, True, False, False]
+
+
+def test_crossover_not_yet_and_floor():
+    rows = synthetic([(1e-6, 1.0), (1e-9, 10.0)], [(1e-6, 0.01), (1e-12, 0.1)])
+    c = crossover(rows)
+    assert c["error_level"] is None and "not (yet) faster" in c["statement"]
+    # with a reference floor of 1e-9 the tightest errors are indistinguishable: MuJoCo still wins there
+    c = crossover(rows, floor=1e-9)
+    assert c["tightest_error"] == {"urdf2links": 1e-9, "MuJoCo": 1e-9}
+    assert c["error_level"] is None and "MuJoCo 100x faster" in c["statement"]
+    failed = [dict(r, status="failed") if r["engine"] == "MuJoCo" else r for r in rows]
+    assert "no successful run" in crossover(failed)["statement"]
+
+
+def test_budget_skips_are_recorded_not_dropped():
+    data = run_study(SCENE, t_end=0.2, quick=True, budget=1e-9, methods=("RK4",), mujoco_integrators=("Euler",))
+    rows = data["rows"]
+    assert len(rows) == 3 + 4 and all(r["status"] == "skipped" for r in rows)
+    assert "> budget" in rows[0]["reason"] and "looser rung" in rows[1]["reason"]
+    assert "no successful run" in data["crossover"]["statement"]
+    section = render_section(data)  # a study with nothing to draw still renders
+    assert section.startswith(BEGIN) and "skipped" in section
+
+
+def test_insert_section_without_footer(tmp_path):
+    page = tmp_path / "p.html"
+    page.write_text("<html><body>no footer</body></html>")
+    data = run_study(SCENE, t_end=0.2, quick=True, budget=1e-9, methods=("RK4",), mujoco_integrators=("RK4",))
+    assert insert_section(page, data) and page.read_text().index(END) < page.read_text().index("</body>")
+    page.write_text("no html at all")
+    assert not insert_section(page, data)
+
+
+def test_cli_writes_the_files(tmp_path, capsys):
+    rc = main(["tradeoff", str(SCENE), "--quick", "--t-end", "0.2", "--methods", "RK4,DOP853",
+               "--mujoco-integrators", "RK4", "--out", str(tmp_path), "--quiet"])
+    assert rc == 0
+    out = capsys.readouterr().out
+    assert "crossover:" in out and "error estimate" in out
+    for name in ("tradeoff.json", "tradeoff.md", "work_precision.png", "energy_drift.png"):
+        assert (tmp_path / name).is_file()
+    assert json.loads((tmp_path / "tradeoff.json").read_text())["command"].startswith("urdf2links tradeoff")
+
+
+@pytest.mark.parametrize("argv, named", [
+    (["--methods", "RK4,Verlet"], "--methods='RK4,Verlet'"),
+    (["--mujoco-integrators", "semi"], "--mujoco-integrators='semi'"),
+    (["--t-end", "-1"], "--t-end=-1.0"),
+    (["--repeats", "0"], "--repeats=0"),
+])
+def test_cli_errors_name_the_argument(argv, named, tmp_path, capsys):
+    rc = main(["tradeoff", str(SCENE), "--out", str(tmp_path), *argv])
+    assert rc == 2
+    assert named in capsys.readouterr().err
+
+
+def test_urdf2links_cli_does_not_import_mujoco():
+    code = "import sys, urdf2links.cli; sys.exit('mujoco' in sys.modules or 'compare.tradeoff' in sys.modules)"
+    assert subprocess.run([sys.executable, "-c", code], cwd=ROOT).returncode == 0
