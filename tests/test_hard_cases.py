@@ -9,6 +9,7 @@ the README's "Hard cases" table. Case 5 (the ZYX angle singularity) is tested el
 
 from __future__ import annotations
 
+import dataclasses
 import time
 import warnings
 import numpy as np
@@ -17,6 +18,7 @@ import pytest
 from corpus import needs_corpus, path as corpus_path
 from hard_robots import GENERATED, HARD
 from urdf2links import DynamicsError, InertiaError, load_urdf, load_urdf_string
+from urdf2links.integrators import IntegrationError
 from urdf2links.plan import compile_plan
 from urdf2links.scene import load_scene
 from urdf2links.simulate import simulate
@@ -131,7 +133,7 @@ def test_extreme_mass_ratios_lose_no_accuracy_in_accelerations(robot):
 
 
 def test_stiff_spring_explodes_explicit_cost_not_implicit():
-    """A 1e6 N m/rad servo spring (overdamped: eigenvalues ~ -2.5e4 and -200 1/s) next to ~1 Hz soft springs.
+    """A 1e6 N m/rad servo spring (eigenvalues -4.2e4, -200 and -44 +- 2017i 1/s) next to soft springs.
 
     An explicit method's step is held by stability at ~|lambda|^-1 whatever the tolerance: DOP853 needs
     ~36 000 evaluations for 0.3 s (measured), Radau ~1 800 and BDF ~760 (their implicit stages
@@ -156,6 +158,35 @@ def test_stiff_spring_explodes_explicit_cost_not_implicit():
         assert np.abs(runs[m].q - runs["DOP853"].q).max() < 1e-3, m
     assert nfev["DOP853"] > 10 * nfev["Radau"]
     assert nfev["DOP853"] > 20 * nfev["BDF"]
+    # "explodes": scale the servo 10x softer in time (k / 100, c / 10: same damping ratio, eigenvalues
+    # / 10). DOP853's cost falls ~10x with the stiff eigenvalue (measured 36 023 -> 3 953), the implicit
+    # methods' barely (Radau 1 803 -> 1 185, BDF 756 -> 572)
+    soft = dataclasses.replace(scene, springs=tuple(
+        dataclasses.replace(sp, stiffness=sp.stiffness / 100, damping=sp.damping / 10) if sp.coordinate == "j2" else sp
+        for sp in scene.springs))
+    soft_nfev = {m: simulate(soft, model=model, method=m, progress=False).stats["nfev"] for m in nfev}
+    print("10x softer servo nfev:", soft_nfev)
+    assert nfev["DOP853"] > 5 * soft_nfev["DOP853"]
+    assert nfev["Radau"] < 2 * soft_nfev["Radau"] and nfev["BDF"] < 2 * soft_nfev["BDF"]
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")   # the overflow of RK4's unstable steps, before it stops
+@pytest.mark.parametrize("method, dt", [("RK4", 1e-2), ("midpoint", 1e-3)])
+def test_stiff_spring_with_too_long_fixed_steps_fails_cleanly(method, dt):
+    """Fixed steps far beyond the stiff time scale (h |lambda| = 420 and 42) never return a blown-up
+    trajectory: the run either holds its energy balance or stops with IntegrationError saying where.
+    RK4 is unstable there (measured: non-finite state at t = 0.02 s). The implicit midpoint rule is
+    A-stable but not L-stable: the stiff 0.3 rad transient of j2 is reflected, not damped (amplification
+    ~ -1), its velocities reach hundreds of rad/s and the Newton iteration fails at the first step even
+    after 4 halvings (measured for dt >= 5e-4 s; it runs at dt = 2e-4 s). Radau and BDF (L-stable) are
+    the methods for this scene."""
+    scene = load_scene(HARD / "stiff_spring_arm.toml")
+    try:
+        traj = simulate(scene, method=method, dt=dt, progress=False)
+    except IntegrationError as err:
+        assert "t=" in str(err)
+        return
+    assert np.all(np.isfinite(traj.q)) and traj.energy_error < 1e-2
 
 
 # ============================================================== 4. fast spin
