@@ -132,7 +132,7 @@ def flat_workspace(I: np.ndarray) -> np.ndarray:
     return np.zeros(workspace_size(int(I[0]), int(I[1])))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def tree_view(I, F):
     """:class:`TreeArrays` of views into the flat arrays of :func:`flat_tree`."""
     L, n, S, P = I[0], I[1], I[2], I[3]
@@ -168,7 +168,7 @@ def tree_view(I, F):
                       mass, moment, second, coord_link, anc_ptr, anc_idx)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def workspace_view(I, Wf):
     """:class:`Workspace` of views into the flat scratch of :func:`flat_workspace`."""
     L, n = I[0], I[1]
@@ -263,7 +263,7 @@ def _factor(cur, slot, val, rate, acc, S, i):
         cur[17] += s5 * rate
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def kinematics(ta, ws, q, qd, base_pose, base_rate, base_accel, g):
     """Root to leaves: pose ``R, o``, twist ``V = (omega, v)`` and spatial acceleration at
     ``q'' = 0`` ``Acc`` of every link; unit twists ``s`` of every coordinate. ``base_pose`` etc.
@@ -342,7 +342,7 @@ def _body(ta, ws, p):
     return m
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def dynamics(ta, ws, want_A):
     """Leaves to root after :func:`kinematics` (and external wrenches in ``ws.fx``): ``ws.A``
     (5.19) when ``want_A``, ``ws.b = -(e + G)`` (5.18)+(5.22), ``ws.Q`` (5.27)-(5.28)."""
@@ -417,7 +417,7 @@ def dynamics(ta, ws, want_A):
     return 0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def clear_wrenches(ws):
     for p in range(ws.fx.shape[0]):
         for j in range(6):
@@ -448,7 +448,7 @@ def add_wrench(ws, p, force, moment, point, local):
     ws.fx[p, 5] += M[2] + r[0] * F[1] - r[1] * F[0]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def cholesky_solve(A, b, Lf, x):
     """Solve ``A x = b`` (A symmetric positive definite) by Cholesky into ``x``; ``Lf`` (n, n)
     scratch. Returns -1 on success, else the index of the first failing pivot: a pivot at or

@@ -64,6 +64,7 @@ class Model:
         self.info = dict(info or {})
         self._plan = RecursivePlan(tree)
         self._fast = CompiledTree(tree)
+        self._zeros = np.zeros(tree.n)      # tau = 0 for the kernel (never written)
         if coupling is None:
             self._C = None
             self._d = None
@@ -233,16 +234,17 @@ class Model:
         wrenches; ``gravity=False`` leaves G out. Raises :class:`~urdf2links.errors.DynamicsError`
         naming the configuration and the coordinates when A is not positive definite.
         """
-        if not loads and self._C is None:
+        if not loads and self._C is None:    # the hot path: straight to the compiled kernel
             q = np.asarray(q, dtype=float)
             qd = np.asarray(qd, dtype=float)
-            n = self.n
-            if q.shape != (n,) or qd.shape != (n,):
-                self._vec(q, "q"), self._vec(qd, "qd")
-            tau_v = np.zeros(n) if tau is None else self._vec(tau, "tau")
-            out = np.empty(n)
             fast = self._fast
-            pivot = _fd_kernel(fast.I, fast.F, fast.W, q, qd, tau_v, self._base18(base, t),
+            shape = (fast.n,)
+            if q.shape != shape or qd.shape != shape:
+                self._vec(q, "q"), self._vec(qd, "qd")
+            out = np.empty(shape)
+            pivot = _fd_kernel(fast.I, fast.F, fast.W, q, qd,
+                               self._zeros if tau is None else self._vec(tau, "tau"),
+                               _NO_BASE if base is None else self._base18(base, t),
                                self.gravity_vector if gravity else _NO_G, out)
             if pivot < 0:
                 return out
