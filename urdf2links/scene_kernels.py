@@ -373,6 +373,14 @@ class CompiledScene:
             self.failure(t, y)
         return out
 
+    def energies(self, t, Q, QD):
+        """``(E, V, h)``, each (m,), at sample times ``t`` (m,) and states ``Q``, ``QD`` (m, n)."""
+        t = np.ascontiguousarray(t, dtype=float)
+        out = np.empty((t.size, 3))
+        scene_energies(t, np.ascontiguousarray(Q, dtype=float), np.ascontiguousarray(QD, dtype=float), out,
+                       *self.args)
+        return out[:, 0], out[:, 1], out[:, 2]
+
     def check(self, t, y):
         """Run the Python plan at a state where the compiled one failed: it raises the named
         :class:`~urdf2links.errors.DynamicsError` when A is not positive definite there."""
@@ -384,3 +392,54 @@ class CompiledScene:
         """Raise the Python plan's error at a state where the compiled solve failed."""
         self.check(t, y)
         raise FloatingPointError(f"compiled right-hand side failed at t={t!r} (y={y!r})")
+
+
+@njit(cache=True)
+def scene_energies(ts, Q, QD, out, I, F, W, SI, SF, X):
+    """At each sample ``k``: ``out[k] = (E, V, h)``, kinetic energy (5.35), potential energy
+    (gravity (5.21) and springs ``0.5 k (q - rest)^2``) and the energy function ``h`` (``E + V``
+    for a fixed base; ``E2 - E0 + V`` from E at ``q'``, ``-q'`` and 0 for a moving one)."""
+    sc = scene_view(SI, SF)
+    ta = K.tree_view(I, F)
+    ws = K.workspace_view(I, W)
+    n, nt = sc.n, sc.nt
+    qt = X[0:nt]
+    qdt = X[nt:2 * nt]
+    b18 = X[2 * nt:2 * nt + 18]
+    zero = np.zeros(3)
+    for k in range(ts.size):
+        t = ts[k]
+        for j in range(18):
+            b18[j] = 0.0
+        if sc.has_base:
+            for j in range(6):
+                fj = sc.base_fn[j]
+                b18[j] = _fn(sc, fj, t, 0)
+                b18[6 + j] = _fn(sc, fj, t, 1)
+                b18[12 + j] = _fn(sc, fj, t, 2)
+        Es = np.zeros(3)
+        V = 0.0
+        for pass_ in range(3 if sc.has_base else 1):
+            sign = 1.0 if pass_ == 0 else (-1.0 if pass_ == 1 else 0.0)
+            for a in range(nt):
+                if sc.coupled:
+                    s1 = sc.d[a]
+                    s2 = 0.0
+                    for j in range(n):
+                        s1 += sc.C[a, j] * Q[k, j]
+                        s2 += sc.C[a, j] * QD[k, j]
+                    qt[a] = s1
+                    qdt[a] = sign * s2
+                else:
+                    qt[a] = Q[k, a]
+                    qdt[a] = sign * QD[k, a]
+            K.kinematics(ta, ws, qt, qdt, b18[0:6], b18[6:12], b18[12:18], zero)
+            E, Vg = K.energies(ta, ws, sc.g)
+            Es[pass_] = E
+            V = Vg
+        for j in range(sc.spring_idx.size):
+            x = Q[k, sc.spring_idx[j]] - sc.rest[j]
+            V += 0.5 * sc.stiffness[j] * x * x
+        out[k, 0] = Es[0]
+        out[k, 1] = V
+        out[k, 2] = (0.5 * (Es[0] + Es[1]) - 2.0 * Es[2] + V) if sc.has_base else Es[0] + V
