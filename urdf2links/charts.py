@@ -76,7 +76,7 @@ import numpy as np
 from .integrators import AngleGuard, integrate
 from .model import Model
 from .rotations import matrix_to_xyz_angles, xyz_angles_to_matrix
-from .tree import LinkSpec, LinkTree, build_tree
+from .tree import LinkSpec, build_tree
 from .transforms import PARAMETERS
 
 __all__ = ["CHART_COS_MIN", "SINGULAR_COS_MIN", "FloatingLink", "Chart", "floating_links",

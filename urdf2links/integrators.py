@@ -11,9 +11,12 @@ Methods (:data:`METHODS`):
 * ``RK4``: classic fourth-order Runge-Kutta, fixed step ``dt`` (last step shortened to land
   on ``t_end``).
 * ``midpoint``: implicit midpoint rule ``y1 = y0 + h F(t0 + h/2, (y0 + y1)/2)``, fixed step
-  ``dt``. Symplectic and symmetric: quadratic invariants (harmonic oscillator energy) are
-  conserved up to the Newton tolerance and rounding, and the energy of a conservative
-  mechanical system has a bounded error without secular drift. The stage slope
+  ``dt``. Symmetric, and symplectic in canonical variables: quadratic invariants (harmonic
+  oscillator energy) are conserved up to the Newton tolerance and rounding. Applied to
+  ``(q, q')`` with a configuration-dependent ``A`` it is not symplectic, but it stays symmetric
+  (time-reversible), which for reversible mechanical systems also gives a bounded energy error
+  without secular drift in practice (measured over 1000 s of the chaotic double pendulum:
+  README, hard case 8). It damps nothing: on stiff springs prefer Radau or BDF. The stage slope
   ``k = F(t0 + h/2, y0 + h/2 k)`` is found by simplified Newton iterations on
   ``(I - h/2 J) dk = F - k``, ``J`` a forward-difference (or the user's ``jac``) Jacobian
   kept over steps and refreshed, in the middle of a step, when the contraction rate
