@@ -92,8 +92,8 @@ MIDPOINT_NEWTON = {"rtol": 1e-10, "atol": 1e-12}
 DEFAULT_T_CAP = 2.0
 #: A method's ladder stops once a run's error is within this factor of the reference's error estimate.
 FLOOR_STOP = 3.0
-#: The crossover's level must see the project faster at this share of the levels below it.
-MAJORITY = 0.75
+#: Error levels per decade at which the crossover compares the engines.
+GRID_PER_DECADE = 4
 DEFAULT_BUDGET = 30.0
 QUICK_BUDGET = 5.0
 
@@ -410,77 +410,75 @@ def _front(rows, engine, level) -> tuple[float, dict | None]:
     return best, who
 
 
-def crossover(rows: list[dict], floor: float = 0.0, *, majority: float = MAJORITY) -> dict:
-    """Where the project becomes faster than MuJoCo. At each error level ``e`` (the errors the runs
-    reached, max over the run; errors below ``floor``, the reference's error estimate, count as
-    ``floor``) that both engines reach, the fastest run of each engine with an error <= e. The
-    crossover ``e*`` is the largest such level at which the project is faster and is faster at
-    no fewer than ``majority`` of the levels <= e* (timing jitter and a single lucky rung must not
-    move it; the levels where MuJoCo is faster below ``e*`` are counted and the tightest named).
-    Returns ``statement`` (a sentence), ``error_level`` (e* or None), ``levels`` (every level's
-    fastest runs), the speed ratios (MuJoCo / project wall time) at e* and at the tightest level
-    both reach, and the tightest error each engine reached."""
+def crossover(rows: list[dict], floor: float = 0.0, *, per_decade: int = GRID_PER_DECADE) -> dict:
+    """Where the project becomes faster than MuJoCo. At error levels ``e`` on a grid of
+    ``per_decade`` levels per decade (``10**(j / per_decade)``) between the tightest error both
+    engines reach and the loosest any run has (errors below ``floor``, the reference's error
+    estimate, count as ``floor``), the fastest run of each engine with an error (max over the run)
+    <= e, and which is faster. The crossover ``e*`` is the top of the tightest contiguous stretch
+    of grid levels where the project is faster: "urdf2links is faster below e*" when the stretch
+    starts at the tightest level, "between a and e*" when MuJoCo is faster at tighter ones. Returns
+    ``statement`` (a sentence), ``error_level`` (e* or None), ``region`` [a, e*], ``levels`` (every
+    grid level's fastest runs and winner), the speed ratios (MuJoCo / project wall time) at e* and
+    the largest below it, and the tightest error each engine reached."""
     def err(r):
         return max(r["error_max"], floor)
     ok = [dict(r, error_max=err(r)) for r in rows if r["status"] == "ok" and r["wall_time_s"] is not None]
     best = {e: min((r["error_max"] for r in ok if r["engine"] == e), default=None) for e in ("urdf2links", "MuJoCo")}
-    out = {"metric": "error = max over the run; faster = smaller median wall time", "error_level": None,
-           "tightest_error": best, "ratio_at_crossover": None, "ratio_at_tightest_common": None, "levels": []}
+    out = {"metric": f"error = max over the run, on a grid of {per_decade} levels per decade; faster = smaller "
+                     "median wall time", "error_level": None, "region": None, "tightest_error": best,
+           "ratio_at_crossover": None, "largest_speedup": None, "levels": []}
     if best["urdf2links"] is None or best["MuJoCo"] is None:
         out["statement"] = "no crossover: one of the engines has no successful run"
         return out
-    common = sorted(e for e in {r["error_max"] for r in ok} if e >= max(best["urdf2links"], best["MuJoCo"]))
-    for e in common:
+    lo, hi = max(best.values()), max(r["error_max"] for r in ok)
+    j0, j1 = math.ceil(per_decade * math.log10(lo) - 1e-9), math.floor(per_decade * math.log10(hi) + 1e-9)
+    for j in range(j0, max(j1, j0) + 1):
+        e = 10.0 ** (j / per_decade)
         tp, rp = _front(ok, "urdf2links", e)
         tm, rm = _front(ok, "MuJoCo", e)
+        if rp is None or rm is None:
+            continue
         out["levels"].append({"error": e, "project_s": tp, "mujoco_s": tm, "project_faster": tp < tm,
                               "project_run": f"{rp['method']} {rp['param']} {rp['value']:g}",
                               "mujoco_run": f"{rm['method']} dt {rm['value']:g}"})
     lv = out["levels"]
-    star = None
-    for k in range(len(lv) - 1, -1, -1):  # from the loosest level down
-        below = [x["project_faster"] for x in lv[:k + 1]]
-        if lv[k]["project_faster"] and sum(below) >= majority * len(below):
-            star = k
-            break
-
-    def ratio_words(x):
-        r = x["mujoco_s"] / x["project_s"]
-        return r, (f"MuJoCo {1 / r:.3g}x faster" if r < 1 else f"urdf2links {r:.3g}x faster")
 
     def at(x):
-        return (f"at {x['error']:.1e} MuJoCo ({x['mujoco_run']}) takes {x['mujoco_s']:.3g} s and urdf2links "
-                f"({x['project_run']}) {x['project_s']:.3g} s")
+        r = x["mujoco_s"] / x["project_s"]
+        return (f"at {x['error']:.1e} urdf2links ({x['project_run']}) takes {x['project_s']:.3g} s and MuJoCo "
+                f"({x['mujoco_run']}) {x['mujoco_s']:.3g} s ("
+                + (f"MuJoCo {1 / r:.3g}x faster)" if r < 1 else f"urdf2links {r:.3g}x faster)"))
 
-    r0, w0 = ratio_words(lv[0])
-    out["ratio_at_tightest_common"] = r0
     extra = ""
     if best["urdf2links"] < best["MuJoCo"]:
-        extra = (f"; only urdf2links reached errors below {best['MuJoCo']:.1e} within the ladder and budget "
+        extra = (f"; only urdf2links reached errors below {best['MuJoCo']:.1e} within the ladders and budget "
                  f"(down to {best['urdf2links']:.1e})")
     elif best["MuJoCo"] < best["urdf2links"]:
-        extra = (f"; only MuJoCo reached errors below {best['urdf2links']:.1e} within the ladder and budget "
+        extra = (f"; only MuJoCo reached errors below {best['urdf2links']:.1e} within the ladders and budget "
                  f"(down to {best['MuJoCo']:.1e})")
-    if star is None:
-        wins = sum(x["project_faster"] for x in lv)
-        out["statement"] = (f"urdf2links is not (yet) faster than MuJoCo at the accuracies both reach "
-                            f"({wins} of {len(lv)} levels): at the tightest, {at(lv[0])} ({w0})" + extra)
+    start = next((k for k, x in enumerate(lv) if x["project_faster"]), None)
+    if start is None:
+        out["statement"] = ("urdf2links is not (yet) faster than MuJoCo at any error level both reach"
+                            + (f": {at(lv[0])}" if lv else "") + extra)
         return out
-    x = lv[star]
+    end = start
+    while end + 1 < len(lv) and lv[end + 1]["project_faster"]:
+        end += 1
+    x = lv[end]
     out["error_level"] = x["error"]
-    out["ratio_at_crossover"], ws = ratio_words(x)
-    below = lv[:star + 1]
-    wins = sum(y["project_faster"] for y in below)
-    top = max(below, key=lambda y: y["mujoco_s"] / y["project_s"])
+    out["region"] = [lv[start]["error"], x["error"]]
+    out["ratio_at_crossover"] = x["mujoco_s"] / x["project_s"]
+    top = max(lv[start:end + 1], key=lambda y: y["mujoco_s"] / y["project_s"])
     out["largest_speedup"] = {"error": top["error"], "ratio": top["mujoco_s"] / top["project_s"]}
-    losses = [y for y in below if not y["project_faster"]]
-    out["statement"] = (
-        f"urdf2links is faster than MuJoCo for errors below {x['error']:.1e}"
-        + ("" if star == len(lv) - 1 else " (MuJoCo is faster above it)")
-        + f", at {wins} of the {len(below)} error levels below it that both engines reach"
-        + (f" (MuJoCo is faster at {len(losses)}, e.g. {at(losses[0])})" if losses else "")
-        + f"; at the crossover {at(x)} ({ws}); largest advantage {at(top)} "
-        f"(urdf2links {top['mujoco_s'] / top['project_s']:.3g}x faster)" + extra)
+    where = (f"below {x['error']:.1e}" if start == 0 else
+             f"between {lv[start]['error']:.1e} and {x['error']:.1e} (MuJoCo is faster below, {at(lv[0])})")
+    above = lv[end + 1:]
+    later = sum(y["project_faster"] for y in above)
+    tail = ("" if not above else "; MuJoCo is faster above it" + (
+        f" (urdf2links again at {later} of the {len(above)} looser levels)" if later else ""))
+    out["statement"] = (f"urdf2links is faster than MuJoCo for errors {where}{tail}: {at(x)}; largest advantage "
+                        f"{at(top)}" + extra)
     return out
 
 

@@ -13,6 +13,7 @@
 
 from __future__ import annotations
 
+import base64
 import html
 from pathlib import Path
 
@@ -100,7 +101,7 @@ def plot_work_precision(data: dict, path=None):
     bx.set_title("the same errors against evaluations", fontsize=9)
     _finish(fig, [ax], data, "work-precision (error against wall time)")
     if path is not None:
-        fig.savefig(Path(path), metadata={"Software": None})
+        _save(fig, path)
     return fig
 
 
@@ -118,8 +119,15 @@ def plot_energy_drift(data: dict, path=None):
     ax.set_ylabel("energy drift: max |h - h(0) - W| / energy scale")
     _finish(fig, [ax], data, "energy drift against wall time")
     if path is not None:
-        fig.savefig(Path(path), metadata={"Software": None})
+        _save(fig, path)
     return fig
+
+
+def _save(fig, path) -> None:
+    """The figure as a PNG file, reduced to a 256-colour palette like the report's (line art)."""
+    from .report import _png
+
+    Path(path).write_bytes(base64.b64decode(_png(fig)))
 
 
 def _b64(fig) -> str:

@@ -138,29 +138,35 @@ def test_crossover_where_the_project_wins_tight_accuracy():
     # MuJoCo: cheap and coarse; urdf2links: dearer at 1e-4, cheaper from 1e-8 down
     rows = synthetic([(1e-4, 1.0), (1e-8, 2.0), (1e-11, 3.0)], [(1e-4, 0.1), (1e-8, 5.0), (1e-10, 50.0)])
     c = crossover(rows)
-    assert c["error_level"] == 1e-8
-    assert "faster than MuJoCo for errors below 1.0e-08 (MuJoCo is faster above it)" in c["statement"]
-    assert c["ratio_at_tightest_common"] == pytest.approx(50.0 / 3.0)
+    # grid of 4 levels per decade from 1e-10 (the tightest both reach): the project is faster up to
+    # 10**-4.25 (its 1e-8 run, 2 s, against MuJoCo's 5 s); at 1e-4 MuJoCo's 0.1 s run wins
+    assert c["error_level"] == pytest.approx(10 ** -4.25)
+    assert c["region"][0] == pytest.approx(1e-10)
+    assert "faster than MuJoCo for errors below 5.6e-05; MuJoCo is faster above it" in c["statement"]
     assert c["ratio_at_crossover"] == pytest.approx(5.0 / 2.0)
+    assert c["largest_speedup"]["ratio"] == pytest.approx(50.0 / 3.0)
     assert "only urdf2links reached errors below 1.0e-10" in c["statement"]
 
 
-def test_crossover_is_not_moved_by_one_level():
-    # the project wins from 1e-6 to 1e-10 but loses at the tightest level (timing jitter, or a
-    # fixed-step rung against an adaptive one), and loses at the loose levels
+def test_crossover_when_mujoco_wins_the_tightest_level():
+    # the project wins from 1e-10 to 1e-4 but loses at the tightest level (timing jitter, or a
+    # fixed-step rung against an adaptive one) and at the loose levels
     rows = synthetic([(1e-2, 1e-3), (1e-3, 1.0), (1e-6, 0.01), (1e-8, 0.02), (1e-10, 0.03), (1e-11, 10.0)],
                      [(1e-2, 1e-4), (1e-3, 5e-3), (1e-6, 1.0), (1e-8, 2.0), (1e-10, 3.0), (1e-11, 5.0)])
     c = crossover(rows)
-    assert c["error_level"] == 1e-6  # 3 of the 4 levels <= 1e-6: the majority rule (75 %) holds
-    assert "at 3 of the 4 error levels below it" in c["statement"] and "MuJoCo is faster at 1" in c["statement"]
+    assert c["error_level"] == pytest.approx(10 ** -3.25)
+    assert c["region"][0] == pytest.approx(1e-10)
+    assert "for errors between 1.0e-10 and 5.6e-04 (MuJoCo is faster below" in c["statement"]
     assert c["largest_speedup"]["ratio"] == pytest.approx(100.0)
-    assert [x["project_faster"] for x in c["levels"]] == [False, True, True, True, False, False]
+    winners = "".join("P" if x["project_faster"] else "M" for x in c["levels"])
+    assert winners == "MMMM" + "P" * 28 + "MMMMM"  # 1e-11..10**-10.25, 1e-10..10**-3.25, 1e-3..1e-2
 
 
 def test_crossover_not_yet_and_floor():
     rows = synthetic([(1e-6, 1.0), (1e-9, 10.0)], [(1e-6, 0.01), (1e-12, 0.1)])
     c = crossover(rows)
     assert c["error_level"] is None and "not (yet) faster" in c["statement"]
+    assert "only MuJoCo reached errors below 1.0e-09" in c["statement"]
     # with a reference floor of 1e-9 the tightest errors are indistinguishable: MuJoCo still wins there
     c = crossover(rows, floor=1e-9)
     assert c["tightest_error"] == {"urdf2links": 1e-9, "MuJoCo": 1e-9}
