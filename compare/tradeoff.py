@@ -62,7 +62,7 @@ import numpy as np
 
 from urdf2links.integrators import METHODS
 from urdf2links.plan import compile_plan
-from urdf2links.scene import Scene, load_scene
+from urdf2links.scene import load_scene
 from urdf2links.simulate import simulate
 
 from .mjcf import mjcf_from_scene
@@ -147,7 +147,7 @@ def _mujoco_failure(run, T) -> str | None:
     return None
 
 
-def _predict(cfg: Config, T, done: list[dict], cost: dict, n: int) -> float:
+def _predict(cfg: Config, T, done: list[dict], cost: dict) -> float:
     """Predicted wall time (s) of ``cfg`` from the cost of one evaluation or step and the looser
     rungs of the same method already run (``done``: their rows, loosest first)."""
     if cfg.engine == "MuJoCo":
@@ -292,7 +292,7 @@ def run_study(scene, *, t_end: float | None = None, quick: bool = False, repeats
         # coarse step that blows up or whose Newton iteration fails says nothing of finer ones)
         stop = next((r for r in done if r["status"] == "skipped" and "budget" in (r["reason"] or "")), None)
         floored = next((r for r in done if r["status"] == "ok" and r["error_max"] <= FLOOR_STOP * est_max), None)
-        pred = _predict(cfg, T, done, cost, n)
+        pred = _predict(cfg, T, done, cost)
         row["predicted_s"] = pred
         if stop is not None:
             row.update(status="skipped", reason=f"a looser rung ({stop['param']} {stop['value']:g}) was over "

@@ -194,6 +194,18 @@ def test_insert_section_without_footer(tmp_path):
     assert not insert_section(page, data)
 
 
+def test_report_includes_the_section_when_the_scene_has_a_study(tmp_path):
+    from compare.report import write_report
+    from compare.trajectory import compare_scene
+
+    data = run_study(SCENE, t_end=0.2, quick=True, methods=("RK4",), mujoco_integrators=("RK4",))
+    write_study(data, tmp_path)
+    c = compare_scene(SCENE, t_end=0.2, states=2, progress=False)
+    page = write_report(c, tmp_path)["html"].read_text()
+    assert page.count(BEGIN) == 1 and "Accuracy against wall time" in page
+    assert page.index("<h2>3. Energy</h2>") < page.index(BEGIN)
+
+
 def test_cli_writes_the_files(tmp_path, capsys):
     rc = main(["tradeoff", str(SCENE), "--quick", "--t-end", "0.2", "--methods", "RK4,DOP853",
                "--mujoco-integrators", "RK4", "--out", str(tmp_path), "--quiet"])
