@@ -66,10 +66,9 @@ def test_base_power_equals_numpy_form(seed):
     q, qd, base = _state(model, 3000 + seed, True)
     ct = K.CompiledTree(model.tree)
     b18 = np.r_[base.pose, base.rate, base.accel]
-    ct.terms(q, qd, b18, np.asarray(model.gravity_vector))
-    tw, acc = np.empty(6), np.empty(6)
-    K.base_motion(base.pose, base.rate, base.accel, tw, acc)
-    dE, dV = K.base_power(K.tree_view(ct.I, ct.F), K.workspace_view(ct.I, ct.W), tw, acc,
+    ct.terms(q, qd, b18, np.asarray(model.gravity_vector))   # kinematics records the base's twist
+    ws = K.workspace_view(ct.I, ct.W)
+    dE, dV = K.base_power(K.tree_view(ct.I, ct.F), ws, ws.base_twist, ws.base_acc,
                           np.asarray(model.gravity_vector))
     bt = base_transforms(base)
     kin = model._plan.kinematics(q, qd, bt, acceleration=True)

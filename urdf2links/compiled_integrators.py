@@ -532,14 +532,13 @@ def midpoint_chunk(grid, rtol, atol, st, ts, ys, ks, hist_h, hist_k, J, minv, cn
 
 # -- drivers (Python): chunks, storage, progress, results ---------------------------------------
 CHUNK = 2000
-COMPILED_METHODS = ("RK45", "DOP853", "RK4", "midpoint")
 
 
 def run(method, rhs, f0, t0, t1, y0, rtol, atol, dt, callback, max_steps, need_dense, guard, grid):
     """Integrate the compiled scene ``rhs`` (a :class:`~urdf2links.scene_kernels.CompiledScene`)
     with a compiled loop. Returns ``(ts, ys, sol, nfev, njev, nrejected, success, message,
     stopped)``; ``sol`` a :class:`~urdf2links.integrators.DenseOutput` when ``need_dense``."""
-    from .integrators import NEWTON_MAXITER, MAX_HALVINGS, DenseOutput, IntegrationError
+    from .integrators import NEWTON_MAXITER, MAX_HALVINGS, DenseOutput, IntegrationError, midpoint_dense
 
     args = rhs.args
     d = y0.size
@@ -625,14 +624,8 @@ def run(method, rhs, f0, t0, t1, y0, rtol, atol, dt, callback, max_steps, need_d
         ts, ys, ks = ts[:n + 1], ys[:n + 1], ks[:n]
         sol = None
         if need_dense:
-            fs = np.empty_like(ys)
-            fs[0] = f0
-            fs[n] = rhs(ts[n], ys[n])
             cnt[0] += 1
-            if n > 1:
-                h = np.diff(ts)[:, None]
-                fs[1:n] = (h[1:] * ks[:-1] + h[:-1] * ks[1:]) / (h[1:] + h[:-1])
-            sol = DenseOutput(ts, ys, fs)
+            sol = midpoint_dense(ts, ys, ks, f0, rhs(ts[n], ys[n]))
         nrejected = int(cnt[2])
     if status == -2:
         rhs.check(float(fail[0]), fail[1:])      # raises the named error of the model if there is one

@@ -500,16 +500,22 @@ def _run_midpoint(fun, f0, t0, t1, y0, dt, rtol, atol, jac, callback, max_steps,
             break
     success = True if success is None else success
     ts, ys, ks = ts[:n + 1], ys[:n + 1], ks[:n]
-    sol = None
-    if need_dense:
-        fs = np.empty_like(ys)
-        fs[0] = f0
-        fs[n] = fun(ts[n], ys[n])
-        if n > 1:
-            h = np.diff(ts)[:, None]
-            fs[1:n] = (h[1:] * ks[:-1] + h[:-1] * ks[1:]) / (h[1:] + h[:-1])
-        sol = DenseOutput(ts, ys, fs)
+    sol = midpoint_dense(ts, ys, ks, f0, fun(ts[n], ys[n])) if need_dense else None
     return ts, ys, sol, njev, nrej, success, message
+
+
+def midpoint_dense(ts, ys, ks, f0, f_end) -> DenseOutput:
+    """The midpoint rule's interpolant: cubic Hermite on the steps ``ts`` (n + 1,), ``ys``, with
+    the exact slopes ``f0``, ``f_end`` at the ends and, inside, the second-order weighted mean of
+    the two adjacent stage slopes ``ks`` (n, dim)."""
+    n = ts.size - 1
+    fs = np.empty_like(ys)
+    fs[0] = f0
+    fs[n] = f_end
+    if n > 1:
+        h = np.diff(ts)[:, None]
+        fs[1:n] = (h[1:] * ks[:-1] + h[:-1] * ks[1:]) / (h[1:] + h[:-1])
+    return DenseOutput(ts, ys, fs)
 
 
 def _jacobian(fun, jac, t, y, f):

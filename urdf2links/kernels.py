@@ -67,6 +67,7 @@ Workspace = namedtuple("Workspace", [
     "A", "b", "Q", "Lf",          # (n, n), (n,), (n,), (n, n) tree-sized
     "cur",                        # (24,) scratch: R (9), o (3), V (6), Acc (6)
     "tmp",                        # (30,) scratch
+    "base_twist", "base_acc",     # (6,), (6,): twist and spatial acceleration of {A} (no gravity)
 ])
 
 _INT_FIELDS = ("parent", "seg_ptr", "seg_kind", "seg_slot", "seg_coord", "coord_link", "anc_ptr", "anc_idx")
@@ -204,7 +205,7 @@ def workspace_view(I, Wf):
     cur = Wf[o:o + 24]
     o += 24
     tmp = Wf[o:o + 30]
-    return Workspace(R, ov, V, Acc, s, cm, cc, cS, fi, fx, A, b, Q, Lf, cur, tmp)
+    return Workspace(R, ov, V, Acc, s, cm, cc, cS, fi, fx, A, b, Q, Lf, cur, tmp, tmp[0:6], tmp[6:12])
 
 
 # -- one factor ------------------------------------------------------------------------------------
@@ -268,7 +269,8 @@ def kinematics(ta, ws, q, qd, base_pose, base_rate, base_accel, g):
     """Root to leaves: pose ``R, o``, twist ``V = (omega, v)`` and spatial acceleration at
     ``q'' = 0`` ``Acc`` of every link; unit twists ``s`` of every coordinate. ``base_pose`` etc.
     (6,) are the six parameters of {A} (zeros for a fixed base); ``g`` (3,) enters as the uniform
-    acceleration ``-g`` (zeros: no gravity). ``qd`` may be all zeros."""
+    acceleration ``-g`` (zeros: no gravity); the base's own twist and acceleration go to
+    ``ws.base_twist``, ``ws.base_acc``. ``qd`` may be all zeros."""
     cur = ws.cur
     sb = ws.tmp.reshape((5, 6))
     L = ta.parent.size
@@ -285,6 +287,9 @@ def kinematics(ta, ws, q, qd, base_pose, base_rate, base_accel, g):
             for k in range(6):
                 if base_pose[k] != 0.0 or base_rate[k] != 0.0 or base_accel[k] != 0.0:
                     _factor(cur, k, base_pose[k], base_rate[k], base_accel[k], sb, 4)
+            for j in range(6):
+                ws.base_twist[j] = cur[12 + j]
+                ws.base_acc[j] = cur[18 + j]
             cur[21] -= g[0]
             cur[22] -= g[1]
             cur[23] -= g[2]
@@ -571,21 +576,6 @@ def base_power(ta, ws, base_twist, base_acc, g):
     dV = -(g[0] * (w[1] * ct[2] - w[2] * ct[1] + mt * v[0]) + g[1] * (w[2] * ct[0] - w[0] * ct[2] + mt * v[1])
            + g[2] * (w[0] * ct[1] - w[1] * ct[0] + mt * v[2]))
     return dE, dV
-
-
-@njit(cache=True)
-def base_motion(base_pose, base_rate, base_accel, twist, acc):
-    """Twist (6,) and spatial acceleration (6,) of {A} from its six parameters and rates."""
-    cur = np.zeros(24)
-    cur[0] = 1.0
-    cur[4] = 1.0
-    cur[8] = 1.0
-    sb = np.empty((1, 6))
-    for k in range(6):
-        _factor(cur, k, base_pose[k], base_rate[k], base_accel[k], sb, 0)
-    for j in range(6):
-        twist[j] = cur[12 + j]
-        acc[j] = cur[18 + j]
 
 
 @njit(cache=True)

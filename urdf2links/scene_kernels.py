@@ -211,6 +211,38 @@ def scratch_size(n: int, nt: int) -> int:
     return 2 * nt + 18 + 2 * n * n + 4 * n + 12 + 3
 
 
+@njit(cache=True, inline="always")
+def _tree_state(sc, q, qd, sign, qt, qdt):
+    """The tree's coordinates ``qt = C q + d`` and rates ``qdt = sign C q'`` (the model's own
+    without coupling); ``sign`` -1 or 0 gives the rates the energy function h needs."""
+    if sc.coupled:
+        for a in range(sc.nt):
+            s1 = sc.d[a]
+            s2 = 0.0
+            for j in range(sc.n):
+                s1 += sc.C[a, j] * q[j]
+                s2 += sc.C[a, j] * qd[j]
+            qt[a] = s1
+            qdt[a] = sign * s2
+    else:
+        for a in range(sc.n):
+            qt[a] = q[a]
+            qdt[a] = sign * qd[a]
+
+
+@njit(cache=True, inline="always")
+def _base_values(sc, t, b18):
+    """(18,) pose, rate and acceleration of {A} at ``t`` from the base functions (zeros: fixed)."""
+    for j in range(18):
+        b18[j] = 0.0
+    if sc.has_base:
+        for j in range(6):
+            fj = sc.base_fn[j]
+            b18[j] = _fn(sc, fj, t, 0)
+            b18[6 + j] = _fn(sc, fj, t, 1)
+            b18[12 + j] = _fn(sc, fj, t, 2)
+
+
 @njit(cache=True)
 def scene_rhs(t, y, out, I, F, W, SI, SF, X):
     """``out = (q', q'', P)`` (2n + 1,) at ``(t, y = (q, q', W))``; ``X`` scratch of
@@ -247,27 +279,8 @@ def scene_rhs(t, y, out, I, F, W, SI, SF, X):
     v3 = X[o:o + 3]
     q = y[:n]
     qd = y[n:2 * n]
-    if sc.coupled:
-        for a in range(nt):
-            s1 = sc.d[a]
-            s2 = 0.0
-            for j in range(n):
-                s1 += sc.C[a, j] * q[j]
-                s2 += sc.C[a, j] * qd[j]
-            qt[a] = s1
-            qdt[a] = s2
-    else:
-        for a in range(n):
-            qt[a] = q[a]
-            qdt[a] = qd[a]
-    for j in range(18):
-        b18[j] = 0.0
-    if sc.has_base:
-        for j in range(6):
-            fj = sc.base_fn[j]
-            b18[j] = _fn(sc, fj, t, 0)
-            b18[6 + j] = _fn(sc, fj, t, 1)
-            b18[12 + j] = _fn(sc, fj, t, 2)
+    _tree_state(sc, q, qd, 1.0, qt, qdt)
+    _base_values(sc, t, b18)
     K.kinematics(ta, ws, qt, qdt, b18[0:6], b18[6:12], b18[12:18], sc.g)
     K.clear_wrenches(ws)
     zero3 = ac[0:3]
@@ -331,9 +344,8 @@ def scene_rhs(t, y, out, I, F, W, SI, SF, X):
         for i in range(out.size):
             out[i] = np.nan
         return pivot
-    if sc.has_base:
-        K.base_motion(b18[0:6], b18[6:12], b18[12:18], tw, ac)
-        dE, dV = K.base_power(ta, ws, tw, ac, sc.g)
+    if sc.has_base:   # the base's twist and acceleration, recorded by kinematics
+        dE, dV = K.base_power(ta, ws, ws.base_twist, ws.base_acc, sc.g)
         P -= dE - dV
     for i in range(n):
         out[i] = qd[i]
@@ -352,8 +364,8 @@ class CompiledScene:
         self.plan = plan
         model = plan.model
         self.SI, self.SF = compile_scene(plan)
-        fast = K.CompiledTree(model.tree)
-        self.I, self.F, self.W = fast.I, fast.F, fast.W
+        fast = model._fast                      # the tree flattened once, by the model
+        self.I, self.F, self.W = fast.I, fast.F, np.zeros_like(fast.W)
         self.X = np.zeros(scratch_size(model.n, model.tree.n))
         self.dim = 2 * model.n + 1
 
@@ -402,37 +414,18 @@ def scene_energies(ts, Q, QD, out, I, F, W, SI, SF, X):
     sc = scene_view(SI, SF)
     ta = K.tree_view(I, F)
     ws = K.workspace_view(I, W)
-    n, nt = sc.n, sc.nt
+    nt = sc.nt
     qt = X[0:nt]
     qdt = X[nt:2 * nt]
     b18 = X[2 * nt:2 * nt + 18]
     zero = np.zeros(3)
     for k in range(ts.size):
-        t = ts[k]
-        for j in range(18):
-            b18[j] = 0.0
-        if sc.has_base:
-            for j in range(6):
-                fj = sc.base_fn[j]
-                b18[j] = _fn(sc, fj, t, 0)
-                b18[6 + j] = _fn(sc, fj, t, 1)
-                b18[12 + j] = _fn(sc, fj, t, 2)
+        _base_values(sc, ts[k], b18)
         Es = np.zeros(3)
         V = 0.0
         for pass_ in range(3 if sc.has_base else 1):
             sign = 1.0 if pass_ == 0 else (-1.0 if pass_ == 1 else 0.0)
-            for a in range(nt):
-                if sc.coupled:
-                    s1 = sc.d[a]
-                    s2 = 0.0
-                    for j in range(n):
-                        s1 += sc.C[a, j] * Q[k, j]
-                        s2 += sc.C[a, j] * QD[k, j]
-                    qt[a] = s1
-                    qdt[a] = sign * s2
-                else:
-                    qt[a] = Q[k, a]
-                    qdt[a] = sign * QD[k, a]
+            _tree_state(sc, Q[k], QD[k], sign, qt, qdt)
             K.kinematics(ta, ws, qt, qdt, b18[0:6], b18[6:12], b18[12:18], zero)
             E, Vg = K.energies(ta, ws, sc.g)
             Es[pass_] = E
