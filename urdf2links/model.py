@@ -2,8 +2,8 @@
 
 ``Model`` composes the recursive form compiled with numba (:mod:`urdf2links.kernels`, the default
 ``method="recursive"``), the same form in numpy (:mod:`urdf2links.recursive`, ``method="numpy"``)
-and :mod:`urdf2links.literal` (the oracle, ``method="literal"``). Every dynamics call takes optional keyword arguments ``t`` (time) and
-``base`` (None for a fixed base, a :class:`~urdf2links.transforms.BaseState`, or a callable
+and :mod:`urdf2links.literal` (the oracle, ``method="literal"``). Every dynamics call takes
+optional keyword arguments ``t`` (time) and ``base`` (None for a fixed base, a :class:`~urdf2links.transforms.BaseState`, or a callable
 ``t -> BaseState``, the prescribed motion of {A}); a fixed base computes no base terms at all.
 
 Coupled coordinates (mimic joints loaded with ``mimic="coupled"``) are a constant linear map
@@ -24,7 +24,7 @@ from .kernels import CompiledTree, forward_dynamics as _fd_kernel
 from .literal import literal_terms
 from .loads import Wrench
 from .recursive import RecursivePlan
-from .transforms import BaseState, resolve_base
+from .transforms import BaseState, base_state_at, resolve_base
 from .tree import LinkTree
 
 __all__ = ["Model"]
@@ -129,20 +129,18 @@ class Model:
     @staticmethod
     def _base18(base, t) -> np.ndarray:
         """(18,) pose, rate and acceleration of {A} for the kernels (zeros for a fixed base)."""
-        if base is None:
+        state = base_state_at(base, t)
+        if state is None:
             return _NO_BASE
-        state = base(t) if callable(base) else base
-        if not isinstance(state, BaseState):
-            raise TypeError(f"base must be None, a BaseState or a callable t -> BaseState; got {type(state).__name__}")
         return np.concatenate([np.asarray(state.pose, float), np.asarray(state.rate, float),
                                np.asarray(state.accel, float)])
 
-    def _compiled_terms(self, q, qd, t, base, g, want_A):
+    def _compiled_terms(self, q, qd, t, base, gravity: bool, want_A: bool):
         qt, qdt = self._tree_state(q, qd)
         if qdt is None:
             qdt = np.zeros(self.tree.n)
-        b18 = self._base18(base, t)
-        return self._fast.terms(qt, qdt, b18, _NO_G if g is None else self.gravity_vector, want_A=want_A)
+        return self._fast.terms(qt, qdt, self._base18(base, t), self.gravity_vector if gravity else _NO_G,
+                                want_A=want_A)
 
     def _literal(self, q, qd, t, base, wrenches=()):
         qt, qdt = self._tree_state(q, np.zeros(self.n) if qd is None else qd)
@@ -156,7 +154,7 @@ class Model:
         if method == "literal":
             return self._reduce(self._literal(q, None, t, base)["A"])
         if method == "recursive":
-            return self._reduce(self._compiled_terms(q, None, t, base, None, True)[0])
+            return self._reduce(self._compiled_terms(q, None, t, base, False, True)[0])
         qt, _ = self._tree_state(q)
         kin = self._plan.kinematics(qt, None, resolve_base(base, t))
         return self._reduce(self._plan.mass_matrix(kin))
@@ -167,7 +165,7 @@ class Model:
         if method == "literal":
             return self._reduce(self._literal(q, qd, t, base)["e"])
         if method == "recursive":
-            return self._reduce(-self._compiled_terms(q, qd, t, base, None, False)[1])
+            return self._reduce(-self._compiled_terms(q, qd, t, base, False, False)[1])
         qt, qdt = self._tree_state(q, qd)
         kin = self._plan.kinematics(qt, qdt, resolve_base(base, t), acceleration=True)
         return self._reduce(self._plan.bias(kin))
@@ -178,7 +176,7 @@ class Model:
         if method == "literal":
             return self._reduce(self._literal(q, None, t, base)["G"])
         if method == "recursive":  # at rest relative to a base at rest: b = -G
-            state = base(t) if callable(base) else base
+            state = base_state_at(base, t)
             still = None if state is None else BaseState.fixed(state.pose)
             return self._reduce(-self._compiled_terms(q, None, t, still, True, False)[1])
         qt, _ = self._tree_state(q)

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .scene_kernels import CompiledScene
 from .transforms import BaseState, base_transforms
 
 __all__ = ["Plan", "compile_plan"]
@@ -66,8 +67,6 @@ class Plan:
             ("Q", bool(self.loads)), ("tau", len(self.torque_funcs) > 0), ("spring", len(springs) > 0),
             ("damper", len(dampers) > 0)) if on)
         self.nfev = 0
-        from .scene_kernels import CompiledScene
-
         self.rhs = CompiledScene(self)
         """``y' = (qd, q'', P)`` for ``y = (q, qd, W)`` (2n + 1,): the compiled right-hand side
         (:mod:`urdf2links.scene_kernels`), equal to :meth:`python_rhs` to rounding."""

@@ -23,6 +23,7 @@ __all__ = [
     "BaseState",
     "base_transforms",
     "resolve_base",
+    "base_state_at",
 ]
 
 PARAMETERS = ("x", "y", "z", "phi_x", "phi_y", "phi_z")
@@ -115,6 +116,13 @@ def resolve_base(base, t: float):
     ``base`` is None (fixed base: (5.7.1), no base terms computed), a :class:`BaseState`,
     or a callable ``t -> BaseState`` (a prescribed motion ``0_A T(t)``).
     """
+    state = base_state_at(base, t)
+    return None if state is None else base_transforms(state)
+
+
+def base_state_at(base, t: float) -> "BaseState | None":
+    """The :class:`BaseState` of ``base`` (None, a BaseState or a callable ``t -> BaseState``) at
+    time ``t``, or None for a fixed base; anything else raises TypeError naming what it got."""
     if base is None:
         return None
     state = base(t) if callable(base) else base
@@ -122,4 +130,4 @@ def resolve_base(base, t: float):
         raise TypeError(
             f"base must be None, a BaseState or a callable t -> BaseState; got {type(state).__name__}"
         )
-    return base_transforms(state)
+    return state
