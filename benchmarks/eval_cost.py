@@ -22,7 +22,7 @@ import mujoco
 import numpy as np
 
 import urdf2links
-from compare.mjcf import mjcf_from_model
+from urdf2links.compare.mjcf import mjcf_from_model
 from urdf2links import LinkSpec, Model, build_tree
 from urdf2links.locations import example_robot_data_dir, shipped_robots_dir
 

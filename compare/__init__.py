@@ -1,4 +1,8 @@
-"""compare: cross-checks of urdf2links against MuJoCo (this package may import mujoco)."""
+"""urdf2links.compare: the MuJoCo side, the same model in MuJoCo, metrics, reports, trade-off studies.
+
+Installed as ``urdf2links.compare`` from the repository's top-level ``compare/`` folder; it imports
+MuJoCo (``import urdf2links`` does not).
+"""
 
 from .mjcf import MjcfModel, mjcf_from_model, mjcf_from_scene
 from .mujoco_run import MujocoRun, mujoco_accelerations, run_mujoco
@@ -11,7 +15,8 @@ from .mujoco_urdf import (
     mujoco_from_urdf,
     mujoco_terms,
 )
-from .report import CheckResult, check_baseline, load_baselines, write_baselines, write_index, write_report
+from .baselines import CheckResult, check_baseline, load_baselines, write_baselines
+from .report import write_index, write_report
 from .terms import TermsComparison, compare_terms_urdf, massless_moving_links, repaired_urdf_text
 from .trajectory import DIVERGENCE_THRESHOLD, SceneComparison, compare_scene, growth_fit, scene_key
 

@@ -1,6 +1,6 @@
 """Try MuJoCo's own URDF import on every URDF of example-robot-data; print what it says.
 
-    python -m compare.corpus_check [--floating] [--no-fusestatic]
+    python -m urdf2links.compare.corpus_check [--floating] [--no-fusestatic]
 
 Each file is reported as ``loaded`` (with its number of hinge/slide dofs), ``refused``
 (MuJoCo's own reason, first line) or ``error`` (not MuJoCo: unreadable XML, unsupported

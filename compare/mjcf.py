@@ -45,7 +45,7 @@ chain of massless links, as long as the receiving body keeps at most 6 dofs (MuJ
 at its origin, inertia ``m_tiny * 1 m^2`` on the diagonal) and ``notes`` says so. A folded link
 has no body (``body_of_link[p] == -1``); :meth:`MjcfModel.link_poses` still gives its pose, and
 loads on it are mapped with the host body's Jacobian restricted to the folded link's own joints
-and those before it (see :mod:`compare.mujoco_run`).
+and those before it (see :mod:`urdf2links.compare.mujoco_run`).
 
 Physics switched off (everything the project does not model): contacts, limits, equality
 constraints, friction loss; springs and dampers unless a spring/damper is given (then as joint
@@ -56,7 +56,7 @@ Moving base ``{A}`` (``moving_base=True``): a root body ``base_A`` at the world 
 slide joints along the world axes then three hinges about x, y, z of its own (moving) frame,
 ``Trans(x, y, z) Rx Ry Rz`` = ``0_A T`` of (5.5) exactly; its qpos are the six base parameters.
 It has a small mass (``BASE_MASS_FRACTION`` of the robot's); its motion is prescribed by
-:func:`compare.mujoco_run.run_mujoco`, so the mass does not enter the robot's motion.
+:func:`urdf2links.compare.mujoco_run.run_mujoco`, so the mass does not enter the robot's motion.
 """
 
 from __future__ import annotations
@@ -288,50 +288,11 @@ def _unique(name: str, taken: set[str]) -> str:
     return out
 
 
-def mjcf_from_model(model, *, gravity=None, springs: Iterable = (), moving_base: bool = False,
-                    timestep: float = 1e-4, integrator: str = "RK4") -> MjcfModel:
-    """The project's tree of ``model`` as an MJCF model compiled by MuJoCo (see module doc).
-
-    Parameters
-    ----------
-    model : urdf2links.model.Model (uncoupled: mimic joints as independent coordinates)
-    gravity : None (no gravity: ``0 0 0``) or (3,) m/s^2 in {0}; e.g. ``model.gravity_vector``.
-    springs : iterable of :class:`urdf2links.scene.Spring` (coordinate, stiffness, rest, damping):
-        joint ``stiffness``/``springref``/``damping``; MuJoCo's spring (damper) flag stays enabled
-        only when some stiffness (damping) is positive.
-    moving_base : add the ``base_A`` body carrying the six base parameters as joints.
-    timestep, integrator : MuJoCo's ``<option>``; integrator one of :data:`INTEGRATORS`.
-    """
-    if getattr(model, "_C", None) is not None:
-        raise ValueError(f"model {model.name!r} has coupled coordinates (mimic='coupled'); route 1 "
-                         "builds the tree's own coordinates only: load with mimic='independent'")
-    if integrator not in INTEGRATORS:
-        raise ValueError(f"integrator must be one of {INTEGRATORS}, got {integrator!r}")
-    if not (timestep > 0 and math.isfinite(timestep)):
-        raise ValueError(f"timestep must be a positive number, got {timestep!r}")
-    tree = model.tree
-    L, n = tree.n_links, tree.n
-    names = tuple(model.coordinate_names)
-    notes: list[str] = []
-    g = None if gravity is None else np.asarray(gravity, float).reshape(3)
-    springs = tuple(springs)
-    spring_of: dict[str, object] = {}
-    for s in springs:
-        if s.coordinate not in names:
-            raise KeyError(f"spring on unknown coordinate {s.coordinate!r}; coordinates are {list(names)}")
-        spring_of[s.coordinate] = s
-
-    mass = tree.H[:, 3, 3]
-    total_mass = float(mass.sum())
-    massless = [bool(np.all(tree.H[p] == 0.0)) for p in range(L)]
-    for p in range(L):
-        if mass[p] == 0.0 and not massless[p]:
-            raise ValueError(f"link {tree.link_names[p]!r}: H has zero mass but non-zero second moments; "
-                             "MuJoCo cannot represent such a body")
-    children = tree.children
-
-    # -- folding: a massless link carrying joints with exactly one child goes into that child.
-    #    MuJoCo allows at most 6 dofs per body: a fold that would exceed that is not made.
+def _fold(tree, massless) -> tuple[list[bool], list[str]]:
+    """Which links fold into their child: a massless link carrying joints with exactly one child
+    goes into that child's body, unless the body would get more than 6 dofs (MuJoCo's limit).
+    Returns the flags and the links left unfolded for that reason."""
+    L, children = tree.n_links, tree.children
     own = [int(np.count_nonzero(tree.coord[p] >= 0)) for p in range(L)]
     folded = [False] * L
     carried = [0] * L  # dofs the body holding this link's joints would have up to this link
@@ -344,100 +305,93 @@ def mjcf_from_model(model, *, gravity=None, springs: Iterable = (), moving_base:
                 folded[p] = True
             else:
                 too_many.append(tree.link_names[p])
+    return folded, too_many
 
-    def chain_of(p: int) -> list[int]:
+
+class _Bodies:
+    """Writes the ``<body>`` elements of the tree: one body per non-folded link, its inertial (a
+    negligible mass for a massless moving link that cannot be folded) and its joints."""
+
+    def __init__(self, model, names, spring_of, folded, massless, tiny):
+        self.tree, self.names, self.spring_of = model.tree, names, spring_of
+        self.folded, self.massless, self.tiny = folded, massless, tiny
+        self.taken = {"world"}
+        self.body_name_of: dict[int, str] = {}
+        self.tiny_links: list[str] = []
+        self.notes: list[str] = []
+        self.lines: list[str] = []
+
+    def chain_of(self, p: int) -> list[int]:
         """Links whose factors make the body of non-folded link p, top first."""
         out = [p]
-        par = int(tree.parent[p])
-        while par >= 0 and folded[par]:
+        par = int(self.tree.parent[p])
+        while par >= 0 and self.folded[par]:
             out.append(par)
-            par = int(tree.parent[par])
+            par = int(self.tree.parent[par])
         return out[::-1]
 
-    def body_children(p: int) -> list[int]:
+    def body_children(self, p: int) -> list[int]:
         """Non-folded links whose bodies are children of link p's body (through folded links)."""
         out = []
-        for c in children[p]:
-            out.extend([c] if not folded[c] else body_children(c))
+        for c in self.tree.children[p]:
+            out.extend([c] if not self.folded[c] else self.body_children(c))
         return out
 
-    tiny = TINY_MASS_FRACTION * max(total_mass, 1.0)
-    tiny_links: list[str] = []
-    taken_bodies = {"world"}
-    taken_joints: set[str] = set(names)
-    body_name_of: dict[int, str] = {}
-    lines: list[str] = []
+    def top(self) -> list[int]:
+        roots = [p for p in range(self.tree.n_links) if self.tree.parent[p] < 0]
+        return [x for r in roots for x in ([r] if not self.folded[r] else self.body_children(r))]
 
-    def emit(p: int, indent: str) -> None:
-        links = chain_of(p)
-        factors = [f for lk in links for f in _link_factors(tree, lk)]
+    def emit(self, p: int, indent: str) -> None:
+        tree, lines = self.tree, self.lines
+        factors = [f for lk in self.chain_of(p) for f in _link_factors(tree, lk)]
         M, joints = _conjugate(factors)
-        bname = _unique(tree.link_names[p], taken_bodies)
+        bname = _unique(tree.link_names[p], self.taken)
         if bname != tree.link_names[p]:
-            notes.append(f"link {tree.link_names[p]!r} is MuJoCo body {bname!r} (name taken)")
-        body_name_of[p] = bname
-        attrs = f'name={quoteattr(bname)} pos="{_vec(M[:3, 3])}" quat="{_vec(_quat(M[:3, :3]))}"'
-        lines.append(f"{indent}<body {attrs}>")
+            self.notes.append(f"link {tree.link_names[p]!r} is MuJoCo body {bname!r} (name taken)")
+        self.body_name_of[p] = bname
+        lines.append(f'{indent}<body name={quoteattr(bname)} pos="{_vec(M[:3, 3])}" quat="{_vec(_quat(M[:3, :3]))}">')
         ind = indent + "  "
-        if not massless[p]:
+        if not self.massless[p]:
             m, com, I = inertial_from_pseudo(tree.H[p])
             I = 0.5 * (I + I.T)
             full = (I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2])
             lines.append(f'{ind}<inertial pos="{_vec(com)}" mass="{_num(m)}" fullinertia="{_vec(full)}"/>')
         elif joints:
-            tiny_links.append(tree.link_names[p])
-            lines.append(f'{ind}<inertial pos="0 0 0" mass="{_num(tiny)}" '
-                         f'diaginertia="{_vec([tiny] * 3)}"/>')
+            self.tiny_links.append(tree.link_names[p])
+            lines.append(f'{ind}<inertial pos="0 0 0" mass="{_num(self.tiny)}" '
+                         f'diaginertia="{_vec([self.tiny] * 3)}"/>')
         for kind, axis, anchor, c in joints:
-            cname = names[c]
-            extra = ""
-            s = spring_of.get(cname)
-            if s is not None:
-                extra = (f' stiffness="{_num(s.stiffness)}" springref="{_num(s.rest)}"'
-                         f' damping="{_num(s.damping)}"')
-            pos = f' pos="{_vec(anchor)}"' if kind == "hinge" and np.any(anchor != 0.0) else ""
-            lines.append(f'{ind}<joint name={quoteattr(cname)} type="{kind}" axis="{_vec(axis)}"{pos}{extra}/>')
-        for ch in body_children(p):
-            emit(ch, ind)
+            lines.append(f"{ind}{self._joint(kind, axis, anchor, c)}")
+        for ch in self.body_children(p):
+            self.emit(ch, ind)
         lines.append(f"{indent}</body>")
 
-    roots = [p for p in range(L) if tree.parent[p] < 0]
-    top = [x for r in roots for x in ([r] if not folded[r] else body_children(r))]
+    def _joint(self, kind, axis, anchor, c) -> str:
+        cname = self.names[c]
+        extra = ""
+        s = self.spring_of.get(cname)
+        if s is not None:
+            extra = f' stiffness="{_num(s.stiffness)}" springref="{_num(s.rest)}" damping="{_num(s.damping)}"'
+        pos = f' pos="{_vec(anchor)}"' if kind == "hinge" and np.any(anchor != 0.0) else ""
+        return f'<joint name={quoteattr(cname)} type="{kind}" axis="{_vec(axis)}"{pos}{extra}/>'
 
-    base_joint_names: tuple[str, ...] = ()
-    indent = "    "
-    if moving_base:
-        bm = BASE_MASS_FRACTION * max(total_mass, 1.0)
-        bname = _unique(BASE_BODY, taken_bodies)
-        base_joint_names = tuple(_unique(j, taken_joints) for j in BASE_JOINTS)
-        lines.append(f'{indent}<body name={quoteattr(bname)} pos="0 0 0">')
-        lines.append(f'{indent}  <inertial pos="0 0 0" mass="{_num(bm)}" diaginertia="{_vec([bm] * 3)}"/>')
-        for k, jn in enumerate(base_joint_names):
+    def base_body(self, bm: float, joint_names, indent: str) -> str:
+        """The prescribed base {A}: a body with slides x, y, z and hinges about x, y, z, the tree inside."""
+        bname = _unique(BASE_BODY, self.taken)
+        self.lines.append(f'{indent}<body name={quoteattr(bname)} pos="0 0 0">')
+        self.lines.append(f'{indent}  <inertial pos="0 0 0" mass="{_num(bm)}" diaginertia="{_vec([bm] * 3)}"/>')
+        for k, jn in enumerate(joint_names):
             axis = np.eye(3)[k % 3]
-            lines.append(f'{indent}  <joint name={quoteattr(jn)} type="{"slide" if k < 3 else "hinge"}" '
-                         f'axis="{_vec(axis)}"/>')
-        for r in top:
-            emit(r, indent + "  ")
-        lines.append(f"{indent}</body>")
-        notes.append(f"moving base: body {bname!r} (mass {bm:.3g} kg) with slides x, y, z along the world "
-                     "axes then hinges about its own x, y, z: Trans(x, y, z) Rx Ry Rz = 0_A T of (5.5); "
-                     "its motion is prescribed by run_mujoco (qfrc_applied from mjcb_control)")
-    else:
-        for r in top:
-            emit(r, indent)
+            self.lines.append(f'{indent}  <joint name={quoteattr(jn)} type="{"slide" if k < 3 else "hinge"}" '
+                              f'axis="{_vec(axis)}"/>')
+        for r in self.top():
+            self.emit(r, indent + "  ")
+        self.lines.append(f"{indent}</body>")
+        return bname
 
-    folded_names = tuple(tree.link_names[p] for p in range(L) if folded[p])
-    if folded_names:
-        notes.append("massless links with joints folded into their only child's body (exact; MuJoCo refuses "
-                     f"massless moving bodies): {', '.join(folded_names)}")
-    if too_many:
-        notes.append("not folded because the child's body would have more than 6 dofs (MuJoCo's limit): "
-                     + ", ".join(too_many))
-    if tiny_links:
-        notes.append(f"massless moving links that cannot be folded (no child or several) got a negligible mass "
-                     f"{tiny:.3g} kg and inertia {tiny:.3g} kg m^2 at their origin (MuJoCo refuses massless "
-                     f"moving bodies; A differs by that much): {', '.join(tiny_links)}")
 
+def _document(model, body_lines, g, springs, timestep, integrator) -> tuple[str, str]:
+    """The whole MJCF text around the bodies (only the scene's physics enabled) and its note."""
     has_spring = any(s.stiffness > 0 for s in springs)
     has_damper = any(s.damping > 0 for s in springs)
     flags = ['contact="disable"', 'limit="disable"', 'equality="disable"', 'frictionloss="disable"']
@@ -458,23 +412,116 @@ def mjcf_from_model(model, *, gravity=None, springs: Iterable = (), moving_base:
         "  </default>",
         "  <worldbody>",
     ]
-    xml = "\n".join(head + lines + ["  </worldbody>", "</mujoco>", ""])
-    notes.append("gravity " + ("off (0 0 0)" if g is None else f"{g.tolist()} m/s^2")
-                 + "; disabled: contact, limit, equality, frictionloss"
-                 + ("" if has_spring else ", spring") + ("" if has_damper else ", damper")
-                 + f"; armature 0; no geoms; integrator {integrator}, timestep {timestep:g} s")
+    xml = "\n".join(head + body_lines + ["  </worldbody>", "</mujoco>", ""])
+    note = ("gravity " + ("off (0 0 0)" if g is None else f"{g.tolist()} m/s^2")
+            + "; disabled: contact, limit, equality, frictionloss"
+            + ("" if has_spring else ", spring") + ("" if has_damper else ", damper")
+            + f"; armature 0; no geoms; integrator {integrator}, timestep {timestep:g} s")
+    return xml, note
 
+
+def _spring_map(names, springs) -> dict:
+    spring_of: dict[str, object] = {}
+    for s in springs:
+        if s.coordinate not in names:
+            raise KeyError(f"spring on unknown coordinate {s.coordinate!r}; coordinates are {list(names)}")
+        spring_of[s.coordinate] = s
+    return spring_of
+
+
+def _check_model(model, integrator, timestep) -> list[bool]:
+    """Refuse what route 1 cannot write; returns which links are massless."""
+    if model.coupling is not None:
+        raise ValueError(f"model {model.name!r} has coupled coordinates (mimic='coupled'); route 1 "
+                         "builds the tree's own coordinates only: load with mimic='independent'")
+    if integrator not in INTEGRATORS:
+        raise ValueError(f"integrator must be one of {INTEGRATORS}, got {integrator!r}")
+    if not (timestep > 0 and math.isfinite(timestep)):
+        raise ValueError(f"timestep must be a positive number, got {timestep!r}")
+    tree = model.tree
+    mass = tree.H[:, 3, 3]
+    massless = [bool(np.all(tree.H[p] == 0.0)) for p in range(tree.n_links)]
+    for p in range(tree.n_links):
+        if mass[p] == 0.0 and not massless[p]:
+            raise ValueError(f"link {tree.link_names[p]!r}: H has zero mass but non-zero second moments; "
+                             "MuJoCo cannot represent such a body")
+    return massless
+
+
+def _fold_notes(tree, folded, too_many, tiny_links, tiny) -> list[str]:
+    notes = []
+    folded_names = tuple(tree.link_names[p] for p in range(tree.n_links) if folded[p])
+    if folded_names:
+        notes.append("massless links with joints folded into their only child's body (exact; MuJoCo refuses "
+                     f"massless moving bodies): {', '.join(folded_names)}")
+    if too_many:
+        notes.append("not folded because the child's body would have more than 6 dofs (MuJoCo's limit): "
+                     + ", ".join(too_many))
+    if tiny_links:
+        notes.append(f"massless moving links that cannot be folded (no child or several) got a negligible mass "
+                     f"{tiny:.3g} kg and inertia {tiny:.3g} kg m^2 at their origin (MuJoCo refuses massless "
+                     f"moving bodies; A differs by that much): {', '.join(tiny_links)}")
+    return notes
+
+
+def mjcf_from_model(model, *, gravity=None, springs: Iterable = (), moving_base: bool = False,
+                    timestep: float = 1e-4, integrator: str = "RK4") -> MjcfModel:
+    """The project's tree of ``model`` as an MJCF model compiled by MuJoCo (see module doc).
+
+    Parameters
+    ----------
+    model : urdf2links.model.Model (uncoupled: mimic joints as independent coordinates)
+    gravity : None (no gravity: ``0 0 0``) or (3,) m/s^2 in {0}; e.g. ``model.gravity_vector``.
+    springs : iterable of :class:`urdf2links.scene.Spring` (coordinate, stiffness, rest, damping):
+        joint ``stiffness``/``springref``/``damping``; MuJoCo's spring (damper) flag stays enabled
+        only when some stiffness (damping) is positive.
+    moving_base : add the ``base_A`` body carrying the six base parameters as joints.
+    timestep, integrator : MuJoCo's ``<option>``; integrator one of :data:`INTEGRATORS`.
+    """
+    massless = _check_model(model, integrator, timestep)
+    tree = model.tree
+    names = tuple(model.coordinate_names)
+    g = None if gravity is None else np.asarray(gravity, float).reshape(3)
+    springs = tuple(springs)
+    total_mass = float(tree.H[:, 3, 3].sum())
+    folded, too_many = _fold(tree, massless)
+    tiny = TINY_MASS_FRACTION * max(total_mass, 1.0)
+    bodies = _Bodies(model, names, _spring_map(names, springs), folded, massless, tiny)
+    base_joint_names: tuple[str, ...] = ()
+    notes = bodies.notes
+    bname = None
+    if moving_base:
+        bm = BASE_MASS_FRACTION * max(total_mass, 1.0)
+        taken_joints: set[str] = set(names)
+        base_joint_names = tuple(_unique(j, taken_joints) for j in BASE_JOINTS)
+        bname = bodies.base_body(bm, base_joint_names, "    ")
+        notes.append(f"moving base: body {bname!r} (mass {bm:.3g} kg) with slides x, y, z along the world "
+                     "axes then hinges about its own x, y, z: Trans(x, y, z) Rx Ry Rz = 0_A T of (5.5); "
+                     "its motion is prescribed by run_mujoco (qfrc_applied from mjcb_control)")
+    else:
+        for r in bodies.top():
+            bodies.emit(r, "    ")
+    notes += _fold_notes(tree, folded, too_many, bodies.tiny_links, tiny)
+    xml, note = _document(model, bodies.lines, g, springs, timestep, integrator)
+    notes.append(note)
     try:
         mm = mujoco.MjModel.from_xml_string(xml)
     except ValueError as err:
         raise ValueError(f"MuJoCo refused the MJCF of model {model.name!r}: {str(err).strip()}") from None
+    return _compiled(mm, xml, model, names, base_joint_names, bname, bodies, folded, g, springs, notes)
+
+
+def _compiled(mm, xml, model, names, base_joint_names, bname, bodies, folded, g, springs, notes) -> MjcfModel:
+    """The :class:`MjcfModel`: MuJoCo's indices of the coordinates, the base and the bodies."""
+    tree = model.tree
+    L, n = tree.n_links, tree.n
 
     def jid(name):
         return mujoco.mj_name2id(mm, mujoco.mjtObj.mjOBJ_JOINT, name)
 
     qpos_index = np.array([mm.jnt_qposadr[jid(nm)] for nm in names], dtype=np.int64)
     dof_index = np.array([mm.jnt_dofadr[jid(nm)] for nm in names], dtype=np.int64)
-    if moving_base:
+    if bname is not None:
         base_qpos = np.array([mm.jnt_qposadr[jid(nm)] for nm in base_joint_names], dtype=np.int64)
         base_dofs = np.array([mm.jnt_dofadr[jid(nm)] for nm in base_joint_names], dtype=np.int64)
         base_body = mujoco.mj_name2id(mm, mujoco.mjtObj.mjOBJ_BODY, bname)
@@ -482,21 +529,22 @@ def mjcf_from_model(model, *, gravity=None, springs: Iterable = (), moving_base:
         base_qpos = base_dofs = np.zeros(0, dtype=np.int64)
         base_body = -1
     body_of_link = np.full(L, -1, dtype=np.int64)
-    for p, bn in body_name_of.items():
+    for p, bn in bodies.body_name_of.items():
         body_of_link[p] = mujoco.mj_name2id(mm, mujoco.mjtObj.mjOBJ_BODY, bn)
     host = body_of_link.copy()
     for p in range(L - 1, -1, -1):  # a folded link's only child comes after it
         if folded[p]:
-            host[p] = host[children[p][0]]
-    if mm.nv != n + (6 if moving_base else 0):
+            host[p] = host[tree.children[p][0]]
+    if mm.nv != n + (6 if bname is not None else 0):
         raise AssertionError(f"MJCF has {mm.nv} dofs, expected {n}")
     for a in (qpos_index, dof_index, base_qpos, base_dofs, body_of_link, host):
         a.setflags(write=False)
+    folded_names = tuple(tree.link_names[p] for p in range(L) if folded[p])
     return MjcfModel(
         xml=xml, model=mm, qpos_index=qpos_index, dof_index=dof_index, base_dofs=base_dofs,
         base_qpos=base_qpos, body_of_link=body_of_link, host_body=host, coordinate_names=names,
         source=model, gravity=g, springs=springs, folded_links=folded_names,
-        tiny_mass_links=tuple(tiny_links), base_body=int(base_body), notes=notes,
+        tiny_mass_links=tuple(bodies.tiny_links), base_body=int(base_body), notes=notes,
     )
 
 

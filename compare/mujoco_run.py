@@ -1,4 +1,4 @@
-"""Run the route-1 MJCF model (:mod:`compare.mjcf`) in MuJoCo: trajectories, energies, time.
+"""Run the route-1 MJCF model (:mod:`urdf2links.compare.mjcf`) in MuJoCo: trajectories, energies, time.
 
 Everything time-dependent is applied from MuJoCo's control callback (``mujoco.set_mjcb_control``),
 which ``mj_forward`` calls after positions and velocities are computed and before the
@@ -8,7 +8,7 @@ accelerations -- at every stage of RK4 too, with ``d.time`` set to the stage's t
 * joint torques ``tau(t)`` (n,) of the project's coordinates -> ``qfrc_applied`` on their dofs;
 * loads on links (force at a point, moment; link or world axes) -> ``xfrc_applied`` of the link's
   body as a world-frame force and a moment about the body's COM ``d.xipos``. A load on a folded
-  massless link (it has no body, see :mod:`compare.mjcf`) is mapped with the host body's Jacobian
+  massless link (it has no body, see :mod:`urdf2links.compare.mjcf`) is mapped with the host body's Jacobian
   at the point, restricted to the dofs that move that link, into ``qfrc_applied``;
 * the prescribed base {A} (``moving_base=True``): with ``a_b`` the base parameters' second
   derivatives at ``d.time``, ``f`` every generalized force but the bias and the base's own
@@ -48,7 +48,7 @@ from urdf2links.transforms import BaseState
 
 from .mjcf import INTEGRATORS, MjcfModel
 
-__all__ = ["MujocoRun", "run_mujoco", "mujoco_accelerations", "ENERGY_COLUMNS"]
+__all__ = ["MujocoRun", "run_mujoco", "mujoco_accelerations", "robot_energy", "energy_function", "ENERGY_COLUMNS"]
 
 ENERGY_COLUMNS = ("kinetic", "potential")
 
@@ -147,7 +147,7 @@ class _Driver:
         self.apply(d)
 
     def apply(self, d) -> None:
-        m, mj = self.m, self.mj
+        mj = self.mj
         t = float(d.time)
         d.qfrc_applied[:] = 0.0
         d.xfrc_applied[:] = 0.0
@@ -258,7 +258,9 @@ def mujoco_accelerations(mj: MjcfModel, q, qd, *, t: float = 0.0, base=None, tau
     return np.array(d.qacc[mj.dof_index])
 
 
-def _robot_energy(mj: MjcfModel, m, d) -> tuple[float, float]:
+def robot_energy(mj: MjcfModel, m, d) -> tuple[float, float]:
+    """``(E, V)`` of the robot in {0} from MuJoCo's ``d.energy`` (``mjENBL_ENERGY``), without the
+    ``base_A`` body's own energies."""
     pot, kin = float(d.energy[0]), float(d.energy[1])  # MuJoCo's order: potential, kinetic
     if mj.moving_base:  # remove base_A's own energies
         b = mj.base_body
@@ -278,7 +280,7 @@ def run_mujoco(mj: MjcfModel, scene=None, *, q0=None, qd0=None, t_end: float | N
 
     Parameters
     ----------
-    mj : MjcfModel from :func:`compare.mjcf.mjcf_from_model` (or ``mjcf_from_scene``).
+    mj : MjcfModel from :func:`urdf2links.compare.mjcf.mjcf_from_model` (or ``mjcf_from_scene``).
     scene : optional :class:`urdf2links.scene.Scene`: supplies the initial state, ``t_end``,
         ``samples``, the base motion, joint torques and loads (through
         :func:`urdf2links.plan.compile_plan`) unless given explicitly here. Its gravity and springs
@@ -290,29 +292,10 @@ def run_mujoco(mj: MjcfModel, scene=None, *, q0=None, qd0=None, t_end: float | N
     torques : callable ``t -> (n,)`` generalized joint forces.
     loads : callable ``t -> iterable`` of Wrench or ``(tree link index, force, moment, point, frame)``.
     """
-    model = mj.source
     notes: list[str] = []
     if scene is not None:
-        _check_scene(mj, scene)
-        from urdf2links.plan import compile_plan
-
-        plan = compile_plan(scene, model)
-        sq, sqd = scene.initial_state(model)
-        q0 = sq if q0 is None else q0
-        qd0 = sqd if qd0 is None else qd0
-        t_end = scene.run.t_end if t_end is None else t_end
-        samples = scene.run.samples if samples is None else samples
-        if base is None and scene.base is not None:
-            base = plan.base_state
-        if torques is None and plan.torque_funcs:
-            idx, funcs = plan.torque_index, plan.torque_funcs
-
-            def torques(t, _idx=idx, _f=funcs, _n=model.n):
-                tau = np.zeros(_n)
-                np.add.at(tau, _idx, [g(t) for g in _f])
-                return tau
-        if loads is None and plan.loads:
-            loads = plan._wrenches
+        q0, qd0, t_end, samples, base, torques, loads = _scene_inputs(mj, scene, q0, qd0, t_end, samples, base,
+                                                                      torques, loads)
     n = mj.n
     q0 = np.zeros(n) if q0 is None else np.asarray(q0, float)
     qd0 = np.zeros(n) if qd0 is None else np.asarray(qd0, float)
@@ -320,7 +303,56 @@ def run_mujoco(mj: MjcfModel, scene=None, *, q0=None, qd0=None, t_end: float | N
     samples = 101 if samples is None else int(samples)
     if samples < 1 or not t_end >= 0:
         raise ValueError(f"need samples >= 1 and t_end >= 0, got {samples}, {t_end}")
+    m, integ = _configured(mj, timestep, integrator)
+    dt = float(m.opt.timestep)
+    t_req = np.linspace(0.0, t_end, samples)
+    ks = np.rint(t_req / dt).astype(np.int64)
+    offset = float(np.max(np.abs(ks * dt - t_req)))
+    if offset > 1e-9 * dt:
+        notes.append(f"timestep {dt:g} s does not divide the sample interval: samples taken at the nearest "
+                     f"steps (largest offset {offset:.3g} s); MujocoRun.t holds the actual times")
+    d = mujoco.MjData(m)
+    base_fn = _as_base_fn(base)
+    if mj.moving_base and base_fn is None:
+        notes.append("the model has a base_A body but no base motion was given: base held at the origin")
+    driver = _Driver(mj, m, d, base=base_fn, torques=torques, loads=loads)
+    mj.set_state(d, q0, qd0, base=driver.base(0.0) if driver.base is not None else None)
+    if mj.moving_base and integ not in ("RK4",):
+        notes.append(f"integrator {integ}: the prescribed base is exact only when nothing changes the "
+                     "acceleration after the control callback (RK4; Euler without dampers)")
+    out, track, wall = _stepping(mj, m, d, driver, ks)
+    if not np.all(np.isfinite(out["q"])):
+        notes.append("MuJoCo's state became non-finite")
+    return MujocoRun(t=out["t"], q=out["q"], qd=out["qd"], energy=out["energy"], base_tracking_error=track,
+                     wall_time=wall, nsteps=int(ks[-1]), timestep=dt, integrator=integ,
+                     coordinate_names=mj.coordinate_names, base_pose=out["base"], notes=notes)
 
+
+def _scene_inputs(mj, scene, q0, qd0, t_end, samples, base, torques, loads):
+    """What a scene supplies where the caller gave nothing: initial state, run length, samples,
+    base motion, joint torques and loads (through the scene's plan)."""
+    _check_scene(mj, scene)
+    from urdf2links.plan import compile_plan
+
+    model = mj.source
+    plan = compile_plan(scene, model)
+    sq, sqd = scene.initial_state(model)
+    q0 = sq if q0 is None else q0
+    qd0 = sqd if qd0 is None else qd0
+    t_end = scene.run.t_end if t_end is None else t_end
+    samples = scene.run.samples if samples is None else samples
+    if base is None and scene.base is not None:
+        base = plan.base_state
+    if torques is None and plan.torque_funcs:
+        torques = plan.torques
+    if loads is None and plan.loads:
+        loads = plan.wrenches
+    return q0, qd0, t_end, samples, base, torques, loads
+
+
+def _configured(mj, timestep, integrator):
+    """A copy of ``mj``'s model with the timestep and integrator asked for and energies enabled;
+    the integrator's name."""
     m = copy.deepcopy(mj.model)
     if timestep is not None:
         m.opt.timestep = float(timestep)
@@ -331,57 +363,36 @@ def run_mujoco(mj: MjcfModel, scene=None, *, q0=None, qd0=None, t_end: float | N
     integ = mujoco.mjtIntegrator(int(m.opt.integrator)).name.removeprefix("mjINT_")
     integ = {"EULER": "Euler", "RK4": "RK4", "IMPLICIT": "implicit", "IMPLICITFAST": "implicitfast"}.get(integ, integ)
     m.opt.enableflags |= int(mujoco.mjtEnableBit.mjENBL_ENERGY)
-    dt = float(m.opt.timestep)
+    return m, integ
 
-    t_req = np.linspace(0.0, t_end, samples)
-    ks = np.rint(t_req / dt).astype(np.int64)
-    K = int(ks[-1])
-    offset = float(np.max(np.abs(ks * dt - t_req)))
-    if offset > 1e-9 * dt:
-        notes.append(f"timestep {dt:g} s does not divide the sample interval: samples taken at the nearest "
-                     f"steps (largest offset {offset:.3g} s); MujocoRun.t holds the actual times")
 
-    d = mujoco.MjData(m)
-    base_fn = _as_base_fn(base)
-    if mj.moving_base and base_fn is None:
-        notes.append("the model has a base_A body but no base motion was given: base held at the origin")
-    driver = _Driver(mj, m, d, base=base_fn, torques=torques, loads=loads)
-    st0 = driver.base(0.0) if driver.base is not None else None
-    mj.set_state(d, q0, qd0, base=st0)
-    if mj.moving_base and integ not in ("RK4",):
-        notes.append(f"integrator {integ}: the prescribed base is exact only when nothing changes the "
-                     "acceleration after the control callback (RK4; Euler without dampers)")
-
-    m_s = len(ks)
-    t_out = np.empty(m_s)
-    q_out = np.empty((m_s, n))
-    qd_out = np.empty((m_s, n))
-    energy = np.empty((m_s, 2))
-    base_pose = np.empty((m_s, 6)) if mj.moving_base else None
+def _stepping(mj, m, d, driver, ks):
+    """Step to ``ks[-1]``, sampling (``mj_forward``) at the steps ``ks``; the samples, the base's
+    tracking error and the wall time of the loop."""
+    m_s, n = len(ks), mj.n
+    out = {"t": np.empty(m_s), "q": np.empty((m_s, n)), "qd": np.empty((m_s, n)), "energy": np.empty((m_s, 2)),
+           "base": np.empty((m_s, 6)) if mj.moving_base else None}
     track = 0.0
     j = 0
+    K = int(ks[-1])
     with _Installed(driver):
         start = _time.perf_counter()
         for k in range(K + 1):
             while j < m_s and ks[j] == k:
                 mujoco.mj_forward(m, d)
-                t_out[j] = d.time
-                q_out[j] = d.qpos[mj.qpos_index]
-                qd_out[j] = d.qvel[mj.dof_index]
-                energy[j] = _robot_energy(mj, m, d)
+                out["t"][j] = d.time
+                out["q"][j] = d.qpos[mj.qpos_index]
+                out["qd"][j] = d.qvel[mj.dof_index]
+                out["energy"][j] = robot_energy(mj, m, d)
                 if mj.moving_base:
                     bp = np.array(d.qpos[mj.base_qpos])
-                    base_pose[j] = bp
+                    out["base"][j] = bp
                     track = max(track, float(np.max(np.abs(bp - np.asarray(driver.base(float(d.time)).pose)))))
                 j += 1
             if k < K:
                 mujoco.mj_step(m, d)
         wall = _time.perf_counter() - start
-    if not np.all(np.isfinite(q_out)):
-        notes.append("MuJoCo's state became non-finite")
-    return MujocoRun(t=t_out, q=q_out, qd=qd_out, energy=energy, base_tracking_error=track, wall_time=wall,
-                     nsteps=K, timestep=dt, integrator=integ, coordinate_names=mj.coordinate_names,
-                     base_pose=base_pose, notes=notes)
+    return out, track, wall
 
 
 def _check_scene(mj: MjcfModel, scene) -> None:
@@ -394,3 +405,21 @@ def _check_scene(mj: MjcfModel, scene) -> None:
         raise ValueError("the scene's springs are not the MJCF model's: build it with mjcf_from_scene")
     if (scene.base is not None) and not mj.moving_base:
         raise ValueError("the scene moves the base but the MJCF model has no base_A: build it with mjcf_from_scene")
+
+
+def energy_function(mj: MjcfModel, run: MujocoRun, plan) -> np.ndarray:
+    """MuJoCo's energy function ``h = (E(qd) + E(-qd)) / 2 - 2 E(0) + V`` at its own states, with
+    the prescribed base's pose and rate (moving base only)."""
+    m = copy.deepcopy(mj.model)
+    m.opt.enableflags |= int(mujoco.mjtEnableBit.mjENBL_ENERGY)
+    d = mujoco.MjData(m)
+    h = np.empty(len(run.t))
+    for i, t in enumerate(run.t):
+        bs = plan.base_state(float(t))
+        kin = []
+        for v in (-run.qd[i], np.zeros_like(run.qd[i])):
+            mj.set_state(d, run.q[i], v, base=bs)
+            mujoco.mj_forward(m, d)
+            kin.append(robot_energy(mj, m, d)[0])
+        h[i] = 0.5 * (run.kinetic[i] + kin[0]) - 2.0 * kin[1] + run.potential[i]
+    return h

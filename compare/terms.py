@@ -1,7 +1,7 @@
 """Terms at identical states: the project's ``A`` and ``e + G`` against MuJoCo's own URDF import.
 
 The "terms" level of the MuJoCo comparison (DESIGN.md, "MuJoCo comparison") on route 2: the
-URDF file goes through MuJoCo's own URDF reader (:func:`compare.mujoco_urdf.mujoco_from_urdf`)
+URDF file goes through MuJoCo's own URDF reader (:func:`urdf2links.compare.mujoco_urdf.mujoco_from_urdf`)
 and, at seeded random states, ``A`` is compared with ``mj_fullM`` and ``e + G`` with
 ``qfrc_bias``, coordinate by coordinate (the project's coordinates are the URDF joint names and
 joint positions, as are MuJoCo's hinge/slide ``qpos``).
@@ -436,6 +436,19 @@ def compare_terms_urdf(urdf_path, model, *, states: int = 8, seed: int = 0,
             f"are not in MuJoCo's import, MuJoCo's {sorted(set(mj.joint_names) - set(names))} not "
             "in the project's (load mimic joints with mimic='independent')")
 
+    err_A, err_b, worst, floors = _seeded_errors(mj, ours, names, states, seed)
+    if floors:
+        notes.append(f"MuJoCo's e + G is zero at {floors} of {states} state(s): relative to "
+                     "max|M| * max(1, max|qd|^2) there")
+    return TermsComparison(route=route, refusal=refusal, max_rel_error_A=err_A,
+                           max_rel_error_bias=err_b, max_rel_error=max(err_A, err_b), n=len(names),
+                           states=states, coordinates=names, worst=worst, notes=notes,
+                           tolerance=tolerance)
+
+
+def _seeded_errors(mj, ours, names, states, seed):
+    """Largest relative errors of ``A`` and ``e + G`` at seeded random states, the worst states, and
+    how many states fell back to the floor (MuJoCo's ``e + G`` zero)."""
     rng = np.random.default_rng(seed)
     n = len(names)
     err_A = err_b = 0.0
@@ -457,13 +470,7 @@ def compare_terms_urdf(urdf_path, model, *, states: int = 8, seed: int = 0,
         if rb > err_b or "bias" not in worst:
             err_b = max(err_b, rb)
             worst["bias"] = dict(state=k, q=q.tolist(), qd=qd.tolist(), rel=rb)
-    if floors:
-        notes.append(f"MuJoCo's e + G is zero at {floors} of {states} state(s): relative to "
-                     "max|M| * max(1, max|qd|^2) there")
-    return TermsComparison(route=route, refusal=refusal, max_rel_error_A=err_A,
-                           max_rel_error_bias=err_b, max_rel_error=max(err_A, err_b), n=n,
-                           states=states, coordinates=names, worst=worst, notes=notes,
-                           tolerance=tolerance)
+    return err_A, err_b, worst, floors
 
 
 def _repaired_route(path: Path, model, err: MujocoRefused, load: dict, gravity,

@@ -11,14 +11,14 @@
    over a ladder of rtol (``atol = 1e-2 rtol``), ``RK4`` and ``midpoint`` (Newton tolerance rtol
    1e-10, atol 1e-12) over a ladder of steps ``dt``;
 3. **MuJoCo's** ``Euler``, ``implicitfast`` and ``RK4`` over a ladder of timesteps (route 1: the
-   project's tree as MJCF, :func:`compare.mjcf.mjcf_from_scene`, run by
-   :func:`compare.mujoco_run.run_mujoco`).
+   project's tree as MJCF, :func:`urdf2links.compare.mjcf.mjcf_from_scene`, run by
+   :func:`urdf2links.compare.mujoco_run.run_mujoco`).
 
 For each run: the error against the reference in the coordinates (max over coordinates of
 ``|q - q_ref|``, rad or m) at the final time and the maximum over the common sample times (the
 reference's dense output at MuJoCo's actual sample times); the energy drift, ``max |h - h(0) - W|``
 over the reference's energy scale (project: its own power balance; MuJoCo: ``h`` from its own
-energies as :mod:`compare.trajectory` does, ``W`` the reference's work when work acts); the wall
+energies as :mod:`urdf2links.compare.trajectory` does, ``W`` the reference's work when work acts); the wall
 time; the dynamics evaluations (project: every call of the right-hand side, Jacobian differences
 included; MuJoCo: steps x stages, Euler 1, implicitfast 1, RK4 4).
 
@@ -39,12 +39,12 @@ state, failed factorization, MuJoCo's instability reset) are recorded as failed 
 **Crossover** (:func:`crossover`): at each error level, the fastest run of each engine reaching
 it; the level below which the project is faster than MuJoCo, or the statement that it is not.
 
-Plots and the report section: :mod:`compare.tradeoff_plots`. Command: ``urdf2links tradeoff``.
+Files, plots and the report section: :mod:`urdf2links.compare.tradeoff_report`. Command: ``urdf2links tradeoff``
+(:mod:`urdf2links.compare.commands`).
 """
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import platform
@@ -65,13 +65,14 @@ from urdf2links.plan import compile_plan
 from urdf2links.scene import load_scene
 from urdf2links.simulate import simulate
 
-from .mjcf import mjcf_from_scene
-from .mujoco_run import run_mujoco
-from .report import json_ready
-from .trajectory import _mujoco_energy_function, _shown_path, scene_key
+from urdf2links.console import shown_path
 
-__all__ = ["run_study", "crossover", "render_markdown", "write_study", "tradeoff_command", "STAGES",
-           "MUJOCO_INTEGRATORS", "ADAPTIVE", "FIXED"]
+from .formatting import json_ready
+from .mjcf import mjcf_from_scene
+from .mujoco_run import energy_function, run_mujoco
+from .trajectory import scene_key
+
+__all__ = ["run_study", "crossover", "STAGES", "MUJOCO_INTEGRATORS", "ADAPTIVE", "FIXED"]
 
 ADAPTIVE = tuple(m for m in METHODS if m not in ("RK4", "midpoint"))
 FIXED = ("RK4", "midpoint")
@@ -203,16 +204,26 @@ def _machine() -> dict:
             "urdf2links": u2l, "git_commit": commit}
 
 
-def run_study(scene, *, t_end: float | None = None, quick: bool = False, repeats: int | None = None,
-              budget: float | None = None, samples: int | None = None, methods=None, mujoco_integrators=None,
-              check: dict | None = None, log: Callable[[str], None] | None = None) -> dict:
-    """The work-precision study of ``scene`` (a Scene or a path): see the module doc. Returns the
-    JSON-ready dictionary that :func:`write_study` writes (``rows``, ``reference``, ``crossover``,
-    ``timing``, ``machine``, ...). ``t_end`` defaults to the scene's, capped at
-    :data:`DEFAULT_T_CAP`; ``quick``: short ladders, one timing round, a cheaper check run."""
-    start = time.perf_counter()
-    if isinstance(scene, (str, Path)):
-        scene = load_scene(scene)
+@dataclass
+class _Study:
+    """What one study works with: the scene, its model, plan and MJCF, run length and samples, the
+    reference run and its error estimate, the energy scale and the per-step costs."""
+
+    scene: object
+    model: object
+    plan: object
+    mj: object
+    T: float
+    S: int
+    ref: object = None
+    est_max: float = 0.0
+    scale: float = 1.0
+    work_terms: bool = False
+    cost: dict | None = None
+
+
+def _settings(scene, t_end, quick, repeats, budget, samples, methods, mujoco_integrators, check):
+    """Checked settings: methods, integrators, repeats, budget, ``T`` and its note, samples, check."""
     methods = tuple(METHODS if methods is None else methods)
     mujoco_integrators = tuple(MUJOCO_INTEGRATORS if mujoco_integrators is None else mujoco_integrators)
     for m in methods:
@@ -236,100 +247,124 @@ def run_study(scene, *, t_end: float | None = None, quick: bool = False, repeats
         t_note = None if T == scene.run.t_end else f"t_end {T:g} s set by --t-end (the scene's is {scene.run.t_end:g} s)"
     S = int(samples) if samples is not None else int(min(2001, max(51, round(T / 0.01) + 1)))
     check = dict(check or (QUICK_CHECK if quick else CHECK))
+    return methods, mujoco_integrators, repeats, budget, T, t_note, S, check
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        model = scene.model()
-    plan = compile_plan(scene, model)
-    mj = mjcf_from_scene(scene, model)
-    n = model.n
 
-    # warm-up: compiled code is compiled at its first call, which must not be timed nor predict costs
+def _warm_up(st: _Study, methods, check) -> None:
+    """Compiled code is compiled at its first call, which must not be timed nor predict costs."""
     for m in methods + (REFERENCE["method"], check["method"]):
         try:
-            simulate(scene, model=model, t_end=min(T, 0.02), samples=2, progress=False, method=m,
+            simulate(st.scene, model=st.model, t_end=min(st.T, 0.02), samples=2, progress=False, method=m,
                      **({"dt": 0.01} if m in FIXED else {"rtol": 1e-6, "atol": 1e-8}))
         except Exception:  # noqa: BLE001 -- a method that fails here fails (and is recorded) below
             pass
-    _say(log, f"reference: {REFERENCE['method']} rtol {REFERENCE['rtol']:g}, t = 0..{T:g} s, {S} samples")
-    ref = simulate(scene, model=model, t_end=T, samples=S, progress=False, method=REFERENCE["method"],
+
+
+def _reference(st: _Study, check, log):
+    """The reference run, its check run and the error estimate; the energy scale."""
+    _say(log, f"reference: {REFERENCE['method']} rtol {REFERENCE['rtol']:g}, t = 0..{st.T:g} s, {st.S} samples")
+    ref = simulate(st.scene, model=st.model, t_end=st.T, samples=st.S, progress=False, method=REFERENCE["method"],
                    rtol=REFERENCE["rtol"], atol=REFERENCE["atol"])
     if not ref.stats["success"]:
         raise RuntimeError(f"the reference run failed: {ref.stats['message']}")
     _say(log, f"  {ref.stats['nsteps']} steps, {ref.stats['nfev']} evaluations, {ref.stats['wall_time']:.2f} s; "
               f"check: {check['method']} rtol {check['rtol']:g}")
-    chk = simulate(scene, model=model, t_end=T, samples=S, progress=False, method=check["method"],
+    chk = simulate(st.scene, model=st.model, t_end=st.T, samples=st.S, progress=False, method=check["method"],
                    rtol=check["rtol"], atol=check["atol"])
     est_final, est_max = _qerr(chk.q, ref.q)
     _say(log, f"  check {chk.stats['nfev']} evaluations, {chk.stats['wall_time']:.2f} s: reference error estimate "
               f"{est_max:.2e} (max over the run), {est_final:.2e} (final)")
     en = ref.energy
-    scale = max(float(np.abs(en["kinetic"]).max()), float(np.abs(en["potential"] - en["potential"][0]).max()),
-                float(np.abs(en["work"]).max()), 1e-300)
-    work_terms = any(t in plan.terms for t in ("Q", "tau", "damper", "base"))
+    st.ref, st.est_max = ref, est_max
+    st.scale = max(float(np.abs(en["kinetic"]).max()), float(np.abs(en["potential"] - en["potential"][0]).max()),
+                   float(np.abs(en["work"]).max()), 1e-300)
+    st.work_terms = any(t in st.plan.terms for t in ("Q", "tau", "damper", "base"))
+    return chk, est_final
 
-    # cost of one evaluation (project) and of one step (MuJoCo), for the budget
+
+def _costs(st: _Study, mujoco_integrators) -> dict:
+    """Cost of one evaluation (project) and of one step (MuJoCo), for the budget."""
+    ref = st.ref
     cost = {"project_eval_s": ref.stats["wall_time"] / max(ref.stats["nfev"], 1), "mujoco_step_s": {}}
     for m in mujoco_integrators:
         dt_probe = 1e-3
-        probe = run_mujoco(mj, scene, t_end=min(T, 200 * dt_probe), timestep=dt_probe, integrator=m, samples=2)
+        probe = run_mujoco(st.mj, st.scene, t_end=min(st.T, 200 * dt_probe), timestep=dt_probe, integrator=m,
+                           samples=2)
         cost["mujoco_step_s"][m] = probe.wall_time / max(probe.nsteps, 1)
+    return cost
 
-    cfgs = _ladder(quick, methods, mujoco_integrators)
+
+def _new_row(cfg: Config) -> dict:
+    row = {"engine": cfg.engine, "method": cfg.method, "param": cfg.param, "value": cfg.value,
+           "status": "ok", "reason": None, "error_final": None, "error_max": None, "energy_drift_rel": None,
+           "wall_time_s": None, "wall_times_s": [], "nfev": None, "nsteps": None, "notes": []}
+    if cfg.engine == "urdf2links" and cfg.method == "midpoint":
+        row["notes"].append(f"Newton tolerance rtol {MIDPOINT_NEWTON['rtol']:g}, atol {MIDPOINT_NEWTON['atol']:g}")
+    if cfg.engine == "urdf2links" and cfg.param == "rtol":
+        row["atol"] = 1e-2 * cfg.value
+    return row
+
+
+def _skip_reason(st: _Study, cfg: Config, done: list[dict], budget: float, row: dict) -> str | None:
+    """Why ``cfg`` is not run: over the budget (its own prediction, or a looser rung's), or a looser
+    rung already reached the reference's error estimate. A failure does not stop the ladder (a
+    coarse step that blows up or whose Newton iteration fails says nothing of finer ones)."""
+    stop = next((r for r in done if r["status"] == "skipped" and "budget" in (r["reason"] or "")), None)
+    floored = next((r for r in done if r["status"] == "ok" and r["error_max"] <= FLOOR_STOP * st.est_max), None)
+    pred = _predict(cfg, st.T, done, st.cost)
+    row["predicted_s"] = pred
+    if stop is not None:
+        return f"a looser rung ({stop['param']} {stop['value']:g}) was over the budget"
+    if floored is not None:
+        return (f"a looser rung ({floored['param']} {floored['value']:g}) already reached the reference's error "
+                f"estimate (error {floored['error_max']:.1e} <= {FLOOR_STOP:g} x {st.est_max:.1e}): tighter runs "
+                "are not resolved")
+    if pred > budget:
+        return f"predicted {pred:.3g} s > budget {budget:g} s"
+    return None
+
+
+def _measure_project(st: _Study, cfg: Config, row: dict) -> None:
+    tr = _project(st.scene, st.model, st.T, st.S, cfg)
+    if not tr.stats["success"]:
+        row.update(status="failed", reason=str(tr.stats["message"]))
+    elif not np.all(np.isfinite(tr.q)):
+        row.update(status="failed", reason="non-finite state")
+    else:
+        row["error_final"], row["error_max"] = _qerr(tr.q, st.ref.q)
+        row["energy_drift_rel"] = float(np.abs(tr.energy["error"]).max() / st.scale)
+    row.update(nfev=int(tr.stats["nfev"]), nsteps=int(tr.stats["nsteps"]), first_run_s=float(tr.stats["wall_time"]))
+
+
+def _measure_mujoco(st: _Study, cfg: Config, row: dict) -> None:
+    n = st.model.n
+    run = _mujoco(st.mj, st.scene, st.T, st.S, cfg)
+    row.update(nsteps=int(run.nsteps), nfev=int(run.nsteps) * STAGES[cfg.method], first_run_s=float(run.wall_time))
+    row["notes"] += list(run.notes)
+    bad = _mujoco_failure(run, st.T)
+    if bad:
+        row.update(status="failed", reason=bad)
+        return
+    Y = st.ref.sol(np.clip(run.t, 0.0, st.T))
+    row["error_final"], row["error_max"] = _qerr(run.q, Y[:, :n])
+    h = run.total_energy if st.scene.base is None else energy_function(st.mj, run, st.plan)
+    bal = h - h[0] - (Y[:, 2 * n] if st.work_terms else 0.0)
+    row["energy_drift_rel"] = float(np.abs(bal).max() / st.scale)
+
+
+def _ladders(st: _Study, cfgs, budget, log) -> list[dict]:
+    """Every configuration once, with samples, for its errors (not timed): the rows."""
     rows: list[dict] = []
     by_method: dict[tuple, list[dict]] = {}
     for k, cfg in enumerate(cfgs, 1):
-        key = (cfg.engine, cfg.method)
-        done = by_method.setdefault(key, [])
-        row = {"engine": cfg.engine, "method": cfg.method, "param": cfg.param, "value": cfg.value,
-               "status": "ok", "reason": None, "error_final": None, "error_max": None, "energy_drift_rel": None,
-               "wall_time_s": None, "wall_times_s": [], "nfev": None, "nsteps": None, "notes": []}
-        if cfg.engine == "urdf2links" and cfg.method == "midpoint":
-            row["notes"].append(f"Newton tolerance rtol {MIDPOINT_NEWTON['rtol']:g}, atol {MIDPOINT_NEWTON['atol']:g}")
-        if cfg.engine == "urdf2links" and cfg.param == "rtol":
-            row["atol"] = 1e-2 * cfg.value
-        # over budget: the tighter rungs cost more still. A failure does not stop the ladder (a
-        # coarse step that blows up or whose Newton iteration fails says nothing of finer ones)
-        stop = next((r for r in done if r["status"] == "skipped" and "budget" in (r["reason"] or "")), None)
-        floored = next((r for r in done if r["status"] == "ok" and r["error_max"] <= FLOOR_STOP * est_max), None)
-        pred = _predict(cfg, T, done, cost)
-        row["predicted_s"] = pred
-        if stop is not None:
-            row.update(status="skipped", reason=f"a looser rung ({stop['param']} {stop['value']:g}) was over "
-                                                "the budget")
-        elif floored is not None:
-            row.update(status="skipped", reason=f"a looser rung ({floored['param']} {floored['value']:g}) already "
-                                                f"reached the reference's error estimate (error {floored['error_max']:.1e}"
-                                                f" <= {FLOOR_STOP:g} x {est_max:.1e}): tighter runs are not resolved")
-        elif pred > budget:
-            row.update(status="skipped", reason=f"predicted {pred:.3g} s > budget {budget:g} s")
+        done = by_method.setdefault((cfg.engine, cfg.method), [])
+        row = _new_row(cfg)
+        why = _skip_reason(st, cfg, done, budget, row)
+        if why is not None:
+            row.update(status="skipped", reason=why)
         else:
             try:
-                if cfg.engine == "urdf2links":
-                    tr = _project(scene, model, T, S, cfg)
-                    if not tr.stats["success"]:
-                        row.update(status="failed", reason=str(tr.stats["message"]))
-                    elif not np.all(np.isfinite(tr.q)):
-                        row.update(status="failed", reason="non-finite state")
-                    else:
-                        row["error_final"], row["error_max"] = _qerr(tr.q, ref.q)
-                        row["energy_drift_rel"] = float(np.abs(tr.energy["error"]).max() / scale)
-                    row.update(nfev=int(tr.stats["nfev"]), nsteps=int(tr.stats["nsteps"]),
-                               first_run_s=float(tr.stats["wall_time"]))
-                else:
-                    run = _mujoco(mj, scene, T, S, cfg)
-                    row.update(nsteps=int(run.nsteps), nfev=int(run.nsteps) * STAGES[cfg.method],
-                               first_run_s=float(run.wall_time))
-                    row["notes"] += list(run.notes)
-                    bad = _mujoco_failure(run, T)
-                    if bad:
-                        row.update(status="failed", reason=bad)
-                    else:
-                        Y = ref.sol(np.clip(run.t, 0.0, T))
-                        row["error_final"], row["error_max"] = _qerr(run.q, Y[:, :n])
-                        h = run.total_energy if scene.base is None else _mujoco_energy_function(mj, run, plan)
-                        bal = h - h[0] - (Y[:, 2 * n] if work_terms else 0.0)
-                        row["energy_drift_rel"] = float(np.abs(bal).max() / scale)
+                (_measure_project if cfg.engine == "urdf2links" else _measure_mujoco)(st, cfg, row)
             except Exception as err:  # a failed run is a result, not a crash of the study
                 row.update(status="failed", reason=f"{type(err).__name__}: {err}")
         done.append(row)
@@ -337,8 +372,11 @@ def run_study(scene, *, t_end: float | None = None, quick: bool = False, repeats
         _say(log, f"[{k}/{len(cfgs)}] {cfg.label}: " + (
             f"error {row['error_max']:.2e} (final {row['error_final']:.2e}), {row['nfev']} evaluations, "
             f"{row['first_run_s']:.3g} s" if row["status"] == "ok" else f"{row['status'].upper()}: {row['reason']}"))
+    return rows
 
-    # timing rounds: engines interleaved, order reversed every other round, median kept
+
+def _timing_rounds(st: _Study, cfgs, rows, repeats, log) -> None:
+    """Timing rounds: engines interleaved, order reversed every other round, median kept."""
     ok = [(cfg, row) for cfg, row in zip(cfgs, rows) if row["status"] == "ok"]
     proj = [x for x in ok if x[0].engine == "urdf2links"]
     mjc = [x for x in ok if x[0].engine == "MuJoCo"]
@@ -348,9 +386,9 @@ def run_study(scene, *, t_end: float | None = None, quick: bool = False, repeats
         for cfg, row in (order if r % 2 == 0 else order[::-1]):
             try:
                 if cfg.engine == "urdf2links":
-                    row["wall_times_s"].append(float(_project(scene, model, T, S, cfg, True).stats["wall_time"]))
+                    row["wall_times_s"].append(float(_project(st.scene, st.model, st.T, st.S, cfg, True).stats["wall_time"]))
                 else:
-                    row["wall_times_s"].append(float(_mujoco(mj, scene, T, S, cfg, True).wall_time))
+                    row["wall_times_s"].append(float(_mujoco(st.mj, st.scene, st.T, st.S, cfg, True).wall_time))
             except Exception as err:
                 row["notes"].append(f"timing round {r + 1} failed: {type(err).__name__}: {err}")
         _say(log, f"timing round {r + 1}/{repeats}: {len(order)} runs in {time.perf_counter() - t0:.1f} s")
@@ -358,27 +396,35 @@ def run_study(scene, *, t_end: float | None = None, quick: bool = False, repeats
         if row["wall_times_s"]:
             row["wall_time_s"] = float(statistics.median(row["wall_times_s"]))
 
-    reference = {
+
+def _reference_record(st: _Study, chk, check, est_final) -> dict:
+    ref = st.ref
+    return {
         "method": REFERENCE["method"], "rtol": REFERENCE["rtol"], "atol": REFERENCE["atol"],
         "nsteps": int(ref.stats["nsteps"]), "nfev": int(ref.stats["nfev"]), "wall_time_s": float(ref.stats["wall_time"]),
-        "energy_drift_rel": float(np.abs(ref.energy["error"]).max() / scale),
+        "energy_drift_rel": float(np.abs(ref.energy["error"]).max() / st.scale),
         "check": {**check, "nsteps": int(chk.stats["nsteps"]), "nfev": int(chk.stats["nfev"]),
                   "wall_time_s": float(chk.stats["wall_time"]), "success": bool(chk.stats["success"])},
-        "error_estimate": est_max, "error_estimate_final": est_final,
+        "error_estimate": st.est_max, "error_estimate_final": est_final,
         "note": (f"error estimate: max over the samples and coordinates of |q_ref - q_check|, the check run being "
                  f"{check['method']} at rtol {check['rtol']:g}; errors below it are not resolved"),
     }
-    data = {
+
+
+def _study_record(st: _Study, rows, reference, *, quick, budget, repeats, t_note) -> dict:
+    scene, model = st.scene, st.model
+    return {
         "schema": 1, "kind": "work-precision", "key": scene_key(scene), "robot": Path(scene.robot).stem,
-        "robot_name": model.name, "scene": scene.name, "scene_file": _shown_path(scene.path),
+        "robot_name": model.name, "scene": scene.name, "scene_file": shown_path(scene.path),
         "description": scene.description, "chaotic": bool(scene.chaotic), "coordinates": list(model.coordinate_names),
-        "effects": list(plan.terms), "t_end": T, "t_end_scene": float(scene.run.t_end), "t_end_note": t_note,
-        "samples": S, "quick": bool(quick), "budget_s": budget, "reference": reference,
+        "effects": list(st.plan.terms), "t_end": st.T, "t_end_scene": float(scene.run.t_end), "t_end_note": t_note,
+        "samples": st.S, "quick": bool(quick), "budget_s": budget, "reference": reference,
         "error": {"metric": "max over coordinates of |q - q_ref| (rad or m); 'max' over the common sample times, "
-                            "'final' at the end", "floor": est_max},
-        "energy": {"scale_J": scale, "work_terms": bool(work_terms),
+                            "'final' at the end", "floor": st.est_max},
+        "energy": {"scale_J": st.scale, "work_terms": bool(st.work_terms),
                    "metric": "max |h - h(0) - W| / scale (h = E + V for a fixed base; MuJoCo: its own energies"
-                             + ("; W: the reference's work along the reference trajectory" if work_terms else "") + ")"},
+                             + ("; W: the reference's work along the reference trajectory" if st.work_terms else "")
+                             + ")"},
         "timing": {"repeats": repeats, "statistic": "median", "interleaved": True,
                    "project": "the integrator's wall_time (Trajectory.stats): integration loop and dense output at "
                               "the 2 sample times of a timing run; not the plan compilation nor the energies",
@@ -387,15 +433,42 @@ def run_study(scene, *, t_end: float | None = None, quick: bool = False, repeats
         "ladders": {"rtol": list(QUICK_RTOLS if quick else RTOLS), "atol": "1e-2 x rtol",
                     "dt": list(QUICK_DTS if quick else DTS), "mujoco_dt": list(QUICK_MUJOCO_DTS if quick else MUJOCO_DTS),
                     "midpoint_newton": MIDPOINT_NEWTON},
-        "cost": {"project_eval_us": cost["project_eval_s"] * 1e6,
-                 "mujoco_step_us": {k: v * 1e6 for k, v in cost["mujoco_step_s"].items()}},
+        "cost": {"project_eval_us": st.cost["project_eval_s"] * 1e6,
+                 "mujoco_step_us": {k: v * 1e6 for k, v in st.cost["mujoco_step_s"].items()}},
         "evaluations": "project: calls of the right-hand side (Jacobian differences included); MuJoCo: steps x "
                        "stages (Euler 1, implicitfast 1, RK4 4)",
         "rows": rows,
         "machine": _machine(),
         "total_s": None,
     }
-    data["crossover"] = crossover(rows, est_max)
+
+
+def run_study(scene, *, t_end: float | None = None, quick: bool = False, repeats: int | None = None,
+              budget: float | None = None, samples: int | None = None, methods=None, mujoco_integrators=None,
+              check: dict | None = None, log: Callable[[str], None] | None = None) -> dict:
+    """The work-precision study of ``scene`` (a Scene or a path): see the module doc. Returns the
+    JSON-ready dictionary that :func:`~urdf2links.compare.tradeoff_report.write_study` writes
+    (``rows``, ``reference``, ``crossover``, ``timing``, ``machine``, ...). ``t_end`` defaults to the
+    scene's, capped at :data:`DEFAULT_T_CAP`; ``quick``: short ladders, one timing round, a cheaper
+    check run."""
+    start = time.perf_counter()
+    if isinstance(scene, (str, Path)):
+        scene = load_scene(scene)
+    methods, mujoco_integrators, repeats, budget, T, t_note, S, check = _settings(
+        scene, t_end, quick, repeats, budget, samples, methods, mujoco_integrators, check)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = scene.model()
+    st = _Study(scene, model, compile_plan(scene, model), mjcf_from_scene(scene, model), T, S)
+    _warm_up(st, methods, check)
+    chk, est_final = _reference(st, check, log)
+    st.cost = _costs(st, mujoco_integrators)
+    cfgs = _ladder(quick, methods, mujoco_integrators)
+    rows = _ladders(st, cfgs, budget, log)
+    _timing_rounds(st, cfgs, rows, repeats, log)
+    data = _study_record(st, rows, _reference_record(st, chk, check, est_final), quick=quick, budget=budget,
+                         repeats=repeats, t_note=t_note)
+    data["crossover"] = crossover(rows, st.est_max)
     data["total_s"] = time.perf_counter() - start
     _say(log, data["crossover"]["statement"])
     return json_ready(data)
@@ -480,102 +553,3 @@ def crossover(rows: list[dict], floor: float = 0.0, *, per_decade: int = GRID_PE
     out["statement"] = (f"urdf2links is faster than MuJoCo for errors {where}{tail}: {at(x)}; largest advantage "
                         f"{at(top)}" + extra)
     return out
-
-
-# --------------------------------------------------------------------------- output
-
-
-def _fmt(x, d=2):
-    return "-" if x is None else (f"{x:.{d}e}" if isinstance(x, float) else str(x))
-
-
-def render_markdown(data: dict) -> str:
-    ref = data["reference"]
-    lines = [f"# {data['robot']} / {data['scene']}: accuracy against wall time", "",
-             f"t = 0..{data['t_end']:g} s, {data['samples']} samples"
-             + (f" ({data['t_end_note']})" if data.get("t_end_note") else "") + ".", "",
-             f"**Crossover:** {data['crossover']['statement']}.", "",
-             f"Reference: {ref['method']} rtol {ref['rtol']:g} atol {ref['atol']:g} ({ref['nsteps']} steps, "
-             f"{ref['nfev']} evaluations); checked against {ref['check']['method']} rtol {ref['check']['rtol']:g}: "
-             f"error estimate {ref['error_estimate']:.2e} (max over the run), {ref['error_estimate_final']:.2e} (final).",
-             "", f"Error: {data['error']['metric']}. Energy drift: {data['energy']['metric']}. Wall time: median of "
-             f"{data['timing']['repeats']} interleaved rounds; urdf2links: {data['timing']['project']}; MuJoCo: "
-             f"{data['timing']['mujoco']}. Budget {data['budget_s']:g} s per run.", "",
-             "| engine | method | setting | status | error max | error final | energy drift | wall s | evaluations | steps |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
-    for r in data["rows"]:
-        st = r["status"] if r["status"] == "ok" else f"{r['status']}: {r['reason']}"
-        wt = "-" if r["wall_time_s"] is None else f"{r['wall_time_s']:.3g}"
-        lines.append(f"| {r['engine']} | {r['method']} | {r['param']} {r['value']:g} | {st} | {_fmt(r['error_max'])} | "
-                     f"{_fmt(r['error_final'])} | {_fmt(r['energy_drift_rel'], 1)} | {wt} | {_fmt(r['nfev'])} | "
-                     f"{_fmt(r['nsteps'])} |")
-    m = data["machine"]
-    lines += ["", f"Machine: {m['platform']}, {m['cpu_count']} CPUs, Python {m['python']}, numpy {m['numpy']}, "
-                  f"scipy {m['scipy']}, MuJoCo {m['mujoco']}; commit {m['git_commit']}.", ""]
-    return "\n".join(lines)
-
-
-def write_study(data: dict, out_dir, *, command: str | None = None) -> dict:
-    """Write ``tradeoff.json``, ``tradeoff.md``, ``work_precision.png`` and ``energy_drift.png`` into
-    ``out_dir``, and put the section into ``report.html`` there when it exists. Returns the paths."""
-    from .tradeoff_plots import insert_section, plot_energy_drift, plot_work_precision
-
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    if command:
-        data = dict(data, command=command)
-    paths = {"dir": out, "json": out / "tradeoff.json", "md": out / "tradeoff.md",
-             "work_precision": out / "work_precision.png", "energy_drift": out / "energy_drift.png"}
-    paths["json"].write_text(json.dumps(json_ready(data), indent=2) + "\n")
-    paths["md"].write_text(render_markdown(data))
-    plot_work_precision(data, paths["work_precision"])
-    plot_energy_drift(data, paths["energy_drift"])
-    report = out / "report.html"
-    paths["report"] = report if report.is_file() and insert_section(report, data) else None
-    return paths
-
-
-def tradeoff_command(args) -> int:
-    """``urdf2links tradeoff SCENE.toml``: the study, its files, the crossover on stdout."""
-    from .cli import _err, _rel
-
-    scene = load_scene(args.scene)
-
-    def names(text, what, allowed):
-        if text is None:
-            return None
-        items = tuple(x.strip() for x in text.split(",") if x.strip())
-        bad = [x for x in items if x not in allowed]
-        if bad or not items:
-            raise ValueError(f"{what}={text!r}: unknown {bad or 'empty list'}; choose from {', '.join(allowed)}")
-        return items
-
-    try:
-        methods = names(args.methods, "--methods", METHODS)
-        integrators = names(args.mujoco_integrators, "--mujoco-integrators", tuple(STAGES))
-        if args.t_end is not None and not (math.isfinite(args.t_end) and args.t_end > 0):
-            raise ValueError(f"--t-end={args.t_end!r}: must be a finite number of seconds > 0")
-        if args.repeats is not None and args.repeats < 1:
-            raise ValueError(f"--repeats={args.repeats!r}: must be at least 1")
-        if args.budget is not None and not args.budget > 0:
-            raise ValueError(f"--budget={args.budget!r}: must be a number of seconds > 0")
-    except ValueError as err:
-        _err(f"urdf2links tradeoff: error: {err}")
-        return 2
-    log = (lambda m: None) if args.quiet else (lambda m: _err(f"  {scene.name}: {m}"))
-    data = run_study(scene, t_end=args.t_end, quick=args.quick, repeats=args.repeats, budget=args.budget,
-                     methods=methods, mujoco_integrators=integrators, log=log)
-    out = Path(args.out) if args.out else Path("reports") / data["robot"] / data["scene"]
-    cmd = " ".join(["urdf2links tradeoff", _rel(args.scene)] + (["--quick"] if args.quick else [])
-                   + ([f"--t-end {args.t_end:g}"] if args.t_end is not None else []))
-    paths = write_study(data, out, command=cmd)
-    ref = data["reference"]
-    print(f"{data['key']}: work-precision, t = 0..{data['t_end']:g} s; reference {ref['method']} rtol {ref['rtol']:g}, "
-          f"error estimate {ref['error_estimate']:.1e} (check {ref['check']['method']} rtol {ref['check']['rtol']:g})")
-    ok = sum(r["status"] == "ok" for r in data["rows"])
-    print(f"  {ok} runs, {sum(r['status'] == 'failed' for r in data['rows'])} failed, "
-          f"{sum(r['status'] == 'skipped' for r in data['rows'])} skipped (budget {data['budget_s']:g} s)")
-    print(f"  crossover: {data['crossover']['statement']}")
-    print(f"  wrote {_rel(paths['json'])}, tradeoff.md, work_precision.png, energy_drift.png"
-          + (f"; section in {_rel(paths['report'])}" if paths["report"] else ""))
-    return 0

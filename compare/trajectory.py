@@ -8,16 +8,16 @@
    holds none), ``A`` against ``mj_fullM`` and ``e + G`` (the scene's gravity) against
    ``qfrc_bias``, as ``max|ours - MuJoCo| / max|MuJoCo|``:
 
-   * route 1: the project's own tree written as MJCF (:mod:`compare.mjcf`), built for the scene
+   * route 1: the project's own tree written as MJCF (:mod:`urdf2links.compare.mjcf`), built for the scene
      (its gravity, springs, moving base);
-   * route 2: MuJoCo's own URDF import of the robot's file (:func:`compare.terms.compare_terms_urdf`),
+   * route 2: MuJoCo's own URDF import of the robot's file (:func:`urdf2links.compare.terms.compare_terms_urdf`),
      only for a fixed-base robot. When MuJoCo refuses the file, its reason is recorded and the
      comparison is repeated with the project's repair (the repaired inertias written into the
      text; a 1 g sphere on each massless moving link on BOTH sides when MuJoCo refuses those),
      labelled as such.
 
 2. **Trajectories.** The project's :func:`urdf2links.simulate.simulate` and MuJoCo
-   (:func:`compare.mujoco_run.run_mujoco`, route 1, base motion prescribed, the scene's torques
+   (:func:`urdf2links.compare.mujoco_run.run_mujoco`, route 1, base motion prescribed, the scene's torques
    and loads) from the same initial state; ``|q_ours - q_MuJoCo|`` per coordinate at MuJoCo's
    sample times (the project's dense output when the times differ). For every scene the
    divergence time (first time the largest coordinate error exceeds ``threshold``, default
@@ -38,7 +38,7 @@
 5. **Wall time** of each engine's integration loop (not checked against baselines).
 
 :meth:`SceneComparison.summary` is the JSON-ready dictionary; the report is written by
-:mod:`compare.report`.
+:mod:`urdf2links.compare.report`.
 """
 
 from __future__ import annotations
@@ -54,13 +54,14 @@ from typing import Callable
 import mujoco
 import numpy as np
 
+from urdf2links.console import shown_path
 from urdf2links.plan import compile_plan
 from urdf2links.scene import Scene, load_scene
 from urdf2links.simulate import Trajectory, simulate
 from urdf2links.transforms import BaseState
 
 from .mjcf import MjcfModel, mjcf_from_scene
-from .mujoco_run import MujocoRun, _robot_energy, run_mujoco
+from .mujoco_run import MujocoRun, energy_function, run_mujoco
 from .mujoco_urdf import MujocoRefused
 from .terms import compare_terms_urdf
 
@@ -306,18 +307,11 @@ class SceneComparison:
     def coordinate_names(self) -> tuple[str, ...]:
         return tuple(self.model.coordinate_names)
 
-    def summary(self) -> dict:
-        """The JSON-ready summary. Contract keys (nested): ``terms.max_rel_error``,
-        ``trajectory.max_abs_error``, ``trajectory.divergence_time`` (None if none),
-        ``energy.project_drift``, ``energy.mujoco_drift``, ``wall_time.project_s``,
-        ``wall_time.mujoco_s``, ``mujoco.integrator``, ``mujoco.timestep``, ``route``."""
-        sc, run, traj = self.scene, self.run, self.traj
+    def _trajectory_summary(self) -> dict:
+        sc = self.scene
         err_max = self.error.max(axis=1) if self.error.size else np.zeros(len(self.t))
         div = divergence_time(self.t, err_max, self.threshold)
-        r1, r2 = self.terms["route1"], self.terms["route2"]
-        term_max = max([r["max_rel_error"] for r in (r1, r2) if "max_rel_error" in r])
         by_coord = {c: float(v) for c, v in zip(self.coordinate_names, self.error.max(axis=0))} if self.error.size else {}
-        e = self.energy
         trajectory = {
             "max_abs_error": float(err_max.max()) if err_max.size else 0.0,
             "max_abs_error_by_coordinate": by_coord,
@@ -343,7 +337,11 @@ class SceneComparison:
                                      if div is None else
                                      f"the engines DIVERGE at t = {div:.4g} s (error > {self.threshold:g}) in a "
                                      "scene that is not marked chaotic")
-        energy = {
+        return trajectory
+
+    def _energy_summary(self) -> dict:
+        e = self.energy
+        return {
             "project_drift": float(np.max(np.abs(e["ours_balance"]))),
             "mujoco_drift": float(np.max(np.abs(e["mujoco_balance"]))),
             "scale": float(self.info["energy_scale"]),
@@ -355,6 +353,16 @@ class SceneComparison:
             "units": "J",
             "note": self.info["energy_note"],
         }
+
+    def summary(self) -> dict:
+        """The JSON-ready summary. Contract keys (nested): ``terms.max_rel_error``,
+        ``trajectory.max_abs_error``, ``trajectory.divergence_time`` (None if none),
+        ``energy.project_drift``, ``energy.mujoco_drift``, ``wall_time.project_s``,
+        ``wall_time.mujoco_s``, ``mujoco.integrator``, ``mujoco.timestep``, ``route``."""
+        sc, run, traj = self.scene, self.run, self.traj
+        r1, r2 = self.terms["route1"], self.terms["route2"]
+        term_max = max([r["max_rel_error"] for r in (r1, r2) if "max_rel_error" in r])
+        trajectory, energy = self._trajectory_summary(), self._energy_summary()
         moving = self.mj.moving_base
         return {
             "schema": 1,
@@ -362,7 +370,7 @@ class SceneComparison:
             "robot": Path(sc.robot).stem,
             "robot_name": self.model.name,
             "scene": sc.name,
-            "scene_file": _shown_path(sc.path),
+            "scene_file": shown_path(sc.path),
             "description": sc.description,
             "chaotic": bool(sc.chaotic),
             "effects": list(self.info["effects"]),
@@ -394,34 +402,6 @@ class SceneComparison:
                           "note": "integration loops only (sampling included); not checked against baselines"},
             "notes": list(self.notes),
         }
-
-
-def _shown_path(path) -> str | None:
-    """``path`` relative to the working folder when it lies inside it (reports are committed)."""
-    if path is None:
-        return None
-    try:
-        return str(Path(path).resolve().relative_to(Path.cwd().resolve()))
-    except ValueError:
-        return str(path)
-
-
-def _mujoco_energy_function(mj: MjcfModel, run: MujocoRun, plan) -> np.ndarray:
-    """MuJoCo's energy function ``h = (E(qd) + E(-qd)) / 2 - 2 E(0) + V`` at its own states, with
-    the prescribed base's pose and rate (moving base only)."""
-    m = copy.deepcopy(mj.model)
-    m.opt.enableflags |= int(mujoco.mjtEnableBit.mjENBL_ENERGY)
-    d = mujoco.MjData(m)
-    h = np.empty(len(run.t))
-    for i, t in enumerate(run.t):
-        bs = plan.base_state(float(t))
-        kin = []
-        for v in (-run.qd[i], np.zeros_like(run.qd[i])):
-            mj.set_state(d, run.q[i], v, base=bs)
-            mujoco.mj_forward(m, d)
-            kin.append(_robot_energy(mj, m, d)[0])
-        h[i] = 0.5 * (run.kinetic[i] + kin[0]) - 2.0 * kin[1] + run.potential[i]
-    return h
 
 
 def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str = "RK4", mujoco_dt: float = 1e-4,
@@ -463,35 +443,55 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     say(f"MuJoCo: {mujoco_integrator} dt {mujoco_dt:g}, {int(round(T / mujoco_dt))} steps")
     run = run_mujoco(mj, scene, t_end=T, samples=samples)
 
-    # the project's state at MuJoCo's sample times
     t = np.asarray(run.t, float)
-    n = model.n
-    if traj.t.shape == t.shape and np.max(np.abs(traj.t - t)) <= 1e-12 * max(1.0, T):
-        q_o, qd_o, W = traj.q, traj.qd, traj.energy["work"]
-        EV_o = traj.energy["kinetic"] + traj.energy["potential"]
-        h_o = traj.energy["function"]
-    else:
-        if traj.sol is None:
-            raise RuntimeError("the project's run has no dense output to sample at MuJoCo's times")
-        Y = traj.sol(np.clip(t, traj.t[0], traj.t[-1]))
-        q_o, qd_o, W = Y[:, :n], Y[:, n:2 * n], Y[:, 2 * n]
-        E = np.array([plan.kinetic_energy(ti, a, b) for ti, a, b in zip(t, q_o, qd_o)])
-        V = np.array([plan.potential_energy(ti, a) for ti, a in zip(t, q_o)])
-        EV_o = E + V
-        h_o = EV_o if scene.base is None else np.array([plan.energy_function(ti, a, b)
-                                                          for ti, a, b in zip(t, q_o, qd_o)])
+    q_o, qd_o, W, EV_o, h_o, resampled = _project_at(traj, plan, t, T)
+    if resampled:
         notes.append("MuJoCo's sample times differ from the project's: the project's dense output was "
                      "evaluated at MuJoCo's times")
-
     error = np.abs(q_o - run.q)
-    err_max = error.max(axis=1) if n else np.zeros(len(t))
+    err_max = error.max(axis=1) if model.n else np.zeros(len(t))
     div = divergence_time(t, err_max, threshold)
     growth = growth_fit(t, err_max, end_time=div) if scene.chaotic else None
+    energy, info = _energy_balances(scene, plan, mj, run, traj, EV_o, h_o, W)
+    if traj.stats.get("n_recharts"):
+        notes.append(f"the project re-charted the ZYX angles of {sorted({r['link'] for r in traj.stats['recharts']})} "
+                     f"{traj.stats['n_recharts']} times near phi_y = +-pi/2 (urdf2links.charts); its q are converted "
+                     "back to the loaded model's coordinates, which MuJoCo integrates as hinges through the singularity")
+    notes += [f"MJCF: {x}" for x in mj.notes] + [f"MuJoCo run: {x}" for x in run.notes]
+    if t_end_note:
+        notes.insert(0, t_end_note)
+    q0, qd0 = scene.initial_state(model)
+    info.update({"t_end": T, "t_end_note": t_end_note, "effects": plan.terms,
+                 "q0": dict(zip(model.coordinate_names, q0.tolist())),
+                 "qd0": dict(zip(model.coordinate_names, qd0.tolist())),
+                 "total_s": time.perf_counter() - start})
+    return SceneComparison(
+        scene=scene, model=model, mj=mj, traj=traj, run=run, t=t, q_ours=q_o, q_mujoco=run.q, error=error,
+        energy=energy, terms=terms, growth=growth, threshold=threshold, info=info, notes=notes)
 
+
+def _project_at(traj, plan, t, T):
+    """The project's ``q``, ``qd``, work ``W``, ``E + V`` and ``h`` at MuJoCo's sample times ``t``: its
+    own samples when the times agree, else its dense output (then the last value is True)."""
+    n = plan.n
+    if traj.t.shape == t.shape and np.max(np.abs(traj.t - t)) <= 1e-12 * max(1.0, T):
+        EV = traj.energy["kinetic"] + traj.energy["potential"]
+        return traj.q, traj.qd, traj.energy["work"], EV, traj.energy["function"], False
+    if traj.sol is None:
+        raise RuntimeError("the project's run has no dense output to sample at MuJoCo's times")
+    Y = traj.sol(np.clip(t, traj.t[0], traj.t[-1]))
+    q, qd, W = Y[:, :n], Y[:, n:2 * n], Y[:, 2 * n]
+    E, V, h = plan.energies(t, q, qd)
+    return q, qd, W, E + V, h, True
+
+
+def _energy_balances(scene, plan, mj, run, traj, EV_o, h_o, W) -> tuple[dict, dict]:
+    """Both engines' balances ``h - h(0) - W`` (MuJoCo's without ``W`` when no work acts), the
+    energy arrays for the report, and what the summary says about them."""
     work_terms = any(term in plan.terms for term in ("Q", "tau", "damper", "base"))
     EV_m = run.total_energy
     if scene.base is not None:
-        h_m = _mujoco_energy_function(mj, run, plan)
+        h_m = energy_function(mj, run, plan)
         quantity, sym = "h = E2 - E0 + V (energy function; moving base)", "h"
     else:
         h_m = EV_m
@@ -501,32 +501,16 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
         bal_m = h_m - h_m[0] - W
         what = [w for w, on in (("forces/moments", "Q" in plan.terms), ("joint torques", "tau" in plan.terms),
                                 ("dampers", "damper" in plan.terms), ("the moving base", "base" in plan.terms)) if on]
-        energy_note = (f"work terms present ({', '.join(what)}): both drifts use the project's work W "
-                       f"(integrated along the project's trajectory): max |{sym} - {sym}(0) - W|")
+        note = (f"work terms present ({', '.join(what)}): both drifts use the project's work W "
+                f"(integrated along the project's trajectory): max |{sym} - {sym}(0) - W|")
         if scene.base is not None:
-            energy_note += ("; MuJoCo's h from its own kinetic energies at qd, -qd and 0 at its states and the "
-                            "prescribed base")
+            note += "; MuJoCo's h from its own kinetic energies at qd, -qd and 0 at its states and the prescribed base"
     else:
         bal_m = h_m - h_m[0]
-        energy_note = "no work terms: MuJoCo's drift is max |(E + V) - (E + V)(0)| of its own energies"
+        note = "no work terms: MuJoCo's drift is max |(E + V) - (E + V)(0)| of its own energies"
     scale = max(float(np.abs(traj.energy["kinetic"]).max()),
                 float(np.abs(traj.energy["potential"] - traj.energy["potential"][0]).max()),
                 float(np.abs(traj.energy["work"]).max()), 1e-300)
-    if traj.stats.get("n_recharts"):
-        notes.append(f"the project re-charted the ZYX angles of {sorted({r['link'] for r in traj.stats['recharts']})} "
-                     f"{traj.stats['n_recharts']} times near phi_y = +-pi/2 (urdf2links.charts); its q are converted "
-                     "back to the loaded model's coordinates, which MuJoCo integrates as hinges through the singularity")
-    notes += [f"MJCF: {x}" for x in mj.notes] + [f"MuJoCo run: {x}" for x in run.notes]
-    if t_end_note:
-        notes.insert(0, t_end_note)
-    q0, qd0 = scene.initial_state(model)
-    info = {"t_end": T, "t_end_note": t_end_note, "effects": plan.terms, "energy_scale": scale,
-            "energy_quantity": quantity, "energy_note": energy_note, "work_terms": work_terms,
-            "q0": dict(zip(model.coordinate_names, q0.tolist())),
-            "qd0": dict(zip(model.coordinate_names, qd0.tolist())),
-            "total_s": time.perf_counter() - start}
-    return SceneComparison(
-        scene=scene, model=model, mj=mj, traj=traj, run=run, t=t, q_ours=q_o, q_mujoco=run.q, error=error,
-        energy={"ours_EV": EV_o, "mujoco_EV": EV_m, "ours_h": h_o, "mujoco_h": h_m, "ours_balance": bal_o,
-                "mujoco_balance": bal_m, "work": W},
-        terms=terms, growth=growth, threshold=threshold, info=info, notes=notes)
+    energy = {"ours_EV": EV_o, "mujoco_EV": EV_m, "ours_h": h_o, "mujoco_h": h_m, "ours_balance": bal_o,
+              "mujoco_balance": bal_m, "work": W}
+    return energy, {"energy_scale": scale, "energy_quantity": quantity, "energy_note": note, "work_terms": work_terms}

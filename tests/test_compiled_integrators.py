@@ -1,10 +1,10 @@
-"""The compiled integration loops (urdf2links.compiled_integrators) against the Python loops of
-urdf2links.integrators on the same compiled right-hand side, on the shipped scenes.
+"""The compiled integration loops (urdf2links.loops) on the shipped scenes: RK4 and the midpoint rule
+against the same loops interpreted, RK45 and DOP853 against scipy's.
 
-The Python loop gets the compiled rhs wrapped in a lambda (so it does not dispatch to the
-compiled loop): both then evaluate identical arithmetic in the right-hand side, and differ only in
-the loop's own rounding (numba vs numpy sums). Fixed-step methods therefore agree to rounding
-(1e-10 absolute on states of order 1-10 over thousands of steps); adaptive ones take the same
+The interpreted loop gets the compiled rhs wrapped in a lambda (so that it is a plain Python
+callable): both then evaluate identical arithmetic in the right-hand side, and differ only in the
+loop's own rounding (numba vs the interpreter). Fixed-step methods therefore agree to rounding
+(1e-10 absolute on states of order 1-10 over thousands of steps); adaptive ones take scipy's
 steps unless an error estimate sits at its rounding floor, so they are compared through their
 error against a tight reference instead (bounded by 100 x rtol, the usual global-error slack of
 an adaptive method on a non-chaotic interval).

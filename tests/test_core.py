@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from urdf2links import BaseState, DynamicsError, LinkSpec, Model, Wrench, build_tree
+from urdf2links.oracles.recursive import RecursivePlan
 from urdf2links.transforms import base_transforms, elementary, link_transform
 
 from builders import (DOUBLE, FREE_BODY, PENDULUM, PRISMATIC_REVOLUTE, double_pendulum, free_body,
@@ -266,8 +267,9 @@ def test_explicit_time_rates_of_the_base_against_finite_differences():
     rng = np.random.default_rng(21)
     base = _moving_base(rng)
     q, qd, t = rng.normal(size=model.n), rng.normal(size=model.n), 0.7
-    kin = model._plan.kinematics(q, qd, base_transforms(base(t)))
-    dE, dV = model._plan.explicit_time_rates(kin, base_transforms(base(t)), model.gravity_vector)
+    rp = RecursivePlan(model.tree)
+    kin = rp.kinematics(q, qd, base_transforms(base(t)))
+    dE, dV = rp.explicit_time_rates(kin, base_transforms(base(t)), model.gravity_vector)
     fd_E = _five_point(lambda s: model.kinetic_energy(q, qd, t=t + s, base=base), 1e-3)
     fd_V = _five_point(lambda s: model.potential_energy(q, t=t + s, base=base), 1e-3)
     assert dE == pytest.approx(fd_E, rel=1e-8)

@@ -98,8 +98,8 @@ def test_extreme_mass_ratios_lose_no_accuracy_in_accelerations(robot):
     <= 9e-12; a solve that lost the digits cond(A) allows would be off by ~eps cond(A) ~ 1e-8 on the
     light coordinates).
     """
-    from compare.mjcf import mjcf_from_model
-    from compare.mujoco_run import mujoco_accelerations
+    from urdf2links.compare.mjcf import mjcf_from_model
+    from urdf2links.compare.mujoco_run import mujoco_accelerations
 
     model = load_urdf(HARD / f"{robot}.urdf", inertia="strict")
     mj = mjcf_from_model(model, gravity=model.gravity_vector)
@@ -261,7 +261,8 @@ def _momentum(plan, i, t, q, qd):
     up to rounding (~eps E)."""
     step = np.zeros_like(qd)
     step[i] = 1.0
-    return 0.5 * (plan.kinetic_energy(t, q, qd + step) - plan.kinetic_energy(t, q, qd - step))
+    model, base = plan.model, plan.base_state(t)
+    return 0.5 * (model.kinetic_energy(q, qd + step, t=t, base=base) - model.kinetic_energy(q, qd - step, t=t, base=base))
 
 
 def test_gyroscope_on_heaving_turning_base_keeps_vertical_momentum():

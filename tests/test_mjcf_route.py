@@ -1,4 +1,4 @@
-"""Route 1 of the MuJoCo comparison: the project's own tree as MJCF (compare.mjcf, compare.mujoco_run)."""
+"""Route 1 of the MuJoCo comparison: the project's own tree as MJCF (urdf2links.compare.mjcf, urdf2links.compare.mujoco_run)."""
 
 from __future__ import annotations
 
@@ -15,8 +15,8 @@ from scipy.integrate import solve_ivp  # noqa: E402
 
 import urdf2links  # noqa: E402
 from builders import random_H, random_tree  # noqa: E402
-from compare.mjcf import mjcf_from_model  # noqa: E402
-from compare.mujoco_run import mujoco_accelerations, run_mujoco  # noqa: E402
+from urdf2links.compare.mjcf import mjcf_from_model  # noqa: E402
+from urdf2links.compare.mujoco_run import mujoco_accelerations, run_mujoco  # noqa: E402
 from urdf2links import BaseState, LinkSpec, Model, Wrench, build_tree  # noqa: E402
 from urdf2links.transforms import base_transforms  # noqa: E402
 
@@ -72,7 +72,7 @@ def random_base(rng):
 
 
 def test_mujoco_multi_joint_semantics():
-    """What compare.mjcf relies on: a body's joints apply in order, each axis in the body frame as
+    """What urdf2links.compare.mjcf relies on: a body's joints apply in order, each axis in the body frame as
     moved by the joints before it (F <- F Rot(axis_j, q_j)), slides along the axis as rotated by
     the hinges before them, hinges about their anchor ``pos``."""
     xml = """<mujoco><compiler angle="radian" inertiafromgeom="false"/><worldbody>
@@ -316,8 +316,9 @@ def test_heaving_base_trajectory():
 def test_scene_run_matches_plan():
     """A scene with torque, spring/damper, a force at a point and base motion: run_mujoco(scene)
     against the project's own plan of the same scene."""
-    plan_mod = pytest.importorskip("urdf2links.plan")
-    from compare.mjcf import mjcf_from_scene
+    import urdf2links.plan as plan_mod
+    from urdf2links.oracles.python_plan import PythonPlan
+    from urdf2links.compare.mjcf import mjcf_from_scene
     from urdf2links.scene import scene_from_dict
 
     scene = scene_from_dict({
@@ -331,7 +332,7 @@ def test_scene_run_matches_plan():
         "run": {"t_end": 0.5, "samples": 11},
     }, where="<test>")
     model = scene.model()
-    plan = plan_mod.compile_plan(scene, model)
+    plan = PythonPlan(plan_mod.compile_plan(scene, model))
     mj = mjcf_from_scene(scene, model, timestep=1e-4)
     run = run_mujoco(mj, scene)
     n = model.n

@@ -11,7 +11,7 @@ import pytest
 
 mujoco = pytest.importorskip("mujoco")
 
-from compare import MujocoRefused, mujoco_data_at, mujoco_from_urdf, mujoco_terms  # noqa: E402
+from urdf2links.compare import MujocoRefused, mujoco_data_at, mujoco_from_urdf, mujoco_terms  # noqa: E402
 
 # --------------------------------------------------------------------------- double pendulum
 

@@ -1,4 +1,4 @@
-"""The MuJoCo cross-validation reports: compare.trajectory, compare.report, `urdf2links compare`.
+"""The MuJoCo cross-validation reports: urdf2links.compare.trajectory, urdf2links.compare.report, `urdf2links compare`.
 
 Short runs (1 s) of the double pendulum and the ship crane, MuJoCo RK4 dt 1e-4 against the
 project's DOP853 rtol 1e-10; the committed baselines (reports/baselines.json) must accept them.
@@ -17,14 +17,10 @@ import pytest
 
 pytest.importorskip("mujoco")
 
-from compare.report import (  # noqa: E402
-    check_baseline,
-    json_ready,
-    load_baselines,
-    write_index,
-    write_report,
-)
-from compare.trajectory import compare_scene, divergence_time, growth_fit  # noqa: E402
+from urdf2links.compare.baselines import check_baseline, load_baselines  # noqa: E402
+from urdf2links.compare.formatting import json_ready  # noqa: E402
+from urdf2links.compare.report import write_index, write_report  # noqa: E402
+from urdf2links.compare.trajectory import compare_scene, divergence_time, growth_fit  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 ROBOTS = ROOT / "robots"
@@ -140,7 +136,7 @@ def test_growth_fit_and_divergence_time():
 
 
 def test_committed_baselines_cover_every_shipped_scene():
-    from compare.cli import report_t_end
+    from urdf2links.compare.commands import report_t_end
     from urdf2links.scene import load_scene
 
     scenes = load_baselines(BASELINES)["scenes"]
@@ -153,7 +149,7 @@ def test_committed_baselines_cover_every_shipped_scene():
 
 
 def test_baseline_run_selection_and_merge(pendulum, tmp_path):
-    from compare.report import select_run, write_baselines
+    from urdf2links.compare.baselines import select_run, write_baselines
 
     s = pendulum[1]  # a 1 s run
     path = tmp_path / "b.json"
@@ -234,12 +230,12 @@ def test_compare_cli_runs_and_checks(tmp_path):
 
 
 def test_cli_does_not_import_mujoco_until_needed():
-    code = "import sys, urdf2links.cli; sys.exit(1 if 'mujoco' in sys.modules or 'compare' in sys.modules else 0)"
+    code = "import sys, urdf2links.cli; sys.exit(1 if 'mujoco' in sys.modules or 'urdf2links.compare' in sys.modules else 0)"
     assert subprocess.run([sys.executable, "-c", code], cwd=ROOT).returncode == 0
 
 
 def test_report_caps_driven_scenes():
-    from compare.cli import report_t_end
+    from urdf2links.compare.commands import report_t_end
     from urdf2links.scene import load_scene
 
     crane = load_scene(ROBOTS / "ship_crane.toml")

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from scipy.special import ellipk
 
-import urdf2links.plan as plan_module
-from urdf2links import recursive
+from urdf2links.oracles import python_plan as python_plan_module, recursive
+from urdf2links.oracles.python_plan import PythonPlan
 from urdf2links.locations import shipped_robots_dir
 from urdf2links.errors import SceneError
 from urdf2links.plan import compile_plan
@@ -85,7 +85,7 @@ def test_unnamed_effects_cost_nothing(tmp_path, monkeypatch):
         """)
     _forbid(monkeypatch, "G", recursive.RecursivePlan, "gravity")
     _forbid(monkeypatch, "Q", recursive.RecursivePlan, "generalized_forces")
-    _forbid(monkeypatch, "base", plan_module, "base_transforms")
+    _forbid(monkeypatch, "base", python_plan_module, "base_transforms")
     scene = load_scene(p)
     plan = compile_plan(scene, scene.model())
     assert plan.terms == ("A", "e")
@@ -93,7 +93,7 @@ def test_unnamed_effects_cost_nothing(tmp_path, monkeypatch):
     from urdf2links.scene_kernels import scene_view
     sc = scene_view(plan.rhs.SI, plan.rhs.SF)
     assert (sc.has_base, sc.has_g, sc.load_link.size, sc.torque_idx.size, sc.spring_idx.size) == (0, 0, 0, 0, 0)
-    plan.python_rhs(0.1, np.r_[0.3, 0.2, 0.1, -0.1, 0.0])     # the Python twin runs under the forbids
+    PythonPlan(plan).rhs(0.1, np.r_[0.3, 0.2, 0.1, -0.1, 0.0])     # the Python twin runs under the forbids
     traj = simulate(scene, progress=False)
     assert traj.stats["terms"] == ("A", "e")
     assert traj.energy_error < 1e-8  # it really ran: a free double pendulum keeps its energy
@@ -134,7 +134,7 @@ def test_named_effects_are_computed(tmp_path, monkeypatch):
             return _orig(self, *a, **k)
         monkeypatch.setattr(recursive.RecursivePlan, attr, counting)
     y = np.r_[0.3, 0.2, 0.1, -0.1, 0.0]
-    out = plan.python_rhs(0.1, y)
+    out = PythonPlan(plan).rhs(0.1, y)
     assert counts["G"] == 1 and counts["Q"] >= 1
     from urdf2links.scene_kernels import scene_view
     sc = scene_view(plan.rhs.SI, plan.rhs.SF)
@@ -291,5 +291,5 @@ def test_compiled_rhs_equals_python_rhs(path):
     rng = np.random.default_rng(11)
     for t in (0.0, 0.37, 1.3):
         y = np.r_[q + 0.1 * rng.normal(size=model.n), qd + rng.normal(size=model.n), 0.0]
-        ref = plan.python_rhs(t, y)
+        ref = PythonPlan(plan).rhs(t, y)
         assert np.abs(plan.rhs(t, y) - ref).max() < 1e-11 * np.abs(ref).max()

@@ -1,4 +1,4 @@
-"""The work-precision study (compare.tradeoff, `urdf2links tradeoff`).
+"""The work-precision study (urdf2links.compare.tradeoff, `urdf2links tradeoff`).
 
 One short study of the double pendulum (t_end 0.5 s, the --quick ladders, one timing round) is shared
 by the module: reference and check, convergence orders of RK4 (both engines) and Euler, monotone
@@ -17,8 +17,9 @@ import pytest
 
 pytest.importorskip("mujoco")
 
-from compare.tradeoff import crossover, run_study, write_study  # noqa: E402
-from compare.tradeoff_plots import BEGIN, END, insert_section, render_section  # noqa: E402
+from urdf2links.compare.tradeoff import crossover, run_study
+from urdf2links.compare.tradeoff_report import write_study  # noqa: E402
+from urdf2links.compare.tradeoff_report import BEGIN, END, insert_section, render_section  # noqa: E402
 from urdf2links.cli import main  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -195,8 +196,8 @@ def test_insert_section_without_footer(tmp_path):
 
 
 def test_report_includes_the_section_when_the_scene_has_a_study(tmp_path):
-    from compare.report import write_report
-    from compare.trajectory import compare_scene
+    from urdf2links.compare.report import write_report
+    from urdf2links.compare.trajectory import compare_scene
 
     data = run_study(SCENE, t_end=0.2, quick=True, methods=("RK4",), mujoco_integrators=("RK4",))
     write_study(data, tmp_path)
@@ -230,5 +231,5 @@ def test_cli_errors_name_the_argument(argv, named, tmp_path, capsys):
 
 
 def test_urdf2links_cli_does_not_import_mujoco():
-    code = "import sys, urdf2links.cli; sys.exit('mujoco' in sys.modules or 'compare.tradeoff' in sys.modules)"
+    code = "import sys, urdf2links.cli; sys.exit('mujoco' in sys.modules or 'urdf2links.compare.tradeoff' in sys.modules)"
     assert subprocess.run([sys.executable, "-c", code], cwd=ROOT).returncode == 0

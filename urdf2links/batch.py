@@ -2,7 +2,7 @@
 
 ``simulate_batch(scene, q0, qd0)`` integrates ``B`` initial states with the scene's compiled
 right-hand side (:mod:`urdf2links.scene_kernels`) and the compiled loops of
-:mod:`urdf2links.compiled_integrators`, one trajectory per thread (numba ``prange``; each thread
+:mod:`urdf2links.loops`, one trajectory per thread (numba ``prange``; each thread
 has its own scratch). Samples are taken by landing steps exactly on the sample times (the step
 size controller carries over), so no dense output is needed. A sweep pays Python's per-run costs
 (plan compilation, result objects, energy bookkeeping) once instead of ``B`` times.
@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit, prange
 
-from .compiled_integrators import TABLEAUX, _f, erk_chunk, initial_step
+from .loops import TABLEAUX, erk_chunk, evaluate, initial_step
 from .plan import compile_plan
 from .scene import Scene, load_scene
 
@@ -26,7 +26,7 @@ __all__ = ["BatchResult", "simulate_batch"]
 @dataclass(frozen=True, eq=False)
 class BatchResult:
     """``t`` (m,), ``q`` and ``qd`` (B, m, n), ``work`` (B, m); ``nfev`` (B,), ``status`` (B,) (1 reached
-    the end; otherwise the codes of :mod:`urdf2links.compiled_integrators`); ``wall_time`` of
+    the end; otherwise the codes of :mod:`urdf2links.loops.driver`); ``wall_time`` of
     the whole sweep."""
 
     t: np.ndarray
@@ -45,35 +45,32 @@ class BatchResult:
 
 
 @njit(cache=True, parallel=True)
-def _sweep_erk(stages, order, A, B, C, E5, E3, D, P, dop, samples, rtol, atol, max_step, Y0,
-               out, nfev, status, I, F, W, SI, SF, X):
+def _sweep_erk(tab, samples, rtol, atol, max_step, Y0, out, nfev, status, I, F, W, SI, SF, X):
     """Each trajectory ``b`` from ``Y0[b]``; states at ``samples`` into ``out[b]`` (m, d)."""
     nb, d = Y0.shape
     m = samples.size
     for b in prange(nb):
         args = (I, F, W[b], SI, SF, X[b])
         cnt = np.zeros(4, np.int64)
-        fail = np.zeros(d + 1)
+        counters = (cnt, np.zeros(d + 1))
         y = Y0[b].copy()
         f = np.empty(d)
-        K = np.zeros((16, d))
-        ts = np.empty(2)
-        ys = np.empty((2, d))
-        dens = np.empty((0, 7, d))
-        gidx = np.zeros(0, np.int64)
+        store = (np.empty(2), np.empty((2, d)), np.empty((0, 7, d)))
+        guard = (np.zeros(0, np.int64), np.zeros(0))
         for i in range(d):
             out[b, 0, i] = y[i]
         code = 1
-        if not _f(samples[0], y, f, args, cnt, fail):
+        if not evaluate(samples[0], y, f, args, counters):
             code = -2
         else:
-            h_abs = initial_step(samples[0], y, f, samples[m - 1], max_step, order, rtol, atol, args, cnt, fail)
+            h_abs = initial_step(samples[0], y, f, samples[m - 1], max_step, tab.order, rtol, atol, args, counters)
             st = np.array([samples[0], h_abs, 1.0])
+            state = (st, y, f, np.zeros((16, d)))
             for j in range(1, m):
+                ctl = (samples[j], rtol, atol, max_step, False)
                 while st[0] < samples[j]:
                     st[2] = 1.0
-                    code = erk_chunk(stages, order, A, B, C, E5, E3, D, P, 7, dop, samples[j], rtol, atol,
-                                     max_step, False, st, y, f, K, ts, ys, dens, gidx, 0.0, cnt, 1, fail, args)
+                    code = erk_chunk(tab, ctl, state, store, guard, counters, 1, args)
                     if code < 0:
                         break
                 if code < 0:
@@ -122,9 +119,7 @@ def simulate_batch(scene, q0, qd0=None, *, t_end: float | None = None, samples: 
     nfev = np.zeros(nb, np.int64)
     status = np.zeros(nb, np.int64)
     start = time.perf_counter()
-    _sweep_erk(tab["stages"], tab["order"], tab["A"], tab["B"], tab["C"], tab["E5"], tab["E3"], tab["D"], tab["P"],
-               method == "DOP853", ts, tol_r, tol_a, np.inf, Y0, out, nfev, status,
-               rhs.I, rhs.F, W, rhs.SI, rhs.SF, X)
+    _sweep_erk(tab, ts, tol_r, tol_a, np.inf, Y0, out, nfev, status, rhs.I, rhs.F, W, rhs.SI, rhs.SF, X)
     wall = time.perf_counter() - start
     return BatchResult(t=ts, q=out[:, :, :n], qd=out[:, :, n:2 * n], work=out[:, :, 2 * n], nfev=nfev,
                        status=status, wall_time=wall, method=method, coordinate_names=model.coordinate_names)

@@ -109,7 +109,7 @@ def floating_links(model: Model) -> tuple[FloatingLink, ...]:
     """The links of ``model`` whose three angle slots are coordinates that are model coordinates of
     their own (not coupled to others): the links that can be re-charted."""
     tree, names = model.tree, model.coordinate_names
-    C, d = model._C, model._d
+    C, d = model.coupling or (None, None)
     out = []
     for p in range(tree.n_links):
         tc = tree.coord[p, 3:6]
@@ -160,7 +160,7 @@ def recharted_model(original: Model, rotations: dict) -> Model:
     new = build_tree(specs)
     if new.coordinate_names != tree.coordinate_names:  # the original numbering was not link by link
         raise ValueError(f"re-charting {sorted(rotations)} would reorder the coordinates of {original.name!r}")
-    coupling = None if original._C is None else (original._C, original._d, original.coordinate_names)
+    coupling = None if original.coupling is None else (*original.coupling, original.coordinate_names)
     return Model(new, gravity=original.gravity_vector, coupling=coupling, name=original.name,
                  source=original.source, audit=original.audit, info=original.info)
 
@@ -340,7 +340,7 @@ def integrate_charted(original: Model, make_plan, y0, t_span, *, t_eval, method,
     y = np.array(y0, float)
     guards = [AngleGuard([ln.angles[1] for ln in group], c) for group, c in ((movable, cos_min),
                                                                              (fixed, SINGULAR_COS_MIN)) if group]
-    guard = None if not guards else guards[0] if len(guards) == 1 else (lambda t, y: guards[0](t, y) or guards[1](t, y))
+    guard = None if not guards else guards[0] if len(guards) == 1 else guards[0] | guards[1]
     segments, recharts, pieces = [], [], []
     nfev = nsteps = 0
     success, message = True, "reached t_end"

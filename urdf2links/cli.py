@@ -99,19 +99,19 @@ def _simulate(args) -> int:
 
 
 def _compare(args) -> int:
-    from compare.cli import compare_command
+    from urdf2links.compare.commands import compare_command
 
     return compare_command(args)
 
 
 def _report(args) -> int:
-    from compare.cli import report_command
+    from urdf2links.compare.commands import report_command
 
     return report_command(args)
 
 
 def _tradeoff(args) -> int:
-    from compare.tradeoff import tradeoff_command
+    from urdf2links.compare.commands import tradeoff_command
 
     return tradeoff_command(args)
 

@@ -17,6 +17,7 @@ __all__ = [
     "MeshError",
     "DynamicsError",
     "SceneError",
+    "IntegrationError",
 ]
 
 
@@ -62,3 +63,8 @@ class SceneError(ValueError):
 
     Messages name the file, the key and the valid choices.
     """
+
+
+class IntegrationError(RuntimeError):
+    """An integration cannot continue: a Newton iteration that does not converge, a state or a
+    right-hand side that is no longer finite. The message says where (time, step) and why."""

@@ -1,6 +1,6 @@
 """The recursive form compiled (numba): (5.18)-(5.29) over the tree in world-frame twists.
 
-:mod:`urdf2links.recursive` writes every coordinate's derivative as one world twist,
+The recursive form writes every coordinate's derivative as one world twist,
 ``T_i^(p) = W_i T^(p)`` with ``W_i = [[w_i^, v_i], [0, 0]]``; the unit twist is kept here as the
 6-vector ``s_i = (w_i, v_i)``. With the {0}-frame pseudo-inertia of a link,
 ``Hw = T H T^T = [[S, c], [c^T, m]]`` (``S = int r r^T dm``, ``c = int r dm``), and
@@ -24,189 +24,23 @@ Twists propagate from root to leaves: a factor ``E_k(q_i)`` adds ``s_i q_i'`` to
 factor changes only the pose. The base {A} is the same chain of six factors with prescribed
 values. Cost: O(n) for the passes, O(sum of depths) for A, O(n^3 / 6) for the Cholesky factor.
 
-The functions take a :class:`TreeArrays` (built once from a LinkTree by :func:`pack_tree`) and a
-:class:`Workspace` (scratch arrays reused across calls; one per thread). Nothing allocates in the
-hot path. The numpy form in :mod:`urdf2links.recursive` and the literal form remain the oracles.
+The functions take a :class:`~urdf2links.tree_arrays.TreeArrays` (built once from a LinkTree by
+:func:`~urdf2links.tree_arrays.pack_tree`) and a :class:`~urdf2links.tree_arrays.Workspace`
+(scratch arrays reused across calls; one per thread). Nothing allocates in the hot path. The numpy
+form (:mod:`urdf2links.oracles.recursive`) and the literal form (:mod:`urdf2links.oracles.literal`)
+are the oracles the tests check these against.
 """
 
 from __future__ import annotations
 
-from collections import namedtuple
-
 import numpy as np
 from numba import njit
 
-from .transforms import elementary
+from .tree_arrays import flat_tree, flat_workspace, pack_tree, tree_view, workspace_view
 
-__all__ = ["TreeArrays", "Workspace", "CompiledTree", "pack_tree", "flat_tree", "flat_workspace",
-           "tree_view", "workspace_view", "kinematics", "dynamics", "energies", "cholesky_solve",
-           "base_power", "forward_dynamics", "terms", "energy_pair"]
-
-TreeArrays = namedtuple("TreeArrays", [
-    "parent",      # (L,) int64
-    "seg_ptr",     # (L + 1,) int64: link p's factors are seg_ptr[p]:seg_ptr[p + 1]
-    "seg_kind",    # (S,) int64: 0 constant (seg_R, seg_p), 1 variable (slot, coord, offset)
-    "seg_slot",    # (S,) int64 0..5
-    "seg_coord",   # (S,) int64
-    "seg_off",     # (S,) float
-    "seg_R",       # (S, 3, 3)
-    "seg_p",       # (S, 3)
-    "mass",        # (L,)  H[3, 3]
-    "moment",      # (L, 3) H[:3, 3] = m r_C in the link frame
-    "second",      # (L, 3, 3) H[:3, :3] = int r r^T dm in the link frame
-    "coord_link",  # (n,) int64
-    "anc_ptr",     # (n + 1,) int64: coordinates l <= i whose link is link(i) or an ancestor of it
-    "anc_idx",     # (P,) int64
-])
-
-Workspace = namedtuple("Workspace", [
-    "R", "o", "V", "Acc",         # (L, 3, 3), (L, 3), (L, 6), (L, 6): pose, twist (w, v), acc.
-    "s",                          # (n, 6) unit twists (w_i, v_i)
-    "cm", "cc", "cS",             # (L,), (L, 3), (L, 3, 3): subtree m, c, S in {0}
-    "fi", "fx",                   # (L, 6): subtree inertial (with gravity) / external wrench (f, n)
-    "A", "b", "Q", "Lf",          # (n, n), (n,), (n,), (n, n) tree-sized
-    "cur",                        # (24,) scratch: R (9), o (3), V (6), Acc (6)
-    "tmp",                        # (30,) scratch
-    "base_twist", "base_acc",     # (6,), (6,): twist and spatial acceleration of {A} (no gravity)
-])
-
-_INT_FIELDS = ("parent", "seg_ptr", "seg_kind", "seg_slot", "seg_coord", "coord_link", "anc_ptr", "anc_idx")
-_FLOAT_FIELDS = ("seg_off", "seg_R", "seg_p", "mass", "moment", "second")
-
-
-def pack_tree(tree) -> TreeArrays:
-    """Flatten a :class:`~urdf2links.tree.LinkTree` for the kernels: runs of constant factors are
-    multiplied into one rigid transform (identity factors dropped), variable factors are kept."""
-    kinds, slots, coords, offs, Rs, ps, ptr = [], [], [], [], [], [], [0]
-    for p in range(tree.n_links):
-        C = None
-        for k in range(6):
-            i, v = int(tree.coord[p, k]), float(tree.params[p, k])
-            if i < 0:
-                if v != 0.0:
-                    E = elementary(k, v)
-                    C = E if C is None else C @ E
-                continue
-            if C is not None:
-                kinds.append(0), slots.append(0), coords.append(-1), offs.append(0.0)
-                Rs.append(C[:3, :3]), ps.append(C[:3, 3])
-                C = None
-            kinds.append(1), slots.append(k), coords.append(i), offs.append(v)
-            Rs.append(np.eye(3)), ps.append(np.zeros(3))
-        if C is not None:
-            kinds.append(0), slots.append(0), coords.append(-1), offs.append(0.0)
-            Rs.append(C[:3, :3]), ps.append(C[:3, 3])
-        ptr.append(len(kinds))
-    anc = tree.coordinate_ancestor()
-    anc_ptr, anc_idx = [0], []
-    for i in range(tree.n):
-        anc_idx += [l for l in range(i + 1) if anc[i, l]]
-        anc_ptr.append(len(anc_idx))
-    i64 = lambda x: np.ascontiguousarray(x, dtype=np.int64)
-    f64 = lambda x, shape: np.ascontiguousarray(np.reshape(np.asarray(x, dtype=float), shape))
-    S = len(kinds)
-    H = np.asarray(tree.H, float)
-    return TreeArrays(
-        parent=i64(tree.parent), seg_ptr=i64(ptr), seg_kind=i64(kinds), seg_slot=i64(slots),
-        seg_coord=i64(coords), seg_off=f64(offs, (S,)), seg_R=f64(Rs, (S, 3, 3)), seg_p=f64(ps, (S, 3)),
-        mass=f64(H[:, 3, 3], (-1,)), moment=f64(H[:, :3, 3], (-1, 3)), second=f64(H[:, :3, :3], (-1, 3, 3)),
-        coord_link=i64(tree.coord_link), anc_ptr=i64(anc_ptr), anc_idx=i64(anc_idx if anc_idx else [0])[:len(anc_idx)],
-    )
-
-
-def flat_tree(ta: TreeArrays) -> tuple[np.ndarray, np.ndarray]:
-    """``(I, F)``: the tree as one int64 and one float64 array (header ``L, n, S, P``), so that a
-    compiled call unboxes two arrays instead of a tuple of fourteen (the dispatch cost of a
-    namedtuple argument is microseconds); :func:`tree_view` rebuilds the views inside numba."""
-    L, n, S, P = ta.parent.size, ta.coord_link.size, ta.seg_kind.size, ta.anc_idx.size
-    I = np.concatenate([np.array([L, n, S, P], dtype=np.int64)] + [getattr(ta, f).ravel() for f in _INT_FIELDS])
-    F = np.concatenate([np.asarray(getattr(ta, f), float).ravel() for f in _FLOAT_FIELDS])
-    return np.ascontiguousarray(I), np.ascontiguousarray(F)
-
-
-def workspace_size(L: int, n: int) -> int:
-    return 9 * L + 3 * L + 6 * L + 6 * L + 6 * n + L + 3 * L + 9 * L + 6 * L + 6 * L + 2 * n * n + 2 * n + 24 + 30
-
-
-def flat_workspace(I: np.ndarray) -> np.ndarray:
-    """Scratch for one evaluation at a time (one per thread), as one float64 array."""
-    return np.zeros(workspace_size(int(I[0]), int(I[1])))
-
-
-@njit(cache=True, inline="always")
-def tree_view(I, F):
-    """:class:`TreeArrays` of views into the flat arrays of :func:`flat_tree`."""
-    L, n, S, P = I[0], I[1], I[2], I[3]
-    o = 4
-    parent = I[o:o + L]
-    o += L
-    seg_ptr = I[o:o + L + 1]
-    o += L + 1
-    seg_kind = I[o:o + S]
-    o += S
-    seg_slot = I[o:o + S]
-    o += S
-    seg_coord = I[o:o + S]
-    o += S
-    coord_link = I[o:o + n]
-    o += n
-    anc_ptr = I[o:o + n + 1]
-    o += n + 1
-    anc_idx = I[o:o + P]
-    f = 0
-    seg_off = F[f:f + S]
-    f += S
-    seg_R = F[f:f + 9 * S].reshape((S, 3, 3))
-    f += 9 * S
-    seg_p = F[f:f + 3 * S].reshape((S, 3))
-    f += 3 * S
-    mass = F[f:f + L]
-    f += L
-    moment = F[f:f + 3 * L].reshape((L, 3))
-    f += 3 * L
-    second = F[f:f + 9 * L].reshape((L, 3, 3))
-    return TreeArrays(parent, seg_ptr, seg_kind, seg_slot, seg_coord, seg_off, seg_R, seg_p,
-                      mass, moment, second, coord_link, anc_ptr, anc_idx)
-
-
-@njit(cache=True, inline="always")
-def workspace_view(I, Wf):
-    """:class:`Workspace` of views into the flat scratch of :func:`flat_workspace`."""
-    L, n = I[0], I[1]
-    o = 0
-    R = Wf[o:o + 9 * L].reshape((L, 3, 3))
-    o += 9 * L
-    ov = Wf[o:o + 3 * L].reshape((L, 3))
-    o += 3 * L
-    V = Wf[o:o + 6 * L].reshape((L, 6))
-    o += 6 * L
-    Acc = Wf[o:o + 6 * L].reshape((L, 6))
-    o += 6 * L
-    s = Wf[o:o + 6 * n].reshape((n, 6))
-    o += 6 * n
-    cm = Wf[o:o + L]
-    o += L
-    cc = Wf[o:o + 3 * L].reshape((L, 3))
-    o += 3 * L
-    cS = Wf[o:o + 9 * L].reshape((L, 3, 3))
-    o += 9 * L
-    fi = Wf[o:o + 6 * L].reshape((L, 6))
-    o += 6 * L
-    fx = Wf[o:o + 6 * L].reshape((L, 6))
-    o += 6 * L
-    A = Wf[o:o + n * n].reshape((n, n))
-    o += n * n
-    b = Wf[o:o + n]
-    o += n
-    Q = Wf[o:o + n]
-    o += n
-    Lf = Wf[o:o + n * n].reshape((n, n))
-    o += n * n
-    cur = Wf[o:o + 24]
-    o += 24
-    tmp = Wf[o:o + 30]
-    return Workspace(R, ov, V, Acc, s, cm, cc, cS, fi, fx, A, b, Q, Lf, cur, tmp, tmp[0:6], tmp[6:12])
-
+__all__ = ["CompiledTree", "kinematics", "dynamics", "energies", "cholesky_solve", "add_wrench",
+           "clear_wrenches", "base_power", "forward_dynamics", "terms", "energy_pair", "poses",
+           "wrench_forces"]
 
 # -- one factor ------------------------------------------------------------------------------------
 # (Hot loops index arrays directly: a view per link or per coordinate costs reference counting.)
@@ -534,7 +368,7 @@ def _twist_matrix(x, out):
 @njit(cache=True)
 def base_power(ta, ws, base_twist, base_acc, g):
     """``(dE/dt, dV/dt)`` at fixed ``(q, q')`` due to the base motion alone (see
-    :meth:`urdf2links.recursive.RecursivePlan.explicit_time_rates`): with the base's twist ``W1``
+    :meth:`urdf2links.oracles.recursive.RecursivePlan.explicit_time_rates`): with the base's twist ``W1``
     and its rate ``W1'`` (4, 4), ``dE/dt = tr(W1' sum Hw V^T) + tr(W1 sum V Hw V^T)`` and
     ``dV/dt = -g . (W1 sum Hw e4)``; ``Hw = T H T^T``, ``V`` the link's twist matrix."""
     X1 = np.zeros((4, 4))
@@ -617,6 +451,36 @@ def energy_pair(I, F, Wf, q, qd, base, g):
     return energies(ta, ws, g)
 
 
+@njit(cache=True)
+def poses(I, F, Wf, q, base, R, o):
+    """The {0}-pose of every link: rotations ``R`` (L, 3, 3) and origins ``o`` (L, 3)."""
+    ta = tree_view(I, F)
+    ws = workspace_view(I, Wf)
+    zero = np.zeros(q.size)
+    kinematics(ta, ws, q, zero, base[0:6], base[6:12], base[12:18], np.zeros(3))
+    for p in range(ta.parent.size):
+        for r in range(3):
+            o[p, r] = ws.o[p, r]
+            for c in range(3):
+                R[p, r, c] = ws.R[p, r, c]
+
+
+@njit(cache=True)
+def wrench_forces(I, F, Wf, q, base, links, forces, moments, points, local, Q):
+    """Q (5.27)-(5.28) into ``Q`` (n,) of the wrenches ``k``: ``forces[k]``, ``moments[k]`` (3,) at
+    ``points[k]`` (3,) of link ``links[k]``, in the link's axes where ``local[k]``."""
+    ta = tree_view(I, F)
+    ws = workspace_view(I, Wf)
+    zero = np.zeros(q.size)
+    kinematics(ta, ws, q, zero, base[0:6], base[6:12], base[12:18], np.zeros(3))
+    clear_wrenches(ws)
+    for k in range(links.size):
+        add_wrench(ws, links[k], forces[k], moments[k], points[k], local[k])
+    dynamics(ta, ws, False)
+    for i in range(q.size):
+        Q[i] = ws.Q[i]
+
+
 class CompiledTree:
     """A LinkTree flattened for the kernels, with its own scratch (not thread-safe: one per
     thread). ``I``, ``F``: :func:`flat_tree`; ``W``: :func:`flat_workspace`."""
@@ -638,3 +502,22 @@ class CompiledTree:
 
     def energies(self, q, qd, base18, g):
         return energy_pair(self.I, self.F, self.W, q, qd, base18, g)
+
+    def poses(self, q, base18) -> np.ndarray:
+        """(L, 4, 4) {0}-poses of the links at a tree configuration."""
+        L = self.n_links
+        R, o = np.empty((L, 3, 3)), np.empty((L, 3))
+        poses(self.I, self.F, self.W, q, base18, R, o)
+        T = np.zeros((L, 4, 4))
+        T[:, :3, :3], T[:, :3, 3], T[:, 3, 3] = R, o, 1.0
+        return T
+
+    def forces(self, q, base18, wrenches) -> np.ndarray:
+        """Q (n,) of ``wrenches``: ``(link index, force, moment, point, frame)`` tuples."""
+        k = len(wrenches)
+        links = np.array([w[0] for w in wrenches], np.int64)
+        vec = lambda j: np.array([np.asarray(w[j], float) for w in wrenches]).reshape(k, 3)  # noqa: E731
+        local = np.array([w[4] == "link" for w in wrenches], np.bool_)
+        Q = np.empty(self.n)
+        wrench_forces(self.I, self.F, self.W, q, base18, links, vec(1), vec(2), vec(3), local, Q)
+        return Q

@@ -9,8 +9,11 @@ __all__ = ["shipped_robots_dir", "example_robot_data_dir"]
 
 
 def shipped_robots_dir() -> Path:
-    """The project's ``robots/`` folder (next to the package in a checkout or editable install)."""
-    return Path(__file__).resolve().parent.parent / "robots"
+    """The shipped robots and scenes: the package data ``urdf2links.robots`` (the repository's
+    ``robots/`` folder in a checkout or an editable install)."""
+    import urdf2links.robots
+
+    return Path(urdf2links.robots.__file__).resolve().parent
 
 
 def example_robot_data_dir() -> Path | None:

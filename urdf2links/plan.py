@@ -1,28 +1,26 @@
-"""A scene compiled for the solver: only the terms the scene calls for.
+"""A scene compiled for the solver: which terms exist, decided once, and the compiled right-hand side.
 
-``compile_plan(scene, model)`` decides once which terms exist; the right-hand side then calls
-exactly those and nothing else:
+``compile_plan(scene, model)`` decides which terms the scene calls for; the right-hand side
+(:class:`~urdf2links.scene_kernels.CompiledScene`, ``plan.rhs``) then computes exactly those, with
+flags that switch the others off:
 
 ==============  ==================================================  ==============================
 term            computed by                                         present when
 ==============  ==================================================  ==============================
-A, e            :meth:`RecursivePlan.mass_matrix`, ``.bias``        always (the kinetic energy)
-base            :func:`~urdf2links.transforms.base_transforms`      ``[base]`` is given
-G               :meth:`RecursivePlan.gravity`                       ``[gravity]`` is given
-Q               :meth:`RecursivePlan.generalized_forces`            ``[[force]]`` or ``[[moment]]``
+A, e            :func:`urdf2links.kernels.dynamics`                 always (the kinetic energy)
+base            the base factors of :func:`~urdf2links.kernels.kinematics`  ``[base]`` is given
+G               gravity as a base acceleration (kinematics)         ``[gravity]`` is given
+Q               :func:`urdf2links.kernels.add_wrench`               ``[[force]]`` or ``[[moment]]``
 tau             joint torques ``[[torque]]``                        ``[[torque]]``
 spring          ``-k (q - rest)`` (a potential)                     a ``[[spring]]`` with k > 0
-damper          ``-c qd`` (dissipation D, (5.1))                    a ``[[spring]]`` with c > 0
+damper          ``-c qd`` (dissipation D)                           a ``[[spring]]`` with c > 0
 ==============  ==================================================  ==============================
-
-``plan.rhs`` is the compiled right-hand side (:class:`~urdf2links.scene_kernels.CompiledScene`,
-with the same flags: a term the scene does not call for is switched off there too);
-``plan.python_rhs`` the same in numpy, its readable twin and oracle.
 
 The state integrated is ``y = (q, qd, W)``: ``W`` is the work done on the system by everything
 that is not a potential (Q, tau, dampers, and the moving base through ``-dL/dt``), so that
 ``h(t) - h(0) - W(t)`` (``h`` the energy function, ``E + V`` for a fixed base) measures the
-integration's own energy error (the power balance).
+integration's own energy error (the power balance; docs/equations.md). The same right-hand side
+in numpy, the oracle the tests compare it with, is :class:`urdf2links.oracles.python_plan.PythonPlan`.
 """
 
 from __future__ import annotations
@@ -30,7 +28,7 @@ from __future__ import annotations
 import numpy as np
 
 from .scene_kernels import CompiledScene
-from .transforms import BaseState, base_transforms
+from .transforms import BaseState
 
 __all__ = ["Plan", "compile_plan"]
 
@@ -41,7 +39,6 @@ class Plan:
     def __init__(self, scene, model):
         self.scene = scene
         self.model = model
-        self.rp = model._plan
         tree = model.tree
         names = model.coordinate_names
         self.n = model.n
@@ -66,20 +63,29 @@ class Plan:
             ("A", True), ("e", True), ("base", self.base is not None), ("G", self.gravity_vector is not None),
             ("Q", bool(self.loads)), ("tau", len(self.torque_funcs) > 0), ("spring", len(springs) > 0),
             ("damper", len(dampers) > 0)) if on)
-        self.nfev = 0
         self.rhs = CompiledScene(self)
         """``y' = (qd, q'', P)`` for ``y = (q, qd, W)`` (2n + 1,): the compiled right-hand side
-        (:mod:`urdf2links.scene_kernels`), equal to :meth:`python_rhs` to rounding."""
+        (:mod:`urdf2links.scene_kernels`)."""
 
-    # -- pieces ----------------------------------------------------------------------------------
+    # -- the scene's inputs at a time --------------------------------------------------------------
     def base_state(self, t) -> BaseState | None:
+        """Pose, rate and acceleration of {A} at ``t``; None for a fixed base."""
         if self.base is None:
             return None
         f = self.base
         return BaseState(np.array([g(t) for g in f]), np.array([g.derivative(t) for g in f]),
                          np.array([g.second_derivative(t) for g in f]))
 
-    def _wrenches(self, t):
+    def torques(self, t) -> np.ndarray:
+        """Joint torques tau (n,) at ``t`` (zeros where none acts)."""
+        tau = np.zeros(self.n)
+        if self.torque_funcs:
+            np.add.at(tau, self.torque_index, [g(t) for g in self.torque_funcs])
+        return tau
+
+    def wrenches(self, t) -> list:
+        """The loads at ``t`` as ``(tree link index, force (3,), moment (3,), point (3,), frame)``, in
+        the tree link's axes where ``frame`` is ``"link"``."""
         out = []
         for link, X, load in self.loads:
             v = np.asarray(load.value(t), float)
@@ -92,86 +98,10 @@ class Plan:
                 out.append((link, np.zeros(3), v, point, load.frame))
         return out
 
-    def generalized_forces(self, t, q, qd, kin=None) -> np.ndarray:
-        """Everything on the right of (5.29) but ``-G - e``: Q of loads, tau, springs, dampers. (n,)"""
-        model = self.model
-        f = np.zeros(self.n)
-        if self.loads:
-            if kin is None:
-                qt, _ = model._tree_state(q)
-                kin = self.rp.kinematics(qt, None, _base_T(self.base_state(t)))
-            f += model._reduce(self.rp.generalized_forces(kin, self._wrenches(t)))
-        if self.torque_funcs:
-            f[self.torque_index] += [g(t) for g in self.torque_funcs]
-        if self.spring_index.size:
-            f[self.spring_index] -= self.stiffness * (q[self.spring_index] - self.rest)
-        if self.damper_index.size:
-            f[self.damper_index] -= self.damping * qd[self.damper_index]
-        return f
-
-    def accelerations(self, t, q, qd, *, with_power: bool = False):
-        """q'' of (5.29) with exactly the scene's terms; with ``with_power`` also the power of the
-        non-potential forces and of the base (see :meth:`power`), from the same kinematics."""
-        self.nfev += 1
-        model = self.model
-        qt, qdt = model._tree_state(q, qd)
-        base_T = _base_T(self.base_state(t))
-        A, rhs, kin = model.equation(qt, qdt, base_T, gravity_vector=self.gravity_vector)
-        f = self.generalized_forces(t, q, qd, kin)
-        qdd = model.solve_mass_matrix(A, rhs + f, q=q)
-        if not with_power:
-            return qdd
-        return qdd, self._power(qd, q, f, kin, base_T)
-
-    def _power(self, qd, q, f, kin, base_T) -> float:
-        P = 0.0
-        if any(term in self.terms for term in ("Q", "tau", "damper")):
-            f = f.copy()
-            if self.spring_index.size:  # springs are a potential, not work
-                f[self.spring_index] += self.stiffness * (q[self.spring_index] - self.rest)
-            P += float(qd @ f)
-        if base_T is not None:
-            dE, dV = self.rp.explicit_time_rates(kin, base_T, self.gravity_vector)
-            P -= dE - dV  # -dL/dt
-        return P
-
-    def python_rhs(self, t, y) -> np.ndarray:
-        """``y' = (qd, q'', P)`` for ``y = (q, qd, W)`` (2n + 1,), in Python (numpy recursive form):
-        the readable twin of the compiled ``rhs``."""
-        n = self.n
-        q, qd = y[:n], y[n:2 * n]
-        out = np.empty(2 * n + 1)
-        out[:n] = qd
-        out[n:2 * n], out[2 * n] = self.accelerations(t, q, qd, with_power=True)
-        return out
-
-    def power(self, t, q, qd) -> float:
-        """Power of the non-potential forces, ``qd . (Q + tau - c qd)``, and of the base, ``-dL/dt``
-        (the explicit time derivative of the Lagrangian at fixed (q, qd))."""
-        return float(self.accelerations(t, q, qd, with_power=True)[1])
-
-    # -- energy ----------------------------------------------------------------------------------
-    def kinetic_energy(self, t, q, qd) -> float:
-        return self.model.kinetic_energy(q, qd, t=t, base=self.base_state(t))
-
-    def potential_energy(self, t, q) -> float:
-        """V = V of gravity (5.21) + spring energies 0.5 k (q - rest)^2."""
-        V = 0.0
-        if self.gravity_vector is not None:
-            qt, _ = self.model._tree_state(q)
-            kin = self.rp.kinematics(qt, None, _base_T(self.base_state(t)))
-            V += self.rp.potential_energy(kin, self.gravity_vector)
-        if self.spring_index.size:
-            V += 0.5 * float(self.stiffness @ (q[self.spring_index] - self.rest) ** 2)
-        return V
-
-    def energy_function(self, t, q, qd) -> float:
-        """h = qd . dL/dqd - L; equals E + V for a fixed base. E is quadratic in qd
-        (E = E2 + E1 + E0), so h = E2 - E0 + V from E at qd, -qd and 0."""
-        if self.base is None:
-            return self.kinetic_energy(t, q, qd) + self.potential_energy(t, q)
-        Ep, Em, E0 = (self.kinetic_energy(t, q, v) for v in (qd, -qd, np.zeros_like(qd)))
-        return 0.5 * (Ep + Em) - 2.0 * E0 + self.potential_energy(t, q)
+    def energies(self, t, q, qd):
+        """``(E, V, h)`` at times ``t`` (m,) and states ``q``, ``qd`` (m, n): kinetic energy, potential
+        energy (gravity and springs) and the energy function, compiled."""
+        return self.rhs.energies(t, q, qd)
 
     # -- words -----------------------------------------------------------------------------------
     def describe(self) -> str:
@@ -198,10 +128,6 @@ class Plan:
         lines.append(f"run: t_end {r.t_end:g} s, method {r.method}, rtol {r.rtol:g}, atol {r.atol:g}"
                      + (f", dt {r.dt:g}" if r.dt else "") + f", {r.samples} samples")
         return "\n".join(lines)
-
-
-def _base_T(state):
-    return None if state is None else base_transforms(state)
 
 
 def compile_plan(scene, model) -> Plan:

@@ -219,6 +219,8 @@ def load_scene(path) -> Scene:
 
 def scene_from_dict(data: dict, *, where: str = "<scene>", directory: Path | None = None, name: str = "scene",
                     path: Path | None = None) -> Scene:
+    """A :class:`Scene` from the parsed TOML ``data``; ``where`` names the file in errors,
+    ``directory`` is where relative robot paths start."""
     r = _Reader(where)
     r.keys(data, _TOP, "")
     if "robot" not in data:
@@ -226,6 +228,22 @@ def scene_from_dict(data: dict, *, where: str = "<scene>", directory: Path | Non
     robot_t = data["robot"]
     r.keys(robot_t, _ROBOT, "robot")
     robot = _robot_path(r, robot_t, directory)
+    options, gravity, base = _robot_options(r, robot_t, directory), _gravity(r, data), _base(r, data)
+    loads, torques, springs = _loads(r, data), _torques(r, data), _springs(r, data)
+    (q0, qd0), run, link_poses = _initial(r, data), _run(r, data), _record(r, data)
+    description = data.get("description", "")
+    chaotic = data.get("chaotic", False)
+    if not isinstance(description, str):
+        r.fail("description", "must be a string")
+    if not isinstance(chaotic, bool):
+        r.fail("chaotic", f"must be true or false, got {chaotic!r}")
+    return Scene(name=name, path=path, robot=robot, load_options=options, description=description,
+                 chaotic=chaotic, gravity=gravity, base=base, loads=loads, torques=torques, springs=springs,
+                 q0=q0, qd0=qd0, run=run, link_poses=link_poses)
+
+
+def _robot_options(r: _Reader, robot_t: dict, directory) -> dict:
+    """``[robot]``'s loading options for :func:`~urdf2links.importer.load_urdf`."""
     options = {}
     if "floating_base" in robot_t:
         if not isinstance(robot_t["floating_base"], bool):
@@ -237,23 +255,33 @@ def scene_from_dict(data: dict, *, where: str = "<scene>", directory: Path | Non
         options["mimic"] = r.choice(robot_t["mimic"], "robot.mimic", ("independent", "coupled"))
     if "package_dirs" in robot_t:
         options["package_dirs"] = tuple((directory or Path.cwd()) / p for p in robot_t["package_dirs"])
+    return options
 
-    gravity = None
-    if "gravity" in data:
-        g = data["gravity"]
-        r.keys(g, ("magnitude", "direction"), "gravity")
-        mag = r.number(g.get("magnitude", 9.81), "gravity.magnitude", nonnegative=True)
-        d = r.vector(g.get("direction", [0, 0, -1]), "gravity.direction")
-        if np.linalg.norm(d) == 0:
-            r.fail("gravity.direction", "must not be the zero vector")
-        gravity = mag * d / np.linalg.norm(d)
 
-    base = None
-    if "base" in data:
-        r.keys(data["base"], PARAMETERS, "base")
-        base = tuple(r.function(data["base"][p], f"base.{p}") if p in data["base"] else Constant(0.0)
-                     for p in PARAMETERS)
+def _gravity(r: _Reader, data: dict):
+    """``[gravity]``: the vector (3,) in m/s^2, or None when the scene names no gravity."""
+    if "gravity" not in data:
+        return None
+    g = data["gravity"]
+    r.keys(g, ("magnitude", "direction"), "gravity")
+    mag = r.number(g.get("magnitude", 9.81), "gravity.magnitude", nonnegative=True)
+    d = r.vector(g.get("direction", [0, 0, -1]), "gravity.direction")
+    if np.linalg.norm(d) == 0:
+        r.fail("gravity.direction", "must not be the zero vector")
+    return mag * d / np.linalg.norm(d)
 
+
+def _base(r: _Reader, data: dict):
+    """``[base]``: six functions of time (x, y, z, phi_x, phi_y, phi_z of {A}), or None (fixed)."""
+    if "base" not in data:
+        return None
+    r.keys(data["base"], PARAMETERS, "base")
+    return tuple(r.function(data["base"][p], f"base.{p}") if p in data["base"] else Constant(0.0)
+                 for p in PARAMETERS)
+
+
+def _loads(r: _Reader, data: dict) -> tuple:
+    """``[[force]]`` and ``[[moment]]`` blocks as :class:`AppliedLoad`."""
     loads = []
     for kind in ("force", "moment"):
         items = data.get(kind, [])
@@ -272,14 +300,22 @@ def scene_from_dict(data: dict, *, where: str = "<scene>", directory: Path | Non
                 frame=r.choice(item.get("frame", "link"), f"{key}.frame", ("link", "world")),
                 value=r.vector_function(item["value"], f"{key}.value"),
                 point=r.vector(item["point"], f"{key}.point") if "point" in item else np.zeros(3)))
+    return tuple(loads)
 
+
+def _torques(r: _Reader, data: dict) -> tuple:
+    """``[[torque]]`` blocks: ``(coordinate, function of time)``."""
     torques = []
     for i, item in enumerate(data.get("torque", [])):
         r.keys(item, ("coordinate", "value"), f"torque[{i}]")
         if not isinstance(item.get("coordinate"), str) or "value" not in item:
             r.fail(f"torque[{i}]", "needs coordinate = 'name' and value = a function of time")
         torques.append((item["coordinate"], r.function(item["value"], f"torque[{i}].value")))
+    return tuple(torques)
 
+
+def _springs(r: _Reader, data: dict) -> tuple:
+    """``[[spring]]`` blocks as :class:`Spring` (stiffness, rest, damping)."""
     springs = []
     for i, item in enumerate(data.get("spring", [])):
         key = f"spring[{i}]"
@@ -290,7 +326,11 @@ def scene_from_dict(data: dict, *, where: str = "<scene>", directory: Path | Non
                               r.number(item.get("stiffness", 0.0), f"{key}.stiffness", nonnegative=True),
                               r.number(item.get("rest", 0.0), f"{key}.rest"),
                               r.number(item.get("damping", 0.0), f"{key}.damping", nonnegative=True)))
+    return tuple(springs)
 
+
+def _initial(r: _Reader, data: dict) -> tuple[dict, dict]:
+    """``[initial]``: ``q`` and ``qd`` by coordinate name (the others start at zero)."""
     q0, qd0 = {}, {}
     if "initial" in data:
         r.keys(data["initial"], ("q", "qd"), "initial")
@@ -299,38 +339,37 @@ def scene_from_dict(data: dict, *, where: str = "<scene>", directory: Path | Non
             r.keys(table, tuple(table), f"initial.{key}")
             for coord, v in table.items():
                 target[coord] = r.number(v, f"initial.{key}.{coord}")
+    return q0, qd0
 
+
+def _run(r: _Reader, data: dict) -> RunSettings:
+    """``[run]``: length, method, tolerances or step, samples, re-charting."""
     run = RunSettings()
-    if "run" in data:
-        t = data["run"]
-        r.keys(t, _RUN, "run")
-        run = RunSettings(
-            t_end=r.number(t.get("t_end", run.t_end), "run.t_end", positive=True),
-            method=r.choice(t.get("method", run.method), "run.method", METHODS),
-            rtol=r.number(t.get("rtol", run.rtol), "run.rtol", positive=True),
-            atol=r.number(t.get("atol", run.atol), "run.atol", positive=True),
-            dt=r.number(t["dt"], "run.dt", positive=True) if "dt" in t else None,
-            samples=int(r.number(t.get("samples", run.samples), "run.samples", positive=True)),
-            recharting=t.get("recharting", True))
-        if not isinstance(run.recharting, bool):
-            r.fail("run.recharting", f"must be true or false, got {run.recharting!r}")
-        if run.method in ("RK4", "midpoint") and run.dt is None:
-            r.fail("run.dt", f"method {run.method!r} takes a fixed step: give dt (seconds)")
+    if "run" not in data:
+        return run
+    t = data["run"]
+    r.keys(t, _RUN, "run")
+    run = RunSettings(
+        t_end=r.number(t.get("t_end", run.t_end), "run.t_end", positive=True),
+        method=r.choice(t.get("method", run.method), "run.method", METHODS),
+        rtol=r.number(t.get("rtol", run.rtol), "run.rtol", positive=True),
+        atol=r.number(t.get("atol", run.atol), "run.atol", positive=True),
+        dt=r.number(t["dt"], "run.dt", positive=True) if "dt" in t else None,
+        samples=int(r.number(t.get("samples", run.samples), "run.samples", positive=True)),
+        recharting=t.get("recharting", True))
+    if not isinstance(run.recharting, bool):
+        r.fail("run.recharting", f"must be true or false, got {run.recharting!r}")
+    if run.method in ("RK4", "midpoint") and run.dt is None:
+        r.fail("run.dt", f"method {run.method!r} takes a fixed step: give dt (seconds)")
+    return run
 
-    link_poses = ()
-    if "record" in data:
-        r.keys(data["record"], ("link_poses",), "record")
-        link_poses = tuple(data["record"].get("link_poses", ()))
 
-    description = data.get("description", "")
-    chaotic = data.get("chaotic", False)
-    if not isinstance(description, str):
-        r.fail("description", "must be a string")
-    if not isinstance(chaotic, bool):
-        r.fail("chaotic", f"must be true or false, got {chaotic!r}")
-    return Scene(name=name, path=path, robot=robot, load_options=options, description=description,
-                 chaotic=chaotic, gravity=gravity, base=base, loads=tuple(loads), torques=tuple(torques),
-                 springs=tuple(springs), q0=q0, qd0=qd0, run=run, link_poses=link_poses)
+def _record(r: _Reader, data: dict) -> tuple:
+    """``[record]``: link poses to keep along the run."""
+    if "record" not in data:
+        return ()
+    r.keys(data["record"], ("link_poses",), "record")
+    return tuple(data["record"].get("link_poses", ()))
 
 
 def _robot_path(r: _Reader, t: dict, directory) -> Path:

@@ -3,7 +3,7 @@
 :func:`compile_scene` turns a :class:`~urdf2links.plan.Plan` into two flat arrays (``SI`` int64,
 ``SF`` float64; see :func:`scene_view`) next to the tree's (:mod:`urdf2links.kernels`), so the
 right-hand side ``y' = (q', q'', P)`` of ``y = (q, q', W)`` runs without Python and the compiled
-integration loops (:mod:`urdf2links.compiled_integrators`) call it directly. It computes exactly
+integration loops (:mod:`urdf2links.loops`) call it directly. It computes exactly
 the terms the plan lists: flags switch off the base (no base factors, no ``-dL/dt``), G (zero
 gravity), Q (no wrench is added), tau, springs and dampers.
 
@@ -133,9 +133,8 @@ def compile_scene(plan) -> tuple[np.ndarray, np.ndarray]:
         load_X.append(np.asarray(X, float)[:3, :4])
         load_point.append(np.asarray(load.point, float))
     torque_fn = [fid(f) for f in plan.torque_funcs]
-    coupled = model._C is not None
-    C = model._C if coupled else np.zeros((0, 0))
-    d = model._d if coupled else np.zeros(0)
+    coupled = model.coupling is not None
+    C, d = model.coupling if coupled else (np.zeros((0, 0)), np.zeros(0))
     g = np.zeros(3) if plan.gravity_vector is None else np.asarray(plan.gravity_vector, float)
     kinds = [k for k, _ in fns]
     ptr = np.cumsum([0] + [len(v) for _, v in fns])
@@ -208,7 +207,7 @@ def _fn(sc, j, t, order):
 
 
 def scratch_size(n: int, nt: int) -> int:
-    return 2 * nt + 18 + 2 * n * n + 4 * n + 12 + 3
+    return 2 * nt + 18 + 2 * n * n + 4 * n + 12
 
 
 @njit(cache=True, inline="always")
@@ -243,54 +242,15 @@ def _base_values(sc, t, b18):
             b18[12 + j] = _fn(sc, fj, t, 2)
 
 
-@njit(cache=True)
-def scene_rhs(t, y, out, I, F, W, SI, SF, X):
-    """``out = (q', q'', P)`` (2n + 1,) at ``(t, y = (q, q', W))``; ``X`` scratch of
-    :func:`scratch_size`. Returns -1, or the index of the failing Cholesky pivot (then ``out`` is
-    NaN). ``P`` is the power of the non-potential forces ``q' . (Q + tau - c q')`` minus the
-    explicit rate ``dE/dt - dV/dt`` of a moving base (see :mod:`urdf2links.plan`)."""
-    sc = scene_view(SI, SF)
-    ta = K.tree_view(I, F)
-    ws = K.workspace_view(I, W)
-    n, nt = sc.n, sc.nt
-    o = 0
-    qt = X[o:o + nt]
-    o += nt
-    qdt = X[o:o + nt]
-    o += nt
-    b18 = X[o:o + 18]
-    o += 18
-    A = X[o:o + n * n].reshape((n, n))
-    o += n * n
-    Lf = X[o:o + n * n].reshape((n, n))
-    o += n * n
-    rhs = X[o:o + n]
-    o += n
-    f = X[o:o + n]
-    o += n
-    qdd = X[o:o + n]
-    o += n
-    Qr = X[o:o + n]
-    o += n
-    tw = X[o:o + 6]
-    o += 6
-    ac = X[o:o + 6]
-    o += 6
-    v3 = X[o:o + 3]
-    q = y[:n]
-    qd = y[n:2 * n]
-    _tree_state(sc, q, qd, 1.0, qt, qdt)
-    _base_values(sc, t, b18)
-    K.kinematics(ta, ws, qt, qdt, b18[0:6], b18[6:12], b18[12:18], sc.g)
-    K.clear_wrenches(ws)
-    zero3 = ac[0:3]
+@njit(cache=True, inline="always")
+def _apply_loads(sc, ws, t, v3, val, pt, zero3):
+    """Add every load of the scene at time ``t`` to the workspace's external wrenches (in the tree's
+    link frames: ``load_X`` maps the URDF link's axes and point into them)."""
     for li in range(sc.load_link.size):
         for c in range(3):
             v3[c] = _fn(sc, sc.load_fn[li, c], t, 0)
         Xl = sc.load_X[li]
         local = sc.load_local[li] == 1
-        val = tw[0:3]
-        pt = tw[3:6]
         for r in range(3):
             val[r] = (Xl[r, 0] * v3[0] + Xl[r, 1] * v3[1] + Xl[r, 2] * v3[2]) if local else v3[r]
             pt[r] = (Xl[r, 0] * sc.load_point[li, 0] + Xl[r, 1] * sc.load_point[li, 1]
@@ -300,30 +260,44 @@ def scene_rhs(t, y, out, I, F, W, SI, SF, X):
             K.add_wrench(ws, sc.load_link[li], val, zero3, pt, local)
         else:
             K.add_wrench(ws, sc.load_link[li], zero3, val, pt, local)
-    K.dynamics(ta, ws, True)
-    if sc.coupled:   # A = C^T A_t C, b = C^T b_t, Q = C^T Q_t
-        for i in range(n):
-            s1 = 0.0
-            s2 = 0.0
-            for a in range(nt):
-                s1 += sc.C[a, i] * ws.b[a]
-                s2 += sc.C[a, i] * ws.Q[a]
-            rhs[i] = s1
-            Qr[i] = s2
-            for j in range(n):
-                s3 = 0.0
-                for a in range(nt):
-                    ca = sc.C[a, i]
-                    if ca != 0.0:
-                        for b_ in range(nt):
-                            s3 += ca * ws.A[a, b_] * sc.C[b_, j]
-                A[i, j] = s3
-    else:
+
+
+@njit(cache=True, inline="always")
+def _model_terms(sc, ws, A, rhs, Qr):
+    """``A``, ``rhs = -(e + G)`` and ``Qr = Q`` in the model's coordinates: the tree's, or
+    ``C^T A_t C``, ``C^T b_t``, ``C^T Q_t`` for coupled coordinates."""
+    n, nt = sc.n, sc.nt
+    if not sc.coupled:
         for i in range(n):
             rhs[i] = ws.b[i]
             Qr[i] = ws.Q[i]
             for j in range(n):
                 A[i, j] = ws.A[i, j]
+        return
+    for i in range(n):
+        s1 = 0.0
+        s2 = 0.0
+        for a in range(nt):
+            s1 += sc.C[a, i] * ws.b[a]
+            s2 += sc.C[a, i] * ws.Q[a]
+        rhs[i] = s1
+        Qr[i] = s2
+        for j in range(n):
+            s3 = 0.0
+            for a in range(nt):
+                ca = sc.C[a, i]
+                if ca != 0.0:
+                    for b_ in range(nt):
+                        s3 += ca * ws.A[a, b_] * sc.C[b_, j]
+            A[i, j] = s3
+
+
+@njit(cache=True, inline="always")
+def _applied(sc, t, q, qd, Qr, f):
+    """``f``: every generalized force the scene applies besides ``-(e + G)``: Q of the loads, joint
+    torques, dampers ``-c q'`` and springs ``-k (q - rest)``. Returns the power ``q' . f`` of the
+    non-potential ones (springs excluded)."""
+    n = sc.n
     for i in range(n):
         f[i] = Qr[i]
     for j in range(sc.torque_idx.size):
@@ -337,6 +311,39 @@ def scene_rhs(t, y, out, I, F, W, SI, SF, X):
     for j in range(sc.spring_idx.size):
         i = sc.spring_idx[j]
         f[i] -= sc.stiffness[j] * (q[i] - sc.rest[j])
+    return P
+
+
+@njit(cache=True)
+def scene_rhs(t, y, out, I, F, W, SI, SF, X):
+    """``out = (q', q'', P)`` (2n + 1,) at ``(t, y = (q, q', W))``; ``X`` scratch of
+    :func:`scratch_size` (it keeps ``A`` in model coordinates at offset ``2 nt + 18``). Returns -1,
+    or the index of the failing Cholesky pivot (then ``out`` is NaN). ``P`` is the power of the
+    non-potential forces ``q' . (Q + tau - c q')`` minus the explicit rate ``dE/dt - dV/dt`` of a
+    moving base (see :mod:`urdf2links.plan`)."""
+    sc = scene_view(SI, SF)
+    ta = K.tree_view(I, F)
+    ws = K.workspace_view(I, W)
+    n, nt = sc.n, sc.nt
+    o = 2 * nt + 18
+    qt, qdt, b18 = X[0:nt], X[nt:2 * nt], X[2 * nt:o]
+    A = X[o:o + n * n].reshape((n, n))
+    o += n * n
+    Lf = X[o:o + n * n].reshape((n, n))
+    o += n * n
+    rhs, f, qdd, Qr = X[o:o + n], X[o + n:o + 2 * n], X[o + 2 * n:o + 3 * n], X[o + 3 * n:o + 4 * n]
+    o += 4 * n
+    v3, val, pt, zero3 = X[o:o + 3], X[o + 3:o + 6], X[o + 6:o + 9], X[o + 9:o + 12]
+    q = y[:n]
+    qd = y[n:2 * n]
+    _tree_state(sc, q, qd, 1.0, qt, qdt)
+    _base_values(sc, t, b18)
+    K.kinematics(ta, ws, qt, qdt, b18[0:6], b18[6:12], b18[12:18], sc.g)
+    K.clear_wrenches(ws)
+    _apply_loads(sc, ws, t, v3, val, pt, zero3)
+    K.dynamics(ta, ws, True)
+    _model_terms(sc, ws, A, rhs, Qr)
+    P = _applied(sc, t, q, qd, Qr, f)
     for i in range(n):
         rhs[i] += f[i]
     pivot = K.cholesky_solve(A, rhs, Lf, qdd)
@@ -355,16 +362,15 @@ def scene_rhs(t, y, out, I, F, W, SI, SF, X):
 
 
 class CompiledScene:
-    """The compiled right-hand side of a plan: callable ``(t, y) -> (2n + 1,)`` like
-    :meth:`Plan.rhs`, and ``args`` for the compiled integration loops. A failing Cholesky pivot
-    re-runs the Python plan at that state, which raises the named
-    :class:`~urdf2links.errors.DynamicsError`."""
+    """The compiled right-hand side of a plan: callable ``(t, y) -> (2n + 1,)``, and ``args`` for the
+    compiled integration loops (:mod:`urdf2links.loops`). A failing Cholesky pivot raises the
+    model's named :class:`~urdf2links.errors.DynamicsError`."""
 
     def __init__(self, plan):
         self.plan = plan
         model = plan.model
         self.SI, self.SF = compile_scene(plan)
-        fast = model._fast                      # the tree flattened once, by the model
+        fast = model.compiled                   # the tree flattened once, by the model
         self.I, self.F, self.W = fast.I, fast.F, np.zeros_like(fast.W)
         self.X = np.zeros(scratch_size(model.n, model.tree.n))
         self.dim = 2 * model.n + 1
@@ -394,14 +400,20 @@ class CompiledScene:
         return out[:, 0], out[:, 1], out[:, 2]
 
     def check(self, t, y):
-        """Run the Python plan at a state where the compiled one failed: it raises the named
+        """At a state where the compiled right-hand side failed: raise the model's named
         :class:`~urdf2links.errors.DynamicsError` when A is not positive definite there."""
         y = np.asarray(y, float)
-        if np.all(np.isfinite(y)):
-            self.plan.python_rhs(t, y)
+        if not np.all(np.isfinite(y)):
+            return
+        model = self.plan.model
+        n, nt = model.n, model.tree.n
+        X = np.zeros_like(self.X)
+        if scene_rhs(float(t), y, np.empty(self.dim), self.I, self.F, np.zeros_like(self.W), self.SI, self.SF, X) >= 0:
+            o = 2 * nt + 18
+            raise model.not_positive_definite(X[o:o + n * n].reshape(n, n).copy(), y[:n])
 
     def failure(self, t, y):
-        """Raise the Python plan's error at a state where the compiled solve failed."""
+        """Raise the model's error at a state where the compiled solve failed."""
         self.check(t, y)
         raise FloatingPointError(f"compiled right-hand side failed at t={t!r} (y={y!r})")
 

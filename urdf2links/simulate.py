@@ -9,14 +9,13 @@ the work of non-potential forces, and the power-balance error ``h - h(0) - W`` a
 from __future__ import annotations
 
 import csv
-import sys
-import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from .charts import integrate_charted, link_poses
+from .console import Progress
 from .model import Model
 from .plan import compile_plan
 from .scene import RunSettings, Scene
@@ -77,36 +76,6 @@ class Trajectory:
         return path
 
 
-class Progress:
-    """A one-line progress bar on stderr, redrawn at most 10 times a second; silent when stderr is
-    not a terminal or ``enabled`` is False."""
-
-    def __init__(self, t_end: float, *, label: str = "", enabled: bool | None = None, stream=None):
-        self.stream = stream or sys.stderr
-        self.enabled = (self.stream.isatty() if enabled is None else enabled)
-        self.t_end, self.label = t_end, label
-        self.start = time.perf_counter()
-        self.last = 0.0
-
-    def __call__(self, t, y=None):
-        if not self.enabled:
-            return
-        now = time.perf_counter()
-        if now - self.last < 0.1 and t < self.t_end:
-            return
-        self.last = now
-        frac = min(max(t / self.t_end, 0.0), 1.0) if self.t_end > 0 else 1.0
-        bar = "#" * int(30 * frac)
-        self.stream.write(f"\r{self.label} [{bar:<30}] {100 * frac:5.1f}%  t = {t:.4g} s  {now - self.start:.1f} s wall")
-        self.stream.flush()
-
-    def close(self):
-        if self.enabled:
-            self(self.t_end)
-            self.stream.write("\n")
-            self.stream.flush()
-
-
 def simulate(scene_or_model, *, t_end: float | None = None, method: str | None = None, rtol: float | None = None,
              atol: float | None = None, dt: float | None = None, samples: int | None = None, q0=None, qd0=None,
              progress: bool | None = None, model: Model | None = None, recharting: bool | None = None) -> Trajectory:
@@ -145,9 +114,9 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
     plan = compile_plan(scene, model)
     q, qd = scene.initial_state(model)
     if q0 is not None:
-        q = model._vec(q0, "q0").copy()
+        q = model.vector(q0, "q0").copy()
     if qd0 is not None:
-        qd = model._vec(qd0, "qd0").copy()
+        qd = model.vector(qd0, "qd0").copy()
     n = model.n
     y0 = np.r_[q, qd, 0.0]
     t_eval = np.linspace(0.0, run.t_end, max(run.samples, 2))

@@ -1,4 +1,7 @@
-"""Figures and the report section of a work-precision study (:mod:`compare.tradeoff`).
+"""The files of a work-precision study (:mod:`urdf2links.compare.tradeoff`): JSON, Markdown, figures, report section.
+
+* :func:`write_study` writes ``tradeoff.json``, ``tradeoff.md`` (:func:`render_markdown`) and the
+  two figures, and puts the section into the scene's ``report.html`` when there is one.
 
 * :func:`plot_work_precision`: error (max over the run) against wall time, log-log, every method a
   line, both engines on one figure (urdf2links: solid lines, cool colours, round markers; MuJoCo:
@@ -13,14 +16,17 @@
 
 from __future__ import annotations
 
-import base64
 import html
+import json
 from pathlib import Path
 
 import numpy as np
 
-__all__ = ["plot_work_precision", "plot_energy_drift", "render_section", "insert_section", "section_from_dir",
-           "style", "BEGIN", "END"]
+from .figures import figure, png_base64, save_png
+from .formatting import json_ready
+
+__all__ = ["write_study", "render_markdown", "plot_work_precision", "plot_energy_drift", "render_section",
+           "insert_section", "section_from_dir", "style", "BEGIN", "END"]
 
 BEGIN = "<!-- tradeoff:begin -->"
 END = "<!-- tradeoff:end -->"
@@ -50,9 +56,7 @@ def _series(data, key):
 
 
 def _figure(w, h):
-    from matplotlib.figure import Figure
-
-    return Figure(figsize=(w, h), dpi=100, layout="constrained")
+    return figure(w, h, dpi=100)
 
 
 def _floor(ax, data):
@@ -101,7 +105,7 @@ def plot_work_precision(data: dict, path=None):
     bx.set_title("the same errors against evaluations", fontsize=9)
     _finish(fig, [ax], data, "work-precision (error against wall time)")
     if path is not None:
-        _save(fig, path)
+        save_png(fig, path)
     return fig
 
 
@@ -119,21 +123,10 @@ def plot_energy_drift(data: dict, path=None):
     ax.set_ylabel("energy drift: max |h - h(0) - W| / energy scale")
     _finish(fig, [ax], data, "energy drift against wall time")
     if path is not None:
-        _save(fig, path)
+        save_png(fig, path)
     return fig
 
 
-def _save(fig, path) -> None:
-    """The figure as a PNG file, reduced to a 256-colour palette like the report's (line art)."""
-    from .report import _png
-
-    Path(path).write_bytes(base64.b64decode(_png(fig)))
-
-
-def _b64(fig) -> str:
-    from .report import _png
-
-    return _png(fig)
 
 
 def _num(x, d=2):
@@ -154,8 +147,8 @@ def render_section(data: dict) -> str:
                     f"{_num(r.get('error_final'))}</td><td class='num'>{_num(r.get('energy_drift_rel'), 1)}</td>"
                     f"<td class='num'>{wt}</td><td class='num'>{'&ndash;' if r.get('nfev') is None else r['nfev']}"
                     f"</td><td>{status}</td></tr>")
-    wp = _b64(plot_work_precision(data))
-    ed = _b64(plot_energy_drift(data))
+    wp = png_base64(plot_work_precision(data))
+    ed = png_base64(plot_energy_drift(data))
     m = data["machine"]
     parts = [BEGIN, "<h2>Accuracy against wall time (work-precision)</h2>",
              f"<div class='box'><b>Crossover:</b> {e(co['statement'])}.</div>",
@@ -204,3 +197,50 @@ def section_from_dir(out_dir) -> str:
         return ""
     return render_section(json.loads(p.read_text()))
 
+
+def _fmt(x, d=2):
+    return "-" if x is None else (f"{x:.{d}e}" if isinstance(x, float) else str(x))
+
+
+def render_markdown(data: dict) -> str:
+    ref = data["reference"]
+    lines = [f"# {data['robot']} / {data['scene']}: accuracy against wall time", "",
+             f"t = 0..{data['t_end']:g} s, {data['samples']} samples"
+             + (f" ({data['t_end_note']})" if data.get("t_end_note") else "") + ".", "",
+             f"**Crossover:** {data['crossover']['statement']}.", "",
+             f"Reference: {ref['method']} rtol {ref['rtol']:g} atol {ref['atol']:g} ({ref['nsteps']} steps, "
+             f"{ref['nfev']} evaluations); checked against {ref['check']['method']} rtol {ref['check']['rtol']:g}: "
+             f"error estimate {ref['error_estimate']:.2e} (max over the run), {ref['error_estimate_final']:.2e} (final).",
+             "", f"Error: {data['error']['metric']}. Energy drift: {data['energy']['metric']}. Wall time: median of "
+             f"{data['timing']['repeats']} interleaved rounds; urdf2links: {data['timing']['project']}; MuJoCo: "
+             f"{data['timing']['mujoco']}. Budget {data['budget_s']:g} s per run.", "",
+             "| engine | method | setting | status | error max | error final | energy drift | wall s | evaluations | steps |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in data["rows"]:
+        st = r["status"] if r["status"] == "ok" else f"{r['status']}: {r['reason']}"
+        wt = "-" if r["wall_time_s"] is None else f"{r['wall_time_s']:.3g}"
+        lines.append(f"| {r['engine']} | {r['method']} | {r['param']} {r['value']:g} | {st} | {_fmt(r['error_max'])} | "
+                     f"{_fmt(r['error_final'])} | {_fmt(r['energy_drift_rel'], 1)} | {wt} | {_fmt(r['nfev'])} | "
+                     f"{_fmt(r['nsteps'])} |")
+    m = data["machine"]
+    lines += ["", f"Machine: {m['platform']}, {m['cpu_count']} CPUs, Python {m['python']}, numpy {m['numpy']}, "
+                  f"scipy {m['scipy']}, MuJoCo {m['mujoco']}; commit {m['git_commit']}.", ""]
+    return "\n".join(lines)
+
+
+def write_study(data: dict, out_dir, *, command: str | None = None) -> dict:
+    """Write ``tradeoff.json``, ``tradeoff.md``, ``work_precision.png`` and ``energy_drift.png`` into
+    ``out_dir``, and put the section into ``report.html`` there when it exists. Returns the paths."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    if command:
+        data = dict(data, command=command)
+    paths = {"dir": out, "json": out / "tradeoff.json", "md": out / "tradeoff.md",
+             "work_precision": out / "work_precision.png", "energy_drift": out / "energy_drift.png"}
+    paths["json"].write_text(json.dumps(json_ready(data), indent=2) + "\n")
+    paths["md"].write_text(render_markdown(data))
+    plot_work_precision(data, paths["work_precision"])
+    plot_energy_drift(data, paths["energy_drift"])
+    report = out / "report.html"
+    paths["report"] = report if report.is_file() and insert_section(report, data) else None
+    return paths

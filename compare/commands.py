@@ -1,6 +1,6 @@
-"""The ``compare`` and ``report`` commands of ``urdf2links`` (their arguments are declared in
-:mod:`urdf2links.cli`, which imports this module only when one of them runs, so that the
-``urdf2links`` package never imports MuJoCo).
+"""The ``compare``, ``report`` and ``tradeoff`` commands of ``urdf2links``: their handlers (the arguments are
+declared in :mod:`urdf2links.cli`, which imports this module only when one of them runs, so that
+``import urdf2links`` never imports MuJoCo).
 
 ``urdf2links compare SCENE.toml``: one scene against MuJoCo, a report in
 ``reports/<robot>/<scene>/`` (or ``--out``), the summary also to ``--json``, and with
@@ -17,38 +17,32 @@ to it (or to FILE), replacing an accepted run of the same length and MuJoCo sett
 
 from __future__ import annotations
 
-import os
+import math
 import sys
 import time
 from pathlib import Path
 
-__all__ = ["compare_command", "report_command", "shipped_scenes", "report_t_end", "REPORT_CAP_S", "main"]
+from urdf2links.console import err, shown_path
+from urdf2links.integrators import METHODS
+from urdf2links.locations import shipped_robots_dir
+from urdf2links.scene import load_scene
+
+from .baselines import check_baseline, load_baselines, write_baselines
+from .formatting import json_ready
+from .report import write_index, write_report
+from .trajectory import compare_scene
+from .tradeoff import STAGES, run_study
+from .tradeoff_report import write_study
+
+__all__ = ["compare_command", "report_command", "tradeoff_command", "shipped_scenes", "report_t_end", "REPORT_CAP_S"]
 
 #: Default cap (s) of ``urdf2links report`` on scenes that drive MuJoCo from Python every stage.
 REPORT_CAP_S = 5.0
 
 
-def _err(msg: str) -> None:
-    print(msg, file=sys.stderr, flush=True)
-
-
-def _rel(path) -> str:
-    p = Path(path)
-    try:
-        return os.path.relpath(p.resolve(), Path.cwd())
-    except ValueError:
-        return str(p)
-
-
 def shipped_scenes() -> list[Path]:
-    """The shipped scene files: ``./robots/*.toml`` when run in a checkout, else the package's."""
-    from urdf2links.locations import shipped_robots_dir
-
-    for folder in (Path.cwd() / "robots", shipped_robots_dir()):
-        found = sorted(folder.glob("*.toml")) if folder.is_dir() else []
-        if found:
-            return found
-    return []
+    """The shipped scene files (``robots/*.toml`` of the installed package)."""
+    return sorted(shipped_robots_dir().glob("*.toml"))
 
 
 def _driven(scene) -> list[str]:
@@ -71,7 +65,7 @@ def report_t_end(scene, *, t_end: float | None, cap: float) -> tuple[float, str 
         return float(cap), (
             f"t_end capped at {cap:g} s (the scene's is {scene.run.t_end:g} s) by `urdf2links report` to keep it "
             f"CI-friendly: MuJoCo applies {_words(driven)} from a Python control callback at every RK4 stage, "
-            f"about 0.2-0.4 ms per step. `urdf2links compare {_rel(scene.path)}` runs the whole scene.")
+            f"about 0.2-0.4 ms per step. `urdf2links compare {shown_path(scene.path)}` runs the whole scene.")
     return float(scene.run.t_end), None
 
 
@@ -95,7 +89,7 @@ def _print_headline(s: dict, stream=sys.stdout) -> None:
 
 
 def _compare_cmd(args) -> str:
-    parts = ["urdf2links compare", _rel(args.scene)]
+    parts = ["urdf2links compare", shown_path(args.scene)]
     for flag, value, default in (("--t-end", args.t_end, None), ("--mujoco-integrator", args.mujoco_integrator, "RK4"),
                                  ("--mujoco-dt", args.mujoco_dt, 1e-4), ("--method", args.method, None),
                                  ("--rtol", args.rtol, None), ("--states", args.states, 8), ("--seed", args.seed, 0)):
@@ -105,20 +99,15 @@ def _compare_cmd(args) -> str:
 
 
 def compare_command(args) -> int:
-    from urdf2links.scene import load_scene
-
-    from .report import check_baseline, json_ready, load_baselines, write_report
-    from .trajectory import compare_scene
-
     scene = load_scene(args.scene)
     quiet = getattr(args, "quiet", False)
-    log = (lambda m: None) if quiet else (lambda m: _err(f"  {scene.name}: {m}"))
+    log = (lambda m: None) if quiet else (lambda m: err(f"  {scene.name}: {m}"))
     baselines = None
     if args.check:
         try:
             baselines = load_baselines(args.check)
-        except (OSError, ValueError) as err:
-            _err(f"urdf2links compare: error: cannot read baselines {args.check}: {err}")
+        except (OSError, ValueError) as exc:
+            err(f"urdf2links compare: error: cannot read baselines {args.check}: {exc}")
             return 2
     c = compare_scene(scene, t_end=args.t_end, mujoco_integrator=args.mujoco_integrator, mujoco_dt=args.mujoco_dt,
                       method=args.method, rtol=args.rtol, states=args.states, seed=args.seed,
@@ -127,32 +116,26 @@ def compare_command(args) -> int:
     check = None
     if baselines is not None:
         try:
-            check = check_baseline(summary, baselines, factor=args.factor, source=_rel(args.check))
-        except KeyError as err:
-            _err(f"urdf2links compare: error: {err.args[0]}")
+            check = check_baseline(summary, baselines, factor=args.factor, source=shown_path(args.check))
+        except KeyError as exc:
+            err(f"urdf2links compare: error: {exc.args[0]}")
             return 2
     paths = write_report(c, args.out, json_path=args.json, command=_compare_cmd(args), check=check)
     _print_headline(paths["summary"])
-    print(f"  report     {_rel(paths['html'])} (summary.json, summary.md)" + (f"; JSON also {args.json}" if args.json else ""))
+    print(f"  report     {shown_path(paths['html'])} (summary.json, summary.md)" + (f"; JSON also {args.json}" if args.json else ""))
     if check is not None:
         print(check.text())
         if not check.ok:
-            _err(f"urdf2links compare: {summary['key']}: figure(s) grew past the baseline: {', '.join(check.failures)}")
+            err(f"urdf2links compare: {summary['key']}: figure(s) grew past the baseline: {', '.join(check.failures)}")
             return 1
     return 0
 
 
 def report_command(args) -> int:
-    from urdf2links.scene import load_scene
-
-    from .report import (check_baseline, json_ready, load_baselines, write_baselines, write_index,
-                         write_report)
-    from .trajectory import compare_scene
-
     out = Path(args.out)
     files = [Path(p) for p in args.scenes] if args.scenes else shipped_scenes()
     if not files:
-        _err("urdf2links report: error: no scenes found (robots/*.toml)")
+        err("urdf2links report: error: no scenes found (robots/*.toml)")
         return 2
     if args.write_baselines is True:
         args.write_baselines = out / "baselines.json"
@@ -161,8 +144,8 @@ def report_command(args) -> int:
     if not args.write_baselines and (args.check or baselines_path.is_file()):
         try:
             baselines = load_baselines(baselines_path)
-        except (OSError, ValueError) as err:
-            _err(f"urdf2links report: error: cannot read baselines {baselines_path}: {err}")
+        except (OSError, ValueError) as exc:
+            err(f"urdf2links report: error: cannot read baselines {baselines_path}: {exc}")
             return 2
     entries, summaries, failed, errors = [], [], [], []
     start = time.perf_counter()
@@ -170,32 +153,32 @@ def report_command(args) -> int:
         t0 = time.perf_counter()
         scene = load_scene(f)
         T, note = report_t_end(scene, t_end=args.t_end, cap=args.cap)
-        _err(f"[{i}/{len(files)}] {Path(scene.robot).stem}/{scene.name}: t = 0..{T:g} s"
+        err(f"[{i}/{len(files)}] {Path(scene.robot).stem}/{scene.name}: t = 0..{T:g} s"
              + (f" (capped; scene {scene.run.t_end:g} s)" if note and args.t_end is None else ""))
         try:
             c = compare_scene(scene, t_end=T, mujoco_integrator=args.mujoco_integrator, mujoco_dt=args.mujoco_dt,
                               states=args.states, t_end_note=note, progress=False if args.quiet else None,
-                              log=(lambda m: None) if args.quiet else (lambda m: _err(f"    {m}")))
-        except Exception as err:  # keep going: one broken scene must not hide the others
-            _err(f"    FAILED: {type(err).__name__}: {err}")
-            errors.append(f"{f}: {err}")
+                              log=(lambda m: None) if args.quiet else (lambda m: err(f"    {m}")))
+        except Exception as exc:  # keep going: one broken scene must not hide the others
+            err(f"    FAILED: {type(exc).__name__}: {exc}")
+            errors.append(f"{f}: {exc}")
             continue
         summary = json_ready(c.summary())
         check = None
         if baselines is not None:
             try:
-                check = check_baseline(summary, baselines, factor=args.factor, source=_rel(baselines_path))
-            except KeyError as err:
-                _err(f"    no baseline: {err.args[0]}")
+                check = check_baseline(summary, baselines, factor=args.factor, source=shown_path(baselines_path))
+            except KeyError as exc:
+                err(f"    no baseline: {exc.args[0]}")
             if check is not None and not check.ok:
                 failed.append(f"{summary['key']}: {', '.join(check.failures)}")
-        cmd = f"urdf2links compare {_rel(f)}" + (f" --t-end {T:g}" if T != scene.run.t_end else "")
+        cmd = f"urdf2links compare {shown_path(f)}" + (f" --t-end {T:g}" if T != scene.run.t_end else "")
         write_report(c, out / summary["robot"] / summary["scene"], command=cmd, check=check,
                      index_link="../../index.html")
         summaries.append(summary)
         entries.append({"summary": summary, "link": f"{summary['robot']}/{summary['scene']}/report.html", "check": check})
         tr, en = summary["trajectory"], summary["energy"]
-        _err(f"    done in {time.perf_counter() - t0:.1f} s: terms {summary['terms']['max_rel_error']:.1e}, "
+        err(f"    done in {time.perf_counter() - t0:.1f} s: terms {summary['terms']['max_rel_error']:.1e}, "
              f"max |dq| {tr['max_abs_error']:.1e}, drift {en['project_drift_rel']:.1e} / {en['mujoco_drift_rel']:.1e}"
              + ("" if check is None else f", baseline {'ok' if check.ok else 'FAILED: ' + ', '.join(check.failures)}"))
     note = ""
@@ -206,26 +189,59 @@ def report_command(args) -> int:
                 f"torques, loads) are capped at t_end = {args.cap:g} s; the others run their whole t_end. "
                 "`urdf2links compare SCENE.toml` runs any scene in full.")
     if baselines is not None:
-        note += f" Baseline check against {_rel(baselines_path)} (errors may grow {baselines.get('factor', 10):g}x)."
+        note += f" Baseline check against {shown_path(baselines_path)} (errors may grow {baselines.get('factor', 10):g}x)."
     idx = write_index(entries, out, note=note.strip(), command="urdf2links report" + (f" --out {args.out}" if str(args.out) != "reports" else ""))
     if args.write_baselines:
         bp = write_baselines(summaries, args.write_baselines, factor=args.factor)
-        _err(f"wrote {_rel(bp)}")
+        err(f"wrote {shown_path(bp)}")
     print(idx["table"])
-    print(f"\n{_rel(idx['html'])}: {len(entries)} scene(s) in {time.perf_counter() - start:.0f} s")
+    print(f"\n{shown_path(idx['html'])}: {len(entries)} scene(s) in {time.perf_counter() - start:.0f} s")
     for e in errors:
-        _err(f"urdf2links report: scene failed: {e}")
+        err(f"urdf2links report: scene failed: {e}")
     for f in failed:
-        _err(f"urdf2links report: baseline check FAILED for {f}")
+        err(f"urdf2links report: baseline check FAILED for {f}")
     return 1 if (errors or failed) else 0
 
 
-def main(argv=None) -> int:
-    """``python -m compare.cli compare|report ...``: the same as ``urdf2links compare|report``."""
-    from urdf2links.cli import main as _main
+def tradeoff_command(args) -> int:
+    """``urdf2links tradeoff SCENE.toml``: the study, its files, the crossover on stdout."""
+    scene = load_scene(args.scene)
 
-    return _main(argv)
+    def names(text, what, allowed):
+        if text is None:
+            return None
+        items = tuple(x.strip() for x in text.split(",") if x.strip())
+        bad = [x for x in items if x not in allowed]
+        if bad or not items:
+            raise ValueError(f"{what}={text!r}: unknown {bad or 'empty list'}; choose from {', '.join(allowed)}")
+        return items
 
-
-if __name__ == "__main__":
-    sys.exit(main())
+    try:
+        methods = names(args.methods, "--methods", METHODS)
+        integrators = names(args.mujoco_integrators, "--mujoco-integrators", tuple(STAGES))
+        if args.t_end is not None and not (math.isfinite(args.t_end) and args.t_end > 0):
+            raise ValueError(f"--t-end={args.t_end!r}: must be a finite number of seconds > 0")
+        if args.repeats is not None and args.repeats < 1:
+            raise ValueError(f"--repeats={args.repeats!r}: must be at least 1")
+        if args.budget is not None and not args.budget > 0:
+            raise ValueError(f"--budget={args.budget!r}: must be a number of seconds > 0")
+    except ValueError as exc:
+        err(f"urdf2links tradeoff: error: {exc}")
+        return 2
+    log = (lambda m: None) if args.quiet else (lambda m: err(f"  {scene.name}: {m}"))
+    data = run_study(scene, t_end=args.t_end, quick=args.quick, repeats=args.repeats, budget=args.budget,
+                     methods=methods, mujoco_integrators=integrators, log=log)
+    out = Path(args.out) if args.out else Path("reports") / data["robot"] / data["scene"]
+    cmd = " ".join(["urdf2links tradeoff", shown_path(args.scene)] + (["--quick"] if args.quick else [])
+                   + ([f"--t-end {args.t_end:g}"] if args.t_end is not None else []))
+    paths = write_study(data, out, command=cmd)
+    ref = data["reference"]
+    print(f"{data['key']}: work-precision, t = 0..{data['t_end']:g} s; reference {ref['method']} rtol {ref['rtol']:g}, "
+          f"error estimate {ref['error_estimate']:.1e} (check {ref['check']['method']} rtol {ref['check']['rtol']:g})")
+    ok = sum(r["status"] == "ok" for r in data["rows"])
+    print(f"  {ok} runs, {sum(r['status'] == 'failed' for r in data['rows'])} failed, "
+          f"{sum(r['status'] == 'skipped' for r in data['rows'])} skipped (budget {data['budget_s']:g} s)")
+    print(f"  crossover: {data['crossover']['statement']}")
+    print(f"  wrote {shown_path(paths['json'])}, tradeoff.md, work_precision.png, energy_drift.png"
+          + (f"; section in {shown_path(paths['report'])}" if paths["report"] else ""))
+    return 0

@@ -1,4 +1,4 @@
-"""The literal form of the reference: the oracle.
+"""The literal trace form: the equations term by term, no reuse between links; the oracle of the other forms.
 
 Everything here follows the equations as printed, with no reuse between links:
 for each link ``p`` the chain of elementary matrices from {A} to ``p`` is multiplied out,
@@ -14,7 +14,7 @@ from functools import reduce
 
 import numpy as np
 
-from .transforms import elementary, elementary_derivative, elementary_second_derivative
+from ..transforms import elementary, elementary_derivative, elementary_second_derivative
 
 __all__ = ["LiteralTerms", "literal_terms"]
 

@@ -1,4 +1,4 @@
-"""The recursive form: the same traces as (5.18)-(5.28), organized over the tree.
+"""The recursive form in numpy: the same traces as (5.18)-(5.28), organized over the tree (an oracle).
 
 Every elementary factor satisfies ``dE_k/dv = E_k D_k`` (see :mod:`urdf2links.transforms`), so the
 derivative of the transform of any link ``p`` that follows coordinate ``q_i`` is
@@ -23,9 +23,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .transforms import GENERATORS, elementary
+from ..transforms import GENERATORS, elementary
 
-__all__ = ["RecursivePlan", "Kinematics"]
+__all__ = ["RecursivePlan", "Kinematics", "numpy_terms"]
 
 _I4 = np.eye(4)
 
@@ -238,3 +238,13 @@ class RecursivePlan:
         """V (5.21)+(5.47): ``-sum_p m_p g . r_C``."""
         first = np.einsum("pab,pb->pa", kin.T, self.H[:, :, 3])
         return -float(first[:, :3].sum(axis=0) @ np.asarray(gravity_vector, float))
+
+
+def numpy_terms(plan: RecursivePlan, q, qd, *, base_T=None, gravity_vector=(0.0, 0.0, -9.81), wrenches=()) -> dict:
+    """A, e, G, Q, E, V of the numpy recursive form at a tree state, as
+    :func:`urdf2links.oracles.literal.literal_terms` returns them (same arguments)."""
+    kin = plan.kinematics(np.asarray(q, float), np.asarray(qd, float), base_T, acceleration=True)
+    Hc = plan.composite_inertia(kin)
+    return {"A": plan.mass_matrix(kin, Hc), "e": plan.bias(kin), "G": plan.gravity(kin, gravity_vector, Hc),
+            "Q": plan.generalized_forces(kin, list(wrenches)), "E": plan.kinetic_energy(kin),
+            "V": plan.potential_energy(kin, gravity_vector)}

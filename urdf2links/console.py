@@ -1,0 +1,53 @@
+"""What the commands show a person: progress on stderr, messages, and paths as a user typed them."""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+__all__ = ["Progress", "err", "shown_path"]
+
+
+def err(message: str) -> None:
+    """A line on stderr, flushed (progress and diagnostics; stdout keeps the results)."""
+    print(message, file=sys.stderr, flush=True)
+
+
+def shown_path(path) -> str | None:
+    """``path`` relative to the working folder when it lies inside it, else absolute (reports show
+    paths the way a user in that folder would type them)."""
+    if path is None:
+        return None
+    p, here = Path(path).resolve(), Path.cwd().resolve()
+    return str(p.relative_to(here)) if p.is_relative_to(here) else str(p)
+
+
+class Progress:
+    """A one-line progress bar on stderr, redrawn at most 10 times a second; silent when stderr is
+    not a terminal or ``enabled`` is False."""
+
+    def __init__(self, t_end: float, *, label: str = "", enabled: bool | None = None, stream=None):
+        self.stream = stream or sys.stderr
+        self.enabled = (self.stream.isatty() if enabled is None else enabled)
+        self.t_end, self.label = t_end, label
+        self.start = time.perf_counter()
+        self.last = 0.0
+
+    def __call__(self, t, y=None):
+        if not self.enabled:
+            return
+        now = time.perf_counter()
+        if now - self.last < 0.1 and t < self.t_end:
+            return
+        self.last = now
+        frac = min(max(t / self.t_end, 0.0), 1.0) if self.t_end > 0 else 1.0
+        bar = "#" * int(30 * frac)
+        self.stream.write(f"\r{self.label} [{bar:<30}] {100 * frac:5.1f}%  t = {t:.4g} s  {now - self.start:.1f} s wall")
+        self.stream.flush()
+
+    def close(self):
+        if self.enabled:
+            self(self.t_end)
+            self.stream.write("\n")
+            self.stream.flush()

@@ -1,0 +1,14 @@
+"""The integration loops: RK45, DOP853, RK4 and the implicit midpoint rule, compiled with numba.
+
+``common`` (the evaluation of a compiled scene, the angle guard), ``erk`` (scipy's explicit pairs,
+step for step), ``fixed`` (RK4, the implicit midpoint), ``driver`` (:func:`run`: chunks, storage,
+results; compiled around a compiled scene, interpreted around a Python callable).
+"""
+
+from .common import AngleGuard, evaluate
+from .driver import CHUNK, Outcome, run
+from .erk import TABLEAUX, Tableau, erk_chunk, initial_step
+from .fixed import MAX_HALVINGS, NEWTON_MAXITER, midpoint_chunk, rk4_chunk
+
+__all__ = ["AngleGuard", "evaluate", "run", "Outcome", "CHUNK", "Tableau", "TABLEAUX", "erk_chunk", "initial_step",
+           "rk4_chunk", "midpoint_chunk", "NEWTON_MAXITER", "MAX_HALVINGS"]
