@@ -297,7 +297,10 @@ def test_gyroscope_on_heaving_turning_base_keeps_vertical_momentum():
 
 
 def _zyx_rate_matrix(phi):
-    """omega (world) = J(phi) phi' for R = Rx(phi_x) Ry(phi_y) Rz(phi_z) (5.5)."""
+    """omega = J(phi) phi' in the parent's axes, for R = Rx(phi_x) Ry(phi_y) Rz(phi_z) (docs/equations.md (E3)).
+
+    ``J = R E(phi) = [e1, Rx e2, Rx Ry e3]`` of (E43). The parent's axes are the world's only for a
+    root over a fixed base, which is where this is used (the humanoid's floating root)."""
     cx, sx, cy, sy = np.cos(phi[0]), np.sin(phi[0]), np.cos(phi[1]), np.sin(phi[1])
     Rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
     Ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
