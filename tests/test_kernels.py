@@ -17,6 +17,8 @@ import corpus
 from corpus import NAMED, needs_corpus
 from urdf2links import BaseState, load_urdf
 from urdf2links import kernels as K
+from urdf2links.factor import cholesky, cholesky_solve
+from urdf2links.tree_arrays import W_SIZE, flat_tree
 from urdf2links.oracles.recursive import RecursivePlan
 from urdf2links.transforms import base_transforms
 
@@ -65,12 +67,13 @@ def test_forward_dynamics_solves_the_equation(seed):
 def test_base_power_equals_numpy_form(seed):
     model = random_tree(seed, links=6)
     q, qd, base = _state(model, 3000 + seed, True)
-    ct = K.CompiledTree(model.tree)
+    TI, TF = flat_tree(model.tree)
+    W = np.zeros(TI[W_SIZE])
     b18 = np.r_[base.pose, base.rate, base.accel]
-    ct.terms(q, qd, b18, np.asarray(model.gravity_vector))   # kinematics records the base's twist
-    ws = K.workspace_view(ct.I, ct.W)
-    dE, dV = K.base_power(K.tree_view(ct.I, ct.F), ws, ws.base_twist, ws.base_acc,
-                          np.asarray(model.gravity_vector))
+    g = np.asarray(model.gravity_vector)
+    K.kinematics(TI, TF, W, q, 0, qd, 0, True, b18, 0, True, *g)   # records the base's twist
+    K.dynamics(TI, TF, W, False, False, True)                        # and the links' momentum
+    dE, dV = K.base_power(TI, W, *g)
     bt = base_transforms(base)
     rp = RecursivePlan(model.tree)
     ref = rp.explicit_time_rates(rp.kinematics(q, qd, bt, acceleration=True), bt, model.gravity_vector)
@@ -78,10 +81,12 @@ def test_base_power_equals_numpy_form(seed):
 
 
 def test_cholesky_flags_a_singular_matrix():
-    A = np.array([[1.0, 1.0], [1.0, 1.0]])
-    x, Lf = np.empty(2), np.empty((2, 2))
-    assert K.cholesky_solve(A, np.ones(2), Lf, x) == 1
-    assert K.cholesky_solve(np.eye(2) * 2.0, np.ones(2), Lf, x) == -1 and np.allclose(x, 0.5)
+    A = np.array([1.0, 1.0, 1.0, 1.0])
+    x, Lf = np.ones(2), np.empty(4)
+    assert cholesky(A, 0, 2, Lf, 0) == 1
+    assert cholesky(np.array([2.0, 0.0, 0.0, 2.0]), 0, 2, Lf, 0) == -1
+    cholesky_solve(Lf, 0, 2, x, 0)
+    assert np.allclose(x, 0.5)
 
 
 @needs_corpus

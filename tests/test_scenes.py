@@ -90,7 +90,7 @@ def test_unnamed_effects_cost_nothing(tmp_path, monkeypatch):
     plan = compile_plan(scene, scene.model())
     assert plan.terms == ("A", "e")
     # the compiled twin has the same terms switched off: no base factors, no gravity, no wrench
-    from urdf2links.scene_kernels import scene_view
+    from urdf2links.scene_arrays import scene_view
     sc = scene_view(plan.rhs.SI, plan.rhs.SF)
     assert (sc.has_base, sc.has_g, sc.load_link.size, sc.torque_idx.size, sc.spring_idx.size) == (0, 0, 0, 0, 0)
     PythonPlan(plan).rhs(0.1, np.r_[0.3, 0.2, 0.1, -0.1, 0.0])     # the Python twin runs under the forbids
@@ -136,7 +136,7 @@ def test_named_effects_are_computed(tmp_path, monkeypatch):
     y = np.r_[0.3, 0.2, 0.1, -0.1, 0.0]
     out = PythonPlan(plan).rhs(0.1, y)
     assert counts["G"] == 1 and counts["Q"] >= 1
-    from urdf2links.scene_kernels import scene_view
+    from urdf2links.scene_arrays import scene_view
     sc = scene_view(plan.rhs.SI, plan.rhs.SF)
     assert (sc.has_base, sc.has_g, sc.load_link.size, sc.torque_idx.size, sc.spring_idx.size,
             sc.damper_idx.size) == (1, 1, 1, 1, 1, 1)

@@ -48,14 +48,15 @@ class MeshError(URDFError):
 class DynamicsError(ArithmeticError):
     """The equations of motion cannot be solved at a state (mass matrix not positive definite).
 
-    Attributes ``q`` (the configuration) and ``coordinates`` (names of the coordinates
-    involved) say where.
+    Attributes ``q`` (the configuration), ``coordinates`` (names of the coordinates involved) and
+    ``row`` (the row of a batch, or None) say where.
     """
 
-    def __init__(self, message: str, *, q=None, coordinates: tuple[str, ...] = ()):
+    def __init__(self, message: str, *, q=None, coordinates: tuple[str, ...] = (), row: int | None = None):
         super().__init__(message)
         self.q = q
         self.coordinates = tuple(coordinates)
+        self.row = row
 
 
 class SceneError(ValueError):

@@ -1,11 +1,19 @@
 """The model users hold: a tree of links and its dynamics, the public API of the project.
 
 ``Model`` evaluates the terms of the equations of motion (docs/equations.md (E24)) with the compiled
-recursive form (:mod:`urdf2links.kernels`). ``method="literal"`` (the trace formulas term by term) and
-``method="numpy"`` (the recursive form in numpy) run the oracles of :mod:`urdf2links.oracles`
-instead, for checking. Every dynamics call takes optional keyword arguments ``t`` (time) and
-``base`` (None for a fixed base, a :class:`~urdf2links.transforms.BaseState`, or a callable
-``t -> BaseState``, the prescribed motion of {A}); a fixed base computes no base terms at all.
+recursive form (:mod:`urdf2links.kernels`, called through :mod:`urdf2links.model_kernels`).
+``method="literal"`` (the trace formulas term by term) and ``method="numpy"`` (the recursive form in
+numpy) run the oracles of :mod:`urdf2links.oracles` instead, for checking. Every dynamics call takes
+optional keyword arguments ``t`` (time) and ``base`` (None for a fixed base, a
+:class:`~urdf2links.transforms.BaseState`, or a callable ``t -> BaseState``, the prescribed motion of
+{A}); a fixed base computes no base terms at all.
+
+**Batches.** The compiled calls accept one state, ``q`` (n,), or a batch, ``Q`` (B, n) (and ``QD``,
+``TAU`` of the same shape), and return ``(B, ...)``: one compiled call, parallel over the rows (numba
+threads: ``NUMBA_NUM_THREADS``, or ``numba.set_num_threads``), equal to the per-state calls to the
+last bit. A batch's base is one BaseState for every row, a BaseState of ``(B, 6)`` arrays (one per
+row), or a callable evaluated at ``t``: a number (every row at that time) or an array ``(B,)`` (each
+row at its own time) (:mod:`urdf2links.rows`). A failure names the first offending row.
 
 Coupled coordinates (mimic joints loaded with ``mimic="coupled"``) are a constant linear map
 ``q_tree = C q + d`` from the model's ``n`` coordinates to the tree's; then
@@ -15,25 +23,28 @@ extra velocity terms: E42).
 
 from __future__ import annotations
 
+from collections import namedtuple
 from typing import Iterable, Sequence
 
 import numpy as np
 import scipy.linalg
 
+from . import model_kernels as MK
 from .errors import DynamicsError
-from .kernels import CompiledTree, forward_dynamics as _fd_kernel
 from .loads import Wrench
-from .transforms import BaseState, base_state_at, resolve_base
+from .rows import NO_LOADS, base_rows, load_rows, state_rows
+from .transforms import base_state_at, resolve_base
 from .tree import LinkTree
+from .tree_arrays import flat_tree
 
-__all__ = ["Model", "METHODS", "DEFAULT_GRAVITY"]
+__all__ = ["Model", "METHODS", "DEFAULT_GRAVITY", "FlatTree"]
 
 METHODS = ("recursive", "numpy", "literal")
-_NO_BASE = np.zeros(18)
-_NO_BASE.setflags(write=False)
-_NO_G = np.zeros(3)
-_NO_G.setflags(write=False)
 DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
+_NO_C, _NO_D = np.zeros((0, 0)), np.zeros(0)
+
+FlatTree = namedtuple("FlatTree", ["TI", "TF"])
+"""The tree flattened for the kernels (:func:`urdf2links.tree_arrays.flat_tree`)."""
 
 
 class Model:
@@ -61,14 +72,17 @@ class Model:
         self.source = source
         self.audit = list(audit)
         self.info = dict(info or {})
-        self.compiled = CompiledTree(tree)
-        """The tree flattened for the kernels, with its scratch (:class:`~urdf2links.kernels.CompiledTree`)."""
-        self._zeros = np.zeros(tree.n)      # tau = 0 for the kernel (never written)
+        self.compiled = FlatTree(*flat_tree(tree))
+        """The tree flattened for the kernels (:class:`FlatTree`)."""
+        self._g, self._g0 = g.copy(), np.zeros(3)      # writable: the frozen kernel takes writable arrays
+        self._fd_plain = None
+        self._nq = tree.n               # the length of q'' on the hot path (no coupling there)
         self._numpy_plan = None
         if coupling is None:
             self._C = None
             self._d = None
             self._names = tree.coordinate_names
+            self._Ck, self._dk = _NO_C, _NO_D
         else:
             C, d, names = coupling
             C = np.asarray(C, float)
@@ -76,6 +90,7 @@ class Model:
             if C.shape != (tree.n, len(names)) or d.shape != (tree.n,):
                 raise ValueError(f"coupling shapes {C.shape}, {d.shape} do not fit a tree of {tree.n} coordinates")
             self._C, self._d, self._names = C, d, tuple(names)
+            self._Ck, self._dk = np.ascontiguousarray(C), np.ascontiguousarray(d)
 
     # -- identity --------------------------------------------------------------------------------
     @property
@@ -140,19 +155,59 @@ class Model:
 
     @staticmethod
     def base18(base, t) -> np.ndarray:
-        """(18,) pose, rate and acceleration of {A} for the kernels (zeros for a fixed base)."""
+        """(18,) pose, rate and acceleration of {A} (zeros for a fixed base)."""
         state = base_state_at(base, t)
         if state is None:
-            return _NO_BASE
+            return np.zeros(18)
         return np.concatenate([np.asarray(state.pose, float), np.asarray(state.rate, float),
                                np.asarray(state.accel, float)])
 
-    def _compiled_terms(self, q, qd, t, base, gravity: bool, want_A: bool):
-        qt, qdt = self.tree_state(q, qd)
-        if qdt is None:
-            qdt = np.zeros(self.tree.n)
-        return self.compiled.terms(qt, qdt, self.base18(base, t), self.gravity_vector if gravity else _NO_G,
-                                   want_A=want_A)
+    def _rows(self, named):
+        return state_rows(self.n, self._names, named)
+
+    def _common(self, base, t, B, batched, *, still=False):
+        """The arguments every compiled row takes after the state: base rows, has_base."""
+        return base_rows(base, t, B, batched=batched, still=still)
+
+    def _terms(self, what, method, q, qd, t, base, *, gravity, still=False, loads=()):
+        """A (MASS), e or G (BIAS) or Q (FORCES), for one state or a batch (compiled)."""
+        named = [("q", q)] if qd is None else [("q", q), ("qd", qd)]
+        rows = self._rows(named)
+        Q, QD = rows.arrays[0], rows.arrays[-1]
+        B, n = Q.shape
+        BASE, has_base = self._common(base, t, B, rows.batched, still=still)
+        g = self._g if gravity else self._g0
+        LD = load_rows(self.tree, loads) if loads else NO_LOADS
+        A = np.empty((B, n, n) if what == MK.MASS else (1, 0, 0))
+        V = np.empty((1, 0) if what == MK.MASS else (B, n))
+        args = (BASE, has_base, g[0], g[1], g[2], LD, self._Ck, self._dk, self._C is not None, what)
+        if rows.batched:
+            MK.terms_batch(self.compiled.TI, self.compiled.TF, Q, QD, qd is not None, *args, A, V)
+        else:
+            MK.terms_one(self.compiled.TI, self.compiled.TF, Q[0], QD[0], qd is not None, BASE[0], *args[1:],
+                         A[0], V[0])
+        out = A if what == MK.MASS else V
+        return out if rows.batched else out[0]
+
+    def _energies(self, q, qd, t, base):
+        rows = self._rows([("q", q)] if qd is None else [("q", q), ("qd", qd)])
+        Q, QD = rows.arrays[0], rows.arrays[-1]
+        B = Q.shape[0]
+        BASE, has_base = self._common(base, t, B, rows.batched)
+        g = self._g
+        args = (qd is not None, BASE, has_base, g[0], g[1], g[2], self._Ck, self._dk, self._C is not None)
+        if rows.batched:
+            E, V = np.empty(B), np.empty(B)
+            MK.energy_batch(self.compiled.TI, self.compiled.TF, Q, QD, *args, E, V)
+            return E, V
+        E, V = MK.energy_one(self.compiled.TI, self.compiled.TF, Q[0], QD[0], args[0], BASE[0], *args[2:])
+        return float(E), float(V)
+
+    @staticmethod
+    def _single(method, q, what):
+        if method != "recursive" and np.ndim(q) != 1:
+            raise ValueError(f"method={method!r} evaluates one state (q of shape (n,)); {what} of a batch runs "
+                             f"compiled (method='recursive'), or loop over the rows")
 
     def _oracle(self, method, q, qd, t, base, wrenches=()) -> dict:
         """A, e, G, Q, E, V (tree coordinates) of an oracle form (:mod:`urdf2links.oracles`)."""
@@ -169,93 +224,125 @@ class Model:
         return numpy_terms(self._numpy_plan, qt, qdt, **kw)
 
     # -- the public API --------------------------------------------------------------------------
-    def mass_matrix(self, q, *, t: float = 0.0, base=None, method: str = "recursive") -> np.ndarray:
-        """A (n, n), (E19): ``a_il = sum_p tr(T_i H T_l^T)``."""
+    def mass_matrix(self, q, *, t=0.0, base=None, method: str = "recursive") -> np.ndarray:
+        """A (n, n), or (B, n, n) for q (B, n), (E19): ``a_il = sum_p tr(T_i H T_l^T)``."""
         self._check_method(method)
         if method != "recursive":
+            self._single(method, q, "mass_matrix")
             return self.reduce(self._oracle(method, q, None, t, base)["A"])
-        return self.reduce(self._compiled_terms(q, None, t, base, False, True)[0])
+        return self._terms(MK.MASS, method, q, None, t, base, gravity=False)
 
-    def bias(self, q, qd, *, t: float = 0.0, base=None, method: str = "recursive") -> np.ndarray:
-        """e (n,), (E20): velocity terms and base-motion terms (E15); no gravity."""
+    def bias(self, q, qd, *, t=0.0, base=None, method: str = "recursive") -> np.ndarray:
+        """e (n,) or (B, n), (E20): velocity terms and base-motion terms (E15); no gravity."""
         self._check_method(method)
         if method != "recursive":
+            self._single(method, q, "bias")
             return self.reduce(self._oracle(method, q, qd, t, base)["e"])
-        return self.reduce(-self._compiled_terms(q, qd, t, base, False, False)[1])
+        return self._terms(MK.BIAS, method, q, qd, t, base, gravity=False)
 
-    def gravity(self, q, *, t: float = 0.0, base=None, method: str = "recursive") -> np.ndarray:
-        """G (n,), (E22): ``g_i = m g e3^T T_i r_C`` summed over links, for ``self.gravity_vector``."""
+    def gravity(self, q, *, t=0.0, base=None, method: str = "recursive") -> np.ndarray:
+        """G (n,) or (B, n), (E22): ``g_i = m g e3^T T_i r_C`` summed over links, for ``self.gravity_vector``."""
         self._check_method(method)
         if method != "recursive":
+            self._single(method, q, "gravity")
             return self.reduce(self._oracle(method, q, None, t, base)["G"])
-        state = base_state_at(base, t)      # at rest relative to a base at rest: b = -G
-        still = None if state is None else BaseState.fixed(state.pose)
-        return self.reduce(-self._compiled_terms(q, None, t, still, True, False)[1])
+        # at rest relative to a base at rest in its pose: -b = G
+        return self._terms(MK.BIAS, method, q, None, t, base, gravity=True, still=True)
 
-    def generalized_forces(self, q, loads: Iterable[Wrench], *, t: float = 0.0, base=None,
+    def generalized_forces(self, q, loads: Iterable[Wrench], *, t=0.0, base=None,
                            method: str = "recursive") -> np.ndarray:
-        """Q (n,), (E23): generalized forces of applied forces and moments on links."""
+        """Q (n,) or (B, n), (E23): generalized forces of applied forces and moments on links."""
         self._check_method(method)
-        wr = self.wrenches(loads)
+        loads = list(loads)
         if method != "recursive":
-            return self.reduce(self._oracle(method, q, None, t, base, wr)["Q"])
-        qt, _ = self.tree_state(q)
-        if not wr:
-            return np.zeros(self.n)
-        return self.reduce(self.compiled.forces(qt, self.base18(base, t), wr))
+            self._single(method, q, "generalized_forces")
+            return self.reduce(self._oracle(method, q, None, t, base, self.wrenches(loads))["Q"])
+        if not loads:
+            load_rows(self.tree, loads)
+            return np.zeros(np.shape(self._rows([("q", q)]).arrays[0]) if np.ndim(q) == 2 else self.n)
+        return self._terms(MK.FORCES, method, q, None, t, base, gravity=False, loads=loads)
 
-    def kinetic_energy(self, q, qd, *, t: float = 0.0, base=None, method: str = "recursive") -> float:
-        """E, (E17): ``0.5 sum_p tr(T' H T'^T)``, base motion included."""
+    def kinetic_energy(self, q, qd, *, t=0.0, base=None, method: str = "recursive"):
+        """E (a float, or (B,)), (E17): ``0.5 sum_p tr(T' H T'^T)``, base motion included."""
         self._check_method(method)
         if method != "recursive":
+            self._single(method, q, "kinetic_energy")
             return float(self._oracle(method, q, qd, t, base)["E"])
-        qt, qdt = self.tree_state(q, qd)
-        return float(self.compiled.energies(qt, qdt, self.base18(base, t), _NO_G)[0])
+        return self._energies(q, qd, t, base)[0]
 
-    def potential_energy(self, q, *, t: float = 0.0, base=None, method: str = "recursive") -> float:
-        """V of gravity, (E21): ``sum_p m_p g z_C`` (for ``self.gravity_vector``)."""
+    def potential_energy(self, q, *, t=0.0, base=None, method: str = "recursive"):
+        """V of gravity (a float, or (B,)), (E21): ``sum_p m_p g z_C`` (for ``self.gravity_vector``)."""
         self._check_method(method)
         if method != "recursive":
+            self._single(method, q, "potential_energy")
             return float(self._oracle(method, q, None, t, base)["V"])
-        qt, _ = self.tree_state(q)
-        return float(self.compiled.energies(qt, np.zeros(self.tree.n), self.base18(base, t), self.gravity_vector)[1])
+        return self._energies(q, None, t, base)[1]
 
     def link_poses(self, q, *, t: float = 0.0, base=None) -> np.ndarray:
         """(L, 4, 4): the {0}-pose ``T^(p)`` of every link (E4)."""
-        qt, _ = self.tree_state(q)
-        return self.compiled.poses(qt, self.base18(base, t))
+        q = np.ascontiguousarray(self.vector(q, "q"))
+        state = base_state_at(base, t)
+        L = self.tree.n_links
+        R, o = np.empty((L, 3, 3)), np.empty((L, 3))
+        MK.poses_one(self.compiled.TI, self.compiled.TF, q, self.base18(base, t), state is not None, self._Ck,
+                     self._dk, self._C is not None, R, o)
+        T = np.zeros((L, 4, 4))
+        T[:, :3, :3], T[:, :3, 3], T[:, 3, 3] = R, o, 1.0
+        return T
 
-    def forward_dynamics(self, q, qd, tau=None, *, loads: Iterable[Wrench] = (), t: float = 0.0,
+    def forward_dynamics(self, q, qd, tau=None, *, loads: Iterable[Wrench] = (), t=0.0,
                          base=None, gravity: bool = True) -> np.ndarray:
-        """q'' (n,) from (E24), ``A q'' = Q - G - e``, by Cholesky (E46).
+        """q'' (n,), or (B, n) for a batch, from (E24), ``A q'' = Q - G - e``, by the tree-sparse
+        factorization (E47) (dense Cholesky (E46) for coupled coordinates).
 
-        ``tau`` (n,) are generalized forces added to Q (joint torques and forces); ``loads`` applied
-        wrenches; ``gravity=False`` leaves G out. Raises :class:`~urdf2links.errors.DynamicsError`
-        naming the configuration and the coordinates when A is not positive definite.
+        ``tau`` (n,) or (B, n) are generalized forces added to Q (joint torques and forces); ``loads``
+        applied wrenches (the same for every row); ``gravity=False`` leaves G out. Raises
+        :class:`~urdf2links.errors.DynamicsError` naming the configuration (and the row of a batch) and
+        the coordinates when A is not positive definite.
         """
-        if not loads and self._C is None:    # the hot path: one compiled call
-            q = np.asarray(q, dtype=float)
-            qd = np.asarray(qd, dtype=float)
-            fast = self.compiled
-            shape = (fast.n,)
-            if q.shape != shape or qd.shape != shape:
-                self.vector(q, "q"), self.vector(qd, "qd")
-            out = np.empty(shape)
-            pivot = _fd_kernel(fast.I, fast.F, fast.W, q, qd,
-                               self._zeros if tau is None else self.vector(tau, "tau"),
-                               _NO_BASE if base is None else self.base18(base, t),
-                               self.gravity_vector if gravity else _NO_G, out)
-            if pivot < 0:
+        if base is None and not loads and self._C is None:    # the hot path: one compiled call
+            fd = self._fd_plain or self._freeze()
+            out = np.empty(self._nq)
+            try:
+                pivot = fd(self.compiled.TI, self.compiled.TF, self._g if gravity else self._g0, q, qd, tau, out)
+            except TypeError:       # not float64 vectors: converted (or batched) below
+                pivot = -2
+            if pivot == -1:
                 return out
-        A, b = self._compiled_terms(q, qd, t, base, gravity, True)
-        qt, _ = self.tree_state(q)
-        wr = self.wrenches(loads)
-        if wr:
-            b = b + self.compiled.forces(qt, self.base18(base, t), wr)
-        rhs = self.reduce(b)
-        if tau is not None:
-            rhs = rhs + self.vector(tau, "tau")
-        return self.solve_mass_matrix(self.reduce(A), rhs, q=q)
+        return self._forward_dynamics(q, qd, tau, list(loads), t, base, gravity)
+
+    def _freeze(self):
+        self._fd_plain = MK.fd_plain_frozen()
+        return self._fd_plain
+
+    def _forward_dynamics(self, q, qd, tau, loads, t, base, gravity):
+        rows = self._rows([("q", q), ("qd", qd), ("tau", tau)])
+        Q, QD, TAU = rows.arrays
+        B = Q.shape[0]
+        BASE, has_base = self._common(base, t, B, rows.batched)
+        g = self._g if gravity else self._g0
+        LD = load_rows(self.tree, loads) if loads else NO_LOADS
+        OUT = np.empty_like(Q)
+        args = (tau is not None, BASE, has_base, g[0], g[1], g[2], LD, self._Ck, self._dk, self._C is not None)
+        TI, TF = self.compiled.TI, self.compiled.TF
+        if rows.batched:
+            status = np.empty(B, np.int64)
+            MK.fd_batch(TI, TF, Q, QD, Q if tau is None else TAU, *args, OUT, status)
+            bad = np.flatnonzero(status >= 0)
+            if bad.size:
+                b = int(bad[0])
+                raise self.not_positive_definite(self._mass_row(Q[b], BASE[b if len(BASE) > 1 else 0], has_base),
+                                                 Q[b], row=b)
+            return OUT
+        if MK.fd_one(TI, TF, Q[0], QD[0], Q[0] if tau is None else TAU[0], args[0], BASE[0], *args[2:], OUT[0]) >= 0:
+            raise self.not_positive_definite(self._mass_row(Q[0], BASE[0], has_base), Q[0])
+        return OUT[0]
+
+    def _mass_row(self, q, base18, has_base):
+        A = np.empty((self.n, self.n))
+        MK.terms_one(self.compiled.TI, self.compiled.TF, q, q, False, base18, has_base, 0.0, 0.0, 0.0, NO_LOADS,
+                     self._Ck, self._dk, self._C is not None, MK.MASS, A, np.empty(0))
+        return A
 
     def solve_mass_matrix(self, A: np.ndarray, rhs: np.ndarray, *, q=None) -> np.ndarray:
         """``A^{-1} rhs`` by Cholesky; a matrix that is not positive definite raises DynamicsError."""
@@ -271,13 +358,15 @@ class Model:
             raise self.not_positive_definite(A, q)
         return scipy.linalg.cho_solve((c, low), rhs, check_finite=False)
 
-    def not_positive_definite(self, A, q) -> DynamicsError:
+    def not_positive_definite(self, A, q, *, row: int | None = None) -> DynamicsError:
         """The :class:`~urdf2links.errors.DynamicsError` for a mass matrix ``A`` (n, n) at ``q`` that is
-        not positive definite: its smallest eigenvalue, the coordinates and links it moves, the fix."""
+        not positive definite: its smallest eigenvalue, the coordinates and links it moves, the fix;
+        ``row``: the row of a batch where it happened."""
+        where = "" if row is None else f"row {row} of the batch: "
         if not np.all(np.isfinite(A)):
             bad = sorted({self._names[i] for i, j in zip(*np.nonzero(~np.isfinite(A)))})
-            return DynamicsError(f"mass matrix A has non-finite entries at q={_fmt(q)} in coordinates {bad}",
-                                 q=q, coordinates=tuple(bad))
+            return DynamicsError(f"{where}mass matrix A has non-finite entries at q={_fmt(q)} in coordinates {bad}",
+                                 q=q, coordinates=tuple(bad), row=row)
         w, V = np.linalg.eigh(A)
         vec = V[:, 0]
         big = np.nonzero(np.abs(vec) > 0.1 * np.abs(vec).max())[0]
@@ -286,11 +375,11 @@ class Model:
         links = sorted({self.tree.link_names[self.tree.coord_link[self.tree.coordinate_index(nm)]]
                         for nm in names if nm in self.tree.coordinate_names})
         return DynamicsError(
-            f"mass matrix A of model {self.name!r} is not positive definite at q={_fmt(q)}: smallest "
+            f"{where}mass matrix A of model {self.name!r} is not positive definite at q={_fmt(q)}: smallest "
             f"eigenvalue {w[0]:.3e} (largest {w[-1]:.3e}); its eigenvector moves coordinates {parts}, "
             f"of links {links}. A moving link (or subtree) without mass or without inertia about its "
             f"joint axis does this; load with inertia='repair' or give the link an inertia.",
-            q=q, coordinates=names,
+            q=q, coordinates=names, row=row,
         )
 
 

@@ -1,82 +1,44 @@
-"""A compiled plan (:mod:`urdf2links.plan`) as arrays, and its right-hand side in numba.
+"""A compiled plan's right-hand side in numba, and the energies of its samples.
 
-:func:`compile_scene` turns a :class:`~urdf2links.plan.Plan` into two flat arrays (``SI`` int64,
-``SF`` float64; see :func:`scene_view`) next to the tree's (:mod:`urdf2links.kernels`), so the
-right-hand side ``y' = (q', q'', P)`` of ``y = (q, q', W)`` runs without Python and the compiled
-integration loops (:mod:`urdf2links.loops`) call it directly. It computes exactly
-the terms the plan lists: flags switch off the base (no base factors, no ``-dL/dt``), G (zero
-gravity), Q (no wrench is added), tau, springs and dampers.
-
-Time functions (:mod:`urdf2links.functions`) are compiled as data: sums of sines
-``offset + rate t + sum a sin(w t + phase)`` (constants have no terms) and piecewise polynomials
-(tables: the spline's :class:`scipy.interpolate.PPoly` form), held at the end values outside their
-interval with zero derivatives, exactly as the Python functions.
+:func:`scene_rhs` computes ``y' = (q', q'', P)`` of ``y = (q, q', W)`` from the plan's flat arrays
+(:mod:`urdf2links.scene_arrays`) next to the tree's (:mod:`urdf2links.tree_arrays`), without
+Python, so the compiled integration loops (:mod:`urdf2links.loops`) call it directly. It computes
+exactly the terms the plan lists: flags switch off the base (no base factors, no ``-dL/dt``), G (zero
+gravity), Q (no wrench is added), tau, springs and dampers. Without coupled coordinates ``q''`` is
+solved in place by the tree-sparse factorization (:mod:`urdf2links.factor`, E47); with them, by a
+dense Cholesky of ``C^T A C`` (E46).
 """
 
 from __future__ import annotations
 
-import math
-from collections import namedtuple
-
 import numpy as np
 from numba import njit
-from scipy.interpolate import BSpline, PPoly
 
-from . import kernels as K
-from .functions import Constant, Sines, Table
+from .factor import cholesky, cholesky_solve, ltdl, ltdl_solve
+from .kernels import add_wrench, base_power, clear_wrenches, dynamics, energies, kinematics
+from .model_kernels import reduce_mass, reduce_vector
+from .scene_arrays import (S_BASE_FN, S_C, S_D, S_DAMPER_IDX, S_DAMPING, S_FN_DATA, S_FN_KIND, S_FN_PTR, S_GRAV,
+                           S_LOAD_FN, S_LOAD_KIND, S_LOAD_LINK, S_LOAD_LOCAL, S_LOAD_POINT, S_LOAD_X, S_REST,
+                           S_SPRING_IDX, S_STIFFNESS, S_TORQUE_FN, S_TORQUE_IDX, compile_scene, scratch_size)
+from .tree_arrays import W_B, W_Q, W_SIZE, nn
 
-__all__ = ["CompiledScene", "compile_scene", "scene_rhs", "function_data"]
-
-SceneArrays = namedtuple("SceneArrays", [
-    "n", "nt", "has_base", "has_g", "coupled",
-    "base_fn",                       # (6,) function index of each base parameter
-    "load_link", "load_kind", "load_local", "load_fn",   # (k,), (k,) 0 force 1 moment, (k,), (k, 3)
-    "load_X", "load_point",          # (k, 3, 4) URDF -> tree frame, (k, 3)
-    "torque_idx", "torque_fn",       # (m,), (m,)
-    "spring_idx", "stiffness", "rest",
-    "damper_idx", "damping",
-    "g",                             # (3,)
-    "C", "d",                        # (nt, n), (nt,) coupling q_tree = C q + d
-    "fn_kind", "fn_ptr", "fn_data",  # compiled time functions
-])
-
-
-def function_data(fn) -> tuple[int, np.ndarray]:
-    """``(kind, data)`` of a scalar time function: kind 0 sines ``[offset, rate, K, (a, w, phase)*K]``,
-    kind 1 piecewise polynomial ``[m, k, x_0..x_m, c (k + 1, m) row-major]`` (scipy PPoly layout)."""
-    if isinstance(fn, Constant):
-        return 0, np.array([fn.value, 0.0, 0.0])
-    if isinstance(fn, Sines):
-        data = [fn.offset, fn.rate, float(len(fn.terms))]
-        for a, f, p in fn.terms:
-            data += [a, 2.0 * math.pi * f, p]
-        return 0, np.array(data)
-    if isinstance(fn, Table):
-        spl = fn._spline
-        pp = PPoly.from_spline(spl) if isinstance(spl, BSpline) else PPoly(spl.c, spl.x)
-        x, c = np.asarray(pp.x, float), np.asarray(pp.c, float)
-        # keep the intervals inside [t0, t1] (from_spline adds empty ones at the ends)
-        t0, t1 = fn.times[0], fn.times[-1]
-        keep = [i for i in range(c.shape[1]) if x[i + 1] > x[i] and x[i] >= t0 and x[i + 1] <= t1]
-        xs = np.r_[x[keep], x[keep[-1] + 1]]
-        cs = c[:, keep]
-        return 1, np.r_[float(cs.shape[1]), float(cs.shape[0] - 1), xs, cs.ravel()]
-    raise TypeError(f"cannot compile time function {fn!r}")
+__all__ = ["CompiledScene", "scene_rhs", "scene_energies", "fn_eval"]
 
 
 @njit(cache=True)
-def fn_eval(kind, data, t, order):
-    """d^order f / dt^order at t for :func:`function_data`."""
-    if kind == 0:
+def fn_eval(SI, SF, j, t, order):
+    """``d^order f_j / dt^order`` at ``t`` of the scene's time function ``j`` (see
+    :func:`urdf2links.scene_arrays.function_data`)."""
+    o = SI[S_FN_DATA] + SI[SI[S_FN_PTR] + j]
+    if SI[SI[S_FN_KIND] + j] == 0:
         if order == 0:
-            out = data[0] + data[1] * t
+            out = SF[o] + SF[o + 1] * t
         elif order == 1:
-            out = data[1]
+            out = SF[o + 1]
         else:
             out = 0.0
-        nk = int(data[2])
-        for j in range(nk):
-            a, w, ph = data[3 + 3 * j], data[4 + 3 * j], data[5 + 3 * j]
+        for k in range(int(SF[o + 2])):
+            a, w, ph = SF[o + 3 + 3 * k], SF[o + 4 + 3 * k], SF[o + 5 + 3 * k]
             x = w * t + ph
             if order == 0:
                 out += a * np.sin(x)
@@ -85,293 +47,228 @@ def fn_eval(kind, data, t, order):
             else:
                 out -= a * w * w * np.sin(x)
         return out
-    m = int(data[0])
-    k = int(data[1])
-    x = data[2:3 + m]
-    c = data[3 + m:3 + m + (k + 1) * m]
+    m = int(SF[o])
+    k = int(SF[o + 1])
+    x = SF[o + 2:o + 3 + m]
+    c = o + 3 + m
     if t < x[0] or t > x[m]:
         if order > 0:
             return 0.0
         t = x[0] if t < x[0] else x[m]
-    i = np.searchsorted(x, t, side="right") - 1
-    if i < 0:
-        i = 0
-    if i > m - 1:
-        i = m - 1
+    i = min(max(np.searchsorted(x, t, side="right") - 1, 0), m - 1)
     s = t - x[i]
     out = 0.0
     for j in range(k + 1):       # c[j, i] (s)^(k - j)
         pw = k - j
         if pw < order:
             continue
-        coef = c[j * m + i]
+        coef = SF[c + j * m + i]
         for r in range(order):
             coef *= pw - r
         out += coef * s ** (pw - order)
     return out
 
 
-def compile_scene(plan) -> tuple[np.ndarray, np.ndarray]:
-    """``(SI, SF)`` of a :class:`~urdf2links.plan.Plan` (see :data:`SceneArrays`)."""
-    model = plan.model
-    tree = model.tree
-    fns: list = []
-
-    def fid(f):
-        fns.append(function_data(f))
-        return len(fns) - 1
-
-    n, nt = model.n, tree.n
-    has_base = plan.base is not None
-    base_fn = [fid(f) for f in plan.base] if has_base else [0] * 6
-    load_link, load_kind, load_local, load_fn, load_X, load_point = [], [], [], [], [], []
-    for link, X, load in plan.loads:
-        load_link.append(link)
-        load_kind.append(0 if load.kind == "force" else 1)
-        load_local.append(1 if load.frame == "link" else 0)
-        load_fn.append([fid(c) for c in load.value.components])
-        load_X.append(np.asarray(X, float)[:3, :4])
-        load_point.append(np.asarray(load.point, float))
-    torque_fn = [fid(f) for f in plan.torque_funcs]
-    coupled = model.coupling is not None
-    C, d = model.coupling if coupled else (np.zeros((0, 0)), np.zeros(0))
-    g = np.zeros(3) if plan.gravity_vector is None else np.asarray(plan.gravity_vector, float)
-    kinds = [k for k, _ in fns]
-    ptr = np.cumsum([0] + [len(v) for _, v in fns])
-    data = np.concatenate([v for _, v in fns]) if fns else np.zeros(0)
-    k = len(load_link)
-    ints = [np.array([n, nt, int(has_base), int(plan.gravity_vector is not None), int(coupled), k,
-                      len(torque_fn), plan.spring_index.size, plan.damper_index.size, len(fns)]),
-            base_fn, load_link, load_kind, load_local, np.reshape(load_fn, (-1,)), plan.torque_index, torque_fn,
-            plan.spring_index, plan.damper_index, kinds, ptr]
-    floats = [np.reshape(load_X, (-1,)), np.reshape(load_point, (-1,)), plan.stiffness, plan.rest,
-              plan.damping, g, np.ravel(C), np.ravel(d), data]
-    SI = np.concatenate([np.asarray(a, dtype=np.int64).ravel() for a in ints])
-    SF = np.concatenate([np.asarray(a, dtype=float).ravel() for a in floats])
-    return SI, SF
+# -- the right-hand side ------------------------------------------------------------------------------
+@njit(cache=True)
+def _tree_state(SI, SF, q, iq, qd, iqd, sign, X):
+    """Coupled coordinates: ``X[0:nt] = C q + d``, ``X[nt:2 nt] = sign C q'`` (E42); ``sign`` -1 or 0
+    gives the rates the energy function h needs."""
+    n, nt = SI[0], SI[1]
+    C, d = SI[S_C], SI[S_D]
+    for a in range(nt):
+        s1 = SF[d + a]
+        s2 = 0.0
+        for j in range(n):
+            s1 += SF[C + a * n + j] * q[iq + j]
+            s2 += SF[C + a * n + j] * qd[iqd + j]
+        X[a] = s1
+        X[nt + a] = sign * s2
 
 
 @njit(cache=True)
-def scene_view(SI, SF):
-    n, nt, has_base, has_g, coupled, k, m, ns, nd, nf = (SI[0], SI[1], SI[2], SI[3], SI[4], SI[5],
-                                                       SI[6], SI[7], SI[8], SI[9])
-    o = 10
-    base_fn = SI[o:o + 6]
-    o += 6
-    load_link = SI[o:o + k]
-    o += k
-    load_kind = SI[o:o + k]
-    o += k
-    load_local = SI[o:o + k]
-    o += k
-    load_fn = SI[o:o + 3 * k].reshape((k, 3))
-    o += 3 * k
-    torque_idx = SI[o:o + m]
-    o += m
-    torque_fn = SI[o:o + m]
-    o += m
-    spring_idx = SI[o:o + ns]
-    o += ns
-    damper_idx = SI[o:o + nd]
-    o += nd
-    fn_kind = SI[o:o + nf]
-    o += nf
-    fn_ptr = SI[o:o + nf + 1]
-    f = 0
-    load_X = SF[f:f + 12 * k].reshape((k, 3, 4))
-    f += 12 * k
-    load_point = SF[f:f + 3 * k].reshape((k, 3))
-    f += 3 * k
-    stiffness = SF[f:f + ns]
-    f += ns
-    rest = SF[f:f + ns]
-    f += ns
-    damping = SF[f:f + nd]
-    f += nd
-    g = SF[f:f + 3]
-    f += 3
-    nc = nt * n if coupled else 0
-    C = SF[f:f + nc].reshape((nt if coupled else 0, n if coupled else 0))
-    f += nc
-    d = SF[f:f + (nt if coupled else 0)]
-    f += nt if coupled else 0
-    fn_data = SF[f:]
-    return SceneArrays(n, nt, has_base, has_g, coupled, base_fn, load_link, load_kind, load_local, load_fn,
-                       load_X, load_point, torque_idx, torque_fn, spring_idx, stiffness, rest, damper_idx,
-                       damping, g, C, d, fn_kind, fn_ptr, fn_data)
+def _base_values(SI, SF, t, X, xb):
+    """``X[xb:xb + 18]``: pose, rate and acceleration of {A} at ``t`` from the base functions."""
+    for j in range(6):
+        fj = SI[SI[S_BASE_FN] + j]
+        X[xb + j] = fn_eval(SI, SF, fj, t, 0)
+        X[xb + 6 + j] = fn_eval(SI, SF, fj, t, 1)
+        X[xb + 12 + j] = fn_eval(SI, SF, fj, t, 2)
 
 
-@njit(cache=True, inline="always")
-def _fn(sc, j, t, order):
-    return fn_eval(sc.fn_kind[j], sc.fn_data[sc.fn_ptr[j]:sc.fn_ptr[j + 1]], t, order)
-
-
-def scratch_size(n: int, nt: int) -> int:
-    return 2 * nt + 18 + 2 * n * n + 4 * n + 12
-
-
-@njit(cache=True, inline="always")
-def _tree_state(sc, q, qd, sign, qt, qdt):
-    """The tree's coordinates ``qt = C q + d`` and rates ``qdt = sign C q'`` (the model's own
-    without coupling); ``sign`` -1 or 0 gives the rates the energy function h needs."""
-    if sc.coupled:
-        for a in range(sc.nt):
-            s1 = sc.d[a]
-            s2 = 0.0
-            for j in range(sc.n):
-                s1 += sc.C[a, j] * q[j]
-                s2 += sc.C[a, j] * qd[j]
-            qt[a] = s1
-            qdt[a] = sign * s2
-    else:
-        for a in range(sc.n):
-            qt[a] = q[a]
-            qdt[a] = sign * qd[a]
-
-
-@njit(cache=True, inline="always")
-def _base_values(sc, t, b18):
-    """(18,) pose, rate and acceleration of {A} at ``t`` from the base functions (zeros: fixed)."""
-    for j in range(18):
-        b18[j] = 0.0
-    if sc.has_base:
-        for j in range(6):
-            fj = sc.base_fn[j]
-            b18[j] = _fn(sc, fj, t, 0)
-            b18[6 + j] = _fn(sc, fj, t, 1)
-            b18[12 + j] = _fn(sc, fj, t, 2)
-
-
-@njit(cache=True, inline="always")
-def _apply_loads(sc, ws, t, v3, val, pt, zero3):
-    """Add every load of the scene at time ``t`` to the workspace's external wrenches (in the tree's
-    link frames: ``load_X`` maps the URDF link's axes and point into them)."""
-    for li in range(sc.load_link.size):
-        for c in range(3):
-            v3[c] = _fn(sc, sc.load_fn[li, c], t, 0)
-        Xl = sc.load_X[li]
-        local = sc.load_local[li] == 1
-        for r in range(3):
-            val[r] = (Xl[r, 0] * v3[0] + Xl[r, 1] * v3[1] + Xl[r, 2] * v3[2]) if local else v3[r]
-            pt[r] = (Xl[r, 0] * sc.load_point[li, 0] + Xl[r, 1] * sc.load_point[li, 1]
-                     + Xl[r, 2] * sc.load_point[li, 2] + Xl[r, 3])
-            zero3[r] = 0.0
-        if sc.load_kind[li] == 0:
-            K.add_wrench(ws, sc.load_link[li], val, zero3, pt, local)
+@njit(cache=True)
+def _apply_loads(SI, SF, I, W, t):
+    """Add every load of the scene at time ``t`` to the links' external wrenches (in the tree's link
+    frames: ``load_X`` maps the URDF link's axes and point into them)."""
+    for li in range(SI[5]):
+        fn = SI[S_LOAD_FN] + 3 * li
+        v0, v1, v2 = fn_eval(SI, SF, SI[fn], t, 0), fn_eval(SI, SF, SI[fn + 1], t, 0), fn_eval(SI, SF, SI[fn + 2], t, 0)
+        X = SI[S_LOAD_X] + 12 * li
+        pt = SI[S_LOAD_POINT] + 3 * li
+        local = SI[SI[S_LOAD_LOCAL] + li] == 1
+        if local:
+            v0, v1, v2 = (SF[X] * v0 + SF[X + 1] * v1 + SF[X + 2] * v2, SF[X + 4] * v0 + SF[X + 5] * v1 + SF[X + 6] * v2,
+                          SF[X + 8] * v0 + SF[X + 9] * v1 + SF[X + 10] * v2)
+        r0 = SF[X] * SF[pt] + SF[X + 1] * SF[pt + 1] + SF[X + 2] * SF[pt + 2] + SF[X + 3]
+        r1 = SF[X + 4] * SF[pt] + SF[X + 5] * SF[pt + 1] + SF[X + 6] * SF[pt + 2] + SF[X + 7]
+        r2 = SF[X + 8] * SF[pt] + SF[X + 9] * SF[pt + 1] + SF[X + 10] * SF[pt + 2] + SF[X + 11]
+        link = SI[SI[S_LOAD_LINK] + li]
+        if SI[SI[S_LOAD_KIND] + li] == 0:
+            add_wrench(I, W, link, v0, v1, v2, 0.0, 0.0, 0.0, r0, r1, r2, local)
         else:
-            K.add_wrench(ws, sc.load_link[li], zero3, val, pt, local)
+            add_wrench(I, W, link, 0.0, 0.0, 0.0, v0, v1, v2, r0, r1, r2, local)
 
 
-@njit(cache=True, inline="always")
-def _model_terms(sc, ws, A, rhs, Qr):
-    """``A``, ``rhs = -(e + G)`` and ``Qr = Q`` in the model's coordinates: the tree's, or
-    ``C^T A_t C``, ``C^T b_t``, ``C^T Q_t`` for coupled coordinates."""
-    n, nt = sc.n, sc.nt
-    if not sc.coupled:
-        for i in range(n):
-            rhs[i] = ws.b[i]
-            Qr[i] = ws.Q[i]
-            for j in range(n):
-                A[i, j] = ws.A[i, j]
-        return
+@njit(cache=True)
+def _applied(SI, SF, t, y, Q, iQ, f, jf):
+    """``f[jf:jf + n]``: every generalized force the scene applies besides ``-(e + G)``: Q of the
+    loads (``Q[iQ:]``, when there are loads), joint torques, dampers ``-c q'`` and springs
+    ``-k (q - rest)``. Returns the power ``q' . f`` of the non-potential ones (springs excluded)."""
+    n = SI[0]
     for i in range(n):
-        s1 = 0.0
-        s2 = 0.0
-        for a in range(nt):
-            s1 += sc.C[a, i] * ws.b[a]
-            s2 += sc.C[a, i] * ws.Q[a]
-        rhs[i] = s1
-        Qr[i] = s2
-        for j in range(n):
-            s3 = 0.0
-            for a in range(nt):
-                ca = sc.C[a, i]
-                if ca != 0.0:
-                    for b_ in range(nt):
-                        s3 += ca * ws.A[a, b_] * sc.C[b_, j]
-            A[i, j] = s3
-
-
-@njit(cache=True, inline="always")
-def _applied(sc, t, q, qd, Qr, f):
-    """``f``: every generalized force the scene applies besides ``-(e + G)``: Q of the loads, joint
-    torques, dampers ``-c q'`` and springs ``-k (q - rest)``. Returns the power ``q' . f`` of the
-    non-potential ones (springs excluded)."""
-    n = sc.n
-    for i in range(n):
-        f[i] = Qr[i]
-    for j in range(sc.torque_idx.size):
-        f[sc.torque_idx[j]] += _fn(sc, sc.torque_fn[j], t, 0)
-    for j in range(sc.damper_idx.size):
-        i = sc.damper_idx[j]
-        f[i] -= sc.damping[j] * qd[i]
+        f[jf + i] = Q[iQ + i] if SI[5] > 0 else 0.0
+    ti, tf = SI[S_TORQUE_IDX], SI[S_TORQUE_FN]
+    for j in range(SI[6]):
+        f[jf + SI[ti + j]] += fn_eval(SI, SF, SI[tf + j], t, 0)
+    di, dc = SI[S_DAMPER_IDX], SI[S_DAMPING]
+    for j in range(SI[8]):
+        i = SI[di + j]
+        f[jf + i] -= SF[dc + j] * y[n + i]
     P = 0.0
     for i in range(n):
-        P += qd[i] * f[i]
-    for j in range(sc.spring_idx.size):
-        i = sc.spring_idx[j]
-        f[i] -= sc.stiffness[j] * (q[i] - sc.rest[j])
+        P += y[n + i] * f[jf + i]
+    si, k, rest = SI[S_SPRING_IDX], SI[S_STIFFNESS], SI[S_REST]
+    for j in range(SI[7]):
+        i = SI[si + j]
+        f[jf + i] -= SF[k + j] * (y[i] - SF[rest + j])
     return P
 
 
 @njit(cache=True)
-def scene_rhs(t, y, out, I, F, W, SI, SF, X):
-    """``out = (q', q'', P)`` (2n + 1,) at ``(t, y = (q, q', W))``; ``X`` scratch of
-    :func:`scratch_size` (it keeps ``A`` in model coordinates at offset ``2 nt + 18``). Returns -1,
-    or the index of the failing Cholesky pivot (then ``out`` is NaN). ``P`` is the power of the
-    non-potential forces ``q' . (Q + tau - c q')`` minus the explicit rate ``dE/dt - dV/dt`` of a
-    moving base (see :mod:`urdf2links.plan`)."""
-    sc = scene_view(SI, SF)
-    ta = K.tree_view(I, F)
-    ws = K.workspace_view(I, W)
-    n, nt = sc.n, sc.nt
-    o = 2 * nt + 18
-    qt, qdt, b18 = X[0:nt], X[nt:2 * nt], X[2 * nt:o]
-    A = X[o:o + n * n].reshape((n, n))
-    o += n * n
-    Lf = X[o:o + n * n].reshape((n, n))
-    o += n * n
-    rhs, f, qdd, Qr = X[o:o + n], X[o + n:o + 2 * n], X[o + 2 * n:o + 3 * n], X[o + 3 * n:o + 4 * n]
-    o += 4 * n
-    v3, val, pt, zero3 = X[o:o + 3], X[o + 3:o + 6], X[o + 6:o + 9], X[o + 9:o + 12]
-    q = y[:n]
-    qd = y[n:2 * n]
-    _tree_state(sc, q, qd, 1.0, qt, qdt)
-    _base_values(sc, t, b18)
-    K.kinematics(ta, ws, qt, qdt, b18[0:6], b18[6:12], b18[12:18], sc.g)
-    K.clear_wrenches(ws)
-    _apply_loads(sc, ws, t, v3, val, pt, zero3)
-    K.dynamics(ta, ws, True)
-    _model_terms(sc, ws, A, rhs, Qr)
-    P = _applied(sc, t, q, qd, Qr, f)
+def _coupled_solve(SI, SF, I, W, X, t, y, out):
+    """Coupled coordinates: ``A = C^T A_tree C``, ``rhs = C^T (b + Q) + f`` and ``q''`` by a dense
+    Cholesky into ``out[n:2 n]``; returns the pivot (scratch layout: :func:`scratch_size`)."""
+    n, nt = SI[0], SI[1]
+    C = SF[SI[S_C]:SI[S_C] + nt * n].reshape((nt, n))
+    xa = 2 * nt + 18
+    xl = xa + n * n
+    xf = xl + n * n
+    if SI[5] > 0:
+        reduce_vector(C, W, I[W_Q], X, xf + n, 1.0)
+    P = _applied(SI, SF, t, y, X, xf + n, X, xf)
+    reduce_vector(C, W, I[W_B], out, n, 1.0)
     for i in range(n):
-        rhs[i] += f[i]
-    pivot = K.cholesky_solve(A, rhs, Lf, qdd)
+        out[n + i] += X[xf + i]
+    reduce_mass(I, W, C, X[xa:xl].reshape((n, n)))
+    pivot = cholesky(X, xa, n, X, xl)
+    if pivot < 0:
+        cholesky_solve(X, xl, n, out, n)
+    return pivot, P
+
+
+@njit(cache=True)
+def scene_rhs(t, y, out, I, F, W, SI, SF, X):
+    """``out = (q', q'', P)`` (2n + 1,) at ``(t, y = (q, q', W))``; ``W`` the tree's scratch, ``X``
+    the scene's (:func:`~urdf2links.scene_arrays.scratch_size`). Returns -1, or the index of the
+    failing pivot (then ``out`` is NaN). ``P`` is the power of the non-potential forces
+    ``q' . (Q + tau - c q')`` minus the explicit rate ``dE/dt - dV/dt`` of a moving base (see
+    :mod:`urdf2links.plan`)."""
+    n, nt = SI[0], SI[1]
+    has_base, coupled, loads = SI[2] != 0, SI[4] != 0, SI[5] > 0
+    applied = loads or SI[6] > 0 or SI[7] > 0 or SI[8] > 0
+    g = SI[S_GRAV]
+    gx, gy, gz = SF[g], SF[g + 1], SF[g + 2]
+    xb = 2 * nt
+    if has_base:
+        _base_values(SI, SF, t, X, xb)
+    if coupled:
+        _tree_state(SI, SF, y, 0, y, n, 1.0, X)
+        kinematics(I, F, W, X, 0, X, nt, True, X, xb, has_base, gx, gy, gz)
+    else:
+        kinematics(I, F, W, y, 0, y, n, True, X, xb, has_base, gx, gy, gz)
+    if loads:
+        clear_wrenches(I, W)
+        _apply_loads(SI, SF, I, W, t)
+    dynamics(I, F, W, True, loads, has_base)
+    for i in range(n):
+        out[i] = y[n + i]
+    P = 0.0
+    if coupled:
+        pivot, P = _coupled_solve(SI, SF, I, W, X, t, y, out)
+    else:
+        wb = nn(I[W_B])
+        if applied:
+            xf = 2 * nt + 18
+            P = _applied(SI, SF, t, y, W, I[W_Q], X, xf)
+            for i in range(n):
+                out[n + i] = W[wb + i] + X[xf + i]
+        else:
+            for i in range(n):
+                out[n + i] = W[wb + i]
+        pivot = ltdl(I, W)
+        if pivot < 0:
+            ltdl_solve(I, W, out, n)
     if pivot >= 0:
         for i in range(out.size):
             out[i] = np.nan
         return pivot
-    if sc.has_base:   # the base's twist and acceleration, recorded by kinematics
-        dE, dV = K.base_power(ta, ws, ws.base_twist, ws.base_acc, sc.g)
+    if has_base:   # the base's twist, acceleration and the links' momentum, recorded by the passes
+        dE, dV = base_power(I, W, gx, gy, gz)
         P -= dE - dV
-    for i in range(n):
-        out[i] = qd[i]
-        out[n + i] = qdd[i]
     out[2 * n] = P
     return -1
 
 
+@njit(cache=True)
+def scene_energies(ts, Q, QD, out, I, F, W, SI, SF, X):
+    """At each sample ``k``: ``out[k] = (E, V, h)``: kinetic energy and potential energy of gravity
+    (docs/equations.md (E37)) plus springs ``0.5 k (q - rest)^2``, and the energy function ``h``
+    (E39) (``E + V`` for a fixed base; ``E2 - E0 + V`` from E at ``q'``, ``-q'`` and 0 for a moving one)."""
+    n, nt = SI[0], SI[1]
+    has_base, coupled = SI[2] != 0, SI[4] != 0
+    g = SI[S_GRAV]
+    gx, gy, gz = SF[g], SF[g + 1], SF[g + 2]
+    xb = 2 * nt
+    si, k, rest = SI[S_SPRING_IDX], SI[S_STIFFNESS], SI[S_REST]
+    for s in range(ts.size):
+        if has_base:
+            _base_values(SI, SF, ts[s], X, xb)
+        E0 = E1 = E2 = V = 0.0
+        for pass_ in range(3 if has_base else 1):
+            sign = 1.0 if pass_ == 0 else (-1.0 if pass_ == 1 else 0.0)
+            if coupled:
+                _tree_state(SI, SF, Q[s], 0, QD[s], 0, sign, X)
+            else:
+                for i in range(n):
+                    X[i] = Q[s, i]
+                    X[nt + i] = sign * QD[s, i]
+            kinematics(I, F, W, X, 0, X, nt, True, X, xb, has_base, 0.0, 0.0, 0.0)
+            E, V = energies(I, F, W, gx, gy, gz)
+            if pass_ == 0:
+                E0 = E
+            elif pass_ == 1:
+                E1 = E
+            else:
+                E2 = E
+        for j in range(SI[7]):
+            x = Q[s, SI[si + j]] - SF[rest + j]
+            V += 0.5 * SF[k + j] * x * x
+        out[s, 0] = E0
+        out[s, 1] = V
+        out[s, 2] = (0.5 * (E0 + E1) - 2.0 * E2 + V) if has_base else E0 + V
+
+
 class CompiledScene:
     """The compiled right-hand side of a plan: callable ``(t, y) -> (2n + 1,)``, and ``args`` for the
-    compiled integration loops (:mod:`urdf2links.loops`). A failing Cholesky pivot raises the
-    model's named :class:`~urdf2links.errors.DynamicsError`."""
+    compiled integration loops (:mod:`urdf2links.loops`). A failing pivot raises the model's named
+    :class:`~urdf2links.errors.DynamicsError`."""
 
     def __init__(self, plan):
         self.plan = plan
         model = plan.model
         self.SI, self.SF = compile_scene(plan)
-        fast = model.compiled                   # the tree flattened once, by the model
-        self.I, self.F, self.W = fast.I, fast.F, np.zeros_like(fast.W)
+        self.I, self.F = model.compiled              # the tree flattened once, by the model
+        self.W = np.zeros(int(self.I[W_SIZE]))
         self.X = np.zeros(scratch_size(model.n, model.tree.n))
         self.dim = 2 * model.n + 1
 
@@ -405,46 +302,12 @@ class CompiledScene:
         y = np.asarray(y, float)
         if not np.all(np.isfinite(y)):
             return
-        model = self.plan.model
-        n, nt = model.n, model.tree.n
-        X = np.zeros_like(self.X)
-        if scene_rhs(float(t), y, np.empty(self.dim), self.I, self.F, np.zeros_like(self.W), self.SI, self.SF, X) >= 0:
-            o = 2 * nt + 18
-            raise model.not_positive_definite(X[o:o + n * n].reshape(n, n).copy(), y[:n])
+        if scene_rhs(float(t), y, np.empty(self.dim), *self.fresh_args()) >= 0:
+            model = self.plan.model
+            q = y[:model.n]
+            raise model.not_positive_definite(model.mass_matrix(q, t=t, base=self.plan.base_state(t)), q)
 
     def failure(self, t, y):
         """Raise the model's error at a state where the compiled solve failed."""
         self.check(t, y)
         raise FloatingPointError(f"compiled right-hand side failed at t={t!r} (y={y!r})")
-
-
-@njit(cache=True)
-def scene_energies(ts, Q, QD, out, I, F, W, SI, SF, X):
-    """At each sample ``k``: ``out[k] = (E, V, h)``: kinetic energy and potential energy of gravity
-    (docs/equations.md (E37)) plus springs ``0.5 k (q - rest)^2``, and the energy function ``h``
-    (E39) (``E + V`` for a fixed base; ``E2 - E0 + V`` from E at ``q'``, ``-q'`` and 0 for a moving one)."""
-    sc = scene_view(SI, SF)
-    ta = K.tree_view(I, F)
-    ws = K.workspace_view(I, W)
-    nt = sc.nt
-    qt = X[0:nt]
-    qdt = X[nt:2 * nt]
-    b18 = X[2 * nt:2 * nt + 18]
-    zero = np.zeros(3)
-    for k in range(ts.size):
-        _base_values(sc, ts[k], b18)
-        Es = np.zeros(3)
-        V = 0.0
-        for pass_ in range(3 if sc.has_base else 1):
-            sign = 1.0 if pass_ == 0 else (-1.0 if pass_ == 1 else 0.0)
-            _tree_state(sc, Q[k], QD[k], sign, qt, qdt)
-            K.kinematics(ta, ws, qt, qdt, b18[0:6], b18[6:12], b18[12:18], zero)
-            E, Vg = K.energies(ta, ws, sc.g)
-            Es[pass_] = E
-            V = Vg
-        for j in range(sc.spring_idx.size):
-            x = Q[k, sc.spring_idx[j]] - sc.rest[j]
-            V += 0.5 * sc.stiffness[j] * x * x
-        out[k, 0] = Es[0]
-        out[k, 1] = V
-        out[k, 2] = (0.5 * (Es[0] + Es[1]) - 2.0 * Es[2] + V) if sc.has_base else Es[0] + V

@@ -1,62 +1,86 @@
-"""The tree flattened for the compiled kernels: arrays, their packing, and views into them.
+"""The tree flattened for the compiled kernels: two arrays, their layout, and the scratch size.
 
-:func:`pack_tree` turns a :class:`~urdf2links.tree.LinkTree` into :data:`TreeArrays` (runs of
-constant factors multiplied into one rigid transform, variable factors kept); :func:`flat_tree`
-packs those into one int64 and one float64 array, so that a compiled call unboxes two arrays
-instead of a tuple of fourteen; :func:`tree_view` and :func:`workspace_view` rebuild named views
-inside numba at no cost.
+:func:`flat_tree` turns a :class:`~urdf2links.tree.LinkTree` into one int64 array ``TI`` and one
+float64 array ``TF``: runs of constant factors are multiplied into one rigid transform (identity
+factors dropped), variable factors are kept with their slot. The kernels index these arrays (and
+their scratch ``W``, one float64 array per thread) at offsets stored in the header of ``TI``,
+never through views: building a view costs reference counting (and a reshape a library call) on
+every call, which was a third of a small robot's evaluation.
+
+Layout (the names are module constants, folded into the compiled code):
+
+- ``TI[:HEADER]``: ``L, n, S, P`` (links, coordinates, segments, ancestor pairs), then the offsets of
+  the blocks of ``TI`` (``I_*``), of ``TF`` (``F_*``) and of the scratch ``W`` (``W_*``, ``W_SIZE``).
+- ``TI`` blocks: ``parent`` (L,), ``seg_ptr`` (L + 1,) (link p's factors are ``seg_ptr[p]:seg_ptr[p + 1]``),
+  ``seg_slot`` (S,) (0..5 a variable slot, :data:`CONSTANT` a constant transform), ``seg_coord`` (S,),
+  ``coord_link`` (n,), ``anc_ptr`` (n + 1,) and ``anc_idx`` (P,): for coordinate ``i`` the coordinates
+  ``l <= i`` whose link is ``link(i)`` or an ancestor, ascending (the last one is ``i``); ``anc_row``
+  (P,): ``anc_ptr[anc_idx[j]]``, where the row of that ancestor starts; ``run_ptr`` (n + 1,) and
+  ``runs`` (2 R,): the same rows as runs of consecutive coordinates ``(first, length)`` (a chain's
+  row is one run), so that the loops over a row index coordinates directly.
+- ``TF`` blocks: per segment ``KS`` floats (offset, R (3, 3) row-major, p (3,)); per link ``KF`` floats
+  (mass, first moment ``m r_C`` (3,) and ``J = tr(S) 1 - S`` (6,: xx yy zz xy xz yz) about the link
+  origin, in the link's axes, with ``S = H[:3, :3]``).
+- ``W`` blocks: per link a record of ``KL`` floats (pose, twist, acceleration, subtree sums, wrenches;
+  offsets ``R_ .. FX``), the coordinates' unit twists ``s = (w, v)`` by component (6, n): ``s_i[j]``
+  at ``W[W_COORD + j n + i]``, the mass matrix packed by
+  rows of ``anc_idx`` (P,) (factorized in place, :mod:`urdf2links.factor`), ``b``, ``Q``, ``x`` (n,),
+  and the base record (``BASE_*``).
 """
 
 from __future__ import annotations
-
-from collections import namedtuple
 
 import numpy as np
 from numba import njit
 
 from .transforms import elementary
 
-__all__ = ["TreeArrays", "Workspace", "pack_tree", "flat_tree", "flat_workspace", "workspace_size",
-           "tree_view", "workspace_view"]
+__all__ = ["flat_tree", "HEADER", "CONSTANT", "KS", "KF", "KL", "workspace_size", "nn"]
 
-TreeArrays = namedtuple("TreeArrays", [
-    "parent",      # (L,) int64
-    "seg_ptr",     # (L + 1,) int64: link p's factors are seg_ptr[p]:seg_ptr[p + 1]
-    "seg_kind",    # (S,) int64: 0 constant (seg_R, seg_p), 1 variable (slot, coord, offset)
-    "seg_slot",    # (S,) int64 0..5
-    "seg_coord",   # (S,) int64
-    "seg_off",     # (S,) float
-    "seg_R",       # (S, 3, 3)
-    "seg_p",       # (S, 3)
-    "mass",        # (L,)  H[3, 3]
-    "moment",      # (L, 3) H[:3, 3] = m r_C in the link frame
-    "second",      # (L, 3, 3) H[:3, :3] = int r r^T dm in the link frame
-    "coord_link",  # (n,) int64
-    "anc_ptr",     # (n + 1,) int64: coordinates l <= i whose link is link(i) or an ancestor of it
-    "anc_idx",     # (P,) int64
-])
+CONSTANT = 6        # seg_slot of a constant transform
+KS = 13             # floats per segment in TF: offset, R (9), p (3)
+KF = 10             # floats per link in TF: m, m r_C (3), J (6)
+KL = 48             # floats per link record in W
 
-Workspace = namedtuple("Workspace", [
-    "R", "o", "V", "Acc",         # (L, 3, 3), (L, 3), (L, 6), (L, 6): pose, twist (w, v), acc.
-    "s",                          # (n, 6) unit twists (w_i, v_i)
-    "cm", "cc", "cS",             # (L,), (L, 3), (L, 3, 3): subtree m, c, S in {0}
-    "fi", "fx",                   # (L, 6): subtree inertial (with gravity) / external wrench (f, n)
-    "A", "b", "Q", "Lf",          # (n, n), (n,), (n,), (n, n) tree-sized
-    "cur",                        # (24,) scratch: R (9), o (3), V (6), Acc (6)
-    "tmp",                        # (30,) scratch
-    "base_twist", "base_acc",     # (6,), (6,): twist and spatial acceleration of {A} (no gravity)
-])
+# TI header
+I_PARENT, I_SEGPTR, I_SEGSLOT, I_SEGCOORD, I_COORDLINK, I_ANCPTR, I_ANCIDX, I_ANCROW, I_RUNPTR, I_RUNS = range(4, 14)
+F_SEG, F_LINK = 14, 15
+W_LINK, W_COORD, W_A, W_B, W_Q, W_X, W_BASE, W_SIZE = range(16, 24)
+HEADER = 24
 
-_INT_FIELDS = ("parent", "seg_ptr", "seg_kind", "seg_slot", "seg_coord", "coord_link", "anc_ptr", "anc_idx")
-_FLOAT_FIELDS = ("seg_off", "seg_R", "seg_p", "mass", "moment", "second")
+# the link record in W (offsets from the record's start)
+R_ = 0      # rotation (9,) row-major
+O_ = 9      # origin (3,)
+WV = 12     # twist: omega (3,), v (3,)
+AC = 18     # spatial acceleration at q'' = 0: alpha (3,), a (3,) (a includes -g)
+CM = 24     # subtree mass, first moment c (3,), J about {0} (6,): the link alone until summed
+CC = 25
+CJ = 28
+FI = 34     # inertial wrench (f, n) of the subtree, gravity included (6,)
+FX = 40     # external wrench (f, n) of the subtree (6,)
+
+# the base record in W: a link record's pose, twist and acceleration (24,), then
+BASE_TWIST = 24     # the base's own twist (6,) and spatial acceleration without gravity (6,)
+BASE_ACC = 30
+BASE_MOM = 36       # total momentum (P, H about {0}) of the links (6,) when asked for
+BASE_S = 42         # scratch unit twist of a base factor (6,)
+KB = 48
 
 
-def pack_tree(tree) -> TreeArrays:
-    """Flatten a :class:`~urdf2links.tree.LinkTree` for the kernels: runs of constant factors are
-    multiplied into one rigid transform (identity factors dropped), variable factors are kept."""
-    kinds, slots, coords, offs, Rs, ps, ptr = [], [], [], [], [], [], [0]
+@njit(cache=True)
+def nn(k):
+    """``max(k, 0)`` of an offset or index that is never negative: it tells the compiler so. An
+    integer index of unknown sign makes numba wrap negative values around on every access
+    (three instructions, and no vectorization); one ``nn`` where an offset is loaded removes that
+    from every access derived from it."""
+    return max(k, 0)
+
+
+def _segments(tree):
+    """Per link: a list of ``(slot, coordinate, offset, R, p)``, constant runs multiplied out."""
+    out = []
     for p in range(tree.n_links):
-        C = None
+        segs, C = [], None
         for k in range(6):
             i, v = int(tree.coord[p, k]), float(tree.params[p, k])
             if i < 0:
@@ -65,121 +89,64 @@ def pack_tree(tree) -> TreeArrays:
                     C = E if C is None else C @ E
                 continue
             if C is not None:
-                kinds.append(0), slots.append(0), coords.append(-1), offs.append(0.0)
-                Rs.append(C[:3, :3]), ps.append(C[:3, 3])
+                segs.append((CONSTANT, -1, 0.0, C[:3, :3], C[:3, 3]))
                 C = None
-            kinds.append(1), slots.append(k), coords.append(i), offs.append(v)
-            Rs.append(np.eye(3)), ps.append(np.zeros(3))
+            segs.append((k, i, v, np.eye(3), np.zeros(3)))
         if C is not None:
-            kinds.append(0), slots.append(0), coords.append(-1), offs.append(0.0)
-            Rs.append(C[:3, :3]), ps.append(C[:3, 3])
-        ptr.append(len(kinds))
+            segs.append((CONSTANT, -1, 0.0, C[:3, :3], C[:3, 3]))
+        out.append(segs)
+    return out
+
+
+def workspace_size(L: int, n: int, P: int) -> int:
+    return KL * L + 6 * n + P + 3 * n + KB
+
+
+def flat_tree(tree) -> tuple[np.ndarray, np.ndarray]:
+    """``(TI, TF)`` of a :class:`~urdf2links.tree.LinkTree` (see the module doc)."""
+    L, n = tree.n_links, tree.n
+    segs = _segments(tree)
+    ptr = np.cumsum([0] + [len(s) for s in segs])
+    flat = [s for link in segs for s in link]
+    S = len(flat)
     anc = tree.coordinate_ancestor()
     anc_ptr, anc_idx = [0], []
-    for i in range(tree.n):
+    for i in range(n):
         anc_idx += [l for l in range(i + 1) if anc[i, l]]
         anc_ptr.append(len(anc_idx))
-    i64 = lambda x: np.ascontiguousarray(x, dtype=np.int64)
-    f64 = lambda x, shape: np.ascontiguousarray(np.reshape(np.asarray(x, dtype=float), shape))
-    S = len(kinds)
+    P = len(anc_idx)
+    anc_row = [anc_ptr[l] for l in anc_idx]
+    run_ptr, runs = [0], []
+    for i in range(n):      # row i's coordinates as runs of consecutive ones: (first, length)
+        row = anc_idx[anc_ptr[i]:anc_ptr[i + 1]]
+        for j, l in enumerate(row):
+            if j > 0 and l == row[j - 1] + 1:
+                runs[-1] += 1
+            else:
+                runs += [l, 1]
+        run_ptr.append(len(runs) // 2)
+    blocks = [np.asarray(tree.parent), ptr, [s[0] for s in flat], [s[1] for s in flat],
+              np.asarray(tree.coord_link), anc_ptr, anc_idx, anc_row, run_ptr, runs]
+    head = np.zeros(HEADER, np.int64)
+    head[:4] = L, n, S, P
+    o = HEADER
+    for k, b in enumerate(blocks):
+        head[I_PARENT + k] = o
+        o += len(b)
     H = np.asarray(tree.H, float)
-    return TreeArrays(
-        parent=i64(tree.parent), seg_ptr=i64(ptr), seg_kind=i64(kinds), seg_slot=i64(slots),
-        seg_coord=i64(coords), seg_off=f64(offs, (S,)), seg_R=f64(Rs, (S, 3, 3)), seg_p=f64(ps, (S, 3)),
-        mass=f64(H[:, 3, 3], (-1,)), moment=f64(H[:, :3, 3], (-1, 3)), second=f64(H[:, :3, :3], (-1, 3, 3)),
-        coord_link=i64(tree.coord_link), anc_ptr=i64(anc_ptr), anc_idx=i64(anc_idx if anc_idx else [0])[:len(anc_idx)],
-    )
-
-
-def flat_tree(ta: TreeArrays) -> tuple[np.ndarray, np.ndarray]:
-    """``(I, F)``: the tree as one int64 and one float64 array (header ``L, n, S, P``), so that a
-    compiled call unboxes two arrays instead of a tuple of fourteen (the dispatch cost of a
-    namedtuple argument is microseconds); :func:`tree_view` rebuilds the views inside numba."""
-    L, n, S, P = ta.parent.size, ta.coord_link.size, ta.seg_kind.size, ta.anc_idx.size
-    I = np.concatenate([np.array([L, n, S, P], dtype=np.int64)] + [getattr(ta, f).ravel() for f in _INT_FIELDS])
-    F = np.concatenate([np.asarray(getattr(ta, f), float).ravel() for f in _FLOAT_FIELDS])
-    return np.ascontiguousarray(I), np.ascontiguousarray(F)
-
-
-def workspace_size(L: int, n: int) -> int:
-    return 9 * L + 3 * L + 6 * L + 6 * L + 6 * n + L + 3 * L + 9 * L + 6 * L + 6 * L + 2 * n * n + 2 * n + 24 + 30
-
-
-def flat_workspace(I: np.ndarray) -> np.ndarray:
-    """Scratch for one evaluation at a time (one per thread), as one float64 array."""
-    return np.zeros(workspace_size(int(I[0]), int(I[1])))
-
-
-@njit(cache=True, inline="always")
-def tree_view(I, F):
-    """:class:`TreeArrays` of views into the flat arrays of :func:`flat_tree`."""
-    L, n, S, P = I[0], I[1], I[2], I[3]
-    o = 4
-    parent = I[o:o + L]
-    o += L
-    seg_ptr = I[o:o + L + 1]
-    o += L + 1
-    seg_kind = I[o:o + S]
-    o += S
-    seg_slot = I[o:o + S]
-    o += S
-    seg_coord = I[o:o + S]
-    o += S
-    coord_link = I[o:o + n]
-    o += n
-    anc_ptr = I[o:o + n + 1]
-    o += n + 1
-    anc_idx = I[o:o + P]
-    f = 0
-    seg_off = F[f:f + S]
-    f += S
-    seg_R = F[f:f + 9 * S].reshape((S, 3, 3))
-    f += 9 * S
-    seg_p = F[f:f + 3 * S].reshape((S, 3))
-    f += 3 * S
-    mass = F[f:f + L]
-    f += L
-    moment = F[f:f + 3 * L].reshape((L, 3))
-    f += 3 * L
-    second = F[f:f + 9 * L].reshape((L, 3, 3))
-    return TreeArrays(parent, seg_ptr, seg_kind, seg_slot, seg_coord, seg_off, seg_R, seg_p,
-                      mass, moment, second, coord_link, anc_ptr, anc_idx)
-
-
-@njit(cache=True, inline="always")
-def workspace_view(I, Wf):
-    """:class:`Workspace` of views into the flat scratch of :func:`flat_workspace`."""
-    L, n = I[0], I[1]
-    o = 0
-    R = Wf[o:o + 9 * L].reshape((L, 3, 3))
-    o += 9 * L
-    ov = Wf[o:o + 3 * L].reshape((L, 3))
-    o += 3 * L
-    V = Wf[o:o + 6 * L].reshape((L, 6))
-    o += 6 * L
-    Acc = Wf[o:o + 6 * L].reshape((L, 6))
-    o += 6 * L
-    s = Wf[o:o + 6 * n].reshape((n, 6))
-    o += 6 * n
-    cm = Wf[o:o + L]
-    o += L
-    cc = Wf[o:o + 3 * L].reshape((L, 3))
-    o += 3 * L
-    cS = Wf[o:o + 9 * L].reshape((L, 3, 3))
-    o += 9 * L
-    fi = Wf[o:o + 6 * L].reshape((L, 6))
-    o += 6 * L
-    fx = Wf[o:o + 6 * L].reshape((L, 6))
-    o += 6 * L
-    A = Wf[o:o + n * n].reshape((n, n))
-    o += n * n
-    b = Wf[o:o + n]
-    o += n
-    Q = Wf[o:o + n]
-    o += n
-    Lf = Wf[o:o + n * n].reshape((n, n))
-    o += n * n
-    cur = Wf[o:o + 24]
-    o += 24
-    tmp = Wf[o:o + 30]
-    return Workspace(R, ov, V, Acc, s, cm, cc, cS, fi, fx, A, b, Q, Lf, cur, tmp, tmp[0:6], tmp[6:12])
+    seg_f = np.zeros((S, KS))
+    for j, (_, _, off, R, p) in enumerate(flat):
+        seg_f[j, 0], seg_f[j, 1:10], seg_f[j, 10:13] = off, np.ravel(R), p
+    link_f = np.zeros((L, KF))
+    for p in range(L):
+        Sm = H[p, :3, :3]
+        J = np.trace(Sm) * np.eye(3) - Sm
+        link_f[p, 0], link_f[p, 1:4] = H[p, 3, 3], H[p, :3, 3]
+        link_f[p, 4:10] = J[0, 0], J[1, 1], J[2, 2], J[0, 1], J[0, 2], J[1, 2]
+    head[F_SEG], head[F_LINK] = 0, S * KS
+    w = [KL * L, 6 * n, P, n, n, n, KB]
+    head[W_LINK:W_SIZE + 1] = np.cumsum([0] + w)
+    assert head[W_SIZE] == workspace_size(L, n, P)
+    TI = np.concatenate([head] + [np.asarray(b, np.int64).ravel() for b in blocks])
+    TF = np.concatenate([seg_f.ravel(), link_f.ravel()])
+    return np.ascontiguousarray(TI), np.ascontiguousarray(TF)
