@@ -1,0 +1,557 @@
+"""A scene's time-dependent inputs applied by a COMPILED MuJoCo control callback: no Python per stage.
+
+MuJoCo calls ``mjcb_control(m, d)`` inside every ``mj_forward``, after positions and velocities
+and before the accelerations: at each of RK4's four stages, with ``d->time`` the stage's time.
+:mod:`urdf2links.compare.mujoco_run` explains what the callback must do (joint torques into
+``qfrc_applied``, loads into ``xfrc_applied`` or through the host body's Jacobian, the prescribed
+base {A} solved with the mass matrix); its Python :class:`~urdf2links.compare.mujoco_run.PythonInputs`
+does it with numpy and is the oracle this module is tested against (trajectories equal to 1e-12).
+
+Here the same steps are numba code (:func:`control`), installed as a C function pointer through
+``mujoco.set_mjcb_control`` (the bindings then call it directly; no Python runs during
+``mj_step``). What it reads:
+
+* the scene's time functions and loads as the project's own right-hand side compiled them
+  (:func:`urdf2links.scene_kernels.compile_scene`: ``SI``, ``SF``, :func:`~urdf2links.scene_kernels.fn_eval`),
+  so both engines evaluate literally the same functions;
+* MuJoCo's arrays of the run's ``MjData`` (``qfrc_applied``, ``xfrc_applied``, ``xpos``, ``xmat``,
+  ``xipos``, ``qfrc_passive``, ``qfrc_actuator``, ``qfrc_bias``, ``qpos``) at the addresses the
+  Python bindings give (``d.qfrc_applied.ctypes.data``); ``d->time`` at its offset in ``mjData``,
+  derived from MuJoCo's own struct description (``mujoco.introspect``, the field list of
+  ``mjdata.h`` in order) laid out by ``ctypes`` and checked at run time against the bindings
+  (the pointer fields at their derived offsets must hold the arrays' addresses, ``time`` a written
+  sentinel): a disagreement refuses the run with :class:`LayoutError`;
+* MuJoCo's ``mj_fullM``, ``mj_applyFT`` and ``mj_jac``, called through their addresses in the
+  bundled ``libmujoco`` (the library the bindings loaded).
+
+The callback finds its run through one process-wide header (:data:`HEADER`, int64 slots) whose
+address the compiled code takes from an external symbol registered with LLVM's linker, so the
+callback (:func:`callback_pointer`) is compiled once and then loaded from numba's disk cache like
+the project's kernels.
+One run is active at a time (MuJoCo's callback is process-global too); the callback leaves any
+other ``MjData`` alone. A failed Cholesky factorization of the robot's block of the mass matrix
+(prescribed base) is recorded in the header and raised after the step by :meth:`CompiledInputs.check`.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import glob
+import os
+import time
+
+import mujoco
+import numpy as np
+from llvmlite import binding as llvm
+from llvmlite import ir
+from numba import carray, cfunc, njit, types
+from numba.extending import intrinsic
+
+from urdf2links.kernels import cholesky_solve
+from urdf2links.scene_kernels import fn_eval, scene_view
+
+__all__ = ["CompiledInputs", "LayoutError", "mjdata_offsets", "check_offsets", "callback_pointer", "control",
+           "HEADER_FIELDS"]
+
+
+class LayoutError(RuntimeError):
+    """The ``mjData`` layout derived from ``mujoco.introspect`` disagrees with the running MuJoCo."""
+
+
+# --------------------------------------------------------------------------- mjData's layout
+
+_PRIMITIVES = {
+    "mjtNum": ctypes.c_double, "double": ctypes.c_double, "float": ctypes.c_float, "int": ctypes.c_int,
+    "unsigned int": ctypes.c_uint, "mjtBool": ctypes.c_ubyte, "mjtByte": ctypes.c_ubyte,
+    "unsigned char": ctypes.c_ubyte, "char": ctypes.c_char, "mjtSize": ctypes.c_int64, "size_t": ctypes.c_size_t,
+    "uintptr_t": ctypes.c_size_t, "int8_t": ctypes.c_int8, "uint8_t": ctypes.c_uint8, "int16_t": ctypes.c_int16,
+    "uint16_t": ctypes.c_uint16, "int32_t": ctypes.c_int32, "uint32_t": ctypes.c_uint32,
+    "int64_t": ctypes.c_int64, "uint64_t": ctypes.c_uint64,
+}
+_STRUCTS: dict = {}
+
+
+def _ctype(t):
+    from mujoco.introspect import enums, structs
+
+    kind = type(t).__name__
+    if kind == "PointerType":
+        return ctypes.c_void_p
+    if kind == "ArrayType":
+        c = _ctype(t.inner_type)
+        for extent in reversed(t.extents):
+            c = c * extent
+        return c
+    name = t.name
+    if name in _PRIMITIVES:
+        return _PRIMITIVES[name]
+    if name in structs.STRUCTS:
+        return _struct(name)
+    if name in enums.ENUMS:
+        return ctypes.c_int
+    raise LayoutError(f"mujoco.introspect: type {name!r} of MuJoCo {mujoco.__version__} has no known C layout")
+
+
+def _struct(name: str):
+    """A ``ctypes.Structure`` with the fields of MuJoCo's struct ``name``, in order (C layout rules)."""
+    from mujoco.introspect import structs
+
+    if name not in _STRUCTS:
+        decl = structs.STRUCTS[name]
+        _STRUCTS[name] = type(name, (ctypes.Structure,), {"_fields_": [(f.name, _ctype(f.type)) for f in decl.fields]})
+    return _STRUCTS[name]
+
+
+#: Pointer fields whose derived offsets are checked against the bindings' array addresses.
+_CHECKED_POINTERS = ("qpos", "qvel", "qfrc_applied", "xfrc_applied", "xpos", "xmat", "xipos", "qfrc_passive",
+                     "qfrc_bias", "qacc")
+
+
+def mjdata_offsets(d: mujoco.MjData) -> dict[str, int]:
+    """Byte offsets in ``mjData`` of ``time`` and the checked pointer fields, derived from
+    ``mujoco.introspect`` and verified on ``d`` by :func:`check_offsets`."""
+    layout = _struct("mjData")
+    return check_offsets(d, {name: getattr(layout, name).offset for name in ("time",) + _CHECKED_POINTERS})
+
+
+def check_offsets(d: mujoco.MjData, offsets: dict[str, int]) -> dict[str, int]:
+    """``offsets`` when they hold on ``d``: each checked pointer field must hold the address of the
+    bindings' array, and ``time`` must read back sentinels written through the bindings (``d.time``
+    is restored). Raises :class:`LayoutError` naming the field that disagrees."""
+    base = d._address
+    for name in _CHECKED_POINTERS:
+        arr = getattr(d, name)
+        if arr.size == 0:
+            continue
+        found = ctypes.c_void_p.from_address(base + offsets[name]).value
+        if found != arr.ctypes.data:
+            raise LayoutError(f"mjData.{name}: the offset {offsets[name]} derived from mujoco.introspect (MuJoCo "
+                              f"{mujoco.__version__}) holds {found!r}, not the address of d.{name} "
+                              f"({arr.ctypes.data}): the compiled control callback cannot be used with this MuJoCo "
+                              "(run_mujoco(..., inputs='python') still works)")
+    saved = d.time
+    try:
+        for sentinel in (1234.5678125, -0.001953125):
+            d.time = sentinel
+            got = ctypes.c_double.from_address(base + offsets["time"]).value
+            if got != sentinel:
+                raise LayoutError(f"mjData.time: the offset {offsets['time']} derived from mujoco.introspect (MuJoCo "
+                                  f"{mujoco.__version__}) reads {got!r} after d.time = {sentinel!r}: the compiled "
+                                  "control callback cannot be used with this MuJoCo (run_mujoco(..., inputs='python') "
+                                  "still works)")
+    finally:
+        d.time = saved
+    return dict(offsets)
+
+
+# --------------------------------------------------------------------------- raw pointers in numba
+
+_VOIDP = ir.IntType(8).as_pointer()
+
+
+@intrinsic
+def _voidptr(typingctx, addr):
+    """The integer ``addr`` as a ``void*``."""
+    def codegen(context, builder, signature, args):
+        return builder.inttoptr(args[0], _VOIDP)
+    return types.voidptr(types.int64), codegen
+
+
+@intrinsic
+def _address(typingctx, ptr):
+    """The address held by a ``void*``, as int64."""
+    def codegen(context, builder, signature, args):
+        return builder.ptrtoint(args[0], ir.IntType(64))
+    return types.int64(types.voidptr), codegen
+
+
+def _codegen(kinds: str):
+    """Code calling ``void f(...)`` at an int64 address with int64 arguments, ``kinds`` one letter
+    per argument: ``p`` passed as ``void*``, ``i`` as a C int."""
+    def codegen(context, builder, signature, llargs):
+        i32 = ir.IntType(32)
+        fnty = ir.FunctionType(ir.VoidType(), [_VOIDP if k == "p" else i32 for k in kinds])
+        f = builder.inttoptr(llargs[0], fnty.as_pointer())
+        builder.call(f, [builder.inttoptr(v, _VOIDP) if k == "p" else builder.trunc(v, i32)
+                         for k, v in zip(kinds, llargs[1:])])
+        return context.get_dummy_value()
+    return codegen
+
+
+def _signature(k: int):
+    return types.void(*([types.int64] * (k + 1)))
+
+
+@intrinsic
+def _call_fullM(typingctx, fn, m, d, dst):
+    """``mj_fullM(m, d, dst)`` at address ``fn``."""
+    return _signature(3), _codegen("ppp")
+
+
+@intrinsic
+def _call_applyFT(typingctx, fn, m, d, force, torque, point, body, target):
+    """``mj_applyFT(m, d, force, torque, point, body, qfrc_target)`` at address ``fn``."""
+    return _signature(7), _codegen("pppppip")
+
+
+@intrinsic
+def _call_jac(typingctx, fn, m, d, jacp, jacr, point, body):
+    """``mj_jac(m, d, jacp, jacr, point, body)`` at address ``fn``."""
+    return _signature(6), _codegen("pppppi")
+
+
+def _libmujoco_functions() -> dict[str, int]:
+    """Addresses of the MuJoCo C functions the callback calls, from the bundled library."""
+    here = os.path.dirname(mujoco.__file__)
+    libs = sorted(glob.glob(os.path.join(here, "libmujoco.so*")) + glob.glob(os.path.join(here, "libmujoco*.dylib"))
+                  + glob.glob(os.path.join(here, "mujoco.dll")))
+    if not libs:
+        raise LayoutError(f"no libmujoco shared library next to {mujoco.__file__}")
+    lib = ctypes.CDLL(libs[0])
+    return {name: ctypes.cast(getattr(lib, name), ctypes.c_void_p).value for name in ("mj_fullM", "mj_applyFT", "mj_jac")}
+
+
+# --------------------------------------------------------------------------- the header
+
+#: Slots of :data:`HEADER` (int64): the run the callback acts on.
+HEADER_FIELDS = (
+    "active", "data", "time_offset", "nv", "nq", "nbody", "n", "L", "base_body", "prescribe",
+    "qfrc_applied", "xfrc_applied", "xpos", "xmat", "xipos", "qfrc_passive", "qfrc_actuator", "qfrc_bias", "qpos",
+    "fullM", "applyFT", "jac",
+    "SI", "SI_len", "SF", "SF_len", "MAP", "MAP_len", "TREE", "TREE_len", "SCR", "SCR_len",
+    "calls", "error", "error_count",
+)
+_H = {name: k for k, name in enumerate(HEADER_FIELDS)}
+(ACTIVE, DATA, TIME_OFF, NV, NQ, NBODY, NR, NL, BASE_BODY, PRESCRIBE, QFRC_APPLIED, XFRC_APPLIED, XPOS, XMAT, XIPOS, QFRC_PASSIVE,
+ QFRC_ACTUATOR, QFRC_BIAS, QPOS, FN_FULLM, FN_APPLYFT, FN_JAC, A_SI, N_SI, A_SF, N_SF, A_MAP, N_MAP, A_TREE, N_TREE,
+ A_SCR, N_SCR, CALLS, ERROR, ERROR_COUNT) = range(len(HEADER_FIELDS))
+NHEADER = len(HEADER_FIELDS)
+
+#: The process-wide header the callback reads. Its address reaches the compiled code as the
+#: external symbol :data:`HEADER_SYMBOL`, registered with LLVM's dynamic linker before the callback
+#: is loaded, so that the callback's machine code is cached on disk like the project's kernels.
+HEADER = np.zeros(NHEADER, dtype=np.int64)
+HEADER_SYMBOL = "urdf2links_mjcb_control_header"
+llvm.add_symbol(HEADER_SYMBOL, int(HEADER.ctypes.data))
+_CALLBACK = None
+
+
+@intrinsic
+def _header_address(typingctx):
+    """The address of :data:`HEADER` (the external symbol :data:`HEADER_SYMBOL`)."""
+    def codegen(context, builder, signature, args):
+        gv = builder.module.globals.get(HEADER_SYMBOL)
+        if gv is None:
+            gv = ir.GlobalVariable(builder.module, ir.IntType(64), name=HEADER_SYMBOL)
+            gv.linkage = "external"
+        return builder.ptrtoint(gv, ir.IntType(64))
+    return types.int64(), codegen
+
+
+def _callback(m, d):
+    control(m, d, _header_address())
+
+
+def callback_pointer():
+    """``(pointer, seconds)``: the C callback ``void(const mjModel*, mjData*)`` for
+    ``mujoco.set_mjcb_control`` (a ctypes function pointer of a numba ``cfunc`` calling
+    :func:`control` on :data:`HEADER`), and the seconds spent compiling or loading it from the cache
+    in this call (0.0 after the first call of a process)."""
+    global _CALLBACK
+    if _CALLBACK is not None:
+        return _CALLBACK.ctypes, 0.0
+    start = time.perf_counter()
+    _CALLBACK = cfunc(types.void(types.voidptr, types.voidptr), cache=True)(_callback)
+    return _CALLBACK.ctypes, time.perf_counter() - start
+
+
+# --------------------------------------------------------------------------- the callback
+
+
+@njit(cache=True, inline="always")
+def _rows(addr, rows, cols):
+    return carray(_voidptr(addr), (rows, cols), np.float64)
+
+
+@njit(cache=True)
+def _link_pose(p, MAP, TREE, xpos, xmat, qpos, L, base_body, R, o, Rl):
+    """{0}-pose ``(R (3, 3), o (3,))`` of tree link ``p``: its body's ``xmat``/``xpos``, or for a folded
+    link (no body) the nearest ancestor with a body (or the base / the world) times ``T~`` of the
+    folded links in between at MuJoCo's ``qpos``. ``MAP`` holds ``body_of_link`` (L,), ``parent``
+    (L,) and the qpos index of each link's six parameters (L, 6; -1 constant); ``TREE`` the
+    parameters (L, 6)."""
+    body_of = MAP[0:L]
+    parent = MAP[L:2 * L]
+    coord_q = MAP[2 * L:8 * L].reshape((L, 6))
+    params = TREE[0:6 * L].reshape((L, 6))
+    chain = np.empty(L, np.int64)
+    k = 0
+    a = p
+    while a >= 0 and body_of[a] < 0:
+        chain[k] = a
+        k += 1
+        a = parent[a]
+    b = body_of[a] if a >= 0 else base_body
+    if b >= 0:
+        for r in range(3):
+            o[r] = xpos[b, r]
+            for c in range(3):
+                R[r, c] = xmat[b, 3 * r + c]
+    else:
+        for r in range(3):
+            o[r] = 0.0
+            for c in range(3):
+                R[r, c] = 1.0 if r == c else 0.0
+    for j in range(k - 1, -1, -1):          # T = T_parent T1 T2 T3 T4 T5 T6 (5.5)
+        f = chain[j]
+        v = np.empty(6)
+        for s in range(6):
+            v[s] = params[f, s] + (qpos[coord_q[f, s]] if coord_q[f, s] >= 0 else 0.0)
+        for r in range(3):
+            o[r] += R[r, 0] * v[0] + R[r, 1] * v[1] + R[r, 2] * v[2]
+        cx, sx, cy, sy, cz, sz = np.cos(v[3]), np.sin(v[3]), np.cos(v[4]), np.sin(v[4]), np.cos(v[5]), np.sin(v[5])
+        Rl[0, 0], Rl[0, 1], Rl[0, 2] = cy * cz, -cy * sz, sy          # Rx Ry Rz
+        Rl[1, 0], Rl[1, 1], Rl[1, 2] = sx * sy * cz + cx * sz, -sx * sy * sz + cx * cz, -sx * cy
+        Rl[2, 0], Rl[2, 1], Rl[2, 2] = -cx * sy * cz + sx * sz, cx * sy * sz + sx * cz, cx * cy
+        for r in range(3):
+            a0, a1, a2 = R[r, 0], R[r, 1], R[r, 2]
+            for c in range(3):
+                R[r, c] = a0 * Rl[0, c] + a1 * Rl[1, c] + a2 * Rl[2, c]
+
+
+@njit(cache=True)
+def _apply_loads(m, d, H, sc, t, MAP, TREE, SCR, xfrc, qfrc):
+    """Every load of the scene at ``t`` (see the module doc of mujoco_run): ``xfrc_applied`` of the
+    link's body, or the host body's Jacobian on the dofs that move a folded link."""
+    L, nv = H[NL], H[NV]
+    xpos = _rows(H[XPOS], H[NBODY], 3)
+    xmat = _rows(H[XMAT], H[NBODY], 9)
+    xipos = _rows(H[XIPOS], H[NBODY], 3)
+    qpos = carray(_voidptr(H[QPOS]), H[NQ], np.float64)
+    host = MAP[8 * L:9 * L]
+    o = 9 * L + H[NR] + 6
+    moving = MAP[o:o + L * nv].reshape((L, nv))
+    R, o, Rl = np.empty((3, 3)), np.empty(3), np.empty((3, 3))
+    val, pt, F, Mo, x = np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty(3)
+    jacp, jacr = SCR[0:3 * nv], SCR[3 * nv:6 * nv]
+    for li in range(sc.load_link.size):
+        Xl = sc.load_X[li]
+        local = sc.load_local[li] == 1
+        for c in range(3):
+            j = sc.load_fn[li, c]
+            pt[c] = fn_eval(sc.fn_kind[j], sc.fn_data[sc.fn_ptr[j]:sc.fn_ptr[j + 1]], t, 0)
+        for r in range(3):   # URDF link axes -> tree link axes; the point into the tree link frame
+            val[r] = (Xl[r, 0] * pt[0] + Xl[r, 1] * pt[1] + Xl[r, 2] * pt[2]) if local else pt[r]
+        for r in range(3):
+            pt[r] = (Xl[r, 0] * sc.load_point[li, 0] + Xl[r, 1] * sc.load_point[li, 1]
+                     + Xl[r, 2] * sc.load_point[li, 2] + Xl[r, 3])
+        p = sc.load_link[li]
+        _link_pose(p, MAP, TREE, xpos, xmat, qpos, L, H[BASE_BODY], R, o, Rl)
+        for r in range(3):
+            w = (R[r, 0] * val[0] + R[r, 1] * val[1] + R[r, 2] * val[2]) if local else val[r]
+            F[r] = w if sc.load_kind[li] == 0 else 0.0
+            Mo[r] = w if sc.load_kind[li] == 1 else 0.0
+            x[r] = o[r] + R[r, 0] * pt[0] + R[r, 1] * pt[1] + R[r, 2] * pt[2]
+        b = MAP[p]
+        if b >= 0:
+            r0, r1, r2 = x[0] - xipos[b, 0], x[1] - xipos[b, 1], x[2] - xipos[b, 2]
+            xfrc[b, 0] += F[0]
+            xfrc[b, 1] += F[1]
+            xfrc[b, 2] += F[2]
+            xfrc[b, 3] += Mo[0] + (r1 * F[2] - r2 * F[1])
+            xfrc[b, 4] += Mo[1] + (r2 * F[0] - r0 * F[2])
+            xfrc[b, 5] += Mo[2] + (r0 * F[1] - r1 * F[0])
+        else:   # folded massless link: its host body's Jacobian at the point
+            _call_jac(H[FN_JAC], _address(m), _address(d), jacp.ctypes.data, jacr.ctypes.data, x.ctypes.data,
+                      host[p])
+            for k in range(nv):
+                if moving[p, k]:
+                    qfrc[k] += (jacp[k] * F[0] + jacp[nv + k] * F[1] + jacp[2 * nv + k] * F[2]
+                                + jacr[k] * Mo[0] + jacr[nv + k] * Mo[1] + jacr[2 * nv + k] * Mo[2])
+
+
+@njit(cache=True)
+def _prescribe_base(m, d, H, sc, t, MAP, SCR, xfrc, qfrc):
+    """``qfrc_applied`` of the base's dofs such that MuJoCo's ``M qacc = f - bias`` gives the base
+    its prescribed acceleration ``a_b`` and the robot ``a_r = M_rr^-1 (f_r - bias_r - M_rb a_b)``."""
+    nv, n, L, nb = H[NV], H[NR], H[NL], H[NBODY]
+    dof = MAP[9 * L:9 * L + n]
+    bdof = MAP[9 * L + n:9 * L + n + 6]
+    M = SCR[6 * nv:6 * nv + nv * nv].reshape((nv, nv))
+    o = 6 * nv + nv * nv
+    f, fx, rhs_r, a_r = SCR[o:o + nv], SCR[o + nv:o + 2 * nv], SCR[o + 2 * nv:o + 2 * nv + n], SCR[o + 2 * nv + n:o + 2 * nv + 2 * n]
+    o += 2 * nv + 2 * n
+    Mrr = SCR[o:o + n * n].reshape((n, n))
+    Lf = SCR[o + n * n:o + 2 * n * n].reshape((n, n))
+    a_b = np.zeros(6)           # the scene's base motion, or a base held at the origin
+    if sc.has_base:
+        for j in range(6):
+            fj = sc.base_fn[j]
+            a_b[j] = fn_eval(sc.fn_kind[fj], sc.fn_data[sc.fn_ptr[fj]:sc.fn_ptr[fj + 1]], t, 2)
+    _call_fullM(H[FN_FULLM], _address(m), _address(d), M.ctypes.data)
+    passive = carray(_voidptr(H[QFRC_PASSIVE]), nv, np.float64)
+    actuator = carray(_voidptr(H[QFRC_ACTUATOR]), nv, np.float64)
+    bias = carray(_voidptr(H[QFRC_BIAS]), nv, np.float64)
+    xipos = _rows(H[XIPOS], nb, 3)
+    for k in range(nv):
+        fx[k] = 0.0
+    if sc.load_link.size:   # the loads' generalized forces, J^T of every body's xfrc_applied
+        for b in range(nb):
+            if (xfrc[b, 0] != 0.0 or xfrc[b, 1] != 0.0 or xfrc[b, 2] != 0.0 or xfrc[b, 3] != 0.0
+                    or xfrc[b, 4] != 0.0 or xfrc[b, 5] != 0.0):
+                row = H[XFRC_APPLIED] + 48 * b
+                _call_applyFT(H[FN_APPLYFT], _address(m), _address(d), row, row + 24, H[XIPOS] + 24 * b, b,
+                              fx.ctypes.data)
+    for k in range(nv):     # every generalized force except the bias and the base's own qfrc_applied
+        f[k] = (qfrc[k] + passive[k] + actuator[k] + fx[k]) - bias[k]
+    for i in range(n):
+        s = f[dof[i]]
+        for j in range(6):
+            s -= M[dof[i], bdof[j]] * a_b[j]
+        rhs_r[i] = s
+        for j in range(n):
+            Mrr[i, j] = M[dof[i], dof[j]]
+    if n:
+        pivot = cholesky_solve(Mrr, rhs_r, Lf, a_r)
+        if pivot >= 0:
+            H[ERROR] = pivot + 1
+            H[ERROR_COUNT] += 1
+            return
+    for j in range(6):
+        s = 0.0
+        for k in range(6):
+            s += M[bdof[j], bdof[k]] * a_b[k]
+        for i in range(n):
+            s += M[bdof[j], dof[i]] * a_r[i]
+        qfrc[bdof[j]] += s - f[bdof[j]]
+
+
+@njit(cache=True)
+def control(m, d, header_address):
+    """The control callback's work for ``mjData* d`` (see the module doc): clear ``qfrc_applied``
+    and ``xfrc_applied``, then joint torques, loads and the prescribed base at ``d->time``."""
+    H = carray(_voidptr(header_address), NHEADER, np.int64)
+    if H[ACTIVE] == 0 or H[DATA] != _address(d):
+        return
+    H[CALLS] += 1
+    t = carray(_voidptr(H[DATA] + H[TIME_OFF]), 1, np.float64)[0]
+    SI = carray(_voidptr(H[A_SI]), H[N_SI], np.int64)
+    SF = carray(_voidptr(H[A_SF]), H[N_SF], np.float64)
+    MAP = carray(_voidptr(H[A_MAP]), H[N_MAP], np.int64)
+    TREE = carray(_voidptr(H[A_TREE]), H[N_TREE], np.float64)
+    SCR = carray(_voidptr(H[A_SCR]), H[N_SCR], np.float64)
+    sc = scene_view(SI, SF)
+    nv, L = H[NV], H[NL]
+    qfrc = carray(_voidptr(H[QFRC_APPLIED]), nv, np.float64)
+    xfrc = _rows(H[XFRC_APPLIED], H[NBODY], 6)
+    for k in range(nv):
+        qfrc[k] = 0.0
+    for b in range(H[NBODY]):
+        for c in range(6):
+            xfrc[b, c] = 0.0
+    dof = MAP[9 * L:9 * L + H[NR]]
+    for j in range(sc.torque_idx.size):
+        fj = sc.torque_fn[j]
+        qfrc[dof[sc.torque_idx[j]]] += fn_eval(sc.fn_kind[fj], sc.fn_data[sc.fn_ptr[fj]:sc.fn_ptr[fj + 1]], t, 0)
+    if sc.load_link.size:
+        _apply_loads(m, d, H, sc, t, MAP, TREE, SCR, xfrc, qfrc)
+    if H[PRESCRIBE]:
+        _prescribe_base(m, d, H, sc, t, MAP, SCR, xfrc, qfrc)
+
+
+# --------------------------------------------------------------------------- one run's inputs
+
+
+class CompiledInputs:
+    """The inputs of a compiled plan (:class:`urdf2links.plan.Plan`) for one ``MjData`` of the
+    route-1 model ``mj``: the arrays :func:`control` reads, and :meth:`installed`, the context in
+    which MuJoCo's control callback is the compiled one (restored afterwards, also on errors). A
+    model with ``base_A`` and a plan without base motion holds the base at the origin.
+
+    ``compile_s``: seconds spent compiling the C wrapper in this call (0 after the first run of
+    the process); ``calls``: callback calls during the last installation."""
+
+    def __init__(self, mj, plan, m: mujoco.MjModel, d: mujoco.MjData):
+        if plan.base is not None and not mj.moving_base:
+            raise ValueError("the scene moves the base but the MJCF model has no base_A: build it with mjcf_from_scene")
+        self.mj, self.plan, self.m, self.d = mj, plan, m, d
+        offsets = mjdata_offsets(d)
+        tree = mj.source.tree
+        L, nv, n = tree.n_links, m.nv, mj.n
+        self.SI, self.SF = plan.rhs.SI, plan.rhs.SF
+        coord_q = np.full((L, 6), -1, dtype=np.int64)
+        for p in range(L):
+            for k in range(6):
+                c = int(tree.coord[p, k])
+                if c >= 0:
+                    coord_q[p, k] = mj.qpos_index[c]
+        moving = np.zeros((L, nv), dtype=np.int64)
+        anc = tree.ancestor
+        for p in range(L):
+            for c in range(tree.n):
+                if anc[p, tree.coord_link[c]]:
+                    moving[p, mj.dof_index[c]] = 1
+            moving[p, mj.base_dofs] = 1
+        bdofs = np.asarray(mj.base_dofs, np.int64) if mj.moving_base else np.zeros(6, np.int64)
+        parent = np.array([int(tree.parent[p]) for p in range(L)], dtype=np.int64)
+        # MAP: body_of_link (L), parent (L), coord_q (6L), host_body (L), dof_index (n), base dofs (6),
+        # moving dofs (L x nv): the offsets _link_pose, _apply_loads, _prescribe_base and control use
+        self.MAP = np.concatenate([np.asarray(mj.body_of_link, np.int64), parent, coord_q.ravel(),
+                                   np.asarray(mj.host_body, np.int64), np.asarray(mj.dof_index, np.int64), bdofs,
+                                   moving.ravel()]).astype(np.int64)
+        self.TREE = np.ascontiguousarray(np.asarray(tree.params, float).reshape(L, 6).ravel())
+        self.SCR = np.zeros(6 * nv + nv * nv + 2 * nv + 2 * n + 2 * n * n + 8)
+        fns = _libmujoco_functions()
+        values = {
+            "active": 0, "data": d._address, "time_offset": offsets["time"], "nv": nv, "nq": m.nq, "nbody": m.nbody, "n": n,
+            "L": L, "base_body": mj.base_body, "prescribe": int(mj.moving_base), "qfrc_applied": d.qfrc_applied.ctypes.data,
+            "xfrc_applied": d.xfrc_applied.ctypes.data, "xpos": d.xpos.ctypes.data, "xmat": d.xmat.ctypes.data,
+            "xipos": d.xipos.ctypes.data, "qfrc_passive": d.qfrc_passive.ctypes.data,
+            "qfrc_actuator": d.qfrc_actuator.ctypes.data, "qfrc_bias": d.qfrc_bias.ctypes.data,
+            "qpos": d.qpos.ctypes.data, "fullM": fns["mj_fullM"], "applyFT": fns["mj_applyFT"], "jac": fns["mj_jac"],
+            "SI": self.SI.ctypes.data, "SI_len": self.SI.size, "SF": self.SF.ctypes.data, "SF_len": self.SF.size,
+            "MAP": self.MAP.ctypes.data, "MAP_len": self.MAP.size, "TREE": self.TREE.ctypes.data,
+            "TREE_len": self.TREE.size, "SCR": self.SCR.ctypes.data, "SCR_len": self.SCR.size,
+            "calls": 0, "error": 0, "error_count": 0,
+        }
+        self.header = np.array([values[k] for k in HEADER_FIELDS], dtype=np.int64)
+        self.compile_s = 0.0
+        self.calls = 0
+
+    def installed(self):
+        return _Installed(self)
+
+    def check(self) -> None:
+        """Raise when the callback failed during the last installation (the robot's block of
+        MuJoCo's mass matrix not positive definite while prescribing the base)."""
+        if self.header[ERROR]:
+            raise FloatingPointError(
+                f"MuJoCo control callback: the robot's block of mj_fullM is not positive definite (Cholesky pivot "
+                f"{int(self.header[ERROR]) - 1}, {int(self.header[ERROR_COUNT])} time(s)) while prescribing the base "
+                f"of {self.mj.source.name!r}")
+
+
+class _Installed:
+    """Context: the run's header in :data:`HEADER`, the compiled callback installed; both restored."""
+
+    def __init__(self, inputs: CompiledInputs):
+        self.inputs = inputs
+        self.previous = None
+
+    def __enter__(self):
+        pointer, self.inputs.compile_s = callback_pointer()
+        if HEADER[ACTIVE]:
+            raise RuntimeError("another run's compiled control callback is active in this process")
+        HEADER[:] = self.inputs.header
+        HEADER[ACTIVE] = 1
+        self.previous = mujoco.get_mjcb_control()
+        mujoco.set_mjcb_control(pointer)
+        return self
+
+    def __exit__(self, *exc):
+        mujoco.set_mjcb_control(self.previous)
+        self.inputs.header[:] = HEADER
+        self.inputs.header[ACTIVE] = 0
+        self.inputs.calls = int(HEADER[CALLS])
+        HEADER[:] = 0
+        return False
