@@ -38,7 +38,6 @@ from __future__ import annotations
 import ctypes
 import glob
 import os
-import time
 
 import mujoco
 import numpy as np
@@ -49,6 +48,7 @@ from numba.extending import intrinsic
 
 from urdf2links.kernels import cholesky_solve
 from urdf2links.scene_kernels import fn_eval, scene_view
+from urdf2links.simulate import Compilation, record_compilation
 
 __all__ = ["CompiledInputs", "LayoutError", "mjdata_offsets", "check_offsets", "callback_pointer", "control",
            "HEADER_FIELDS"]
@@ -253,16 +253,19 @@ def _callback(m, d):
 
 
 def callback_pointer():
-    """``(pointer, seconds)``: the C callback ``void(const mjModel*, mjData*)`` for
+    """``(pointer, compilation)``: the C callback ``void(const mjModel*, mjData*)`` for
     ``mujoco.set_mjcb_control`` (a ctypes function pointer of a numba ``cfunc`` calling
-    :func:`control` on :data:`HEADER`), and the seconds spent compiling or loading it from the cache
-    in this call (0.0 after the first call of a process)."""
+    :func:`control` on :data:`HEADER`), and the :class:`~urdf2links.simulate.Compilation` of this
+    call: its seconds (compiling, or loading from numba's cache; 0.0 after the first call of a
+    process) and the callback's name when it was compiled rather than loaded."""
     global _CALLBACK
     if _CALLBACK is not None:
-        return _CALLBACK.ctypes, 0.0
-    start = time.perf_counter()
-    _CALLBACK = cfunc(types.void(types.voidptr, types.voidptr), cache=True)(_callback)
-    return _CALLBACK.ctypes, time.perf_counter() - start
+        return _CALLBACK.ctypes, Compilation()
+    with record_compilation() as rec:
+        _CALLBACK = cfunc(types.void(types.voidptr, types.voidptr), cache=True)(_callback)
+    if _CALLBACK.cache_hits == 0 and not rec.functions:
+        rec.functions.append("urdf2links.compare.mujoco_inputs._callback (C callback)")
+    return _CALLBACK.ctypes, rec
 
 
 # --------------------------------------------------------------------------- the callback
@@ -468,8 +471,9 @@ class CompiledInputs:
     which MuJoCo's control callback is the compiled one (restored afterwards, also on errors). A
     model with ``base_A`` and a plan without base motion holds the base at the origin.
 
-    ``compile_s``: seconds spent compiling the C wrapper in this call (0 after the first run of
-    the process); ``calls``: callback calls during the last installation."""
+    ``compilation``: the :class:`~urdf2links.simulate.Compilation` of the callback in this run
+    (empty after the first run of a process); ``calls``: callback calls during the last
+    installation."""
 
     def __init__(self, mj, plan, m: mujoco.MjModel, d: mujoco.MjData):
         if plan.base is not None and not mj.moving_base:
@@ -515,7 +519,7 @@ class CompiledInputs:
             "calls": 0, "error": 0, "error_count": 0,
         }
         self.header = np.array([values[k] for k in HEADER_FIELDS], dtype=np.int64)
-        self.compile_s = 0.0
+        self.compilation = Compilation()
         self.calls = 0
 
     def installed(self):
@@ -539,7 +543,7 @@ class _Installed:
         self.previous = None
 
     def __enter__(self):
-        pointer, self.inputs.compile_s = callback_pointer()
+        pointer, self.inputs.compilation = callback_pointer()
         if HEADER[ACTIVE]:
             raise RuntimeError("another run's compiled control callback is active in this process")
         HEADER[:] = self.inputs.header

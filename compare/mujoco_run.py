@@ -62,6 +62,7 @@ import mujoco
 import numpy as np
 
 from urdf2links.loads import Wrench
+from urdf2links.simulate import Compilation
 from urdf2links.transforms import BaseState
 
 from .mjcf import INTEGRATORS, MjcfModel
@@ -96,8 +97,9 @@ class MujocoRun:
     engine, the ``mj_step(nstep)`` calls only (:data:`TIMED_REGION`); ``harness_time`` (s): the whole
     :func:`run_mujoco` call; ``nsteps`` MuJoCo steps; ``timestep``, ``integrator``; ``inputs``:
     ``"none"``, ``"compiled"`` or ``"python"`` (the control callback used); ``callback_calls`` its
-    calls (4 per RK4 step); ``callback_compile_s`` the compiled callback's one-time compilation in
-    this run (0.0 when it was already compiled in this process).
+    calls (4 per RK4 step); ``compilation`` the compiled callback's
+    :class:`~urdf2links.simulate.Compilation` in this run (its loading from numba's cache, or its
+    compilation, once per process; empty afterwards).
     """
 
     t: np.ndarray
@@ -115,7 +117,7 @@ class MujocoRun:
     harness_time: float = 0.0
     inputs: str = "none"
     callback_calls: int = 0
-    callback_compile_s: float = 0.0
+    compilation: Compilation = field(default_factory=Compilation)
 
     @property
     def kinetic(self) -> np.ndarray:
@@ -380,7 +382,7 @@ def run_mujoco(mj: MjcfModel, scene=None, *, q0=None, qd0=None, t_end: float | N
                      coordinate_names=mj.coordinate_names, base_pose=out["base"], notes=notes,
                      harness_time=_time.perf_counter() - start, inputs=used,
                      callback_calls=0 if driver is None else int(driver.calls),
-                     callback_compile_s=float(getattr(driver, "compile_s", 0.0)))
+                     compilation=driver.compilation if isinstance(driver, CompiledInputs) else Compilation())
 
 
 def _inputs(mj, m, d, plan, inputs, explicit, base_fn, torques, loads, notes):

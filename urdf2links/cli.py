@@ -168,8 +168,8 @@ def main(argv=None) -> int:
     p.add_argument("scenes", nargs="*", help="scene files (default: robots/*.toml)")
     p.add_argument("--out", default="reports", help="folder of the reports and index.html (default reports)")
     _add_mujoco_options(p)
-    p.add_argument("--cap", type=float, default=5.0, help="cap (s) on t_end of scenes that drive MuJoCo from Python "
-                   "(moving base, torques, loads); 0: none (default 5)")
+    p.add_argument("--cap", type=float, default=0.0, help="cap (s) on t_end of scenes with time-dependent inputs "
+                   "(moving base, torques, loads); 0: none (default)")
     p.add_argument("--check", metavar="BASELINE.json", help="baselines to check every scene against (default "
                    "<out>/baselines.json when it exists); exit 1 on a failure")
     p.add_argument("--write-baselines", nargs="?", const=True, metavar="FILE",
