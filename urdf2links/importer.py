@@ -3,7 +3,7 @@
 Data flow: :func:`urdf2links.parse.parse_urdf` (validated description) -> this module (frames,
 coordinates, H, audit) -> :class:`urdf2links.tree.LinkTree` -> :class:`urdf2links.model.Model`.
 
-Frames. Every URDF link ``C`` lives in some tree link ``t`` with a constant transform ``X``
+Frames (docs/equations.md (E9), (E11)). Every URDF link ``C`` lives in some tree link ``t`` with a constant transform ``X``
 (``r_t = X r_C``). A joint with origin ``O`` (4, 4) and unit axis ``u`` becomes:
 
 - revolute/continuous: one tree link whose ``T~`` has translation and rotation of ``M Ra`` (``M = X_parent O``,
@@ -69,7 +69,7 @@ def load_urdf(source, *, floating_base: bool = False, inertia: str = "audit", mi
     Parameters
     ----------
     source : path to a ``.urdf`` file, or the URDF text itself.
-    floating_base : give the root link six coordinates ``<root>.x ... <root>.phi_z`` (5.5).
+    floating_base : give the root link six coordinates ``<root>.x ... <root>.phi_z`` (E3).
     inertia : ``"audit"`` (report findings in ``model.audit`` and warn once), ``"strict"`` (raise
         :class:`~urdf2links.errors.InertiaError` on any finding) or ``"repair"`` (fix every finding:
         from the link's geometry when it has some, otherwise the smallest change that makes H
@@ -380,7 +380,7 @@ def _replace(rec: AuditRecord, fix: str) -> AuditRecord:
 
 
 def _params(F) -> np.ndarray:
-    """The six parameters (5.5) of a constant transform F (4, 4): its origin and ZYX angles."""
+    """The six parameters (E3) of a constant transform F (4, 4): its origin and ZYX angles (E7)."""
     return np.r_[F[:3, 3], matrix_to_xyz_angles(F[:3, :3])]
 
 
