@@ -12,6 +12,7 @@ n, the O(n^2) mass matrix and the O(n^3) factorization large n), and a least-squ
 the large-n end** (the :data:`LARGE_N` largest chains). Usage::
 
     python benchmarks/eval_cost.py [--reps 300] [--rounds 7] [--out reports/benchmarks/eval_cost.json]
+    python benchmarks/eval_cost.py --render-only      # the table and plot again from the JSON
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ import mujoco
 import numpy as np
 
 import urdf2links
-from benchmarking import fmt_spread, markdown_table, parser, rounds, spread, write_outputs
+from benchmarking import fmt_spread, markdown_table, rounds, run_benchmark, spread
 from urdf2links import LinkSpec, Model, build_tree
 from urdf2links.compare.mjcf import mjcf_from_model
 from urdf2links.locations import example_robot_data_dir, shipped_robots_dir
@@ -150,11 +151,7 @@ def plot(rows, slopes):
     return fig
 
 
-def main(argv=None):
-    p = parser("eval_cost", __doc__)
-    p.set_defaults(rounds=7)
-    p.add_argument("--reps", type=int, default=300)
-    args = p.parse_args(argv)
+def measure_all(args, log) -> dict:
     models = [chain(n) for n in CHAIN_SIZES]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -166,16 +163,20 @@ def main(argv=None):
     for model in models:
         rows.append(measure(model, args.reps, args.rounds))
         r = rows[-1]
-        print(f"{r['robot'][:28]:28s} n {r['n']:3d}: forward {fmt_spread(r['forward_dynamics_s'], 1e6)} us, "
-              f"mj_forward {fmt_spread(r['mj_forward_s'], 1e6)} us, ratio {r['ratio_forward']:.2f}", flush=True)
+        log(f"{r['robot'][:28]:28s} n {r['n']:3d}: forward {fmt_spread(r['forward_dynamics_s'], 1e6)} us, "
+            f"mj_forward {fmt_spread(r['mj_forward_s'], 1e6)} us, ratio {r['ratio_forward']:.2f}")
     chains = [r for r in rows if r["chain"]]
-    slopes = {k: growth(chains, k) for k in VARIANTS}
-    md = table(rows, slopes)
-    print(md)
-    paths = write_outputs(args.out, {"benchmark": "eval_cost", "reps": args.reps, "rounds": args.rounds, "rows": rows,
-                                     "growth": slopes, "large_n_points": LARGE_N}, md, plot(rows, slopes))
-    print("wrote " + ", ".join(str(p) for p in paths))
+    return {"reps": args.reps, "rounds": args.rounds, "rows": rows, "large_n_points": LARGE_N,
+            "growth": {k: growth(chains, k) for k in VARIANTS}}
+
+
+def render(data):
+    return table(data["rows"], data["growth"]), plot(data["rows"], data["growth"])
+
+
+def options(p):
+    p.add_argument("--reps", type=int, default=300, help="calls per round and variant (default 300)")
 
 
 if __name__ == "__main__":
-    main()
+    run_benchmark("eval_cost", __doc__, measure_all, render, options=options, rounds_default=7)

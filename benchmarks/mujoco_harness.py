@@ -28,7 +28,7 @@ import time
 import mujoco
 import numpy as np
 
-from benchmarking import fmt_spread, markdown_table, parser, rounds, spread, write_outputs
+from benchmarking import fmt_spread, markdown_table, rounds, run_benchmark, spread
 from urdf2links.compare.mjcf import mjcf_from_scene
 from urdf2links.compare.mujoco_run import PythonInputs, robot_energy, run_mujoco
 from urdf2links.locations import shipped_robots_dir
@@ -166,19 +166,19 @@ def plot(rows):
     return fig
 
 
-def main(argv=None):
-    p = parser("mujoco_harness", __doc__)
+def measure_all(args, log) -> dict:
+    return {"t_end": T_END, "samples": SAMPLES, "rounds": args.rounds, "before_rounds": args.before_rounds,
+            "rows": [measure(c, args.rounds, args.before_rounds, log) for c in CASES]}
+
+
+def render(data):
+    return table(data["rows"]), plot(data["rows"])
+
+
+def options(p):
     p.add_argument("--before-rounds", type=int, default=1, help="rounds of the old harness on scenes with inputs "
                    "(tens of seconds each; default 1)")
-    args = p.parse_args(argv)
-    rows = [measure(c, args.rounds, args.before_rounds, print) for c in CASES]
-    md = table(rows)
-    print(md)
-    paths = write_outputs(args.out, {"benchmark": "mujoco_harness", "t_end": T_END, "samples": SAMPLES,
-                                     "rounds": args.rounds, "before_rounds": args.before_rounds, "rows": rows},
-                          md, plot(rows))
-    print("wrote " + ", ".join(str(p) for p in paths))
 
 
 if __name__ == "__main__":
-    main()
+    run_benchmark("mujoco_harness", __doc__, measure_all, render, options=options)

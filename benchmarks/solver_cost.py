@@ -23,7 +23,7 @@ import numba
 import numpy as np
 from numba import njit
 
-from benchmarking import fmt_spread, markdown_table, parser, rounds, spread, write_outputs
+from benchmarking import fmt_spread, markdown_table, rounds, run_benchmark, spread
 from urdf2links.batch import simulate_batch
 from urdf2links.integrators import integrate
 from urdf2links.locations import shipped_robots_dir
@@ -159,20 +159,20 @@ def plot(rows):
     return fig
 
 
-def main(argv=None):
-    p = parser("solver_cost", __doc__)
-    p.set_defaults(rounds=3)
-    p.add_argument("--t-end", type=float, default=2.0)
-    p.add_argument("--batch", type=int, default=32)
-    args = p.parse_args(argv)
-    rows = [r for name in SCENES for r in loops_rows(name, args.t_end, args.rounds, print)]
-    sweeps = [sweep_row(name, args.t_end, args.batch, args.rounds, print) for name in SWEEP_SCENES]
-    md = table(rows, sweeps)
-    print(md)
-    paths = write_outputs(args.out, {"benchmark": "solver_cost", "rounds": args.rounds, "rows": rows, "sweeps": sweeps},
-                          md, plot(rows))
-    print("wrote " + ", ".join(str(p) for p in paths))
+def measure_all(args, log) -> dict:
+    rows = [r for name in SCENES for r in loops_rows(name, args.t_end, args.rounds, log)]
+    sweeps = [sweep_row(name, args.t_end, args.batch, args.rounds, log) for name in SWEEP_SCENES]
+    return {"rounds": args.rounds, "rows": rows, "sweeps": sweeps}
+
+
+def render(data):
+    return table(data["rows"], data["sweeps"]), plot(data["rows"])
+
+
+def options(p):
+    p.add_argument("--t-end", type=float, default=2.0, help="run length, s (default 2, at most the scene's)")
+    p.add_argument("--batch", type=int, default=32, help="trajectories of a sweep (default 32)")
 
 
 if __name__ == "__main__":
-    main()
+    run_benchmark("solver_cost", __doc__, measure_all, render, options=options, rounds_default=3)

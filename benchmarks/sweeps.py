@@ -29,7 +29,7 @@ import numba
 import numpy as np
 from mujoco import rollout as mj_rollout
 
-from benchmarking import fmt_spread, markdown_table, parser, rounds, spread, write_outputs
+from benchmarking import fmt_spread, markdown_table, rounds, run_benchmark, spread
 from urdf2links.batch import simulate_batch
 from urdf2links.compare.mjcf import mjcf_from_scene
 from urdf2links.locations import shipped_robots_dir
@@ -47,6 +47,7 @@ class MujocoSweep:
 
     def __init__(self, mj, Q0, QD0, threads):
         self.mj, self.m = mj, mj.model
+        self.models = [self.m] * len(Q0)          # one per trajectory: rollout's checks skipped
         self.datas = [mujoco.MjData(self.m) for _ in range(threads)]
         self.pool = mj_rollout.Rollout(nthread=threads if threads > 1 else 0)
         spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
@@ -70,7 +71,7 @@ class MujocoSweep:
         q[:, 0] = x[:, self.q_at]
         t0 = _clock()
         for j in range(1, SAMPLES):
-            self.pool.rollout(self.m, self.datas, x, nstep=per, state=buf, skip_checks=True)
+            self.pool.rollout(self.models, self.datas, x, nstep=per, state=buf, skip_checks=True)
             x[:] = buf[:, -1]
             q[:, j] = x[:, self.q_at]
         return _clock() - t0, q
@@ -80,7 +81,7 @@ class MujocoSweep:
         B, K = len(self.x0), per * (SAMPLES - 1)
         buf = np.empty((B, K, self.nstate))
         t0 = _clock()
-        self.pool.rollout(self.m, self.datas, self.x0, nstep=K, state=buf, skip_checks=True)
+        self.pool.rollout(self.models, self.datas, self.x0, nstep=K, state=buf, skip_checks=True)
         wall = _clock() - t0
         q = np.concatenate([self.x0[:, None, self.q_at], buf[:, per - 1::per][:, :, self.q_at]], axis=1)
         return wall, q
@@ -175,20 +176,22 @@ def plot(rows):
     return fig
 
 
-def main(argv=None):
-    p = parser("sweeps", __doc__)
-    p.add_argument("--batch", type=int, default=32)
-    p.add_argument("--threads", type=int, default=os.cpu_count() or 1)
-    p.add_argument("--check", type=int, default=4, help="trajectories checked against the reference (default 4)")
-    args = p.parse_args(argv)
+def measure_all(args, log) -> dict:
     threads = min(args.threads, numba.config.NUMBA_NUM_THREADS)
     numba.set_num_threads(threads)
-    rows = [measure(s, args.batch, threads, args.rounds, args.check, print) for s in SCENES]
-    md = table(rows)
-    print(md)
-    paths = write_outputs(args.out, {"benchmark": "sweeps", "rows": rows, "rounds": args.rounds}, md, plot(rows))
-    print("wrote " + ", ".join(str(p) for p in paths))
+    return {"rounds": args.rounds, "rows": [measure(s, args.batch, threads, args.rounds, args.check, log)
+                                            for s in SCENES]}
+
+
+def render(data):
+    return table(data["rows"]), plot(data["rows"])
+
+
+def options(p):
+    p.add_argument("--batch", type=int, default=32, help="trajectories per sweep (default 32)")
+    p.add_argument("--threads", type=int, default=os.cpu_count() or 1, help="threads of both engines (default: CPUs)")
+    p.add_argument("--check", type=int, default=4, help="trajectories checked against the reference (default 4)")
 
 
 if __name__ == "__main__":
-    main()
+    run_benchmark("sweeps", __doc__, measure_all, render, options=options)

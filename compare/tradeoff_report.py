@@ -88,9 +88,9 @@ def _finish(fig, axes, data, title):
     fails = [r for r in data["rows"] if r["status"] == "failed"]
     skips = [r for r in data["rows"] if r["status"] == "skipped"]
     ref = data["reference"]
-    sub = (f"t = 0..{data['t_end']:g} s; reference {ref['method']} rtol {ref['rtol']:g}; wall time: median of "
-           f"{data['timing']['repeats']} interleaved rounds (bars: min-max), same process, compilation excluded; "
-           f"{len(fails)} failed and {len(skips)} skipped runs not drawn (see the table)")
+    sub = (f"t = 0..{data['t_end']:g} s; reference {ref['method']} rtol {ref['rtol']:g}; {len(fails)} failed and "
+           f"{len(skips)} skipped runs not drawn (see the table)\nwall time: median of {data['timing']['repeats']} "
+           "interleaved rounds (bars: min-max), both engines in one process, compilation excluded")
     fig.suptitle(f"{data['robot']} / {data['scene']}: {title}\n{sub}", fontsize=10)
     handles, labels = axes[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside right center", fontsize=8, frameon=False)
