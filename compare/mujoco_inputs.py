@@ -213,19 +213,29 @@ def _libmujoco_functions() -> dict[str, int]:
 
 # --------------------------------------------------------------------------- the header
 
+#: The run's integer data (one int64 array), section by section: its start offsets are header slots
+#: (a section ends where the next one starts; the slot after the last holds the total).
+INT_SECTIONS = ("body_of", "parent", "coord_q", "host", "dof", "bdof", "moving", "base_fn", "torque_dof", "torque_fn",
+                "load_link", "load_kind", "load_local", "load_fn", "fn_kind", "fn_ptr")
+#: The run's float data (one float64 array), likewise; ``scratch`` is the callback's work space.
+FLOAT_SECTIONS = ("params", "load_X", "load_point", "fn_data", "scratch")
 #: Slots of :data:`HEADER` (int64): the run the callback acts on.
 HEADER_FIELDS = (
     "active", "data", "time_offset", "nv", "nq", "nbody", "n", "L", "base_body", "prescribe",
     "qfrc_applied", "xfrc_applied", "xpos", "xmat", "xipos", "qfrc_passive", "qfrc_actuator", "qfrc_bias", "qpos",
-    "fullM", "applyFT", "jac",
-    "SI", "SI_len", "SF", "SF_len", "MAP", "MAP_len", "TREE", "TREE_len", "SCR", "SCR_len",
+    "fullM", "applyFT", "jac", "I", "F",
+    *(f"i_{k}" for k in INT_SECTIONS), "i_end", *(f"f_{k}" for k in FLOAT_SECTIONS), "f_end",
     "calls", "error", "error_count",
 )
 _H = {name: k for k, name in enumerate(HEADER_FIELDS)}
-(ACTIVE, DATA, TIME_OFF, NV, NQ, NBODY, NR, NL, BASE_BODY, PRESCRIBE, QFRC_APPLIED, XFRC_APPLIED, XPOS, XMAT, XIPOS, QFRC_PASSIVE,
- QFRC_ACTUATOR, QFRC_BIAS, QPOS, FN_FULLM, FN_APPLYFT, FN_JAC, A_SI, N_SI, A_SF, N_SF, A_MAP, N_MAP, A_TREE, N_TREE,
- A_SCR, N_SCR, CALLS, ERROR, ERROR_COUNT) = range(len(HEADER_FIELDS))
+(ACTIVE, DATA, TIME_OFF, NV, NQ, NBODY, NR, NL, BASE_BODY, PRESCRIBE, QFRC_APPLIED, XFRC_APPLIED, XPOS, XMAT, XIPOS,
+ QFRC_PASSIVE, QFRC_ACTUATOR, QFRC_BIAS, QPOS, FN_FULLM, FN_APPLYFT, FN_JAC, A_I, A_F) = range(24)
+(I_BODY_OF, I_PARENT, I_COORD_Q, I_HOST, I_DOF, I_BDOF, I_MOVING, I_BASE_FN, I_TORQUE_DOF, I_TORQUE_FN, I_LOAD_LINK,
+ I_LOAD_KIND, I_LOAD_LOCAL, I_LOAD_FN, I_FN_KIND, I_FN_PTR, I_END) = range(24, 24 + len(INT_SECTIONS) + 1)
+(F_PARAMS, F_LOAD_X, F_LOAD_POINT, F_FN_DATA, F_SCRATCH, F_END) = range(I_END + 1, I_END + 1 + len(FLOAT_SECTIONS) + 1)
+CALLS, ERROR, ERROR_COUNT = F_END + 1, F_END + 2, F_END + 3
 NHEADER = len(HEADER_FIELDS)
+assert HEADER_FIELDS[A_F] == "F" and HEADER_FIELDS[I_END] == "i_end" and HEADER_FIELDS[ERROR_COUNT] == "error_count"
 
 #: The process-wide header the callback reads. Its address reaches the compiled code as the
 #: external symbol :data:`HEADER_SYMBOL`, registered with LLVM's dynamic linker before the callback
@@ -271,22 +281,45 @@ def callback_pointer():
 # --------------------------------------------------------------------------- the callback
 
 
+#: Scratch of the loads beyond the two Jacobians (6 nv): R, Rl (18), o, val, pt, x, w (15).
+_LOAD_SCRATCH = 33
+
+
 @njit(cache=True, inline="always")
 def _rows(addr, rows, cols):
     return carray(_voidptr(addr), (rows, cols), np.float64)
 
 
+@njit(cache=True, inline="always")
+def _int(H, I, k):
+    """Integer section ``k`` (a header slot of :data:`INT_SECTIONS`) of the run's data."""
+    return I[H[k]:H[k + 1]]
+
+
+@njit(cache=True, inline="always")
+def _float(H, F, k):
+    return F[H[k]:H[k + 1]]
+
+
+@njit(cache=True, inline="always")
+def _fn(H, I, F, j, t, order):
+    """d^order f / dt^order at ``t`` of the scene's time function ``j``
+    (:func:`urdf2links.scene_kernels.fn_eval` on the data the project's right-hand side uses)."""
+    ptr = _int(H, I, I_FN_PTR)
+    data = _float(H, F, F_FN_DATA)
+    return fn_eval(_int(H, I, I_FN_KIND)[j], data[ptr[j]:ptr[j + 1]], t, order)
+
+
 @njit(cache=True)
-def _link_pose(p, MAP, TREE, xpos, xmat, qpos, L, base_body, R, o, Rl):
+def _link_pose(p, H, I, F, xpos, xmat, qpos, R, o, Rl):
     """{0}-pose ``(R (3, 3), o (3,))`` of tree link ``p``: its body's ``xmat``/``xpos``, or for a folded
     link (no body) the nearest ancestor with a body (or the base / the world) times ``T~`` of the
-    folded links in between at MuJoCo's ``qpos``. ``MAP`` holds ``body_of_link`` (L,), ``parent``
-    (L,) and the qpos index of each link's six parameters (L, 6; -1 constant); ``TREE`` the
-    parameters (L, 6)."""
-    body_of = MAP[0:L]
-    parent = MAP[L:2 * L]
-    coord_q = MAP[2 * L:8 * L].reshape((L, 6))
-    params = TREE[0:6 * L].reshape((L, 6))
+    folded links in between at MuJoCo's ``qpos`` (the qpos index of each link's six parameters,
+    -1 for a constant one, and the parameters: the tree's)."""
+    L = H[NL]
+    body_of, parent = _int(H, I, I_BODY_OF), _int(H, I, I_PARENT)
+    coord_q = _int(H, I, I_COORD_Q).reshape((L, 6))
+    params = _float(H, F, F_PARAMS).reshape((L, 6))
     chain = np.empty(L, np.int64)
     k = 0
     a = p
@@ -294,20 +327,14 @@ def _link_pose(p, MAP, TREE, xpos, xmat, qpos, L, base_body, R, o, Rl):
         chain[k] = a
         k += 1
         a = parent[a]
-    b = body_of[a] if a >= 0 else base_body
-    if b >= 0:
-        for r in range(3):
-            o[r] = xpos[b, r]
-            for c in range(3):
-                R[r, c] = xmat[b, 3 * r + c]
-    else:
-        for r in range(3):
-            o[r] = 0.0
-            for c in range(3):
-                R[r, c] = 1.0 if r == c else 0.0
+    b = body_of[a] if a >= 0 else H[BASE_BODY]
+    for r in range(3):
+        o[r] = xpos[b, r] if b >= 0 else 0.0
+        for c in range(3):
+            R[r, c] = xmat[b, 3 * r + c] if b >= 0 else (1.0 if r == c else 0.0)
+    v = np.empty(6)
     for j in range(k - 1, -1, -1):          # T = T_parent T1 T2 T3 T4 T5 T6 (5.5)
         f = chain[j]
-        v = np.empty(6)
         for s in range(6):
             v[s] = params[f, s] + (qpos[coord_q[f, s]] if coord_q[f, s] >= 0 else 0.0)
         for r in range(3):
@@ -323,82 +350,84 @@ def _link_pose(p, MAP, TREE, xpos, xmat, qpos, L, base_body, R, o, Rl):
 
 
 @njit(cache=True)
-def _apply_loads(m, d, H, sc, t, MAP, TREE, SCR, xfrc, qfrc):
+def _apply_loads(m, d, H, I, F, t, xfrc, qfrc):
     """Every load of the scene at ``t`` (see the module doc of mujoco_run): ``xfrc_applied`` of the
     link's body, or the host body's Jacobian on the dofs that move a folded link."""
-    L, nv = H[NL], H[NV]
-    xpos = _rows(H[XPOS], H[NBODY], 3)
-    xmat = _rows(H[XMAT], H[NBODY], 9)
-    xipos = _rows(H[XIPOS], H[NBODY], 3)
+    L, nv, nb = H[NL], H[NV], H[NBODY]
+    xpos, xmat, xipos = _rows(H[XPOS], nb, 3), _rows(H[XMAT], nb, 9), _rows(H[XIPOS], nb, 3)
     qpos = carray(_voidptr(H[QPOS]), H[NQ], np.float64)
-    host = MAP[8 * L:9 * L]
-    o = 9 * L + H[NR] + 6
-    moving = MAP[o:o + L * nv].reshape((L, nv))
-    R, o, Rl = np.empty((3, 3)), np.empty(3), np.empty((3, 3))
-    val, pt, F, Mo, x = np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty(3)
-    jacp, jacr = SCR[0:3 * nv], SCR[3 * nv:6 * nv]
-    for li in range(sc.load_link.size):
-        Xl = sc.load_X[li]
-        local = sc.load_local[li] == 1
-        for c in range(3):
-            j = sc.load_fn[li, c]
-            pt[c] = fn_eval(sc.fn_kind[j], sc.fn_data[sc.fn_ptr[j]:sc.fn_ptr[j + 1]], t, 0)
+    body_of, host = _int(H, I, I_BODY_OF), _int(H, I, I_HOST)
+    moving = _int(H, I, I_MOVING).reshape((L, nv))
+    link, kind, local = _int(H, I, I_LOAD_LINK), _int(H, I, I_LOAD_KIND), _int(H, I, I_LOAD_LOCAL)
+    k = link.size
+    fns = _int(H, I, I_LOAD_FN).reshape((k, 3))
+    X = _float(H, F, F_LOAD_X).reshape((k, 3, 4))
+    point = _float(H, F, F_LOAD_POINT).reshape((k, 3))
+    scr = _float(H, F, F_SCRATCH)
+    jacp, jacr = scr[0:3 * nv], scr[3 * nv:6 * nv]
+    R, Rl = scr[6 * nv:6 * nv + 9].reshape((3, 3)), scr[6 * nv + 9:6 * nv + 18].reshape((3, 3))
+    o, val, pt, x = scr[6 * nv + 18:6 * nv + 21], scr[6 * nv + 21:6 * nv + 24], scr[6 * nv + 24:6 * nv + 27], \
+        scr[6 * nv + 27:6 * nv + 30]
+    w = scr[6 * nv + 30:6 * nv + _LOAD_SCRATCH]
+    for li in range(k):
+        Xl = X[li]
+        loc = local[li] == 1
+        f0, f1, f2 = _fn(H, I, F, fns[li, 0], t, 0), _fn(H, I, F, fns[li, 1], t, 0), _fn(H, I, F, fns[li, 2], t, 0)
         for r in range(3):   # URDF link axes -> tree link axes; the point into the tree link frame
-            val[r] = (Xl[r, 0] * pt[0] + Xl[r, 1] * pt[1] + Xl[r, 2] * pt[2]) if local else pt[r]
+            val[r] = (Xl[r, 0] * f0 + Xl[r, 1] * f1 + Xl[r, 2] * f2) if loc else (f0, f1, f2)[r]
+            pt[r] = Xl[r, 0] * point[li, 0] + Xl[r, 1] * point[li, 1] + Xl[r, 2] * point[li, 2] + Xl[r, 3]
+        p = link[li]
+        _link_pose(p, H, I, F, xpos, xmat, qpos, R, o, Rl)
+        F0 = F1 = F2 = M0 = M1 = M2 = 0.0
         for r in range(3):
-            pt[r] = (Xl[r, 0] * sc.load_point[li, 0] + Xl[r, 1] * sc.load_point[li, 1]
-                     + Xl[r, 2] * sc.load_point[li, 2] + Xl[r, 3])
-        p = sc.load_link[li]
-        _link_pose(p, MAP, TREE, xpos, xmat, qpos, L, H[BASE_BODY], R, o, Rl)
-        for r in range(3):
-            w = (R[r, 0] * val[0] + R[r, 1] * val[1] + R[r, 2] * val[2]) if local else val[r]
-            F[r] = w if sc.load_kind[li] == 0 else 0.0
-            Mo[r] = w if sc.load_kind[li] == 1 else 0.0
+            w[r] = (R[r, 0] * val[0] + R[r, 1] * val[1] + R[r, 2] * val[2]) if loc else val[r]
             x[r] = o[r] + R[r, 0] * pt[0] + R[r, 1] * pt[1] + R[r, 2] * pt[2]
-        b = MAP[p]
+        if kind[li] == 0:
+            F0, F1, F2 = w[0], w[1], w[2]
+        else:
+            M0, M1, M2 = w[0], w[1], w[2]
+        b = body_of[p]
         if b >= 0:
             r0, r1, r2 = x[0] - xipos[b, 0], x[1] - xipos[b, 1], x[2] - xipos[b, 2]
-            xfrc[b, 0] += F[0]
-            xfrc[b, 1] += F[1]
-            xfrc[b, 2] += F[2]
-            xfrc[b, 3] += Mo[0] + (r1 * F[2] - r2 * F[1])
-            xfrc[b, 4] += Mo[1] + (r2 * F[0] - r0 * F[2])
-            xfrc[b, 5] += Mo[2] + (r0 * F[1] - r1 * F[0])
+            xfrc[b, 0] += F0
+            xfrc[b, 1] += F1
+            xfrc[b, 2] += F2
+            xfrc[b, 3] += M0 + (r1 * F2 - r2 * F1)
+            xfrc[b, 4] += M1 + (r2 * F0 - r0 * F2)
+            xfrc[b, 5] += M2 + (r0 * F1 - r1 * F0)
         else:   # folded massless link: its host body's Jacobian at the point
             _call_jac(H[FN_JAC], _address(m), _address(d), jacp.ctypes.data, jacr.ctypes.data, x.ctypes.data,
                       host[p])
-            for k in range(nv):
-                if moving[p, k]:
-                    qfrc[k] += (jacp[k] * F[0] + jacp[nv + k] * F[1] + jacp[2 * nv + k] * F[2]
-                                + jacr[k] * Mo[0] + jacr[nv + k] * Mo[1] + jacr[2 * nv + k] * Mo[2])
+            for c in range(nv):
+                if moving[p, c]:
+                    qfrc[c] += (jacp[c] * F0 + jacp[nv + c] * F1 + jacp[2 * nv + c] * F2
+                                + jacr[c] * M0 + jacr[nv + c] * M1 + jacr[2 * nv + c] * M2)
 
 
 @njit(cache=True)
-def _prescribe_base(m, d, H, sc, t, MAP, SCR, xfrc, qfrc):
+def _prescribe_base(m, d, H, I, F, t, xfrc, qfrc):
     """``qfrc_applied`` of the base's dofs such that MuJoCo's ``M qacc = f - bias`` gives the base
     its prescribed acceleration ``a_b`` and the robot ``a_r = M_rr^-1 (f_r - bias_r - M_rb a_b)``."""
-    nv, n, L, nb = H[NV], H[NR], H[NL], H[NBODY]
-    dof = MAP[9 * L:9 * L + n]
-    bdof = MAP[9 * L + n:9 * L + n + 6]
-    M = SCR[6 * nv:6 * nv + nv * nv].reshape((nv, nv))
-    o = 6 * nv + nv * nv
-    f, fx, rhs_r, a_r = SCR[o:o + nv], SCR[o + nv:o + 2 * nv], SCR[o + 2 * nv:o + 2 * nv + n], SCR[o + 2 * nv + n:o + 2 * nv + 2 * n]
+    nv, n, nb = H[NV], H[NR], H[NBODY]
+    dof, bdof, base_fn = _int(H, I, I_DOF), _int(H, I, I_BDOF), _int(H, I, I_BASE_FN)
+    scr = _float(H, F, F_SCRATCH)
+    o = 6 * nv + _LOAD_SCRATCH
+    M = scr[o:o + nv * nv].reshape((nv, nv))
+    o += nv * nv
+    f, fx, rhs_r, a_r = scr[o:o + nv], scr[o + nv:o + 2 * nv], scr[o + 2 * nv:o + 2 * nv + n], \
+        scr[o + 2 * nv + n:o + 2 * nv + 2 * n]
     o += 2 * nv + 2 * n
-    Mrr = SCR[o:o + n * n].reshape((n, n))
-    Lf = SCR[o + n * n:o + 2 * n * n].reshape((n, n))
-    a_b = np.zeros(6)           # the scene's base motion, or a base held at the origin
-    if sc.has_base:
-        for j in range(6):
-            fj = sc.base_fn[j]
-            a_b[j] = fn_eval(sc.fn_kind[fj], sc.fn_data[sc.fn_ptr[fj]:sc.fn_ptr[fj + 1]], t, 2)
+    Mrr, Lf = scr[o:o + n * n].reshape((n, n)), scr[o + n * n:o + 2 * n * n].reshape((n, n))
+    a_b = scr[o + 2 * n * n:o + 2 * n * n + 6]   # the scene's base motion, or a base held at the origin
+    for j in range(6):
+        a_b[j] = _fn(H, I, F, base_fn[j], t, 2) if base_fn[j] >= 0 else 0.0
     _call_fullM(H[FN_FULLM], _address(m), _address(d), M.ctypes.data)
     passive = carray(_voidptr(H[QFRC_PASSIVE]), nv, np.float64)
     actuator = carray(_voidptr(H[QFRC_ACTUATOR]), nv, np.float64)
     bias = carray(_voidptr(H[QFRC_BIAS]), nv, np.float64)
-    xipos = _rows(H[XIPOS], nb, 3)
     for k in range(nv):
         fx[k] = 0.0
-    if sc.load_link.size:   # the loads' generalized forces, J^T of every body's xfrc_applied
+    if _int(H, I, I_LOAD_LINK).size:   # the loads' generalized forces, J^T of every body's xfrc_applied
         for b in range(nb):
             if (xfrc[b, 0] != 0.0 or xfrc[b, 1] != 0.0 or xfrc[b, 2] != 0.0 or xfrc[b, 3] != 0.0
                     or xfrc[b, 4] != 0.0 or xfrc[b, 5] != 0.0):
@@ -438,28 +467,23 @@ def control(m, d, header_address):
         return
     H[CALLS] += 1
     t = carray(_voidptr(H[DATA] + H[TIME_OFF]), 1, np.float64)[0]
-    SI = carray(_voidptr(H[A_SI]), H[N_SI], np.int64)
-    SF = carray(_voidptr(H[A_SF]), H[N_SF], np.float64)
-    MAP = carray(_voidptr(H[A_MAP]), H[N_MAP], np.int64)
-    TREE = carray(_voidptr(H[A_TREE]), H[N_TREE], np.float64)
-    SCR = carray(_voidptr(H[A_SCR]), H[N_SCR], np.float64)
-    sc = scene_view(SI, SF)
-    nv, L = H[NV], H[NL]
+    I = carray(_voidptr(H[A_I]), H[I_END], np.int64)
+    F = carray(_voidptr(H[A_F]), H[F_END], np.float64)
+    nv, nb = H[NV], H[NBODY]
     qfrc = carray(_voidptr(H[QFRC_APPLIED]), nv, np.float64)
-    xfrc = _rows(H[XFRC_APPLIED], H[NBODY], 6)
+    xfrc = _rows(H[XFRC_APPLIED], nb, 6)
     for k in range(nv):
         qfrc[k] = 0.0
-    for b in range(H[NBODY]):
+    for b in range(nb):
         for c in range(6):
             xfrc[b, c] = 0.0
-    dof = MAP[9 * L:9 * L + H[NR]]
-    for j in range(sc.torque_idx.size):
-        fj = sc.torque_fn[j]
-        qfrc[dof[sc.torque_idx[j]]] += fn_eval(sc.fn_kind[fj], sc.fn_data[sc.fn_ptr[fj]:sc.fn_ptr[fj + 1]], t, 0)
-    if sc.load_link.size:
-        _apply_loads(m, d, H, sc, t, MAP, TREE, SCR, xfrc, qfrc)
+    torque_dof, torque_fn = _int(H, I, I_TORQUE_DOF), _int(H, I, I_TORQUE_FN)
+    for j in range(torque_dof.size):
+        qfrc[torque_dof[j]] += _fn(H, I, F, torque_fn[j], t, 0)
+    if _int(H, I, I_LOAD_LINK).size:
+        _apply_loads(m, d, H, I, F, t, xfrc, qfrc)
     if H[PRESCRIBE]:
-        _prescribe_base(m, d, H, sc, t, MAP, SCR, xfrc, qfrc)
+        _prescribe_base(m, d, H, I, F, t, xfrc, qfrc)
 
 
 # --------------------------------------------------------------------------- one run's inputs
@@ -482,7 +506,7 @@ class CompiledInputs:
         offsets = mjdata_offsets(d)
         tree = mj.source.tree
         L, nv, n = tree.n_links, m.nv, mj.n
-        self.SI, self.SF = plan.rhs.SI, plan.rhs.SF
+        sc = scene_view(plan.rhs.SI, plan.rhs.SF)     # the project's compiled inputs, read once per run
         coord_q = np.full((L, 6), -1, dtype=np.int64)
         for p in range(L):
             for k in range(6):
@@ -496,26 +520,28 @@ class CompiledInputs:
                 if anc[p, tree.coord_link[c]]:
                     moving[p, mj.dof_index[c]] = 1
             moving[p, mj.base_dofs] = 1
-        bdofs = np.asarray(mj.base_dofs, np.int64) if mj.moving_base else np.zeros(6, np.int64)
-        parent = np.array([int(tree.parent[p]) for p in range(L)], dtype=np.int64)
-        # MAP: body_of_link (L), parent (L), coord_q (6L), host_body (L), dof_index (n), base dofs (6),
-        # moving dofs (L x nv): the offsets _link_pose, _apply_loads, _prescribe_base and control use
-        self.MAP = np.concatenate([np.asarray(mj.body_of_link, np.int64), parent, coord_q.ravel(),
-                                   np.asarray(mj.host_body, np.int64), np.asarray(mj.dof_index, np.int64), bdofs,
-                                   moving.ravel()]).astype(np.int64)
-        self.TREE = np.ascontiguousarray(np.asarray(tree.params, float).reshape(L, 6).ravel())
-        self.SCR = np.zeros(6 * nv + nv * nv + 2 * nv + 2 * n + 2 * n * n + 8)
+        dof = np.asarray(mj.dof_index, np.int64)
+        ints = {"body_of": mj.body_of_link, "parent": [int(tree.parent[p]) for p in range(L)], "coord_q": coord_q,
+                "host": mj.host_body, "dof": dof, "bdof": mj.base_dofs if mj.moving_base else np.zeros(6),
+                "moving": moving, "base_fn": sc.base_fn if sc.has_base else np.full(6, -1),
+                "torque_dof": dof[sc.torque_idx], "torque_fn": sc.torque_fn, "load_link": sc.load_link,
+                "load_kind": sc.load_kind, "load_local": sc.load_local, "load_fn": sc.load_fn,
+                "fn_kind": sc.fn_kind, "fn_ptr": sc.fn_ptr}
+        floats = {"params": np.asarray(tree.params, float), "load_X": sc.load_X, "load_point": sc.load_point,
+                  "fn_data": sc.fn_data, "scratch": np.zeros(6 * nv + _LOAD_SCRATCH + nv * nv + 2 * nv + 2 * n + 2 * n * n + 6)}
+        self.I, i_at = _packed([ints[k] for k in INT_SECTIONS], np.int64)
+        self.F, f_at = _packed([floats[k] for k in FLOAT_SECTIONS], np.float64)
         fns = _libmujoco_functions()
         values = {
-            "active": 0, "data": d._address, "time_offset": offsets["time"], "nv": nv, "nq": m.nq, "nbody": m.nbody, "n": n,
-            "L": L, "base_body": mj.base_body, "prescribe": int(mj.moving_base), "qfrc_applied": d.qfrc_applied.ctypes.data,
-            "xfrc_applied": d.xfrc_applied.ctypes.data, "xpos": d.xpos.ctypes.data, "xmat": d.xmat.ctypes.data,
-            "xipos": d.xipos.ctypes.data, "qfrc_passive": d.qfrc_passive.ctypes.data,
-            "qfrc_actuator": d.qfrc_actuator.ctypes.data, "qfrc_bias": d.qfrc_bias.ctypes.data,
-            "qpos": d.qpos.ctypes.data, "fullM": fns["mj_fullM"], "applyFT": fns["mj_applyFT"], "jac": fns["mj_jac"],
-            "SI": self.SI.ctypes.data, "SI_len": self.SI.size, "SF": self.SF.ctypes.data, "SF_len": self.SF.size,
-            "MAP": self.MAP.ctypes.data, "MAP_len": self.MAP.size, "TREE": self.TREE.ctypes.data,
-            "TREE_len": self.TREE.size, "SCR": self.SCR.ctypes.data, "SCR_len": self.SCR.size,
+            "active": 0, "data": d._address, "time_offset": offsets["time"], "nv": nv, "nq": m.nq, "nbody": m.nbody,
+            "n": n, "L": L, "base_body": mj.base_body, "prescribe": int(mj.moving_base),
+            "qfrc_applied": d.qfrc_applied.ctypes.data, "xfrc_applied": d.xfrc_applied.ctypes.data,
+            "xpos": d.xpos.ctypes.data, "xmat": d.xmat.ctypes.data, "xipos": d.xipos.ctypes.data,
+            "qfrc_passive": d.qfrc_passive.ctypes.data, "qfrc_actuator": d.qfrc_actuator.ctypes.data,
+            "qfrc_bias": d.qfrc_bias.ctypes.data, "qpos": d.qpos.ctypes.data, "fullM": fns["mj_fullM"],
+            "applyFT": fns["mj_applyFT"], "jac": fns["mj_jac"], "I": self.I.ctypes.data, "F": self.F.ctypes.data,
+            **{f"i_{k}": v for k, v in zip(INT_SECTIONS + ("end",), i_at)},
+            **{f"f_{k}": v for k, v in zip(FLOAT_SECTIONS + ("end",), f_at)},
             "calls": 0, "error": 0, "error_count": 0,
         }
         self.header = np.array([values[k] for k in HEADER_FIELDS], dtype=np.int64)
@@ -533,6 +559,13 @@ class CompiledInputs:
                 f"MuJoCo control callback: the robot's block of mj_fullM is not positive definite (Cholesky pivot "
                 f"{int(self.header[ERROR]) - 1}, {int(self.header[ERROR_COUNT])} time(s)) while prescribing the base "
                 f"of {self.mj.source.name!r}")
+
+
+def _packed(parts, dtype) -> tuple[np.ndarray, list[int]]:
+    """The arrays ``parts`` flattened into one, and the start offset of each (then the total)."""
+    flat = [np.ascontiguousarray(np.asarray(x, dtype=dtype)).ravel() for x in parts]
+    at = np.cumsum([0] + [a.size for a in flat]).tolist()
+    return (np.concatenate(flat) if flat else np.zeros(0, dtype)), at
 
 
 class _Installed:

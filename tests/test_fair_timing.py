@@ -71,8 +71,9 @@ print(json.dumps({"scene": s["key"], **{k: s["wall_time"][k] for k in ("project_
 @pytest.mark.slow
 def test_first_scene_in_a_fresh_environment(tmp_path):
     """`urdf2links report`'s first scene with an empty numba cache (everything compiles) and again
-    with the cache it filled: the timed integration is the same run both times, so within 2x (the
-    margin is the machine's jitter; compilation inside the timed region was 500x)."""
+    with the cache it filled: the first run's timed integration is within 2x of the second's (the
+    issue's bound; the margin is the machine's jitter: compilation inside the timed region was
+    500x). Only that direction is bounded: a first run faster than the second is jitter too."""
     pytest.importorskip("mujoco")
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba-cache"))
 
@@ -88,4 +89,4 @@ def test_first_scene_in_a_fresh_environment(tmp_path):
     ratio = first["project_s"] / second["project_s"]
     print(f"{first['scene']}: project_s {first['project_s']:.4f} s fresh (warm-up {first['project_warmup_s']:.1f} s "
           f"compiling {len(first['project_compiled'])} functions), {second['project_s']:.4f} s cached: x{ratio:.2f}")
-    assert 0.5 <= ratio <= 2.0
+    assert ratio <= 2.0
