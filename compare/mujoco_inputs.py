@@ -12,8 +12,10 @@ Here the same steps are numba code (:func:`control`), installed as a C function 
 ``mj_step``). What it reads:
 
 * the scene's time functions and loads as the project's own right-hand side compiled them
-  (:func:`urdf2links.scene_kernels.compile_scene`: ``SI``, ``SF``, :func:`~urdf2links.scene_kernels.fn_eval`),
-  so both engines evaluate literally the same functions;
+  (:func:`urdf2links.scene_kernels.compile_scene`, read once per run by
+  :func:`~urdf2links.scene_kernels.scene_view` into the flat sections :data:`INT_SECTIONS` and
+  :data:`FLOAT_SECTIONS`; evaluated by :func:`~urdf2links.scene_kernels.fn_eval`), so both engines
+  evaluate literally the same functions;
 * MuJoCo's arrays of the run's ``MjData`` (``qfrc_applied``, ``xfrc_applied``, ``xpos``, ``xmat``,
   ``xipos``, ``qfrc_passive``, ``qfrc_actuator``, ``qfrc_bias``, ``qpos``) at the addresses the
   Python bindings give (``d.qfrc_applied.ctypes.data``); ``d->time`` at its offset in ``mjData``,
