@@ -224,9 +224,9 @@ def _closing_sections(s, command) -> list[str]:
                          fmt(wt["mujoco_s"], 3, " s"), fmt(wt["mujoco_harness_s"], 3, " s")]],
                        ["engine", "integrator", "steps", "timed: the integration", "whole call"], num_cols=(2, 3, 4)))
     regions = wt["regions"]
-    parts.append("<p class='small'><b>Timed</b>, urdf2links: " + e(regions["project_s"]) + ". MuJoCo: "
-                 + e(regions["mujoco_s"]) + ". <b>Whole call</b>, urdf2links: " + e(regions["project_run_s"])
-                 + "; MuJoCo: " + e(regions["mujoco_harness_s"]) + f". MuJoCo's inputs: {e(_inputs_words(wt))}.</p>")
+    parts.append("<p class='small'><b>Timed.</b> " + e(regions["project_s"]) + ". " + e(regions["mujoco_s"])
+                 + ". <b>Whole call.</b> urdf2links: " + e(regions["project_run_s"]) + "; MuJoCo: "
+                 + e(regions["mujoco_harness_s"]) + f". MuJoCo's inputs: {e(_inputs_words(wt))}.</p>")
     parts.append(f"<p class='small'>{e(_compile_words(wt))} Terms: {fmt(wt['terms_s'], 2, ' s')}; whole comparison "
                  f"{fmt(wt['total_s'], 2, ' s')}; {e(wt['note'])}.</p>")
     if s["notes"]:
