@@ -55,7 +55,7 @@ from .errors import SceneError
 from .functions import Constant, SceneValueError, TimeFunction, VectorFunction, parse_function, vector_function
 from .integrators import METHODS
 from .locations import example_robot_data_dir, shipped_robots_dir
-from .transforms import PARAMETERS
+from .transforms import PARAMETERS, BaseState
 
 __all__ = ["Scene", "AppliedLoad", "Spring", "RunSettings", "load_scene", "shipped_robots_dir"]
 
@@ -145,6 +145,14 @@ class Scene:
             if coord not in names:
                 raise SceneError(f"{where}: [{what}] coordinate {coord!r} is not a coordinate of robot {model.name!r}"
                                  f"{_hint(coord, names)}; coordinates are {list(names)}")
+
+    def base_state(self, t) -> BaseState | None:
+        """Pose, rate and acceleration of {A} at ``t`` from ``[base]``; None for a fixed base."""
+        if self.base is None:
+            return None
+        f = self.base
+        return BaseState(np.array([g(t) for g in f]), np.array([g.derivative(t) for g in f]),
+                         np.array([g.second_derivative(t) for g in f]))
 
     def initial_state(self, model) -> tuple[np.ndarray, np.ndarray]:
         names = model.coordinate_names
