@@ -40,11 +40,13 @@ from .transforms import base_state_at, link_transform
 from .visuals import RobotShapes, model_shapes
 
 __all__ = ["Motion", "Animation", "Panel", "render_animation", "animation_page", "trajectory_page",
-           "write_trajectory_page", "frame_indices", "viewer_script", "DEFAULT_FPS"]
+           "write_trajectory_page", "read_animation_data", "frame_indices", "link_poses_over", "viewer_script",
+           "DEFAULT_FPS"]
 
 #: Default frames per second of simulated time.
 DEFAULT_FPS = 30.0
 _FOV_DEG = 75.0  # meshcat's default camera
+_DATA_TAG = "<script type='application/json' class='u2l-data'>"
 
 
 @dataclass(frozen=True)
@@ -289,11 +291,28 @@ def render_animation(model, motions, *, shapes: RobotShapes | None = None, panel
                 f"<div class='u2l-status'>Loading the 3D view&hellip;</div>{_controls(motions)}"
                 f"{_legend(motions, shapes, len(t), fps, base)}</div>"
                 f"<div class='u2l-side'>{side}</div>"
-                f"<script type='application/json' class='u2l-data'>{text}</script></div>"
+                f"{_DATA_TAG}{text}</script></div>"
                 f"<!-- 3D viewer: meshcat (MIT) with three.js r132 (MIT), from the meshcat Python package -->"
                 f"<script>{viewer_script()}</script><script>{_asset('player.js')}</script>")
     return Animation(html=fragment, frames=t, links=tuple(shapes.links), runs=tuple(m.name for m in motions),
                      fps=float(fps), data_bytes=len(text), notes=tuple(shapes.notes))
+
+
+def read_animation_data(page: str) -> dict:
+    """The data an animation page embeds (frames, links, shapes, runs, base, camera, readout), with
+    each run's ``poses`` and the base's decoded to float arrays (F, L, 7) and (F, 7): position and
+    quaternion (x, y, z, w). ValueError when the page holds no animation."""
+    start = page.find(_DATA_TAG)
+    if start < 0:
+        raise ValueError("the page holds no animation data (no <script class='u2l-data'>)")
+    start += len(_DATA_TAG)
+    data = json.loads(page[start:page.index("</script>", start)])
+    F, L = len(data["t"]), len(data["links"])
+    for run in data["runs"]:
+        run["poses"] = np.frombuffer(base64.b64decode(run["poses"]), "<f4").reshape(F, L, 7)
+    if data["base"]:
+        data["base"]["poses"] = np.frombuffer(base64.b64decode(data["base"]["poses"]), "<f4").reshape(F, 7)
+    return data
 
 
 def animation_page(animation: Animation, *, title: str, intro: str = "") -> str:

@@ -25,12 +25,14 @@ from .description import Geometry, RobotDescription
 from .errors import MeshError, URDFError
 from .rotations import homogeneous, rpy_to_matrix
 
-__all__ = ["Shape", "RobotShapes", "robot_shapes", "model_shapes", "DEFAULT_MAX_FACES", "tessellate"]
+__all__ = ["Shape", "RobotShapes", "robot_shapes", "model_shapes", "decimate", "tessellate", "DEFAULT_MAX_FACES",
+           "MIN_PART_FACES"]
 
 #: Triangle budget of a robot's meshes in all (the UR5's visual meshes hold ~96 000).
 DEFAULT_MAX_FACES = 40_000
-#: Smallest number of triangles a decimated mesh part keeps.
-MIN_PART_FACES = 64
+#: Mesh parts of at most this many triangles are kept whole (decimating small parts, thin rings and
+#: caps, loses whole pieces of them); larger ones are decimated to at least this many.
+MIN_PART_FACES = 400
 
 
 @dataclass(frozen=True, eq=False)
@@ -126,7 +128,7 @@ def _read_parts(geometry: Geometry) -> tuple[list, list[str]]:
     return merged, notes
 
 
-def _decimate(vertices, faces, target: int) -> tuple[np.ndarray, np.ndarray]:
+def decimate(vertices, faces, target: int) -> tuple[np.ndarray, np.ndarray]:
     """One part reduced to about ``target`` triangles (unchanged when smaller): quadric decimation,
     then vertex clustering where the quadric collapses stall (open, non-manifold files)."""
     if len(faces) <= target:
@@ -218,10 +220,15 @@ def robot_shapes(description: RobotDescription, *, max_faces: int = DEFAULT_MAX_
 
 
 def _within_budget(raw: list[Shape], read: int, max_faces: int) -> list[Shape]:
-    """The shapes with each mesh decimated to its share of ``max_faces`` (a part shared by several
-    links is decimated once)."""
+    """The shapes with each mesh part decimated to its share of ``max_faces``: parts of at most
+    :data:`MIN_PART_FACES` triangles kept whole, the rest of the budget shared by the larger parts
+    in proportion to their size (a part shared by several links is decimated once)."""
     if read <= max_faces:
         return [s if s.kind != "mesh" else _as_float32(s, s.vertices, s.faces) for s in raw]
+    parts = {id(s.faces): len(s.faces) for s in raw if s.kind == "mesh"}
+    small = sum(f for f in parts.values() if f <= MIN_PART_FACES)
+    large = sum(f for f in parts.values() if f > MIN_PART_FACES)
+    share = max(max_faces - small, 0) / large if large else 1.0
     done: dict = {}
     out = []
     for s in raw:
@@ -230,8 +237,8 @@ def _within_budget(raw: list[Shape], read: int, max_faces: int) -> list[Shape]:
             continue
         key = id(s.faces)
         if key not in done:
-            target = max(MIN_PART_FACES, int(len(s.faces) * max_faces / read))
-            done[key] = _decimate(s.vertices, s.faces, target)
+            target = len(s.faces) if len(s.faces) <= MIN_PART_FACES else max(MIN_PART_FACES, int(len(s.faces) * share))
+            done[key] = decimate(s.vertices, s.faces, target)
         out.append(_as_float32(s, *done[key]))
     return out
 
