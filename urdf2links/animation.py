@@ -164,7 +164,7 @@ def _camera(points: np.ndarray, reach: float) -> tuple[dict, float]:
     motion's radius. Of the views from 20 degrees above, every 15 degrees around, the one in which
     the motion covers the largest area (a planar motion is seen square on; ties go to the front
     right), at the distance that fits the motion into the pane (vertical field of view 75 degrees,
-    width 1.5 times the height)."""
+    width 1.3 times the height, a margin of 15 %)."""
     lo, hi = points.min(axis=0), points.max(axis=0)
     centre = 0.5 * (lo + hi)
     p = points - centre
@@ -184,7 +184,7 @@ def _camera(points: np.ndarray, reach: float) -> tuple[dict, float]:
             best = (score, d, np.abs(uv).max(axis=0) + reach, float(np.max(p @ d, initial=0.0)))
     _, d, (u_ext, v_ext), near = best
     half = np.tan(np.radians(_FOV_DEG / 2))
-    distance = near + 1.05 * max(v_ext / half, u_ext / (1.5 * half), 1e-3)
+    distance = near + 1.15 * max(v_ext / half, u_ext / (1.3 * half), 1e-3)
     return {"target": [float(v) for v in centre], "offset": [float(v) for v in distance * d]}, radius
 
 

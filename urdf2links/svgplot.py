@@ -133,7 +133,7 @@ def panel_svg(panel: Panel) -> str:
                    f"<title>{e(label)}</title></polyline>")
     if panel.legend and len(ys) > 1:
         for k, label in enumerate(ys):
-            out.append(f"<text x='{_L + 6 + 80 * (k % 4)}' y='{_T + 12 + 12 * (k // 4)}' class='u2l-tick' "
-                       f"fill='{PALETTE[k % len(PALETTE)]}'>{e(label[:14])}</text>")
+            out.append(f"<text x='{_L + 6 + 116 * (k % 3)}' y='{_T + 12 + 12 * (k // 3)}' class='u2l-tick' "
+                       f"fill='{PALETTE[k % len(PALETTE)]}'>{e(label[:20])}</text>")
     out.append(f"<line class='u2l-cursor' x1='{x(t0):.1f}' x2='{x(t0):.1f}' y1='{_T}' y2='{_H - _B}'/></svg>")
     return "".join(out)

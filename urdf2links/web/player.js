@@ -12,7 +12,8 @@
  * [sx, sy, cx, cy]} or null; camera {target, offset} (world, z up); readout [{label, unit,
  * log, values (F,)}]; frame_size (m).
  *
- * URL parameters (after # or ?): t=SECONDS shows that time, paused; play=1 plays; speed=X.
+ * URL parameters (after # or ?): t=SECONDS shows that time, paused; play=1 plays from there; speed=X.
+ * When ready the element gets data-ready="1" and data-top (its top in the page, CSS pixels).
  */
 (function () {
   "use strict";
@@ -236,6 +237,7 @@
     }
     status.textContent = "";
     root.dataset.ready = "1";
+    root.dataset.top = String(Math.round(root.getBoundingClientRect().top + window.scrollY));  // for screenshots
     if (params.t !== undefined) {
       show(+params.t || 0);
       play(params.play === "1");
