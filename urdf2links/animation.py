@@ -123,6 +123,14 @@ def _placements(model, links) -> tuple[np.ndarray, np.ndarray]:
     return np.array(idx), np.array(X)
 
 
+def _link_masses(model, links) -> np.ndarray:
+    """Mass (L,) of each link's tree link (links folded into one share its mass), plus a small floor
+    so that massless links count a little."""
+    idx, _ = _placements(model, links)
+    m = np.asarray(model.tree.H[:, 3, 3], float)[idx]
+    return m + 1e-6 * max(float(m.sum()), 1e-9) + 1e-12
+
+
 def link_poses_over(model, links, t, q, base=None) -> np.ndarray:
     """{0}-poses (F, L, 4, 4) of ``links`` (URDF links or tree links) at times ``t`` (F,) and ``q`` (F, n)."""
     idx, X = _placements(model, links)
@@ -159,15 +167,30 @@ def _shape_data(s, li: int) -> dict:
     return d
 
 
-def _camera(points: np.ndarray, reach: float) -> tuple[dict, float]:
+def _weighted_range(points: np.ndarray, weights: np.ndarray, tail: float) -> tuple[np.ndarray, np.ndarray]:
+    """Per axis, the values below which ``tail`` and above which ``tail`` of the weight lies (3,), (3,)."""
+    lo, hi = np.empty(3), np.empty(3)
+    for k in range(3):
+        order = np.argsort(points[:, k])
+        c = np.cumsum(weights[order]) / np.sum(weights)
+        lo[k] = points[order[min(np.searchsorted(c, tail), len(c) - 1)], k]
+        hi[k] = points[order[min(np.searchsorted(c, 1.0 - tail), len(c) - 1)], k]
+    return lo, hi
+
+
+def _camera(points: np.ndarray, weights: np.ndarray, first: np.ndarray, reach: float) -> tuple[dict, float]:
     """Target (centre of the motion), offset (where the camera sits from it, world z up) and the
-    motion's radius. Of the views from 20 degrees above, every 15 degrees around, the one in which
+    motion's radius. The motion is where the mass goes: ``points`` (k, 3) weighted by their links'
+    masses ``weights`` (k,), without the lightest 0.5 % at either end of each axis (a finger sliding
+    out of an unlimited joint does not shrink the robot to a dot), and the whole first frame
+    ``first`` (j, 3). Of the views from 20 degrees above, every 15 degrees around, the one in which
     the motion covers the largest area (a planar motion is seen square on; ties go to the front
     right), at the distance that fits the motion into the pane (vertical field of view 75 degrees,
     width 1.3 times the height, a margin of 15 %)."""
-    lo, hi = points.min(axis=0), points.max(axis=0)
+    lo, hi = _weighted_range(points, weights, 0.005)
+    lo, hi = np.minimum(lo, first.min(axis=0)), np.maximum(hi, first.max(axis=0))
     centre = 0.5 * (lo + hi)
-    p = points - centre
+    p = np.clip(points, lo, hi) - centre
     radius = max(0.5 * float(np.linalg.norm(hi - lo)) + reach, 1e-3)
     el = np.radians(20.0)
     best = None
@@ -216,7 +239,11 @@ def _payload(model, shapes: RobotShapes, motions, panels, base, fps) -> tuple[di
     reach = max((s.extent() for s in shapes.shapes), default=0.0)
     centres = [poses[0][:, link_index[s.link]] @ (s.origin @ np.r_[s.centre(), 1.0]) for s in shapes.shapes]
     points = np.concatenate([poses[0][:, :, :3, 3].reshape(-1, 3)] + [c[:, :3] for c in centres])
-    camera, radius = _camera(points, reach)
+    mass = _link_masses(model, links)
+    weights = np.concatenate([np.tile(mass, len(t))] + [np.full(len(t), mass[link_index[s.link]])
+                                                         for s in shapes.shapes])
+    first = np.concatenate([poses[0][0, :, :3, 3]] + [c[:1, :3] for c in centres])
+    camera, radius = _camera(points, weights, first, reach)
     frame_size = 0.08 * radius
     readout = []
     for p in panels:

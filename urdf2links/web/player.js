@@ -114,8 +114,8 @@
       resize(w === undefined ? pane.clientWidth : w, h === undefined ? pane.clientHeight : h);
     };
     viewer.set_3d_pane_size();
-    viewer.set_property(["Background"], "top_color", [0.97, 0.98, 1.0]);
-    viewer.set_property(["Background"], "bottom_color", [0.74, 0.79, 0.86]);
+    viewer.set_property(["Background"], "top_color", [0.88, 0.91, 0.95]);
+    viewer.set_property(["Background"], "bottom_color", [0.52, 0.58, 0.67]);
     viewer.set_property(["Axes"], "visible", false);
 
     const T = data.t, F = T.length, L = data.links.length;
