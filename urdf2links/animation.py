@@ -224,6 +224,19 @@ def _base_data(base, t: np.ndarray, poses0: np.ndarray, frame_size: float) -> di
                                                          float(centre[1])]}
 
 
+def _motion_points(model, shapes: RobotShapes, poses: np.ndarray):
+    """What the camera frames (:func:`_camera`'s arguments): link origins and shape centres over the
+    frames (k, 3), their links' masses (k,), the first frame's points, the largest shape's reach."""
+    index = {k: i for i, k in enumerate(shapes.links)}
+    F = len(poses)
+    centres = [poses[:, index[s.link]] @ (s.origin @ np.r_[s.centre(), 1.0]) for s in shapes.shapes]  # (F, 4)
+    points = np.concatenate([poses[:, :, :3, 3].reshape(-1, 3)] + [c[:, :3] for c in centres])
+    mass = _link_masses(model, shapes.links)
+    weights = np.concatenate([np.tile(mass, F)] + [np.full(F, mass[index[s.link]]) for s in shapes.shapes])
+    first = np.concatenate([poses[0, :, :3, 3]] + [c[:1, :3] for c in centres])
+    return points, weights, first, max((s.extent() for s in shapes.shapes), default=0.0)
+
+
 def _payload(model, shapes: RobotShapes, motions, panels, base, fps) -> tuple[dict, np.ndarray]:
     ref = motions[0]
     t_all = np.asarray(ref.t, float)
@@ -236,14 +249,7 @@ def _payload(model, shapes: RobotShapes, motions, panels, base, fps) -> tuple[di
     links = list(shapes.links)
     link_index = {k: i for i, k in enumerate(links)}
     poses = [link_poses_over(model, links, t, np.asarray(m.q, float)[idx], base) for m in motions]
-    reach = max((s.extent() for s in shapes.shapes), default=0.0)
-    centres = [poses[0][:, link_index[s.link]] @ (s.origin @ np.r_[s.centre(), 1.0]) for s in shapes.shapes]
-    points = np.concatenate([poses[0][:, :, :3, 3].reshape(-1, 3)] + [c[:, :3] for c in centres])
-    mass = _link_masses(model, links)
-    weights = np.concatenate([np.tile(mass, len(t))] + [np.full(len(t), mass[link_index[s.link]])
-                                                         for s in shapes.shapes])
-    first = np.concatenate([poses[0][0, :, :3, 3]] + [c[:1, :3] for c in centres])
-    camera, radius = _camera(points, weights, first, reach)
+    camera, radius = _camera(*_motion_points(model, shapes, poses[0]))
     frame_size = 0.08 * radius
     readout = []
     for p in panels:
