@@ -41,12 +41,35 @@ def format_tree(model) -> str:
     lines = ["  ".join(cell.ljust(w) for cell, w in zip(r, widths)).rstrip() for r in rows]
     lines.insert(1, "  ".join("-" * w for w in widths))
     out = [f"robot {model.name!r} from {model.source}: {tree.n_links} links, {model.n} coordinates", ""] + lines
+    out += _joint_lines(model.info.get("joints", []))
     out += ["", f"inertia audit: {len(model.audit)} finding(s)"]
     out += [f"  - {r}" for r in model.audit]
     notes = model.info.get("notes", [])
     if notes:
         out += ["", "import notes:"] + [f"  - {n}" for n in notes]
     return "\n".join(out)
+
+
+def _num(v) -> str:
+    return "-" if v is None else f"{v:.4g}"
+
+
+def _joint_lines(joints) -> list[str]:
+    """The URDF joints with what ``<limit>`` and ``<dynamics>`` say (limits are not enforced; damping acts
+    only in scenes with ``[dampers] from_urdf = true``; friction is not modelled)."""
+    moving = [j for j in joints if j["type"] != "fixed"]
+    if not moving:
+        return []
+    rows = [("joint", "type", "coordinates", "lower", "upper", "effort", "velocity", "damping", "friction")]
+    for j in moving:
+        rows.append((j["name"], j["type"], ", ".join(j["coordinates"]) or "(coupled)", _num(j["lower"]),
+                     _num(j["upper"]), _num(j["effort"]), _num(j["velocity"]), _num(j["damping"]),
+                     _num(j["friction"])))
+    widths = [max(len(r[c]) for r in rows) for c in range(len(rows[0]))]
+    lines = ["  ".join(cell.ljust(w) for cell, w in zip(r, widths)).rstrip() for r in rows]
+    lines.insert(1, "  ".join("-" * w for w in widths))
+    return ["", "joints (limits not enforced, noted when a run leaves them; damping acts in scenes with [dampers] "
+            "from_urdf = true; friction not modelled):"] + lines
 
 
 def _inspect(args) -> int:
