@@ -38,9 +38,9 @@ def parse_xacro_arg(text: str) -> tuple[str, str]:
 
 
 @contextmanager
-def _package_finder(xacro_module, directory: Path, package_dirs):
-    """Let ``$(find pkg)`` search the same folders as ``package://pkg`` (then ament, if present)."""
-    subst = xacro_module.substitution_args
+def _package_finder(subst, directory: Path, package_dirs):
+    """Let ``$(find pkg)`` search the same folders as ``package://pkg`` (then ament, if present):
+    ``subst`` is ``xacro.substitution_args``, whose ``_find`` calls ``_eval_find(pkg)``."""
     original = subst._eval_find
 
     def find(pkg):
@@ -65,6 +65,7 @@ def expand_xacro(path, *, xacro_args=None, package_dirs=()) -> str:
     """The URDF text of the xacro file ``path`` expanded with ``xacro_args`` (dict name -> value)."""
     try:
         import xacro
+        from xacro import substitution_args
     except ImportError:
         raise URDFError(f"{path}: is a xacro file; expanding it needs the xacro package: "
                         f"{XACRO_INSTALL} (or run `xacro {Path(path).name} > robot.urdf` and load the URDF)") from None
@@ -73,7 +74,7 @@ def expand_xacro(path, *, xacro_args=None, package_dirs=()) -> str:
         raise URDFError(f"{path}: the xacro file does not exist")
     args = {str(k): str(v) for k, v in (xacro_args or {}).items()}
     try:
-        with _package_finder(xacro, path.resolve().parent, tuple(Path(p) for p in package_dirs)):
+        with _package_finder(substitution_args, path.resolve().parent, tuple(Path(p) for p in package_dirs)):
             doc = xacro.process_file(str(path), mappings=args)
     except URDFError:
         raise
