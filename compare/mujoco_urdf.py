@@ -32,6 +32,7 @@ has the sign of the URDF axis (checked against yourdfpy in the tests).
 from __future__ import annotations
 
 import os
+import re
 import sys
 import tempfile
 from contextlib import contextmanager
@@ -56,6 +57,9 @@ __all__ = [
 #: Names of the six dofs of a MuJoCo free joint, in MuJoCo's order: linear velocity of
 #: the body origin in the WORLD frame, then angular velocity in the BODY (local) frame.
 FREE_DOF_LABELS = ("vx", "vy", "vz", "wx", "wy", "wz")
+
+#: An XML declaration at the start of a text (dropped before lxml parses the decoded text).
+_DECLARATION = re.compile(r"^\ufeff?\s*<\?xml[^>]*\?>")
 
 #: Everything we do not compare, switched off on the compiled model.
 _DISABLED = (
@@ -150,6 +154,9 @@ def _prepare(text: str, source: str, *, strip_meshes: bool, fusestatic: bool,
              meshdir: Path | None, notes: list[str]) -> tuple[str, list[str]]:
     """Edit the URDF text for MuJoCo; return the new text and the list of link names."""
     parser = etree.XMLParser(remove_comments=True, resolve_entities=False)
+    declaration = _DECLARATION.match(text)
+    if declaration:  # the text is already decoded; lxml would also refuse an unusual version ("0.0")
+        text = text[declaration.end():]
     try:
         root = etree.fromstring(text.encode("utf-8"), parser)
     except etree.XMLSyntaxError as err:
