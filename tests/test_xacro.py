@@ -63,6 +63,15 @@ def test_xacro_expands_with_arguments_and_finds_packages(workspace):
     assert default.coordinate_names == ("shoulder",)
 
 
+def test_include_by_package_url(workspace):
+    f = workspace / "urdf" / "by_url.urdf.xacro"
+    f.write_text(ROBOT.replace("$(find armpkg)/urdf/macros.xacro", "package://armpkg/urdf/macros.xacro"))
+    assert load_urdf(f).coordinate_names == ("shoulder",)
+    macros_only = workspace / "urdf" / "macros.xacro"
+    with pytest.raises(URDFError, match="only defines macros"):
+        load_urdf(macros_only)
+
+
 def test_package_meshes_of_an_expanded_xacro_resolve(workspace):
     from urdf2links.parse import parse_urdf
 

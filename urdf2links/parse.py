@@ -49,6 +49,7 @@ from .inventory import inventory_notes, joint_value_notes
 from .mesh_paths import require_mesh, resolve_mesh_path
 from .rotations import matrix_to_rpy
 from .urdf_source import read_source
+from .xacro_input import is_xacro_path
 
 __all__ = ["parse_urdf", "resolve_mesh_path", "require_mesh", "JOINT_TYPES"]
 
@@ -478,7 +479,9 @@ def parse_urdf(source, *, package_dirs=(), strict: bool = False, xacro_args=None
         link_els, joint_els = _children(root, "link"), _children(root, "joint")
         if not link_els:
             r.fail(root, f"robot '{name}'", "there are no <link> elements",
-                   "a URDF needs at least one <link name=\"...\"/>", URDFStructureError)
+                   "a URDF needs at least one <link name=\"...\"/>" + (
+                       " (a xacro file that only defines macros? load the file that calls them)"
+                       if is_xacro_path(source) else ""), URDFStructureError)
         links = [_link(r, el, directory, package_dirs) for el in link_els]
         _check_unique(r, link_els, [l.name for l in links], "link")
         joints = [_joint(r, el) for el in joint_els]
