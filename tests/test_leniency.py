@@ -121,12 +121,16 @@ def test_axis_of_jointless_types_is_not_read(jtype):
 def test_unused_and_unknown_elements_are_listed():
     text = robot(a='<self_collide/>', jbody=LIMIT + '<origin xyz="0 0 1"/><origin xyz="9 9 9"/>'
                  '<safety_controller k_velocity="1"/><calibration rising="0"/><dynamics damping="0.5" friction="0.1"/>',
-                 extra='<transmission name="t1"/><gazebo reference="a"/><material name="red"/><sensor name="s"/>')
+                 extra='<transmission name="t1"/><gazebo reference="a"/><material name="red"/><sensor name="s"/>'
+                       '<link name="c"><visual><geometry><box size="1 1 1"/></geometry><shine/></visual></link>'
+                       '<joint name="k" type="fixed"><parent link="b"/><child link="c"/>'
+                       '<safety_controller k_velocity="1"/></joint>')
     desc = parse_urdf(text)
     notes = "\n".join(desc.notes)
     for words in (["<link> <self_collide> in link 'a'", "unknown element"],
                   ["a second <joint> <origin> in joint 'j'", "only the first"],
-                  ["<joint> <safety_controller> in joint 'j'", "not used"],
+                  ["<joint> <safety_controller> in joints 'j', 'k'", "not used"],
+                  ["<link> <visual> <shine> in link 'c'", "unknown element"],
                   ["<joint> <calibration> in joint 'j'", "not used"],
                   ["<transmission>: 1 element(s) (t1)", "not used"], ["<gazebo>", "not used"],
                   ["<material>: 1 element(s) (red)", "visual only"], ["<sensor>", "unknown element"],

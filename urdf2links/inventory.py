@@ -66,7 +66,7 @@ def _walk(el, path: str, groups: dict) -> None:
         if used is None:
             continue
         if c in used:
-            if seen[c] == 1 and tag in ("robot", "link", "joint", "inertial", "visual", "collision"):
+            if (seen[c] == 1 or c not in _ONCE) and tag in ("robot", "link", "joint", "inertial", "visual", "collision"):
                 _walk(child, f"<{c}>" if tag == "robot" else where, groups)
         elif c in known:
             groups.setdefault((where, f"not used ({known[c]})"), []).append(
@@ -84,8 +84,16 @@ def _format(groups: dict) -> list[str]:
             out.append(f"{where}: {len(owners)} element(s)" + (f" ({', '.join(dict.fromkeys(named))})" if named
                                                                   else "") + f": {action}")
         else:
-            out.append(f"{where} in {', '.join(dict.fromkeys(owners))}: {action}")
+            out.append(f"{where} in {_owners(list(dict.fromkeys(owners)))}: {action}")
     return out
+
+
+def _owners(owners: list[str]) -> str:
+    """``joint 'a'`` / ``joints 'a', 'b'`` (mixed kinds listed one by one)."""
+    kinds = {o.split(" ", 1)[0] for o in owners}
+    if len(owners) > 1 and len(kinds) == 1 and " " in owners[0]:
+        return f"{kinds.pop()}s " + ", ".join(o.split(" ", 1)[1] for o in owners)
+    return ", ".join(owners)
 
 
 def inventory_notes(root) -> list[str]:

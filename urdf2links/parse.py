@@ -89,9 +89,7 @@ class _Reader:
 
     def fail(self, el, what: str, problem: str, fix: str, cls=URDFValueError):
         line = f", line {el.sourceline}" if el is not None and el.sourceline else ""
-        err = cls(f"{self.label}{line}: {what}: {problem}; {fix}")
-        err.problem = problem  # the parts, for a note when the defect is tolerated
-        raise err
+        raise cls(f"{self.label}{line}: {what}: {problem}; {fix}", problem=problem)
 
     def note(self, el, what: str, text: str) -> None:
         line = f" (line {el.sourceline})" if el is not None and el.sourceline else ""
@@ -263,7 +261,7 @@ def _geometry(r: _Reader, el, what: str, directory, package_dirs) -> Geometry:
         shapes = [c for c in geo if isinstance(c.tag, str)] if geo is not None else []
         known = [c for c in shapes if etree.QName(c).localname in GEOMETRY_KINDS]
         kind = etree.QName((known or shapes)[0]).localname if shapes else "none"
-        problem = getattr(err, "problem", str(err))
+        problem = err.problem
         r.note(el, f"{what} <geometry><{kind}>" if shapes else what,
                f"{problem}: ignored for the dynamics (a geometry is used only when a link's inertia is computed "
                "from it, and then this one is refused by name)")
@@ -297,7 +295,7 @@ def _axis(r: _Reader, el, what: str, jtype: str) -> np.ndarray:
         try:
             return r.floats(axis_el, "xyz", 3, f"{what} <axis>", (1.0, 0.0, 0.0))
         except URDFValueError as err:
-            r.note(axis_el, f"{what} <axis>", f"{getattr(err, 'problem', err)}: ignored, a {jtype} joint has "
+            r.note(axis_el, f"{what} <axis>", f"{err.problem}: ignored, a {jtype} joint has "
                    "no axis (urdfdom does not read it)")
             return np.array([1.0, 0.0, 0.0])
     axis = r.floats(axis_el, "xyz", 3, f"{what} <axis>", (1.0, 0.0, 0.0))
