@@ -1,6 +1,6 @@
 """Terms at identical states: the project's ``A`` and ``e + G`` against MuJoCo's own URDF import.
 
-The "terms" level of the MuJoCo comparison (DESIGN.md, "MuJoCo comparison") on route 2: the
+The "terms" level of the MuJoCo comparison (the others: trajectories, energies) on route 2: the
 URDF file goes through MuJoCo's own URDF reader (:func:`urdf2links.compare.mujoco_urdf.mujoco_from_urdf`)
 and, at seeded random states, ``A`` is compared with ``mj_fullM`` and ``e + G`` with
 ``qfrc_bias``, coordinate by coordinate (the project's coordinates are the URDF joint names and

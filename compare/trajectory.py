@@ -1,6 +1,6 @@
 """One scene run by both engines and compared: terms, trajectories, energies, base, wall time.
 
-:func:`compare_scene` is the MuJoCo cross-validation of one scene (DESIGN.md, "MuJoCo comparison"):
+:func:`compare_scene` is the MuJoCo cross-validation of one scene:
 
 1. **Terms at identical states.** At ``states`` seeded random states (``q`` uniform in
    [-1, 1] rad or m, ``qd`` standard normal; with a moving base also a random base pose

@@ -1,9 +1,9 @@
 """Parsed robot description: a faithful, validated mirror of the URDF.
 
-This is the first of the two data layers (DESIGN.md): it holds what the file says,
-in the file's own terms (URDF ``rpy``, joint axes, inertials about the COM), after
-validation. Nothing here knows the trace method; :mod:`urdf2links.importer` turns
-it into the tree of links.
+This is the first of the two data layers (the second is the tree of links,
+:mod:`urdf2links.tree`): it holds what the file says, in the file's own terms (URDF ``rpy``,
+joint axes, inertials about the COM), after validation. Nothing here knows the trace method;
+:mod:`urdf2links.importer` turns it into the tree of links.
 
 Shapes: vectors are ``(3,)`` float arrays, inertia tensors ``(3, 3)``.
 """

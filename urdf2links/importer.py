@@ -3,7 +3,7 @@
 Data flow: :func:`urdf2links.parse.parse_urdf` (validated description) -> this module (frames,
 coordinates, H, audit) -> :class:`urdf2links.tree.LinkTree` -> :class:`urdf2links.model.Model`.
 
-Frames. Every URDF link ``C`` lives in some tree link ``t`` with a constant transform ``X``
+Frames (docs/equations.md (E9), (E11)). Every URDF link ``C`` lives in some tree link ``t`` with a constant transform ``X``
 (``r_t = X r_C``). A joint with origin ``O`` (4, 4) and unit axis ``u`` becomes:
 
 - revolute/continuous: one tree link whose ``T~`` has translation and rotation of ``M Ra`` (``M = X_parent O``,
@@ -15,8 +15,8 @@ Frames. Every URDF link ``C`` lives in some tree link ``t`` with a constant tran
 - fixed: no tree link; the child's H is added to the parent's (``H += X H_C X^T``, exact) and its
   children re-attached through ``X``;
 - floating (six coordinates ``<joint>.x ... <joint>.phi_z``), spherical (three, the ZYX angles
-  ``<joint>.phi_x``, ``<joint>.phi_y``, ``<joint>.phi_z``: ``R = Rx Ry Rz`` (5.5) relative to the joint
-  frame; re-charted near ``phi_y = +-pi/2`` like a floating link, :mod:`urdf2links.charts`) and planar
+  ``<joint>.phi_x``, ``<joint>.phi_y``, ``<joint>.phi_z``: ``R = Rx Ry Rz`` (E3) relative to the joint
+  frame; re-charted near ``phi_y = +-pi/2`` like a floating link, (E45), :mod:`urdf2links.charts`) and planar
   (``<joint>.x``, ``<joint>.y``, ``<joint>.phi_z`` in the plane normal to the axis): after a constant
   frame when needed.
 
@@ -77,7 +77,7 @@ def load_urdf(source, *, floating_base: bool = False, inertia: str = "audit", mi
     ----------
     source : path to a ``.urdf`` file, a ``.xacro`` file (expanded with the optional ``xacro``
         package: ``pip install "urdf2links[xacro]"``), or the URDF text itself.
-    floating_base : give the root link six coordinates ``<root>.x ... <root>.phi_z`` (5.5).
+    floating_base : give the root link six coordinates ``<root>.x ... <root>.phi_z`` (E3).
     inertia : ``"audit"`` (report findings in ``model.audit`` and warn once), ``"strict"`` (raise
         :class:`~urdf2links.errors.InertiaError` on any finding) or ``"repair"`` (fix every finding:
         from the link's geometry when it has some, otherwise the smallest change that makes H
@@ -410,7 +410,7 @@ def _replace(rec: AuditRecord, fix: str) -> AuditRecord:
 
 
 def _params(F) -> np.ndarray:
-    """The six parameters (5.5) of a constant transform F (4, 4): its origin and ZYX angles."""
+    """The six parameters (E3) of a constant transform F (4, 4): its origin and ZYX angles (E7)."""
     return np.r_[F[:3, 3], matrix_to_xyz_angles(F[:3, :3])]
 
 

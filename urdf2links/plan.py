@@ -20,7 +20,7 @@ damper          ``-c qd`` (dissipation D)                           a ``[[spring
 The state integrated is ``y = (q, qd, W)``: ``W`` is the work done on the system by everything
 that is not a potential (Q, tau, dampers, and the moving base through ``-dL/dt``), so that
 ``h(t) - h(0) - W(t)`` (``h`` the energy function, ``E + V`` for a fixed base) measures the
-integration's own energy error (the power balance; docs/equations.md). The same right-hand side
+integration's own energy error (the power balance, docs/equations.md (E40)). The same right-hand side
 in numpy, the oracle the tests compare it with, is :class:`urdf2links.oracles.python_plan.PythonPlan`.
 """
 

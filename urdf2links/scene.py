@@ -23,12 +23,12 @@ not computed, see :mod:`urdf2links.plan`)::
     [base]                                  # prescribed motion of {A}: x, y, z [m], phi_x, phi_y, phi_z [rad]
     z = { sines = [[0.8, 0.1, 0.0]] }       # each a function of time (urdf2links.functions)
 
-    [[force]]                               # (5.27): a force on a link
+    [[force]]                               # (E23): a force on a link
     link = "lower"; point = [0, 0, -1.0]    # application point in the link's (URDF) frame [m]
     frame = "world"                         # axes of the vector: link | world
     value = [0, 0, { sines = [[2.0, 0.5]] }]   # N, three functions of time
 
-    [[moment]]                              # (5.28): link, frame, value [N m]
+    [[moment]]                              # (E23): link, frame, value [N m]
     [[torque]]                              # coordinate = "shoulder"; value = function [N m or N]
     [[spring]]                              # coordinate, stiffness [N m/rad], rest [rad], damping [N m s/rad]
 
@@ -103,7 +103,7 @@ class AppliedLoad:
 @dataclass(frozen=True)
 class Spring:
     """Joint spring and damper on ``coordinate``: force ``-stiffness (q - rest) - damping qd``,
-    i.e. V += 0.5 k (q - rest)^2 and the dissipation function D = 0.5 c qd^2 of (5.1)."""
+    i.e. V += 0.5 k (q - rest)^2 and the dissipation function D = 0.5 c qd^2 of docs/equations.md (E16)."""
 
     coordinate: str
     stiffness: float = 0.0
