@@ -22,6 +22,7 @@ import sys
 import time
 from pathlib import Path
 
+from urdf2links.cli import scene_from_args, write_scene_option
 from urdf2links.console import err, shown_path
 from urdf2links.integrators import METHODS
 from urdf2links.locations import shipped_robots_dir
@@ -90,6 +91,8 @@ def _print_headline(s: dict, stream=sys.stdout) -> None:
 
 def _compare_cmd(args) -> str:
     parts = ["urdf2links compare", shown_path(args.scene)]
+    parts += [f for f, on in (("--floating", args.floating), (f"--q0 {args.q0}", args.q0 != "zero")) if on]
+    parts += [f"--xacro-arg {a}" for a in args.xacro_arg]
     for flag, value, default in (("--t-end", args.t_end, None), ("--mujoco-integrator", args.mujoco_integrator, "RK4"),
                                  ("--mujoco-dt", args.mujoco_dt, 1e-4), ("--method", args.method, None),
                                  ("--rtol", args.rtol, None), ("--states", args.states, 8), ("--seed", args.seed, 0)):
@@ -99,7 +102,8 @@ def _compare_cmd(args) -> str:
 
 
 def compare_command(args) -> int:
-    scene = load_scene(args.scene)
+    scene = scene_from_args(args)
+    write_scene_option(args, scene)
     quiet = getattr(args, "quiet", False)
     log = (lambda m: None) if quiet else (lambda m: err(f"  {scene.name}: {m}"))
     baselines = None

@@ -2,13 +2,14 @@
 
 Same frames, same ``H``, same coordinates in the same order (through ``qpos_index`` /
 ``dof_index``), so that MuJoCo and the trace method integrate literally the same model and any
-difference is the solver's or the integrator's (DESIGN.md, "MuJoCo comparison").
+difference is the solver's or the integrator's (route 2, :mod:`urdf2links.compare.mujoco_urdf`,
+checks the importer instead).
 
 One MJCF body per tree link, nested as the tree. The body's frame IS the link's frame, at every
 ``q`` (checked in the tests against :meth:`urdf2links.model.Model.link_poses`).
 
-How a link's ``T~ = T1 T2 T3 T4 T5 T6`` (5.5) becomes a body with joints
--------------------------------------------------------------------------
+How a link's ``T~ = T1 T2 T3 T4 T5 T6`` (docs/equations.md (E3)) becomes a body with joints
+-------------------------------------------------------------------------------------------
 MuJoCo's multi-joint semantics (``mj_kinematics``): the body frame starts at
 ``parent * (pos, quat)``; then the body's joints are applied IN ORDER, each about an axis (and,
 for a hinge, through an anchor ``pos``) given in the body's local frame *as moved by the joints
@@ -54,7 +55,7 @@ constraints, friction loss; springs and dampers unless a spring/damper is given 
 
 Moving base ``{A}`` (``moving_base=True``): a root body ``base_A`` at the world origin with three
 slide joints along the world axes then three hinges about x, y, z of its own (moving) frame,
-``Trans(x, y, z) Rx Ry Rz`` = ``0_A T`` of (5.5) exactly; its qpos are the six base parameters.
+``Trans(x, y, z) Rx Ry Rz`` = ``0_A T`` of (E13) exactly; its qpos are the six base parameters.
 It has a small mass (``BASE_MASS_FRACTION`` of the robot's); its motion is prescribed by
 :func:`urdf2links.compare.mujoco_run.run_mujoco`, so the mass does not enter the robot's motion.
 """
@@ -496,7 +497,8 @@ def mjcf_from_model(model, *, gravity=None, springs: Iterable = (), moving_base:
         base_joint_names = tuple(_unique(j, taken_joints) for j in BASE_JOINTS)
         bname = bodies.base_body(bm, base_joint_names, "    ")
         notes.append(f"moving base: body {bname!r} (mass {bm:.3g} kg) with slides x, y, z along the world "
-                     "axes then hinges about its own x, y, z: Trans(x, y, z) Rx Ry Rz = 0_A T of (5.5); "
+                     "axes then hinges about its own x, y, z: Trans(x, y, z) Rx Ry Rz = 0_A T "
+                     "(docs/equations.md (E13)); "
                      "its motion is prescribed by run_mujoco (qfrc_applied from mjcb_control)")
     else:
         for r in bodies.top():
@@ -549,11 +551,12 @@ def _compiled(mm, xml, model, names, base_joint_names, bname, bodies, folded, g,
 
 
 def mjcf_from_scene(scene, model, *, timestep: float | None = None, integrator: str | None = None) -> MjcfModel:
-    """:func:`mjcf_from_model` with a scene's gravity, springs and base; ``timestep`` defaults to
+    """:func:`mjcf_from_model` with a scene's gravity, springs and dampers (URDF damping included when
+    the scene asks, :meth:`~urdf2links.scene.Scene.springs_for`) and base; ``timestep`` defaults to
     the scene's ``run.dt`` (else 1e-4 s), ``integrator`` to RK4 when the scene names none of
     MuJoCo's."""
     scene.check_names(model)
     dt = timestep if timestep is not None else (scene.run.dt or 1e-4)
     integ = integrator if integrator is not None else (scene.run.method if scene.run.method in INTEGRATORS else "RK4")
-    return mjcf_from_model(model, gravity=scene.gravity, springs=scene.springs,
+    return mjcf_from_model(model, gravity=scene.gravity, springs=scene.springs_for(model).springs,
                            moving_base=scene.base is not None, timestep=dt, integrator=integ)

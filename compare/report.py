@@ -142,6 +142,11 @@ def _terms_section(s) -> list[str]:
         r2_label += f"<br><span class='small'>{e(r2['error'])}</span>"
     rows.append(["route&nbsp;2", r2_label, *_route_rows(r2)])
     parts.append(_rows(rows, ["", "what MuJoCo loaded", "A", "e + G", "max"], num_cols=(2, 3, 4)))
+    if r2.get("max_rel_error_damping") is not None:
+        parts.append("<p>Route 2 also compared the dampers (the scene asks for the URDF's damping): the project's "
+                     "<code>-c qd</code> against MuJoCo's <code>qfrc_damper</code> from its own reading of "
+                     f"<code>&lt;dynamics damping&gt;</code>: max relative error "
+                     f"<code>{r2['max_rel_error_damping']:.2e}</code> (included in route 2's max).</p>")
     if r2.get("refusals"):
         parts.append("<p><b>MuJoCo refused the original file.</b> Attempts, in order:</p><ul class='notes'>")
         for ref in r2["refusals"]:

@@ -3,8 +3,10 @@ spin, a free-floating humanoid, degenerate models from real files, a long chaoti
 
 Each test states its bound and why. The robots and scenes are in ``robots/hard/`` (not
 ``robots/*.toml``, so that ``urdf2links report`` does not run them; see robots/README.md); the
-generated URDFs come from ``tests/hard_robots.py``. Figures measured on the 2-core CI machine are in
-the README's "Hard cases" table. Case 5 (the ZYX angle singularity) is tested elsewhere.
+generated URDFs come from ``tests/hard_robots.py``. The tests hand what they measure to ``record_figure``
+(tests/conftest.py): ``python -m pytest tests/test_hard_cases.py --figures reports/hard_cases -m "slow or
+not slow"`` writes the table reports/hard_cases/hard_cases.md (docs/hard-cases.md explains each case).
+Case 5 (the ZYX angle singularity) is tested in tests/test_charts.py.
 """
 
 from __future__ import annotations
@@ -24,6 +26,30 @@ from urdf2links.scene import load_scene
 from urdf2links.simulate import simulate
 
 EPS = np.finfo(float).eps
+
+# The bound each case is held to (the assertions below), for the generated table of figures (--figures).
+LONG_CHAINS, MASS_RATIOS, STIFF, SPIN = "1. long chains", "2. extreme mass ratios", "3. stiff joints", "4. fast spin"
+HUMANOID, DEGENERATE_MODELS, LONG_HORIZON = "6. free-floating humanoid", "7. degenerate models", "8. long horizon"
+FIGURE_BOUNDS = {
+    LONG_CHAINS: "drift of E + V < 1e-8 (relative), DOP853 rtol 1e-12; 1e4 < max cond(A) < 1e10",
+    MASS_RATIOS: "per coordinate: error <= 100 eps cond(DAD) in units of D_ii max|q''_j / D_jj| "
+                 "(D = diag(A)^-1/2), and <= 1e-10 relative to |q''_i|; premise cond(A) > 1e6, cond(DAD) < 100",
+    STIFF: "DOP853 evaluations > 10x Radau's and > 20x BDF's; softer servo: DOP853's cost falls > 5x, the "
+           "implicit ones' < 2x; all runs finite, agree within 1e-3 rad, energy balance < 1e-4; too-long fixed "
+           "steps end in IntegrationError (or hold the balance to 1e-2), never NaN",
+    SPIN: "A, G 1e-12 relative, e 100 eps I_s w^2; yaw = Omega t and tilt constant to 1e-10 rad; angular "
+          "momentum about the vertical and spin momentum 1e-10 relative; energy balance 1e-9 of the scale "
+          "and of the base's work",
+    HUMANOID: "linear and angular momentum constant to 1e-9 relative; energy balance 1e-9",
+    DEGENERATE_MODELS: "strict: InertiaError naming the link; default: a warning naming it at load, DynamicsError "
+                       "naming it (and the coordinate) at the first step; repair: simulates with energy "
+                       "balance < 1e-8",
+    LONG_HORIZON: "midpoint: energy error < 1e-2 of the scale; last 100 s <= 1.5x the first; least-squares "
+                  "trend < 0.5 max|e|; RK4 at the same step: trend > 0.8 max|e| and last 100 s > 3x the first",
+}
+FIGURE_NOTE = ("\"wall s\" is the integrator's own time for the run (`Trajectory.stats['wall_time']`), on a warm "
+               "kernel cache; wall times are not bounded by the tests. Case 5 (the ZYX angle singularity) is "
+               "tests/test_charts.py.")
 
 
 def _quiet_load(*args, **kw):
@@ -59,7 +85,7 @@ def _chain_run(n, t_end):
 
 
 @pytest.mark.parametrize("n", [32, 64])
-def test_long_chain_ten_seconds_energy(n):
+def test_long_chain_ten_seconds_energy(n, record_figure):
     """32- and 64-link spatial pendulums (hinges alternating x / y), free swing for 10 s.
 
     The issue's bound: relative drift of E + V below 1e-8 with DOP853 at rtol 1e-12. Measured 2e-14 (32)
@@ -69,6 +95,10 @@ def test_long_chain_ten_seconds_energy(n):
     take ~1 s and ~8 s (the pure-numpy solver took 28 s and 71 s).
     """
     traj, cond = _chain_run(n, 10.0)
+    record_figure(LONG_CHAINS, f"chain{n}: drift", traj.energy_error, "{:.1e}")
+    record_figure(LONG_CHAINS, "max cond(A)", cond, "{:.1e}")
+    record_figure(LONG_CHAINS, "steps", traj.stats["nsteps"], "{:.0f}")
+    record_figure(LONG_CHAINS, "wall s", traj.stats["wall_time"], "{:.1f}")
     assert traj.stats["success"]
     assert np.ptp(traj.q[:, 0]) > 0.5          # it really swings
     assert traj.energy_error < 1e-8
@@ -84,7 +114,7 @@ def _states(n, count, seed):
 
 
 @pytest.mark.parametrize("robot", ["mass_ratio_chain", "ur5_finger"])
-def test_extreme_mass_ratios_lose_no_accuracy_in_accelerations(robot):
+def test_extreme_mass_ratios_lose_no_accuracy_in_accelerations(robot, record_figure):
     """A chain whose last links weigh 1e-6 of the first, and a ~21 kg arm with a 1 g finger.
 
     "No loss of accuracy" in q'': A is badly *scaled* (its diagonal spans 7-8 decades: cond(A) ~ 1e7),
@@ -124,6 +154,10 @@ def test_extreme_mass_ratios_lose_no_accuracy_in_accelerations(robot):
     raw, scaled = np.max(conds, axis=0)
     print(f"{robot}: cond(A) up to {raw:.1e}, cond(DAD) up to {scaled:.1f}; worst error {worst_scaled:.2f} eps "
           f"cond(DAD) in scaled units, {worst_rel:.1e} relative per coordinate")
+    record_figure(MASS_RATIOS, f"{robot}: error / (eps cond(DAD))", worst_scaled, "{:.1f}")
+    record_figure(MASS_RATIOS, "relative", worst_rel, "{:.1e}")
+    record_figure(MASS_RATIOS, "cond(DAD)", scaled, "{:.2g}")
+    record_figure(MASS_RATIOS, "cond(A)", raw, "{:.1e}")
     assert raw > 1e6 and scaled < 100       # the premise: badly scaled, well conditioned after scaling
     assert worst_scaled < 100
     assert worst_rel < 1e-10
@@ -132,7 +166,7 @@ def test_extreme_mass_ratios_lose_no_accuracy_in_accelerations(robot):
 # ============================================================== 3. stiff joints
 
 
-def test_stiff_spring_explodes_explicit_cost_not_implicit():
+def test_stiff_spring_explodes_explicit_cost_not_implicit(record_figure):
     """A 1e6 N m/rad servo spring (eigenvalues -4.2e4, -200 and -44 +- 2017i 1/s) next to soft springs.
 
     An explicit method's step is held by stability at ~|lambda|^-1 whatever the tolerance: DOP853 needs
@@ -148,6 +182,12 @@ def test_stiff_spring_explodes_explicit_cost_not_implicit():
     runs = {m: simulate(scene, model=model, method=m, progress=False) for m in ("Radau", "BDF", "DOP853")}
     nfev = {m: r.stats["nfev"] for m, r in runs.items()}
     print("stiff spring arm nfev:", nfev, {m: round(r.stats["wall_time"], 2) for m, r in runs.items()})
+    record_figure(STIFF, "evaluations DOP853 / Radau / BDF", " / ".join(str(nfev[m]) for m in ("DOP853", "Radau", "BDF")))
+    record_figure(STIFF, "DOP853 / Radau", nfev["DOP853"] / nfev["Radau"], "{:.0f}x")
+    record_figure(STIFF, "DOP853 / BDF", nfev["DOP853"] / nfev["BDF"], "{:.0f}x")
+    record_figure(STIFF, "max energy balance", max(r.energy_error for r in runs.values()), "{:.0e}")
+    record_figure(STIFF, "max |q - q_DOP853|", max(np.abs(runs[m].q - runs["DOP853"].q).max() for m in ("Radau", "BDF")),
+                  "{:.0e} rad")
     for m, r in runs.items():
         assert r.stats["success"], m
         assert np.all(np.isfinite(r.q)) and np.all(np.isfinite(r.qd)), m
@@ -166,13 +206,15 @@ def test_stiff_spring_explodes_explicit_cost_not_implicit():
         for sp in scene.springs))
     soft_nfev = {m: simulate(soft, model=model, method=m, progress=False).stats["nfev"] for m in nfev}
     print("10x softer servo nfev:", soft_nfev)
+    record_figure(STIFF, "softer servo: evaluations DOP853 / Radau / BDF",
+                  " / ".join(str(soft_nfev[m]) for m in ("DOP853", "Radau", "BDF")))
     assert nfev["DOP853"] > 5 * soft_nfev["DOP853"]
     assert nfev["Radau"] < 2 * soft_nfev["Radau"] and nfev["BDF"] < 2 * soft_nfev["BDF"]
 
 
 @pytest.mark.filterwarnings("ignore::RuntimeWarning")   # the overflow of RK4's unstable steps, before it stops
 @pytest.mark.parametrize("method, dt", [("RK4", 1e-2), ("midpoint", 1e-3)])
-def test_stiff_spring_with_too_long_fixed_steps_fails_cleanly(method, dt):
+def test_stiff_spring_with_too_long_fixed_steps_fails_cleanly(method, dt, record_figure):
     """Fixed steps far beyond the stiff time scale (h |lambda| = 420 and 42) never return a blown-up
     trajectory: the run either holds its energy balance or stops with IntegrationError saying where.
     RK4 is unstable there (measured: non-finite state at t = 0.02 s). The implicit midpoint rule is
@@ -184,8 +226,10 @@ def test_stiff_spring_with_too_long_fixed_steps_fails_cleanly(method, dt):
     try:
         traj = simulate(scene, method=method, dt=dt, progress=False)
     except IntegrationError as err:
+        record_figure(STIFF, f"{method} dt {dt:g} s", "IntegrationError")
         assert "t=" in str(err)
         return
+    record_figure(STIFF, f"{method} dt {dt:g} s: ran, energy balance", traj.energy_error, "{:.0e}")
     assert np.all(np.isfinite(traj.q)) and traj.energy_error < 1e-2
 
 
@@ -214,26 +258,35 @@ def _gyro_closed_form(theta, yaw_rate, tilt_rate, spin_rate):
     return A, e, G
 
 
-def test_gyroscope_terms_match_the_textbook_gyroscopic_moment():
+def test_gyroscope_terms_match_the_textbook_gyroscopic_moment(record_figure):
     """A, e and G at 1000 rad/s against the closed form of the heavy symmetric top. The tilt row of e
     is the textbook gyroscopic moment |I_s w x Omega| = I_s w3 psi' sin(theta) plus the centrifugal
     -I_t psi'^2 sin cos; the yaw and spin rows couple the tilt rate to the spin (I_s w3 theta'). Bound
     1e-12 relative for A and G; e in the note below."""
     model = load_urdf(HARD / "gyroscope.urdf", inertia="strict")
     rng = np.random.default_rng(4)
+    worst = {"A": 0.0, "e": 0.0, "G": 0.0}
     for _ in range(6):
         theta, psi, phi = rng.uniform(0.2, 1.3), rng.uniform(-3, 3), rng.uniform(-3, 3)
         rates = np.array([rng.uniform(-1, 1), rng.uniform(-2, 2), 1000.0 * rng.choice([-1, 1])])
         A, e, G = _gyro_closed_form(theta, *rates)
         q = np.array([psi, theta, phi])
-        assert np.abs(model.mass_matrix(q) - A).max() <= 1e-12 * np.abs(A).max()
+        err_A, err_e, err_G = (np.abs(model.mass_matrix(q) - A).max(), np.abs(model.bias(q, rates) - e).max(),
+                               np.abs(model.gravity(q) - G).max())
+        worst["A"] = max(worst["A"], err_A / np.abs(A).max())
+        worst["e"] = max(worst["e"], err_e / (EPS * GYRO["Is"] * rates[2] ** 2))
+        worst["G"] = max(worst["G"], err_G / np.abs(G).max())
+        assert err_A <= 1e-12 * np.abs(A).max()
         # e is a sum of products of rates whose largest are I_s w^2 ~ 5000 (spin-spin terms that cancel):
         # its rounding is eps I_s w^2 (measured 0.5 eps I_s w^2 = 5e-13 N m on a term of ~0.05 N m)
-        assert np.abs(model.bias(q, rates) - e).max() <= 100 * EPS * GYRO["Is"] * rates[2] ** 2
-        assert np.abs(model.gravity(q) - G).max() <= 1e-12 * np.abs(G).max()
+        assert err_e <= 100 * EPS * GYRO["Is"] * rates[2] ** 2
+        assert err_G <= 1e-12 * np.abs(G).max()
+    record_figure(SPIN, "terms at 1000 rad/s: A", worst["A"], "{:.0e} relative")
+    record_figure(SPIN, "e", worst["e"], "{:.1f} eps I_s w^2")
+    record_figure(SPIN, "G", worst["G"], "{:.0e} relative")
 
 
-def test_gyroscope_steady_precession_at_1000_rad_s():
+def test_gyroscope_steady_precession_at_1000_rad_s(record_figure):
     """Released at the exact steady precession of the heavy top (theta' = 0 and the slow root of
     I_t cos(theta) Omega^2 - I_s w3 Omega + m g d = 0, Omega ~ m g d / (I_s w3) = 0.098 rad/s), the
     gyroscope precesses uniformly: yaw(t) = Omega t, tilt constant. Any error in the gyroscopic
@@ -250,6 +303,8 @@ def test_gyroscope_steady_precession_at_1000_rad_s():
                     q0=[0.0, theta, 0.0], qd0=[omega, 0.0, w3 - omega * np.cos(theta)])
     print(f"precession {omega:.6f} rad/s; yaw error {np.abs(traj.q[:, 0] - omega * traj.t).max():.1e}, "
           f"tilt error {np.abs(traj.q[:, 1] - theta).max():.1e}, {traj.stats['nsteps']} steps")
+    record_figure(SPIN, "steady precession: yaw error", np.abs(traj.q[:, 0] - omega * traj.t).max(), "{:.1e} rad")
+    record_figure(SPIN, "tilt error", np.abs(traj.q[:, 1] - theta).max(), "{:.1e} rad")
     assert omega == pytest.approx(mgd / (Is * w3), rel=1e-3)
     assert np.abs(traj.q[:, 0] - omega * traj.t).max() < 1e-10
     assert np.abs(traj.q[:, 1] - theta).max() < 1e-10
@@ -265,7 +320,7 @@ def _momentum(plan, i, t, q, qd):
     return 0.5 * (model.kinetic_energy(q, qd + step, t=t, base=base) - model.kinetic_energy(q, qd - step, t=t, base=base))
 
 
-def test_gyroscope_on_heaving_turning_base_keeps_vertical_momentum():
+def test_gyroscope_on_heaving_turning_base_keeps_vertical_momentum(record_figure):
     """robots/hard/gyroscope_heave.toml: 1000 rad/s on a base heaving at 0.8 g peak and turning +-0.3 rad
     about the vertical, 5 s.
 
@@ -283,11 +338,16 @@ def test_gyroscope_on_heaving_turning_base_keeps_vertical_momentum():
     work = np.abs(traj.energy["work"]).max()
     print(f"gyroscope heave: {traj.stats['nsteps']} steps, {traj.stats['wall_time']:.1f} s, balance "
           f"{traj.energy_error:.1e} of scale, {np.abs(traj.energy['error']).max() / work:.1e} of work")
+    record_figure(SPIN, "heaving base: balance", traj.energy_error, "{:.1e} of the scale")
+    record_figure(SPIN, "balance", np.abs(traj.energy["error"]).max() / work, "{:.1e} of the work")
+    record_figure(SPIN, "steps", traj.stats["nsteps"], "{:.0f}")
+    record_figure(SPIN, "wall s", traj.stats["wall_time"], "{:.1f}")
     assert traj.stats["success"]
     assert work > 1.0                                    # the base really works on it (J)
     assert np.ptp(traj.q[:, names.index("tilt")]) > 1e-4  # it nutates: the heave changes the effective g
     for coord in ("yaw", "spin"):
         p = np.array([_momentum(plan, names.index(coord), *s) for s in zip(traj.t, traj.q, traj.qd)])
+        record_figure(SPIN, f"{coord} momentum", np.abs(p - p[0]).max() / abs(p[0]), "{:.0e} relative")
         assert np.abs(p - p[0]).max() <= 1e-10 * abs(p[0]), coord
     assert traj.energy_error < 1e-9
     assert np.abs(traj.energy["error"]).max() < 1e-9 * work
@@ -297,7 +357,10 @@ def test_gyroscope_on_heaving_turning_base_keeps_vertical_momentum():
 
 
 def _zyx_rate_matrix(phi):
-    """omega (world) = J(phi) phi' for R = Rx(phi_x) Ry(phi_y) Rz(phi_z) (5.5)."""
+    """omega = J(phi) phi' in the parent's axes, for R = Rx(phi_x) Ry(phi_y) Rz(phi_z) (docs/equations.md (E3)).
+
+    ``J = R E(phi) = [e1, Rx e2, Rx Ry e3]`` of (E43). The parent's axes are the world's only for a
+    root over a fixed base, which is where this is used (the humanoid's floating root)."""
     cx, sx, cy, sy = np.cos(phi[0]), np.sin(phi[0]), np.cos(phi[1]), np.sin(phi[1])
     Rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
     Ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
@@ -318,7 +381,7 @@ def floating_momenta(model, q, qd):
 
 
 @needs_corpus
-def test_free_floating_humanoid_keeps_its_momentum():
+def test_free_floating_humanoid_keeps_its_momentum(record_figure):
     """Talos (example-robot-data, 38 coordinates) in zero gravity, seven joints driven by sine torques for 2 s.
 
     Joint torques are internal: the total linear and angular momentum stay what the initial drift and
@@ -335,6 +398,12 @@ def test_free_floating_humanoid_keeps_its_momentum():
     joints = [i for i, nm in enumerate(model.coordinate_names) if not nm.startswith("base_link.")]
     print(f"talos floating: {traj.stats['nsteps']} steps, {traj.stats['wall_time']:.2f} s; dP {dP:.1e}, dL {dL:.1e}; "
           f"joints moved up to {np.abs(traj.q[:, joints] - traj.q[0, joints]).max():.2f} rad")
+    record_figure(HUMANOID, "linear momentum", dP, "{:.1e}")
+    record_figure(HUMANOID, "angular momentum", dL, "{:.1e}")
+    record_figure(HUMANOID, "joints moved up to", np.abs(traj.q[:, joints] - traj.q[0, joints]).max(), "{:.1f} rad")
+    record_figure(HUMANOID, "energy balance", traj.energy_error, "{:.0e}")
+    record_figure(HUMANOID, "steps", traj.stats["nsteps"], "{:.0f}")
+    record_figure(HUMANOID, "wall s", traj.stats["wall_time"], "{:.2f}")
     assert np.abs(traj.q[:, joints] - traj.q[0, joints]).max() > 0.5     # the limbs really move
     assert np.abs(traj.energy["work"]).max() > 0.1                      # the torques really work
     assert dP < 1e-9 and dL < 1e-9
@@ -387,7 +456,7 @@ DEGENERATE = {
 
 
 @pytest.mark.parametrize("case", sorted(DEGENERATE))
-def test_degenerate_link_is_named_at_load_and_first_step_and_repair_simulates(case):
+def test_degenerate_link_is_named_at_load_and_first_step_and_repair_simulates(case, record_figure):
     """Each defect makes A singular or indefinite. strict: InertiaError at load naming link 'b'; audit (the
     default): a warning at load naming 'b', then DynamicsError at the first step naming 'b' and j2
     (never a NaN); repair: the fixed model simulates 1 s with its energy balance held (1e-8 of the
@@ -407,6 +476,7 @@ def test_degenerate_link_is_named_at_load_and_first_step_and_repair_simulates(ca
         fixed = load_urdf_string(text, inertia="repair")
     assert any(r.link == "b" and r.action == "repaired" for r in fixed.audit)
     traj = simulate(fixed, t_end=1.0, q0=[0.3, 0.2], qd0=[0.0, 0.5], progress=False)
+    record_figure(DEGENERATE_MODELS, f"{case}: named; repaired balance", traj.energy_error, "{:.0e}")
     assert traj.stats["success"] and np.all(np.isfinite(traj.q))
     assert traj.energy_error < 1e-8
 
@@ -427,7 +497,7 @@ def test_inconsistent_inertia_that_keeps_A_definite_is_named_at_load():
 
 
 @needs_corpus
-def test_real_file_with_massless_fingers_romeo():
+def test_real_file_with_massless_fingers_romeo(record_figure):
     """romeo.urdf (example-robot-data) has 24 finger joints moving links without mass: strict names them,
     the default's first evaluation raises DynamicsError naming finger links (only those), repair (from
     the links' meshes, or a 1 g sphere) makes it simulate."""
@@ -445,11 +515,14 @@ def test_real_file_with_massless_fingers_romeo():
     fixed = _quiet_load(f, inertia="repair")
     assert massless <= {r.link for r in fixed.audit if r.action == "repaired"}
     traj = simulate(fixed, t_end=0.05, q0=q, qd0=np.zeros(model.n), progress=False)
+    record_figure(DEGENERATE_MODELS, "romeo: massless moving links", f"{len(massless)}, DynamicsError names "
+                  f"{len(named)} of them (finger links only)")
+    record_figure(DEGENERATE_MODELS, "repaired balance over 0.05 s", traj.energy_error, "{:.0e}")
     assert traj.stats["success"] and traj.energy_error < 1e-8
 
 
 @needs_corpus
-def test_real_file_with_inconsistent_moving_link_inertia_finger_edu():
+def test_real_file_with_inconsistent_moving_link_inertia_finger_edu(record_figure):
     """finger_edu.urdf: the moving link finger_lower_link has an H that is not positive definite."""
     f = corpus_path("finger_edu_description/robots/finger_edu.urdf")
     with pytest.raises(InertiaError, match="finger_lower_link"):
@@ -460,6 +533,7 @@ def test_real_file_with_inconsistent_moving_link_inertia_finger_edu():
     assert [r.link for r in fixed.audit if r.action == "repaired"] == ["finger_lower_link"]
     assert all(np.linalg.eigvalsh(H)[0] > 0 for H in fixed.tree.H if H[3, 3] > 0)
     traj = simulate(fixed, t_end=1.0, q0=[0.3, -0.4, 0.5], qd0=np.zeros(3), progress=False)
+    record_figure(DEGENERATE_MODELS, "finger_edu: named; repaired balance", traj.energy_error, "{:.0e}")
     assert traj.stats["success"] and traj.energy_error < 1e-8
 
 
@@ -476,7 +550,7 @@ def _drift_figures(traj):
 
 
 @pytest.mark.slow
-def test_chaotic_double_pendulum_1000_s_midpoint_energy_bounded_without_drift():
+def test_chaotic_double_pendulum_1000_s_midpoint_energy_bounded_without_drift(record_figure):
     """robots/hard/double_pendulum_1000s.toml: 200 000 implicit-midpoint steps of 5 ms.
 
     Bounded: the energy error stays below 1e-2 of the energy scale (measured 3.3e-3) and the error over
@@ -497,6 +571,12 @@ def test_chaotic_double_pendulum_1000_s_midpoint_energy_bounded_without_drift():
         tr = mid if name == "midpoint" else rk4
         print(f"{name}: {tr.stats['nsteps']} steps, {tr.stats['wall_time']:.1f} s; max|e| {emax:.3g} J "
               f"({tr.energy_error:.1e} of scale), trend {trend / emax:.2f} max|e|, last/first 100 s {last / first:.2f}")
+        if name == "midpoint":
+            record_figure(LONG_HORIZON, "midpoint: energy error", tr.energy_error, "{:.1e} of the scale")
+        record_figure(LONG_HORIZON, f"{name}: trend" if name == "RK4" else "trend", trend / emax, "{:.2f} max|e|")
+        record_figure(LONG_HORIZON, "last / first 100 s", last / first, "{:.2g}x")
+        record_figure(LONG_HORIZON, "steps", tr.stats["nsteps"], "{:.0f}")
+        record_figure(LONG_HORIZON, "wall s", tr.stats["wall_time"], "{:.1f}")
     emax, trend, first, last = figures["midpoint"]
     assert mid.stats["success"] and mid.stats["nsteps"] == 200_000
     assert np.abs(mid.q[:, 1]).max() > np.pi       # the lower link whirls over: really chaotic motion

@@ -1,5 +1,5 @@
 """The compiled recursive form (urdf2links.kernels) against the numpy recursive form and the
-literal form of the reference, on random trees (branching, all six slot types, massless frames,
+literal trace form (docs/equations.md §5), on random trees (branching, all six slot types, massless frames,
 moving base) and on real robots; forward dynamics against a dense solve; base power against the
 numpy form.
 

@@ -1,4 +1,4 @@
-"""Tests of urdf2links.rotations: URDF rpy <-> reference angles, axis alignment."""
+"""Tests of urdf2links.rotations: URDF rpy <-> ZYX angles (docs/equations.md (E6), (E7)), axis alignment."""
 
 from __future__ import annotations
 
@@ -94,7 +94,7 @@ def test_round_trip_multiples_of_half_pi():
 
 @pytest.mark.parametrize("phi_y", [HALF, -HALF, HALF - 1e-9, -HALF + 1e-9, HALF - 1e-14, HALF - 1e-17])
 def test_reference_gimbal_lock_matrices(phi_y):
-    """Matrices built directly in the reference sequence with phi_y at or near +-pi/2."""
+    """Matrices built directly in the ZYX-angle sequence Rx Ry Rz with phi_y at or near +-pi/2."""
     rng = np.random.default_rng(7)
     for ax, az in itertools.chain(rng.uniform(-PI, PI, size=(50, 2)), itertools.product([0, HALF, -PI, 1.0], repeat=2)):
         R = rot_x(ax) @ rot_y(phi_y) @ rot_z(az)

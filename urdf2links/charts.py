@@ -4,14 +4,15 @@ The problem
 -----------
 A link whose three angle slots are coordinates (a free or floating body, six coordinates, or a
 ball made of three angles) has the rotation ``R = Rx(phi_x) Ry(phi_y) Rz(phi_z)`` relative to its
-parent (5.5). Its angular velocity in its own axes is ``omega = E(phi) phi'`` with
+parent (docs/equations.md (E3)). Its angular velocity in its own axes is (E43)
+``omega = E(phi) phi'`` with
 
     E(phi) = [Rz^T Ry^T e_x,  Rz^T e_y,  e_z]      (3, 3),   E^T E = [[1, 0, s_y], [0, 1, 0], [s_y, 0, 1]],
 
 (``s_y = sin phi_y``), so ``det E = cos phi_y`` and the chart is singular at ``phi_y = +-pi/2``:
-there the axes of ``phi_x`` and ``phi_z`` coincide. The block of ``A`` (5.19) that belongs to the
+there the axes of ``phi_x`` and ``phi_z`` coincide. The block of ``A`` (E44) that belongs to the
 three angles is ``E^T J E`` for a single body (``J`` its inertia tensor about the origin, in its own
-axes), of condition up to ``cond(J) (1 + |s_y|) / (1 - |s_y|) ~ 4 cond(J) / cos^2 phi_y``: ``A``
+axes), of condition up to ``cond(J) (1 + |s_y|) / (1 - |s_y|) <= 4 cond(J) / cos^2 phi_y``: ``A``
 loses rank, ``phi_x'`` and ``phi_z'`` grow like ``|omega| / |cos phi_y|`` and ``q''`` like their
 square; the motion itself is regular.
 
@@ -19,9 +20,10 @@ Detection
 ---------
 An :class:`~urdf2links.integrators.AngleGuard` on the ``phi_y`` coordinates ends an integration
 segment at the first accepted step with ``|cos phi_y| < cos_min`` (:data:`CHART_COS_MIN` = 0.3).
-At 0.3 the angle block's condition is at most ``~44 cond(J)`` (``(1 + 0.954) / (1 - 0.954)``, less
-than two digits lost) and the angle rates at most ``3.3 |omega|``: the integrator has not yet had
-to shrink its steps, while a fresh chart (``|cos| = 1``) is a rotation of at least
+At 0.3 the angle block's condition is at most ``42.4 cond(J)`` (``(1 + s) / (1 - s)`` with
+``s = sin(arccos 0.3) = 0.954``; the looser bound ``4 / cos^2 phi_y`` gives 44.4; less than two
+digits lost) and the angle rates at most ``3.3 |omega|``: the integrator has not yet had to shrink
+its steps, while a fresh chart (``|cos| = 1``) is a rotation of at least
 ``arccos 0.3 = 1.27 rad`` away from the next guard, so the switches never chatter. The condition
 number of the angle block before and after each switch is reported (:func:`angle_block_condition`).
 The guard is tested at accepted steps: a single step that moves ``phi_y`` by more than
@@ -39,13 +41,13 @@ link itself. :func:`recharted_model` splits each re-charted link ``p`` into two 
 * ``p`` (parent ``p~chart``, its ``H`` and children unchanged): the three angle coordinates, no
   translation: ``T~ = Rx(psi_x) Ry(psi_y) Rz(psi_z)``.
 
-The pose of ``p`` is ``T^(s) Trans(x, y, z) R_c R(psi)`` (5.34): the same frame as before, so its
+The pose of ``p`` is ``T^(s) Trans(x, y, z) R_c R(psi)`` (E4, E45): the same frame as before, so its
 children, ``H``, loads and recorded poses need no change, and the coordinates keep their names and
-their order (``x, y, z`` then the angles: (5.30)/(5.33) numbering is link by link, slot by slot).
+their order (``x, y, z`` then the angles: the numbering (E5) is link by link, slot by slot).
 The translational coordinates keep their values and rates (they are along the parent's axes in
 both charts). At a switch ``R_c <- R_c R(psi)`` and ``psi <- 0``; since ``E(0) = 1`` the new angle
 rates are the angular velocity ``psi' <- omega = E(psi) psi'`` (:func:`rechart`). ``T`` and ``T'``
-of every link are then unchanged, and with them the energy (5.10), (5.35) and the momenta; the
+of every link are then unchanged, and with them the energy (E17) and the momenta; the
 work ``W`` carries over.
 
 Original coordinates
@@ -224,7 +226,7 @@ def to_original(chart: Chart, links, q, qd, reference) -> tuple[np.ndarray, np.n
 
 
 def angle_block_condition(model: Model, link: FloatingLink, q, *, t: float = 0.0, base=None) -> float:
-    """2-norm condition number of the 3 x 3 block of ``A`` (5.19) of ``link``'s angles at ``q``."""
+    """2-norm condition number of the 3 x 3 block of ``A`` (E44) of ``link``'s angles at ``q``."""
     A = model.mass_matrix(q, t=t, base=base)
     return float(np.linalg.cond(A[np.ix_(link.angles, link.angles)]))
 

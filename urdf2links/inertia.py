@@ -1,6 +1,6 @@
 """Pseudo-inertia matrices H: from URDF inertials and from geometry, audit, repair.
 
-``H`` (reference (5.11), DESIGN.md) is the ``(4, 4)`` matrix ``integral(r r^T dm)`` with
+``H`` (docs/equations.md (E10)) is the ``(4, 4)`` matrix ``integral(r r^T dm)`` with
 ``r = (x, y, z, 1)`` in a link's frame::
 
     H = [[S,      m c],        S = integral(p p^T dm)  (3, 3), second moments about the origin

@@ -1,23 +1,23 @@
-"""The recursive form compiled (numba): (5.18)-(5.29) over the tree in world-frame twists.
+"""The recursive form compiled (numba): docs/equations.md (E26)-(E38), over the tree in world-frame twists.
 
 The recursive form writes every coordinate's derivative as one world twist,
 ``T_i^(p) = W_i T^(p)`` with ``W_i = [[w_i^, v_i], [0, 0]]``; the unit twist is kept here as the
 6-vector ``s_i = (w_i, v_i)``. With the {0}-frame pseudo-inertia of a link,
 ``Hw = T H T^T = [[S, c], [c^T, m]]`` (``S = int r r^T dm``, ``c = int r dm``), and
-``W r~ = w x r + v`` for a point ``r~ = (r, 1)``, the traces of the reference become integrals of
+``W r~ = w x r + v`` for a point ``r~ = (r, 1)``, the traces of the trace form (E19)-(E23) become integrals of
 point velocities, which only need ``m``, ``c`` and ``J = tr(S) 1 - S`` (the inertia about {0}):
 
-- (5.19) ``a_il = tr(W_i Hc W_l^T) = int (w_i x r + v_i).(w_l x r + v_l) dm = v_l.p_i + w_l.h_i``,
+- (E31) ``a_il = tr(W_i Hc W_l^T) = int (w_i x r + v_i).(w_l x r + v_l) dm = v_l.p_i + w_l.h_i``,
   with the composite's momentum of the unit motion ``p_i = w_i x c + m v_i``,
   ``h_i = J w_i + c x v_i``; only ancestor pairs are visited.
-- (5.18)+(5.22) ``e_i + g_i = int (W_i r~).(a_0(r) - g) dm = v_i.f + w_i.n`` over the subtree of
+- (E34) ``e_i + g_i = int (W_i r~).(a_0(r) - g) dm = v_i.f + w_i.n`` over the subtree of
   ``link(i)``, with ``a_0(r) = alpha x r + a + omega x (omega x r + v)`` the acceleration at
   ``q'' = 0`` of the point ``r`` of a body with twist ``(omega, v)`` and spatial acceleration
   ``(alpha, a)``, and ``(f, n)`` the wrench ``int (a_0 - g) dm``, ``int r x (a_0 - g) dm``:
   ``f = alpha x c + m (a - g) + omega x (omega x c + m v)``,
   ``n = J alpha + c x (a - g) + omega x (J omega) + c x (omega x v)``. Gravity is the uniform
-  acceleration ``-g`` added to the base's, which is exactly (5.22).
-- (5.27)-(5.28) ``Q_i = v_i.f_ext + w_i.n_ext`` over the subtree (moments about {0}).
+  acceleration ``-g`` added to the base's (E33), which gives exactly the G of (E22).
+- (E36) ``Q_i = v_i.f_ext + w_i.n_ext`` over the subtree (moments about {0}).
 
 Twists propagate from root to leaves: a factor ``E_k(q_i)`` adds ``s_i q_i'`` to the twist and
 ``s_i q_i'' + (V x s_i) q_i'`` to the spatial acceleration (``dW_i/dt = [V, W_i]``); a constant
@@ -184,7 +184,7 @@ def _body(ta, ws, p):
 @njit(cache=True, inline="always")
 def dynamics(ta, ws, want_A):
     """Leaves to root after :func:`kinematics` (and external wrenches in ``ws.fx``): ``ws.A``
-    (5.19) when ``want_A``, ``ws.b = -(e + G)`` (5.18)+(5.22), ``ws.Q`` (5.27)-(5.28)."""
+    (E31) when ``want_A``, ``ws.b = -(e + G)`` (E34), ``ws.Q`` (E36)."""
     L = ta.parent.size
     n = ta.coord_link.size
     cc, cS, cm, fi, fx, V, Acc, sv = ws.cc, ws.cS, ws.cm, ws.fi, ws.fx, ws.V, ws.Acc, ws.s
@@ -326,8 +326,8 @@ def cholesky_solve(A, b, Lf, x):
 
 @njit(cache=True)
 def energies(ta, ws, g):
-    """``(E, V)`` after :func:`kinematics`: E (5.35) ``= 0.5 sum (m v.v + 2 v.(omega x c) +
-    omega.J omega)``, V (5.21) ``= -g . sum c``."""
+    """``(E, V)`` after :func:`kinematics` (E37): E ``= 0.5 sum (m v.v + 2 v.(omega x c) +
+    omega.J omega)``, V ``= -g . sum c``."""
     E = 0.0
     V = 0.0
     for p in range(ta.parent.size):
@@ -414,7 +414,7 @@ def base_power(ta, ws, base_twist, base_acc, g):
 
 @njit(cache=True)
 def forward_dynamics(I, F, Wf, q, qd, tau, base, g, out):
-    """q'' (5.29) into ``out`` (n,): ``A q'' = tau - G - e``; ``base`` (18,) pose, rate and
+    """q'' (E24) into ``out`` (n,): ``A q'' = tau - G - e`` by (E46); ``base`` (18,) pose, rate and
     acceleration of {A}; ``g`` (3,) (zeros: no G). Returns -1, or the failing Cholesky pivot."""
     ta = tree_view(I, F)
     ws = workspace_view(I, Wf)
@@ -444,7 +444,7 @@ def terms(I, F, Wf, q, qd, base, g, want_A, A, b):
 
 @njit(cache=True)
 def energy_pair(I, F, Wf, q, qd, base, g):
-    """``(E, V)`` of (5.35) and (5.21) at one state."""
+    """``(E, V)`` (E37) at one state."""
     ta = tree_view(I, F)
     ws = workspace_view(I, Wf)
     kinematics(ta, ws, q, qd, base[0:6], base[6:12], base[12:18], g)
@@ -467,7 +467,7 @@ def poses(I, F, Wf, q, base, R, o):
 
 @njit(cache=True)
 def wrench_forces(I, F, Wf, q, base, links, forces, moments, points, local, Q):
-    """Q (5.27)-(5.28) into ``Q`` (n,) of the wrenches ``k``: ``forces[k]``, ``moments[k]`` (3,) at
+    """Q (E36) into ``Q`` (n,) of the wrenches ``k``: ``forces[k]``, ``moments[k]`` (3,) at
     ``points[k]`` (3,) of link ``links[k]``, in the link's axes where ``local[k]``."""
     ta = tree_view(I, F)
     ws = workspace_view(I, Wf)

@@ -1,4 +1,4 @@
-"""Applied forces and moments on links, the inputs of the generalized forces Q, (5.23)-(5.28)."""
+"""Applied forces and moments on links, the inputs of the generalized forces Q, docs/equations.md (E23)."""
 
 from __future__ import annotations
 
@@ -13,9 +13,9 @@ FRAMES = ("link", "world")
 
 @dataclass(frozen=True)
 class Wrench:
-    """A force ``force`` (3,) applied at ``point`` (3,) (in the link's own frame, the vector r~ of
-    (5.26)) and a moment ``moment`` (3,) acting on link ``link``. ``frame`` says in which axes
-    ``force`` and ``moment`` are given: ``"link"`` (F~, M~ of (5.23)-(5.24)) or ``"world"`` {0}."""
+    """A force ``force`` (3,) applied at ``point`` (3,) (in the link's own frame, the point rho_N of
+    (E23)) and a moment ``moment`` (3,) acting on link ``link``. ``frame`` says in which axes
+    ``force`` and ``moment`` are given: ``"link"`` (F~, M~ of (E23)) or ``"world"`` {0}."""
 
     link: str
     force: np.ndarray = field(default_factory=lambda: np.zeros(3))

@@ -1,7 +1,7 @@
 """The model users hold: a tree of links and its dynamics, the public API of the project.
 
-``Model`` evaluates the terms of the equations of motion with the compiled recursive form
-(:mod:`urdf2links.kernels`). ``method="literal"`` (the trace formulas term by term) and
+``Model`` evaluates the terms of the equations of motion (docs/equations.md (E24)) with the compiled
+recursive form (:mod:`urdf2links.kernels`). ``method="literal"`` (the trace formulas term by term) and
 ``method="numpy"`` (the recursive form in numpy) run the oracles of :mod:`urdf2links.oracles`
 instead, for checking. Every dynamics call takes optional keyword arguments ``t`` (time) and
 ``base`` (None for a fixed base, a :class:`~urdf2links.transforms.BaseState`, or a callable
@@ -10,7 +10,7 @@ instead, for checking. Every dynamics call takes optional keyword arguments ``t`
 Coupled coordinates (mimic joints loaded with ``mimic="coupled"``) are a constant linear map
 ``q_tree = C q + d`` from the model's ``n`` coordinates to the tree's; then
 ``A = C^T A_tree C``, ``e = C^T e_tree``, ``G = C^T G_tree``, ``Q = C^T Q_tree`` (C constant, so no
-extra velocity terms; docs/equations.md).
+extra velocity terms: E42).
 """
 
 from __future__ import annotations
@@ -170,21 +170,21 @@ class Model:
 
     # -- the public API --------------------------------------------------------------------------
     def mass_matrix(self, q, *, t: float = 0.0, base=None, method: str = "recursive") -> np.ndarray:
-        """A (n, n), (5.19): ``a_il = sum_p tr(T_i H T_l^T)``."""
+        """A (n, n), (E19): ``a_il = sum_p tr(T_i H T_l^T)``."""
         self._check_method(method)
         if method != "recursive":
             return self.reduce(self._oracle(method, q, None, t, base)["A"])
         return self.reduce(self._compiled_terms(q, None, t, base, False, True)[0])
 
     def bias(self, q, qd, *, t: float = 0.0, base=None, method: str = "recursive") -> np.ndarray:
-        """e (n,), (5.18): velocity terms and base-motion terms (5.17.1); no gravity."""
+        """e (n,), (E20): velocity terms and base-motion terms (E15); no gravity."""
         self._check_method(method)
         if method != "recursive":
             return self.reduce(self._oracle(method, q, qd, t, base)["e"])
         return self.reduce(-self._compiled_terms(q, qd, t, base, False, False)[1])
 
     def gravity(self, q, *, t: float = 0.0, base=None, method: str = "recursive") -> np.ndarray:
-        """G (n,), (5.22): ``g_i = m g theta_3 T_i r_C`` summed over links, for ``self.gravity_vector``."""
+        """G (n,), (E22): ``g_i = m g e3^T T_i r_C`` summed over links, for ``self.gravity_vector``."""
         self._check_method(method)
         if method != "recursive":
             return self.reduce(self._oracle(method, q, None, t, base)["G"])
@@ -194,7 +194,7 @@ class Model:
 
     def generalized_forces(self, q, loads: Iterable[Wrench], *, t: float = 0.0, base=None,
                            method: str = "recursive") -> np.ndarray:
-        """Q (n,), (5.27)-(5.28): generalized forces of applied forces and moments on links."""
+        """Q (n,), (E23): generalized forces of applied forces and moments on links."""
         self._check_method(method)
         wr = self.wrenches(loads)
         if method != "recursive":
@@ -205,7 +205,7 @@ class Model:
         return self.reduce(self.compiled.forces(qt, self.base18(base, t), wr))
 
     def kinetic_energy(self, q, qd, *, t: float = 0.0, base=None, method: str = "recursive") -> float:
-        """E, (5.10)/(5.35): ``0.5 sum_p tr(T' H T'^T)``, base motion included."""
+        """E, (E17): ``0.5 sum_p tr(T' H T'^T)``, base motion included."""
         self._check_method(method)
         if method != "recursive":
             return float(self._oracle(method, q, qd, t, base)["E"])
@@ -213,7 +213,7 @@ class Model:
         return float(self.compiled.energies(qt, qdt, self.base18(base, t), _NO_G)[0])
 
     def potential_energy(self, q, *, t: float = 0.0, base=None, method: str = "recursive") -> float:
-        """V of gravity, (5.21): ``sum_p m_p g z_C`` (for ``self.gravity_vector``)."""
+        """V of gravity, (E21): ``sum_p m_p g z_C`` (for ``self.gravity_vector``)."""
         self._check_method(method)
         if method != "recursive":
             return float(self._oracle(method, q, None, t, base)["V"])
@@ -221,13 +221,13 @@ class Model:
         return float(self.compiled.energies(qt, np.zeros(self.tree.n), self.base18(base, t), self.gravity_vector)[1])
 
     def link_poses(self, q, *, t: float = 0.0, base=None) -> np.ndarray:
-        """(L, 4, 4): the {0}-pose ``T^(p)`` of every link (5.34)."""
+        """(L, 4, 4): the {0}-pose ``T^(p)`` of every link (E4)."""
         qt, _ = self.tree_state(q)
         return self.compiled.poses(qt, self.base18(base, t))
 
     def forward_dynamics(self, q, qd, tau=None, *, loads: Iterable[Wrench] = (), t: float = 0.0,
                          base=None, gravity: bool = True) -> np.ndarray:
-        """q'' (n,) from (5.29), ``A q'' = Q - G - e``, by Cholesky.
+        """q'' (n,) from (E24), ``A q'' = Q - G - e``, by Cholesky (E46).
 
         ``tau`` (n,) are generalized forces added to Q (joint torques and forces); ``loads`` applied
         wrenches; ``gravity=False`` leaves G out. Raises :class:`~urdf2links.errors.DynamicsError`

@@ -1,11 +1,11 @@
-"""Rotation matrices and the conversion between URDF ``rpy`` and the reference's angles.
+"""Rotation matrices and the conversion between URDF ``rpy`` and the project's ZYX angles.
 
-Two angle conventions meet in this project (DESIGN.md, "Conventions that must not drift"):
+Two angle conventions meet in this project (docs/equations.md (E3), (E6), (E7)):
 
 * URDF ``rpy = (roll, pitch, yaw)``: ``R = Rz(yaw) Ry(pitch) Rx(roll)``
   (:func:`rpy_to_matrix`).
-* The reference's link parameters ``(phi_x, phi_y, phi_z)``: ``R = Rx(phi_x) Ry(phi_y) Rz(phi_z)``,
-  i.e. ``T4 T5 T6`` of (5.5), called "ZYX Euler angles" there (:func:`matrix_to_xyz_angles`).
+* The ZYX angles, a link's parameters ``(phi_x, phi_y, phi_z)``: ``R = Rx(phi_x) Ry(phi_y) Rz(phi_z)``,
+  i.e. ``T4 T5 T6`` of (E1), (E3), the trace method's "ZYX Euler angles" (:func:`matrix_to_xyz_angles`).
 
 All functions are pure, take array-likes and return new ``float`` arrays. Matrices are
 ``(3, 3)`` rotations or ``(4, 4)`` homogeneous transforms acting on column vectors.
@@ -25,6 +25,7 @@ __all__ = [
     "rot_z",
     "rpy_to_matrix",
     "matrix_to_xyz_angles",
+    "matrix_to_rpy",
     "xyz_angles_to_matrix",
     "rpy_to_xyz_angles",
     "axis_alignment",
@@ -33,19 +34,19 @@ __all__ = [
 
 
 def rot_x(a: float) -> np.ndarray:
-    """Rotation by angle ``a`` (rad) about the x axis, ``(3, 3)``: ``T4`` of the reference."""
+    """Rotation by angle ``a`` (rad) about the x axis, ``(3, 3)``: ``T4`` of (E1)."""
     c, s = math.cos(a), math.sin(a)
     return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
 
 
 def rot_y(a: float) -> np.ndarray:
-    """Rotation by angle ``a`` (rad) about the y axis, ``(3, 3)``: ``T5`` of the reference."""
+    """Rotation by angle ``a`` (rad) about the y axis, ``(3, 3)``: ``T5`` of (E1)."""
     c, s = math.cos(a), math.sin(a)
     return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
 
 
 def rot_z(a: float) -> np.ndarray:
-    """Rotation by angle ``a`` (rad) about the z axis, ``(3, 3)``: ``T6`` of the reference."""
+    """Rotation by angle ``a`` (rad) about the z axis, ``(3, 3)``: ``T6`` of (E1)."""
     c, s = math.cos(a), math.sin(a)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
@@ -77,7 +78,7 @@ def rpy_to_matrix(rpy) -> np.ndarray:
 
 
 def xyz_angles_to_matrix(angles) -> np.ndarray:
-    """The reference's angles to a matrix: ``Rx(phi_x) @ Ry(phi_y) @ Rz(phi_z)``, shape (3, 3)."""
+    """ZYX angles (E3) to a matrix: ``Rx(phi_x) @ Ry(phi_y) @ Rz(phi_z)``, shape (3, 3)."""
     ax, ay, az = _vector3(angles, "angles (phi_x, phi_y, phi_z)")
     return rot_x(ax) @ rot_y(ay) @ rot_z(az)
 
@@ -140,8 +141,15 @@ def matrix_to_xyz_angles(R) -> tuple[float, float, float]:
     return phi_x, phi_y, phi_z
 
 
+def matrix_to_rpy(R) -> tuple[float, float, float]:
+    """URDF ``(roll, pitch, yaw)`` with ``Rz(yaw) @ Ry(pitch) @ Rx(roll) == R``: since
+    ``R^T = Rx(-roll) Ry(-pitch) Rz(-yaw)``, minus the angles of ``R^T`` (:func:`matrix_to_xyz_angles`)."""
+    a = matrix_to_xyz_angles(np.asarray(R, dtype=float).T)
+    return -a[0], -a[1], -a[2]
+
+
 def rpy_to_xyz_angles(rpy) -> tuple[float, float, float]:
-    """URDF ``rpy`` to the reference's ``(phi_x, phi_y, phi_z)``: the same rotation, other sequence.
+    """URDF ``rpy`` to the ZYX angles ``(phi_x, phi_y, phi_z)``: the same rotation, other sequence.
 
     ``xyz_angles_to_matrix(rpy_to_xyz_angles(rpy)) == rpy_to_matrix(rpy)`` to rounding error,
     including at pitch ``+-pi/2`` (see :func:`matrix_to_xyz_angles`).

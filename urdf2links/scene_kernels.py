@@ -420,9 +420,9 @@ class CompiledScene:
 
 @njit(cache=True)
 def scene_energies(ts, Q, QD, out, I, F, W, SI, SF, X):
-    """At each sample ``k``: ``out[k] = (E, V, h)``, kinetic energy (5.35), potential energy
-    (gravity (5.21) and springs ``0.5 k (q - rest)^2``) and the energy function ``h`` (``E + V``
-    for a fixed base; ``E2 - E0 + V`` from E at ``q'``, ``-q'`` and 0 for a moving one)."""
+    """At each sample ``k``: ``out[k] = (E, V, h)``: kinetic energy and potential energy of gravity
+    (docs/equations.md (E37)) plus springs ``0.5 k (q - rest)^2``, and the energy function ``h``
+    (E39) (``E + V`` for a fixed base; ``E2 - E0 + V`` from E at ``q'``, ``-q'`` and 0 for a moving one)."""
     sc = scene_view(SI, SF)
     ta = K.tree_view(I, F)
     ws = K.workspace_view(I, W)

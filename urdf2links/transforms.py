@@ -1,10 +1,10 @@
-"""Elementary homogeneous transformations of the reference, (5.5), and base motion {A}.
+"""Elementary homogeneous transformations, docs/equations.md (E1)-(E3), and base motion {A} (E13).
 
 A link's transform relative to its parent is ``T~ = T1(x) T2(y) T3(z) T4(phi_x) T5(phi_y) T6(phi_z)``:
 three translations along the parent's axes, then ``R = Rx(phi_x) Ry(phi_y) Rz(phi_z)``.
 The six parameters are always listed in this order; ``PARAMETERS[k]`` names slot ``k``.
 
-Every elementary matrix is a one-parameter group ``E_k(v) = exp(v * D_k)``, so
+Every elementary matrix is a one-parameter group ``E_k(v) = exp(v * D_k)`` (E2), so
 ``dE_k/dv = E_k D_k = D_k E_k`` and ``d2E_k/dv2 = E_k D_k D_k``, with ``D_k = GENERATORS[k]``.
 """
 
@@ -41,7 +41,7 @@ _ROT_PLANE = {3: (1, 2), 4: (2, 0), 5: (0, 1)}
 
 
 def elementary(k: int, v: float) -> np.ndarray:
-    """``T_{k+1}(v)`` of (5.5), (4, 4): translation along axis k (k < 3) or rotation about axis k-3."""
+    """``T_{k+1}(v)`` of (E1), (4, 4): translation along axis k (k < 3) or rotation about axis k-3."""
     E = np.eye(4)
     if k < 3:
         E[k, 3] = v
@@ -66,7 +66,7 @@ def elementary_second_derivative(k: int, v: float) -> np.ndarray:
 
 
 def link_transform(params) -> np.ndarray:
-    """``T~ = T1 T2 T3 T4 T5 T6`` (5.5) from the six parameters ``(x, y, z, phi_x, phi_y, phi_z)``."""
+    """``T~ = T1 T2 T3 T4 T5 T6`` (E3) from the six parameters ``(x, y, z, phi_x, phi_y, phi_z)``."""
     T = np.eye(4)
     for k in range(6):
         T = T @ elementary(k, params[k])
@@ -76,7 +76,7 @@ def link_transform(params) -> np.ndarray:
 @dataclass(frozen=True)
 class BaseState:
     """State of the moving base {A} at one instant: its six parameters (x, y, z, phi_x, phi_y,
-    phi_z) of (5.5) as ``pose`` (6,), their first and second time derivatives ``rate`` (6,) and
+    phi_z) of (E13) as ``pose`` (6,), their first and second time derivatives ``rate`` (6,) and
     ``accel`` (6,)."""
 
     pose: np.ndarray
@@ -90,7 +90,7 @@ class BaseState:
 
 
 def base_transforms(state: BaseState) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(0_A T, its first, its second time derivative)``, each (4, 4), by the product rule on (5.5).
+    """``(0_A T, its first, its second time derivative)``, each (4, 4), by the product rule (E13).
 
     With ``E_k' = E_k D_k v'`` and ``E_k'' = E_k (D_k v'' + D_k D_k v'^2)``.
     """
@@ -113,7 +113,7 @@ BaseLike = "BaseState | Callable[[float], BaseState] | None"
 def resolve_base(base, t: float):
     """``(B, B', B'')`` for ``base`` at time ``t``, or None for a fixed base.
 
-    ``base`` is None (fixed base: (5.7.1), no base terms computed), a :class:`BaseState`,
+    ``base`` is None (fixed base: ``B = I`` (E4), no base terms computed), a :class:`BaseState`,
     or a callable ``t -> BaseState`` (a prescribed motion ``0_A T(t)``).
     """
     state = base_state_at(base, t)

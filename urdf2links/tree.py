@@ -1,17 +1,17 @@
-"""The tree of links of the reference: the document's form of a robot, frozen and array-backed.
+"""The tree of links of the trace method: the project's form of a robot, frozen and array-backed.
 
-Per link ``p`` (links in topological order, parents first, (5.31)-(5.33)):
+Per link ``p`` (links in topological order, parents first, docs/equations.md (E5)):
 
 - ``parent[p]``: index of the preceding link ``s`` or ``-1`` when ``p`` hangs from the base {A};
-- ``params[p]`` (6,): the constants ``x, y, z, phi_x, phi_y, phi_z`` of ``T~ = T1..T6`` (5.5);
+- ``params[p]`` (6,): the constants ``x, y, z, phi_x, phi_y, phi_z`` of ``T~ = T1..T6`` (E3);
   where a slot is a generalized coordinate, the slot's value is ``params[p, k] + q[coord[p, k]]``
   (so ``params`` holds the coordinate's offset, usually 0);
 - ``coord[p]`` (6,): index into ``q`` of the coordinate in each slot, or ``-1`` for a constant;
-- ``H[p]`` (4, 4): the pseudo-inertia matrix (5.11) in the link's frame; all zeros for a
+- ``H[p]`` (4, 4): the pseudo-inertia matrix (E10) in the link's frame; all zeros for a
   massless link (a pure frame).
 
 Coordinates are numbered link by link in tree order and, inside a link, in slot order
-``x, y, z, phi_x, phi_y, phi_z``, which is the order of (5.30)/(5.33).
+``x, y, z, phi_x, phi_y, phi_z``, which is the order of (E5).
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ __all__ = ["LinkSpec", "LinkTree", "build_tree", "pseudo_inertia_from"]
 
 
 def pseudo_inertia_from(mass: float, com=(0.0, 0.0, 0.0), inertia=None) -> np.ndarray:
-    """H (4, 4) of (5.11) from a mass, a COM (3,) and the inertia tensor (3, 3) about the COM
+    """H (4, 4) of (E10) from a mass, a COM (3,) and the inertia tensor (3, 3) about the COM
     in the link's axes (URDF convention: ``I = [[ixx, ixy, ixz], ...]``, ``ixy = -integral(x y dm)``)."""
     from .inertia import pseudo_inertia
 
@@ -38,7 +38,7 @@ def pseudo_inertia_from(mass: float, com=(0.0, 0.0, 0.0), inertia=None) -> np.nd
 @dataclass(frozen=True)
 class LinkSpec:
     """One link as written in code: name, parent name (None: the base {A}), the six constants
-    ``params`` (6,) of (5.5), ``coordinates`` mapping a slot name (``"x"`` ... ``"phi_z"``) to the
+    ``params`` (6,) of (E3), ``coordinates`` mapping a slot name (``"x"`` ... ``"phi_z"``) to the
     name of the generalized coordinate in that slot, and ``H`` (4, 4) (None: massless)."""
 
     name: str
@@ -60,7 +60,7 @@ class LinkTree:
 
     Derived arrays: ``coord_link`` (n,) the link of each coordinate, ``coord_slot`` (n,) its slot
     0..5, ``ancestor`` (L, L) bool, ``ancestor[p, a]`` when ``a`` is ``p`` or precedes it
-    (``a`` in ``N_p`` of (5.31)), ``children`` tuple of tuples.
+    (``a`` in ``N_p`` of (E5)), ``children`` tuple of tuples.
     """
 
     link_names: tuple[str, ...]
@@ -127,7 +127,7 @@ class LinkTree:
 
     @property
     def com(self) -> np.ndarray:
-        """(L, 3) COM of each link in its own frame (5.20); zeros for a massless link."""
+        """(L, 3) COM of each link in its own frame, ``H e4 / m`` (E21); zeros for a massless link."""
         m = self.H[:, 3, 3]
         safe = np.where(m > 0, m, 1.0)
         return np.where((m > 0)[:, None], self.H[:, :3, 3] / safe[:, None], 0.0)

@@ -1,11 +1,11 @@
 """The literal trace form: the equations term by term, no reuse between links; the oracle of the other forms.
 
-Everything here follows the equations as printed, with no reuse between links:
-for each link ``p`` the chain of elementary matrices from {A} to ``p`` is multiplied out,
-``Tbar_i`` and ``Tbar_{l,j}`` are formed by replacing the factors of ``q_i`` (and ``q_j``) by their
-derivatives (5.14), (5.17.2), and the sums (5.18), (5.22), (5.27), (5.28), (5.35) are taken
-term by term and assembled over the tree as in (5.36)-(5.49). Cost O(n^3) to O(n^4); it exists
-to check :mod:`urdf2links.recursive`.
+Everything here follows the trace form as written (docs/equations.md §4-§5), with no reuse
+between links: for each link ``p`` the chain of elementary matrices from {A} to ``p`` is multiplied
+out, ``Tbar_i`` and ``Tbar_{l,j}`` are formed by replacing the factors of ``q_i`` (and ``q_j``) by
+their derivatives (E14), (E15), and the sums (E17), (E19), (E20), (E22), (E23) are taken term by
+term and assembled over the tree as in (E25). Cost O(n^3) to O(n^4); it exists to check
+:mod:`urdf2links.oracles.recursive` and the compiled kernels.
 """
 
 from __future__ import annotations
@@ -62,7 +62,7 @@ class LiteralTerms:
             path.append(p)
             p = tree.parent[p]
         factors = []
-        for s in reversed(path):  # N_p of (5.31): from the first link to p
+        for s in reversed(path):  # N_p (E5): from the first link to p
             for k in range(6):
                 i = int(tree.coord[s, k])
                 v = tree.params[s, k] + (q[i] if i >= 0 else 0.0)
@@ -71,20 +71,20 @@ class LiteralTerms:
 
 
 def literal_terms(tree, q, qd, *, base_T=None, gravity_vector=(0.0, 0.0, -9.81), wrenches=()):
-    """A, e, G, Q, E, V of the reference, literally.
+    """A, e, G, Q, E, V of the trace form (E17)-(E23), literally.
 
     Parameters
     ----------
     tree : LinkTree
     q, qd : (n,) coordinates and velocities.
     base_T : ``(0_A T, its first, its second derivative)`` (4, 4) each, or None for a fixed base.
-    gravity_vector : (3,) gravitational acceleration in {0}; ``(0, 0, -g)`` gives (5.21)-(5.22).
+    gravity_vector : (3,) gravitational acceleration in {0}; ``(0, 0, -g)`` gives ``m g z_C`` in (E21), (E22).
     wrenches : iterable of ``(link index, force (3,), moment (3,), point (3,), frame)``.
 
     Returns
     -------
-    dict with ``A`` (n, n) (5.19), ``e`` (n,) (5.18), ``G`` (n,) (5.22), ``Q`` (n,) (5.27)+(5.28),
-    ``E`` kinetic energy (5.35)+(5.46), ``V`` potential energy of gravity (5.21)+(5.47).
+    dict with ``A`` (n, n) (E19), ``e`` (n,) (E20), ``G`` (n,) (E22), ``Q`` (n,) (E23),
+    ``E`` kinetic energy (E17), ``V`` potential energy of gravity (E21).
     """
     n = tree.n
     q = np.asarray(q, float)
@@ -101,33 +101,33 @@ def literal_terms(tree, q, qd, *, base_T=None, gravity_vector=(0.0, 0.0, -9.81),
         H = tree.H[p]
         Tbar = lt.Tbar[p]
         T = B @ Tbar
-        Ti = {i: B @ M for i, M in lt.dTbar[p].items()}            # T_k^(p) of (5.36)
-        Tbar_dot = sum((M * qd[i] for i, M in lt.dTbar[p].items()), np.zeros((4, 4)))  # (5.14)
+        Ti = {i: B @ M for i, M in lt.dTbar[p].items()}            # T_i^(p) (E14); link(i) in N_p (E25)
+        Tbar_dot = sum((M * qd[i] for i, M in lt.dTbar[p].items()), np.zeros((4, 4)))  # (E14)
         second = sum((M * qd[l] * qd[j] for (l, j), M in lt.ddTbar[p].items()), np.zeros((4, 4)))
-        inner = Bdd @ Tbar + 2.0 * Bd @ Tbar_dot + B @ second     # bracket of (5.18)/(5.36)
+        inner = Bdd @ Tbar + 2.0 * Bd @ Tbar_dot + B @ second     # T''_0 of (E15), (E20)
         for i, Tk in Ti.items():
             for l, Tl in Ti.items():
-                A[i, l] += np.trace(Tk @ H @ Tl.T)                   # a_il of (5.18)
-            e[i] += np.trace(Tk @ H @ inner.T)                       # e_i of (5.18)
-            # (5.22) g_i = m g theta_3 T_i r_C, with m r_C = H e4; general direction of gravity.
+                A[i, l] += np.trace(Tk @ H @ Tl.T)                   # a_il of (E19)
+            e[i] += np.trace(Tk @ H @ inner.T)                       # e_i of (E20)
+            # (E22) g_i = m g e3^T T_i r_C, with m r_C = H e4; general direction of gravity.
             G[i] += -gvec @ (Tk @ H @ _E4)[:3]
-        Tdot = Bd @ Tbar + B @ Tbar_dot                              # (5.13)
-        E += 0.5 * np.trace(Tdot @ H @ Tdot.T)                       # (5.35)
-        V += -gvec @ (T @ H @ _E4)[:3]                               # (5.21): m g z_C
+        Tdot = Bd @ Tbar + B @ Tbar_dot                              # (E14)
+        E += 0.5 * np.trace(Tdot @ H @ Tdot.T)                       # (E17)
+        V += -gvec @ (T @ H @ _E4)[:3]                               # (E21): m g z_C
     Q = np.zeros(n)
     for link, force, moment, point, frame in wrenches:
         T = B @ lt.Tbar[link]
         R = T[:3, :3]
         r = np.append(point, 1.0)
-        F4 = np.append(force, 0.0)                                    # (5.23)
-        Mloc = moment if frame == "link" else R.T @ moment            # M~ of (5.24)
+        F4 = np.append(force, 0.0)                                    # (F, 0) in link or world axes (E23)
+        Mloc = moment if frame == "link" else R.T @ moment            # M~ (link axes) of (E23)
         for i, M in lt.dTbar[link].items():
             Tk = B @ M
             if frame == "link":
-                Q[i] += F4 @ T.T @ Tk @ r                             # (5.27)
+                Q[i] += F4 @ T.T @ Tk @ r                             # F~^T T^T T_i rho_N (E23)
             else:
-                Q[i] += F4 @ Tk @ r                                   # (5.26)
-            t, ti = T, Tk                                             # (5.28), 0-based indices
+                Q[i] += F4 @ Tk @ r                                   # F^T T_i rho_N (E23)
+            t, ti = T, Tk                                             # moment term of (E23), 0-based
             Q[i] += (
                 Mloc[0] * sum(t[l, 2] * ti[l, 1] for l in range(3))
                 + Mloc[1] * sum(t[l, 0] * ti[l, 2] for l in range(3))

@@ -1,8 +1,9 @@
 """A scene's right-hand side in numpy: the readable twin of the compiled one, and its oracle.
 
-:class:`PythonPlan` evaluates ``y' = (q', q'', P)`` of a :class:`~urdf2links.plan.Plan` with the
-numpy recursive form (:class:`~urdf2links.oracles.recursive.RecursivePlan`), term by term and
-only the terms the plan lists, plus the scene's energies at one state. The tests compare
+:class:`PythonPlan` evaluates ``y' = (q', q'', P)`` (docs/equations.md (E24), (E40)) of a
+:class:`~urdf2links.plan.Plan` with the numpy recursive form
+(:class:`~urdf2links.oracles.recursive.RecursivePlan`), term by term and only the terms the plan
+lists, plus the scene's energies at one state. The tests compare
 ``plan.rhs`` (compiled) with it, and it is what a reader follows to see what the compiled
 right-hand side computes.
 """
@@ -33,7 +34,7 @@ class PythonPlan:
         return None if state is None else base_transforms(state)
 
     def _equation(self, qt, qdt, base_T):
-        """``A`` and ``-(G + e)`` in model coordinates (5.29), and the kinematics they came from."""
+        """``A`` and ``-(G + e)`` in model coordinates (E24), and the kinematics they came from."""
         rp, model, plan = self.rp, self.model, self.plan
         kin = rp.kinematics(qt, qdt, base_T, acceleration=True)
         Hc = rp.composite_inertia(kin)
@@ -43,7 +44,7 @@ class PythonPlan:
         return model.reduce(rp.mass_matrix(kin, Hc)), model.reduce(rhs), kin
 
     def generalized_forces(self, t, q, qd, kin=None) -> np.ndarray:
-        """Everything on the right of (5.29) but ``-G - e``: Q of loads, tau, springs, dampers. (n,)"""
+        """Everything on the right of (E24) but ``-G - e``: Q of loads, tau, springs, dampers. (n,)"""
         plan, model = self.plan, self.model
         f = np.zeros(plan.n)
         if plan.loads:
@@ -60,7 +61,7 @@ class PythonPlan:
         return f
 
     def accelerations(self, t, q, qd, *, with_power: bool = False):
-        """q'' of (5.29) with exactly the scene's terms; with ``with_power`` also the power of the
+        """q'' of (E24) with exactly the scene's terms; with ``with_power`` also the power of the
         non-potential forces and of the base (see :meth:`power`), from the same kinematics."""
         self.nfev += 1
         model = self.model
@@ -97,7 +98,7 @@ class PythonPlan:
 
     def power(self, t, q, qd) -> float:
         """Power of the non-potential forces, ``qd . (Q + tau - c qd)``, and of the base, ``-dL/dt``
-        (the explicit time derivative of the Lagrangian at fixed (q, qd))."""
+        (the explicit time derivative of the Lagrangian at fixed (q, qd)): ``P`` of (E40)."""
         return float(self.accelerations(t, q, qd, with_power=True)[1])
 
     # -- energy ----------------------------------------------------------------------------------
@@ -106,7 +107,7 @@ class PythonPlan:
         return self.rp.kinetic_energy(self.rp.kinematics(qt, qdt, self._base_T(t)))
 
     def potential_energy(self, t, q) -> float:
-        """V = V of gravity (5.21) + spring energies 0.5 k (q - rest)^2."""
+        """V = V of gravity (E21) + spring energies 0.5 k (q - rest)^2."""
         plan = self.plan
         V = 0.0
         if plan.gravity_vector is not None:
@@ -118,7 +119,7 @@ class PythonPlan:
         return V
 
     def energy_function(self, t, q, qd) -> float:
-        """h = qd . dL/dqd - L; equals E + V for a fixed base. E is quadratic in qd
+        """h = qd . dL/dqd - L (E39); equals E + V for a fixed base. E is quadratic in qd
         (E = E2 + E1 + E0), so h = E2 - E0 + V from E at qd, -qd and 0."""
         if self.plan.base is None:
             return self.kinetic_energy(t, q, qd) + self.potential_energy(t, q)

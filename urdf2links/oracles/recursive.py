@@ -1,19 +1,19 @@
-"""The recursive form in numpy: the same traces as (5.18)-(5.28), organized over the tree (an oracle).
+"""The recursive form in numpy (an oracle): the traces of docs/equations.md (E19)-(E23) over the tree.
 
-Every elementary factor satisfies ``dE_k/dv = E_k D_k`` (see :mod:`urdf2links.transforms`), so the
-derivative of the transform of any link ``p`` that follows coordinate ``q_i`` is
+Every elementary factor satisfies ``dE_k/dv = E_k D_k`` (E2, :mod:`urdf2links.transforms`), so the
+derivative of the transform of any link ``p`` that follows coordinate ``q_i`` is (E26)
 
     T_i^(p) = W_i T^(p),   W_i = F_i D_k F_i^{-1}   (4, 4), the same for every such p,
 
 where ``F_i`` is the {0}-pose of the frame right after ``q_i``'s factor (the base motion included).
 ``W_i = [[w^, v], [0, 0]]`` is the twist of the coordinate's unit motion in {0}. Then the sums
-over links of the reference collapse onto composite matrices accumulated from leaves to root:
+over links collapse onto composite matrices (E30) accumulated from leaves to root (E38):
 
-- (5.19) ``a_il = sum_p tr(T_i H T_l^T) = tr(W_i Hc W_l^T)``, ``Hc = sum_{p >= deeper} T H T^T``;
-- (5.18) ``e_i = sum_p tr(T_i H T''^T) = tr(W_i Mc)``, ``Mc = sum_{p >= link(i)} T H T''_0^T``,
-  with ``T''_0`` the acceleration of ``T`` at ``q'' = 0`` (base terms of (5.17.1) included);
-- (5.22) ``g_i = -g . (W_i Hc e4)``: the last column of ``Hc`` is the subtree's first moment;
-- (5.27)-(5.28) ``Q_i = v_i . f + w_i . n`` with ``f``, ``n`` the subtree's force and moment about {0}.
+- (E19) ``a_il = sum_p tr(T_i H T_l^T) = tr(W_i Hc W_l^T)``, ``Hc = sum_{p >= deeper} T H T^T``;
+- (E20) ``e_i = sum_p tr(T_i H T''^T) = tr(W_i Mc)``, ``Mc = sum_{p >= link(i)} T H T''_0^T``,
+  with ``T''_0`` the acceleration of ``T`` at ``q'' = 0`` (base terms of (E15) included);
+- (E22) ``g_i = -g . (W_i Hc e4)``: the last column of ``Hc`` is the subtree's first moment;
+- (E23), (E36) ``Q_i = v_i . f + w_i . n`` with ``f``, ``n`` the subtree's force and moment about {0}.
 
 ``T``, ``T'``, ``T''_0`` are propagated from root to leaves through the elementary factors by
 the product rule. A costs O(n^2); e, G and Q cost O(n).
@@ -166,7 +166,7 @@ class RecursivePlan:
         return self.subtree_sum(np.einsum("pab,pbc,pdc->pad", kin.T, self.H, kin.T))
 
     def mass_matrix(self, kin: Kinematics, Hc: np.ndarray | None = None) -> np.ndarray:
-        """A (n, n), (5.19): ``a_il = tr(W_i Hc[deeper] W_l^T)`` on ancestor pairs, 0 elsewhere."""
+        """A (n, n), (E38): ``a_il = tr(W_i Hc[deeper] W_l^T)`` on ancestor pairs, 0 elsewhere."""
         if Hc is None:
             Hc = self.composite_inertia(kin)
         W = kin.W()
@@ -176,14 +176,14 @@ class RecursivePlan:
         return np.where(anc, Afull, np.where(anc.T, Afull.T, 0.0))
 
     def bias(self, kin: Kinematics) -> np.ndarray:
-        """e (n,), (5.18): ``e_i = tr(W_i Mc[link(i)])``, ``Mc = subtree sum of T H T''_0^T``."""
+        """e (n,), (E38): ``e_i = tr(W_i Mc[link(i)])``, ``Mc = subtree sum of T H T''_0^T``."""
         M = np.einsum("pab,pbc,pdc->pad", kin.T, self.H, kin.Tdd0)
         Mc = self.subtree_sum(M)
         W = kin.W()
         return np.einsum("iab,iba->i", W, Mc[self.coord_link])
 
     def gravity(self, kin: Kinematics, gravity_vector, Hc: np.ndarray | None = None) -> np.ndarray:
-        """G (n,), (5.22): ``g_i = -g . (w_i x c + v_i m)`` with ``(c, m)`` = last column of Hc."""
+        """G (n,), (E38): ``g_i = -g . (w_i x c + v_i m)`` with ``(c, m)`` = last column of Hc."""
         if Hc is None:
             first = np.einsum("pab,pb->pa", kin.T, self.H[:, :, 3])  # T H e4 (L, 4)
             hc = self.subtree_sum(first)
@@ -195,7 +195,7 @@ class RecursivePlan:
         return -motion @ np.asarray(gravity_vector, float)
 
     def generalized_forces(self, kin: Kinematics, wrenches) -> np.ndarray:
-        """Q (n,), (5.27)-(5.28): ``Q_i = v_i . f_c + w_i . n_c`` over the subtree of ``link(i)``."""
+        """Q (n,), (E36): ``Q_i = v_i . f_c + w_i . n_c`` over the subtree of ``link(i)``."""
         L = self.tree.n_links
         fn = np.zeros((L, 6))
         for link, force, moment, point, frame in wrenches:
@@ -210,11 +210,11 @@ class RecursivePlan:
         return np.einsum("ij,ij->i", kin.twist[:, 3:], fc[:, :3]) + np.einsum("ij,ij->i", kin.twist[:, :3], fc[:, 3:])
 
     def explicit_time_rates(self, kin: Kinematics, base_T, gravity_vector) -> tuple[float, float]:
-        """``(dE/dt, dV/dt)`` at fixed ``(q, qd)``: the rates due to the base motion alone.
+        """``(dE/dt, dV/dt)`` at fixed ``(q, qd)``: the rates due to the base motion alone (E41).
 
         With ``T = B Tbar``: ``dT/dt = W1 T`` and ``dT'/dt = (W2 - W1 W1) T + W1 T'``, where
-        ``W1 = B' B^-1``, ``W2 = B'' B^-1``; then ``dE/dt = sum tr(dT'/dt H T'^T)`` (5.35) and
-        ``dV/dt = -g . sum (W1 T H e4)`` (5.21). Needs ``kin.Td``.
+        ``W1 = B' B^-1``, ``W2 = B'' B^-1``; then ``dE/dt = sum tr(dT'/dt H T'^T)`` (from E17) and
+        ``dV/dt = -g . sum (W1 T H e4)`` (from E21). Needs ``kin.Td``.
         """
         B, Bd, Bdd = base_T
         Binv = np.eye(4)
@@ -231,11 +231,11 @@ class RecursivePlan:
         return dE, dV
 
     def kinetic_energy(self, kin: Kinematics) -> float:
-        """E (5.35)+(5.46): ``0.5 sum_p tr(T' H T'^T)``."""
+        """E (E17): ``0.5 sum_p tr(T' H T'^T)``."""
         return 0.5 * float(np.einsum("pab,pbc,pac->", kin.Td, self.H, kin.Td))
 
     def potential_energy(self, kin: Kinematics, gravity_vector) -> float:
-        """V (5.21)+(5.47): ``-sum_p m_p g . r_C``."""
+        """V (E21): ``-sum_p m_p g . r_C``."""
         first = np.einsum("pab,pb->pa", kin.T, self.H[:, :, 3])
         return -float(first[:, :3].sum(axis=0) @ np.asarray(gravity_vector, float))
 
