@@ -13,7 +13,7 @@ from __future__ import annotations
 import html
 
 from urdf2links.animation import DEFAULT_FPS, Motion, Panel, render_animation
-from urdf2links.visuals import model_shapes
+from urdf2links.visuals import scene_shapes
 
 __all__ = ["motion_section", "comparison_animation"]
 
@@ -33,7 +33,7 @@ def comparison_animation(c, *, fps: float = DEFAULT_FPS):
                     log=True, unit="rad or m", lines={f"divergence threshold {c.threshold:g}": c.threshold}),
               Panel("|q urdf2links - q MuJoCo| per coordinate", c.t, {nm: c.error[:, i] for i, nm in enumerate(names)}, log=True,
                     unit="rad or m", legend=len(names) <= 8)]
-    shapes = model_shapes(model, package_dirs=scene.load_options.get("package_dirs", ()))
+    shapes = scene_shapes(scene, model)
     base = scene.base_state if scene.base is not None else None
     return render_animation(model, motions, shapes=shapes, panels=panels, base=base, fps=fps)
 

@@ -193,6 +193,18 @@ def test_simulate_cli_writes_the_animation(tmp_path):
     assert "animation" in out.stdout and "ship_crane.html" in out.stdout
 
 
+def test_simulate_a_robot_without_scene_writes_the_animation(tmp_path):
+    out = subprocess.run([sys.executable, "-m", "urdf2links.cli", "simulate", str(ROBOTS / "pendulum.urdf"),
+                          "--t-end", "0.5", "--animate", "--quiet", "--out", str(tmp_path)],
+                         capture_output=True, text=True, cwd=ROOT)
+    assert out.returncode == 0, out.stderr
+    pages = list(tmp_path.glob("*.html"))
+    assert len(pages) == 1 and pages[0].name.startswith("pendulum")
+    data = read_animation_data(pages[0].read_text())
+    assert {s["source"] for s in data["shapes"]} >= {"visual"}  # pendulum.urdf has a <visual>
+    assert data["t"][-1] == pytest.approx(0.5)
+
+
 # --------------------------------------------------------------------------- thumbnails
 
 

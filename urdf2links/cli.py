@@ -173,9 +173,11 @@ def _simulate(args) -> int:
     if args.animate:
         from .animation import write_trajectory_page
 
-        page = write_trajectory_page(out / f"{scene.name}.html", traj, model, fps=args.animation_fps or 30.0,
+        from .visuals import scene_shapes
+
+        page = write_trajectory_page(out / f"{stem}.html", traj, model, fps=args.animation_fps or 30.0,
                                      base=scene.base_state if scene.base is not None else None,
-                                     package_dirs=scene.load_options.get("package_dirs", ()))
+                                     shapes=scene_shapes(scene, model))
         print(f"  animation {page} ({page.stat().st_size / 1e6:.1f} MB)")
     return 0
 

@@ -25,8 +25,8 @@ from .description import Geometry, RobotDescription
 from .errors import MeshError, URDFError
 from .rotations import homogeneous, rpy_to_matrix
 
-__all__ = ["Shape", "RobotShapes", "robot_shapes", "model_shapes", "decimate", "tessellate", "DEFAULT_MAX_FACES",
-           "MIN_PART_FACES"]
+__all__ = ["Shape", "RobotShapes", "robot_shapes", "model_shapes", "scene_shapes", "decimate", "tessellate",
+           "DEFAULT_MAX_FACES", "MIN_PART_FACES"]
 
 #: Triangle budget of a robot's meshes in all (the UR5's visual meshes hold ~96 000).
 DEFAULT_MAX_FACES = 40_000
@@ -248,16 +248,17 @@ def _as_float32(s: Shape, vertices, faces) -> Shape:
                  faces=np.ascontiguousarray(faces, np.int32), color=s.color)
 
 
-def model_shapes(model, *, description: RobotDescription | None = None, package_dirs=(),
+def model_shapes(model, *, description: RobotDescription | None = None, package_dirs=(), xacro_args=None,
                  max_faces: int = DEFAULT_MAX_FACES) -> RobotShapes:
-    """The shapes of an imported model: of ``description`` when given, else of the URDF file the model
-    was loaded from (``model.source``, meshes searched in ``package_dirs`` too); a model built in
-    code or from URDF text gets a frame per link (its tree links, or its URDF links when known)."""
+    """The shapes of an imported model: of ``description`` when given, else of the URDF (or xacro) file
+    the model was loaded from (``model.source``, meshes searched in ``package_dirs`` too, xacro
+    expanded with ``xacro_args``); a model built in code or from URDF text gets a frame per link (its
+    tree links, or its URDF links when known)."""
     from .parse import parse_urdf
 
     if description is None and model.source and model.source != "<string>":
         try:
-            description = parse_urdf(model.source, package_dirs=package_dirs)
+            description = parse_urdf(model.source, package_dirs=package_dirs, xacro_args=xacro_args)
         except (OSError, URDFError) as exc:
             links = _frame_links(model)
             return RobotShapes(model.name or "robot", links, tuple(Shape(k, "frame", np.eye(4), "frame") for k in links),
@@ -267,6 +268,14 @@ def model_shapes(model, *, description: RobotDescription | None = None, package_
     links = _frame_links(model)
     return RobotShapes(model.name or "robot", links, tuple(Shape(k, "frame", np.eye(4), "frame") for k in links),
                        ("no URDF file: links shown as frames",))
+
+
+def scene_shapes(scene, model, *, max_faces: int = DEFAULT_MAX_FACES) -> RobotShapes:
+    """:func:`model_shapes` of a scene's model, its file read with the scene's ``package_dirs`` and
+    ``xacro_args``."""
+    opts = scene.load_options
+    return model_shapes(model, package_dirs=opts.get("package_dirs", ()), xacro_args=opts.get("xacro_args"),
+                        max_faces=max_faces)
 
 
 def _frame_links(model) -> tuple[str, ...]:
