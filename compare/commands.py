@@ -22,6 +22,7 @@ import sys
 import time
 from pathlib import Path
 
+from urdf2links.cli import scene_from_args, write_scene_option
 from urdf2links.console import err, shown_path
 from urdf2links.integrators import METHODS
 from urdf2links.locations import shipped_robots_dir
@@ -95,6 +96,8 @@ def _print_headline(s: dict, stream=sys.stdout) -> None:
 
 def _compare_cmd(args) -> str:
     parts = ["urdf2links compare", shown_path(args.scene)]
+    parts += [f for f, on in (("--floating", args.floating), (f"--q0 {args.q0}", args.q0 != "zero")) if on]
+    parts += [f"--xacro-arg {a}" for a in args.xacro_arg]
     for flag, value, default in (("--t-end", args.t_end, None), ("--mujoco-integrator", args.mujoco_integrator, "RK4"),
                                  ("--mujoco-dt", args.mujoco_dt, 1e-4), ("--method", args.method, None),
                                  ("--rtol", args.rtol, None), ("--states", args.states, 8), ("--seed", args.seed, 0)):
@@ -104,7 +107,8 @@ def _compare_cmd(args) -> str:
 
 
 def compare_command(args) -> int:
-    scene = load_scene(args.scene)
+    scene = scene_from_args(args)
+    write_scene_option(args, scene)
     quiet = getattr(args, "quiet", False)
     log = (lambda m: None) if quiet else (lambda m: err(f"  {scene.name}: {m}"))
     baselines = None
@@ -125,7 +129,8 @@ def compare_command(args) -> int:
         except KeyError as exc:
             err(f"urdf2links compare: error: {exc.args[0]}")
             return 2
-    paths = write_report(c, args.out, json_path=args.json, command=_compare_cmd(args), check=check)
+    paths = write_report(c, args.out, json_path=args.json, command=_compare_cmd(args), check=check,
+                         animation_fps=args.animation_fps)
     _print_headline(paths["summary"])
     print(f"  report     {shown_path(paths['html'])} (summary.json, summary.md)" + (f"; JSON also {args.json}" if args.json else ""))
     if check is not None:
@@ -179,7 +184,7 @@ def report_command(args) -> int:
                 failed.append(f"{summary['key']}: {', '.join(check.failures)}")
         cmd = f"urdf2links compare {shown_path(f)}" + (f" --t-end {T:g}" if T != scene.run.t_end else "")
         write_report(c, out / summary["robot"] / summary["scene"], command=cmd, check=check,
-                     index_link="../../index.html")
+                     index_link="../../index.html", animation_fps=args.animation_fps)
         summaries.append(summary)
         entries.append({"summary": summary, "link": f"{summary['robot']}/{summary['scene']}/report.html", "check": check})
         tr, en = summary["trajectory"], summary["energy"]

@@ -493,7 +493,7 @@ def _check_scene(mj: MjcfModel, scene) -> None:
         raise ValueError(f"the scene's gravity {None if g_scene is None else g_scene.tolist()} is not the MJCF "
                          f"model's {None if mj.gravity is None else mj.gravity.tolist()}: build it with mjcf_from_scene")
     key = lambda s: (s.coordinate, s.stiffness, s.rest, s.damping)  # noqa: E731
-    if sorted(map(key, scene.springs)) != sorted(map(key, mj.springs)):
+    if sorted(map(key, scene.springs_for(mj.source).springs)) != sorted(map(key, mj.springs)):
         raise ValueError("the scene's springs are not the MJCF model's: build it with mjcf_from_scene")
     if (scene.base is not None) and not mj.moving_base:
         raise ValueError("the scene moves the base but the MJCF model has no base_A: build it with mjcf_from_scene")

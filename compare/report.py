@@ -1,8 +1,10 @@
 """Reports of the MuJoCo cross-validation: a self-contained HTML page, ``summary.json`` and
 ``summary.md`` per scene, and an index page over scenes.
 
-* :func:`write_report` writes ``report.html`` (plots embedded as base64 PNG: coordinates of both
-  engines overlaid, error against time (log), energy of both engines, agreement of the terms),
+* :func:`write_report` writes ``report.html`` (the robot moving in both engines, MuJoCo's run a
+  translucent ghost (:mod:`urdf2links.compare.report_motion`); plots embedded as base64 PNG:
+  coordinates of both engines overlaid, error against time (log), energy of both engines,
+  agreement of the terms),
   ``summary.json`` (:meth:`urdf2links.compare.trajectory.SceneComparison.summary`, non-finite numbers
   written as the strings ``"nan"``/``"inf"``) and ``summary.md`` into
   ``<root>/<robot>/<scene>/`` (or a given folder).
@@ -22,6 +24,9 @@ from pathlib import Path
 
 from .baselines import CheckResult
 from .formatting import fmt, fmt_md, fmt_t, json_ready
+from urdf2links.animation import DEFAULT_FPS
+
+from .report_motion import motion_section
 from .report_plots import plot_coordinates, plot_energy, plot_error, plot_terms
 from .tradeoff_report import insert_section
 
@@ -139,6 +144,11 @@ def _terms_section(s) -> list[str]:
         r2_label += f"<br><span class='small'>{e(r2['error'])}</span>"
     rows.append(["route&nbsp;2", r2_label, *_route_rows(r2)])
     parts.append(_rows(rows, ["", "what MuJoCo loaded", "A", "e + G", "max"], num_cols=(2, 3, 4)))
+    if r2.get("max_rel_error_damping") is not None:
+        parts.append("<p>Route 2 also compared the dampers (the scene asks for the URDF's damping): the project's "
+                     "<code>-c qd</code> against MuJoCo's <code>qfrc_damper</code> from its own reading of "
+                     f"<code>&lt;dynamics damping&gt;</code>: max relative error "
+                     f"<code>{r2['max_rel_error_damping']:.2e}</code> (included in route 2's max).</p>")
     if r2.get("refusals"):
         parts.append("<p><b>MuJoCo refused the original file.</b> Attempts, in order:</p><ul class='notes'>")
         for ref in r2["refusals"]:
@@ -240,11 +250,13 @@ def _closing_sections(s, command) -> list[str]:
 
 
 def render_html(c, summary: dict, *, command: str | None = None, check: "CheckResult | None" = None,
-                index_link: str | None = None) -> str:
-    """The scene's self-contained report page (plots as base64 PNG); ``index_link``: relative
-    address of the index page, if any."""
-    parts = (_top(summary, check, index_link) + _terms_section(summary) + _trajectory_section(c, summary)
-             + _energy_section(c, summary) + _closing_sections(summary, command) + ["</body></html>"])
+                index_link: str | None = None, animation_fps: float = DEFAULT_FPS) -> str:
+    """The scene's self-contained report page (plots as base64 PNG, the motion section's viewer
+    inlined); ``index_link``: relative address of the index page, if any; ``animation_fps``: frames
+    per second of simulated time of the motion section (0: no motion section)."""
+    parts = (_top(summary, check, index_link) + motion_section(c, fps=animation_fps) + _terms_section(summary)
+             + _trajectory_section(c, summary) + _energy_section(c, summary) + _closing_sections(summary, command)
+             + ["</body></html>"])
     return "\n".join(parts)
 
 
@@ -286,11 +298,12 @@ def render_markdown(s: dict) -> str:
 
 
 def write_report(c, out_dir=None, *, root="reports", json_path=None, command: str | None = None,
-                 check: "CheckResult | None" = None, index_link: str | None = None) -> dict:
+                 check: "CheckResult | None" = None, index_link: str | None = None,
+                 animation_fps: float = DEFAULT_FPS) -> dict:
     """Write ``report.html``, ``summary.json`` and ``summary.md`` for comparison ``c`` into
     ``out_dir`` (default ``<root>/<robot>/<scene>/``, whose page then links ``../../index.html``;
-    else ``index_link``) and, if given, the summary also to ``json_path``. Returns
-    ``{"dir", "html", "json", "md", "summary"}``."""
+    else ``index_link``) and, if given, the summary also to ``json_path``; ``animation_fps`` as
+    :func:`render_html`. Returns ``{"dir", "html", "json", "md", "summary"}``."""
     summary = json_ready(c.summary())
     if out_dir is None:
         out = Path(root) / summary["robot"] / summary["scene"]
@@ -305,7 +318,8 @@ def write_report(c, out_dir=None, *, root="reports", json_path=None, command: st
         jp.parent.mkdir(parents=True, exist_ok=True)
         jp.write_text(text)
     (out / "summary.md").write_text(render_markdown(summary))
-    (out / "report.html").write_text(render_html(c, summary, command=command, check=check, index_link=index_link))
+    (out / "report.html").write_text(render_html(c, summary, command=command, check=check, index_link=index_link,
+                                                 animation_fps=animation_fps), encoding="utf-8")
     if (out / "tradeoff.json").is_file():  # a work-precision study of this scene (urdf2links tradeoff): its section
         try:
             insert_section(out / "report.html", json.loads((out / "tradeoff.json").read_text()))

@@ -23,6 +23,7 @@ import numpy as np
 
 from .charts import integrate_charted, link_poses
 from .console import Progress
+from .limits import limit_excursions
 from .model import Model
 from .plan import compile_plan
 from .scene import RunSettings, Scene
@@ -44,7 +45,8 @@ class Trajectory:
     arrays: ``kinetic`` E, ``potential`` V (gravity and springs), ``work`` W (non-potential forces
     and base), ``function`` h (E + V for a fixed base), ``error`` ``h - h(0) - W``;
     ``poses`` dict link -> (m, 4, 4); ``stats`` (method, rtol, atol, dt, nfev, nsteps, ``wall_time`` the
-    integration (:data:`TIMED_REGION`), ``run_s`` the whole :func:`simulate` call);
+    integration (:data:`TIMED_REGION`), ``run_s`` the whole :func:`simulate` call,
+    ``limit_excursions``: :class:`~urdf2links.limits.LimitExcursion` dicts, ``spring_notes``);
     ``sol`` the integrator's dense interpolant ``t -> (q, qd, W)`` or None; ``charts`` the
     :class:`~urdf2links.charts.ChartedRun` (segments, states in each chart) when floating links were
     re-charted, else None.
@@ -137,7 +139,7 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
     t_eval = np.linspace(0.0, run.t_end, max(run.samples, 2))
     bar = Progress(run.t_end, label=f"{scene.name} {run.method}", enabled=progress)
     # torques and springs act on coordinates: their links keep their chart
-    exclude = {c for c, _ in scene.torques} | {sp.coordinate for sp in scene.springs}
+    exclude = {c for c, _ in scene.torques} | {sp.coordinate for sp in plan.spring_set.springs}
     try:
         res = integrate_charted(model, lambda m: plan if m is model else compile_plan(scene, m), y0,
                                 (0.0, run.t_end), t_eval=t_eval, method=run.method, rtol=run.rtol, atol=run.atol,
@@ -165,7 +167,9 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
     stats = {"method": run.method, "rtol": run.rtol, "atol": run.atol, "dt": run.dt, "nfev": res.nfev,
              "nsteps": res.nsteps, "wall_time": res.wall_time, "terms": plan.terms, "success": res.success,
              "message": res.message, "recharting": run.recharting, "n_recharts": len(res.recharts),
-             "recharts": res.recharts, "segments": len(res.segments), "run_s": time.perf_counter() - started}
+             "recharts": res.recharts, "segments": len(res.segments),
+             "limit_excursions": [e.as_dict() for e in limit_excursions(model, t, qs)],
+             "spring_notes": list(plan.spring_set.notes), "run_s": time.perf_counter() - started}
     return Trajectory(t=t, q=qs, qd=qds, coordinate_names=model.coordinate_names,
                       energy={"kinetic": E, "potential": V, "work": W, "function": h, "error": h - h[0] - W},
                       poses=poses, stats=stats, scene=scene.name, robot=model.name, sol=res.sol,
