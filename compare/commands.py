@@ -22,7 +22,7 @@ import sys
 import time
 from pathlib import Path
 
-from urdf2links.cli import scene_from_args, write_scene_option
+from urdf2links.scene_toml import scene_from_args, write_scene_option
 from urdf2links.console import err, shown_path
 from urdf2links.integrators import METHODS
 from urdf2links.locations import shipped_robots_dir

@@ -14,6 +14,7 @@ import numpy as np
 
 from .errors import DynamicsError, SceneError, URDFError
 from .limits import LimitExcursion
+from .scene_toml import scene_from_args, write_scene_option, xacro_args_of
 from .transforms import PARAMETERS
 
 __all__ = ["main", "format_tree", "scene_from_args", "xacro_args_of", "write_scene_option"]
@@ -72,32 +73,6 @@ def _joint_lines(joints) -> list[str]:
     lines.insert(1, "  ".join("-" * w for w in widths))
     return ["", "joints (limits not enforced, noted when a run leaves them; damping acts in scenes with [dampers] "
             "from_urdf = true; friction not modelled):"] + lines
-
-
-def xacro_args_of(args) -> dict:
-    """``--xacro-arg name:=value`` options as a dict (a URDFError names a malformed one)."""
-    from .xacro_input import parse_xacro_arg
-
-    try:
-        return dict(parse_xacro_arg(a) for a in (getattr(args, "xacro_arg", None) or []))
-    except ValueError as err:
-        raise URDFError(f"--xacro-arg: {err}") from None
-
-
-def scene_from_args(args):
-    """The scene a ``simulate``/``compare`` command runs: ``args.scene`` as a scene file, or a robot file in
-    its default scene with ``--floating``, ``--q0``, ``--seed``, ``--t-end``, ``--xacro-arg``, ``--package-dir``."""
-    from .scene_toml import scene_or_robot
-
-    return scene_or_robot(args.scene, floating=args.floating, q0=args.q0, seed=args.seed, t_end=args.t_end,
-                          xacro_args=xacro_args_of(args), package_dirs=args.package_dir)
-
-
-def write_scene_option(args, scene) -> None:
-    if getattr(args, "write_scene", None):
-        from .scene_toml import write_scene
-
-        print(f"  scene written to {write_scene(scene, args.write_scene)} (edit it, then run it by name)")
 
 
 def _inspect(args) -> int:
