@@ -551,11 +551,12 @@ def _compiled(mm, xml, model, names, base_joint_names, bname, bodies, folded, g,
 
 
 def mjcf_from_scene(scene, model, *, timestep: float | None = None, integrator: str | None = None) -> MjcfModel:
-    """:func:`mjcf_from_model` with a scene's gravity, springs and base; ``timestep`` defaults to
+    """:func:`mjcf_from_model` with a scene's gravity, springs and dampers (URDF damping included when
+    the scene asks, :meth:`~urdf2links.scene.Scene.springs_for`) and base; ``timestep`` defaults to
     the scene's ``run.dt`` (else 1e-4 s), ``integrator`` to RK4 when the scene names none of
     MuJoCo's."""
     scene.check_names(model)
     dt = timestep if timestep is not None else (scene.run.dt or 1e-4)
     integ = integrator if integrator is not None else (scene.run.method if scene.run.method in INTEGRATORS else "RK4")
-    return mjcf_from_model(model, gravity=scene.gravity, springs=scene.springs,
+    return mjcf_from_model(model, gravity=scene.gravity, springs=scene.springs_for(model).springs,
                            moving_base=scene.base is not None, timestep=dt, integrator=integ)

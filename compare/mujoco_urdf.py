@@ -15,7 +15,9 @@ we do not compare:
 After compiling, the physics is cut down to what we compare: the given gravity;
 contacts, joint limits, equality constraints (URDF ``<mimic>``), friction loss, springs
 and dampers disabled; ``dof_armature``, ``dof_damping``, joint stiffness and gravity
-compensation set to zero.
+compensation set to zero -- except, with ``damping=True`` (a scene with ``[dampers] from_urdf``),
+the dampers MuJoCo read from the URDF's ``<dynamics damping>``: then ``dof_damping`` is kept and
+the damper flag stays on.
 
 When MuJoCo refuses a file (a moving link with zero mass, an inertia violating the
 triangle inequality, ...) :class:`MujocoRefused` carries MuJoCo's own words.
@@ -30,6 +32,7 @@ has the sign of the URDF axis (checked against yourdfpy in the tests).
 from __future__ import annotations
 
 import os
+import re
 import sys
 import tempfile
 from contextlib import contextmanager
@@ -54,6 +57,9 @@ __all__ = [
 #: Names of the six dofs of a MuJoCo free joint, in MuJoCo's order: linear velocity of
 #: the body origin in the WORLD frame, then angular velocity in the BODY (local) frame.
 FREE_DOF_LABELS = ("vx", "vy", "vz", "wx", "wy", "wz")
+
+#: An XML declaration at the start of a text (dropped before lxml parses the decoded text).
+_DECLARATION = re.compile(r"^\ufeff?\s*<\?xml[^>]*\?>")
 
 #: Everything we do not compare, switched off on the compiled model.
 _DISABLED = (
@@ -148,6 +154,9 @@ def _prepare(text: str, source: str, *, strip_meshes: bool, fusestatic: bool,
              meshdir: Path | None, notes: list[str]) -> tuple[str, list[str]]:
     """Edit the URDF text for MuJoCo; return the new text and the list of link names."""
     parser = etree.XMLParser(remove_comments=True, resolve_entities=False)
+    declaration = _DECLARATION.match(text)
+    if declaration:  # the text is already decoded; lxml would also refuse an unusual version ("0.0")
+        text = text[declaration.end():]
     try:
         root = etree.fromstring(text.encode("utf-8"), parser)
     except etree.XMLSyntaxError as err:
@@ -261,21 +270,24 @@ def _compile_quiet(text: str, source: str, floating_base: bool, notes: list[str]
     return model, free_name, root_body
 
 
-def _restrict_physics(model: mujoco.MjModel, gravity, notes: list[str]) -> None:
+def _restrict_physics(model: mujoco.MjModel, gravity, notes: list[str], *, damping: bool = False) -> None:
     model.opt.gravity[:] = np.asarray(gravity, dtype=float)
-    for name in _DISABLED:
+    disabled = tuple(n for n in _DISABLED if not (damping and n == "mjDSBL_DAMPER"))
+    for name in disabled:
         model.opt.disableflags |= int(getattr(mujoco.mjtDisableBit, name))
     changed = []
-    for attr in ("dof_armature", "dof_damping", "dof_frictionloss", "jnt_stiffness",
-                 "body_gravcomp"):
+    zeroed = ("dof_armature", "dof_frictionloss", "jnt_stiffness", "body_gravcomp") + (() if damping else ("dof_damping",))
+    for attr in zeroed:
         arr = getattr(model, attr)
         if np.any(arr != 0):
             changed.append(attr)
         arr[:] = 0.0
     notes.append(f"gravity set to {tuple(float(g) for g in gravity)}; disabled: "
-                 + ", ".join(n.removeprefix("mjDSBL_").lower() for n in _DISABLED)
-                 + "; armature, damping, frictionloss, stiffness, gravcomp zeroed"
-                 + (f" (non-zero before: {', '.join(changed)})" if changed else ""))
+                 + ", ".join(n.removeprefix("mjDSBL_").lower() for n in disabled)
+                 + "; " + ", ".join(a.removeprefix("dof_").removeprefix("jnt_").removeprefix("body_") for a in zeroed)
+                 + " zeroed" + (f" (non-zero before: {', '.join(changed)})" if changed else "")
+                 + ("; MuJoCo's own dof_damping from the URDF's <dynamics damping> kept (the scene asks for URDF "
+                    "damping)" if damping else ""))
     if model.neq:
         notes.append(f"{model.neq} equality constraint(s) (URDF <mimic>?) are disabled: "
                      "mimic joints are independent coordinates here")
@@ -283,9 +295,10 @@ def _restrict_physics(model: mujoco.MjModel, gravity, notes: list[str]) -> None:
 
 def mujoco_from_urdf(path_or_text, *, strip_meshes: bool = True, fusestatic: bool = True,
                      gravity=(0.0, 0.0, -9.81), floating_base: bool = False,
-                     repair_urdf_text: str | None = None) -> MujocoURDF:
+                     repair_urdf_text: str | None = None, damping: bool = False) -> MujocoURDF:
     """Compile a URDF with MuJoCo's own importer, restricted to the dynamics we compare.
 
+    ``damping``: keep the joint damping MuJoCo read from ``<dynamics damping>`` (module doc).
     ``path_or_text``: a file path, or URDF text (anything starting with ``<``).
     ``repair_urdf_text``: if given, this text (the project's repaired inertias) is loaded
     INSTEAD of the original; ``notes`` records it and whether the original loads.
@@ -320,7 +333,7 @@ def mujoco_from_urdf(path_or_text, *, strip_meshes: bool = True, fusestatic: boo
         notes.append(f"fusestatic merged {len(fused)} link(s) without a moving joint into "
                      f"their parents: {', '.join(fused)}")
 
-    _restrict_physics(model, gravity, notes)
+    _restrict_physics(model, gravity, notes, damping=damping)
     if model.nv == 0:
         notes.append("the compiled model has no degrees of freedom (no moving joint; "
                      f"{len(links)} URDF link(s))")

@@ -48,7 +48,7 @@ from lxml import etree
 from urdf2links import load_urdf
 from urdf2links.inertia import inertial_from_pseudo, pseudo_inertia
 
-from .mujoco_urdf import MujocoRefused, MujocoURDF, mujoco_from_urdf, mujoco_terms
+from .mujoco_urdf import MujocoRefused, MujocoURDF, mujoco_data_at, mujoco_from_urdf, mujoco_terms
 
 __all__ = ["TermsComparison", "repaired_urdf_text", "compare_terms_urdf", "massless_moving_links",
            "ROUTE_ORIGINAL", "ROUTE_REPAIRED"]
@@ -313,6 +313,9 @@ class TermsComparison:
     ``worst``: the states (``q``, ``qd``) where each maximum occurred. ``notes``: MuJoCo's side
     (what was edited, disabled, fused) and which project model was compared.
     ``passed``: ``max_rel_error <= tolerance`` when a tolerance was given, else ``None``.
+    ``max_rel_error_damping``: with ``dampers`` given, the damper forces ``-c qd`` against MuJoCo's
+    ``qfrc_damper`` from its own reading of ``<dynamics damping>`` (included in ``max_rel_error``);
+    None otherwise.
     """
 
     route: str
@@ -326,6 +329,7 @@ class TermsComparison:
     worst: dict = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
     tolerance: float | None = None
+    max_rel_error_damping: float | None = None
 
     @property
     def passed(self) -> bool | None:
@@ -382,7 +386,7 @@ def _sphere_H(mass: float, com) -> np.ndarray:
 
 def compare_terms_urdf(urdf_path, model, *, states: int = 8, seed: int = 0,
                        tolerance: float | None = None, fusestatic: bool = False,
-                       massless_moving: float | None = None) -> TermsComparison:
+                       massless_moving: float | None = None, dampers: dict | None = None) -> TermsComparison:
     """Compare ``A`` and ``e + G`` of ``model`` with MuJoCo's own import of ``urdf_path``.
 
     ``model``: the project's import of the same file (``floating_base=False``,
@@ -402,13 +406,15 @@ def compare_terms_urdf(urdf_path, model, *, states: int = 8, seed: int = 0,
     normal) in ``model.coordinate_names`` order, the relative errors (see
     :class:`TermsComparison`) are computed and their maxima returned. Gravity is
     ``model.gravity_vector`` on both sides. ``fusestatic`` is MuJoCo's compiler option (off:
-    see the module docstring). ``tolerance``, if given, sets ``result.passed``.
+    see the module docstring). ``tolerance``, if given, sets ``result.passed``. ``dampers``
+    (``{coordinate: c}``, the project's reading of ``<dynamics damping>``): MuJoCo keeps the damping
+    it read from the file and the damper forces are compared too (``max_rel_error_damping``).
     """
     path = Path(urdf_path)
     _check_model(model, path)
     gravity = np.asarray(model.gravity_vector, dtype=float)
     g = tuple(float(x) for x in gravity)
-    load = dict(gravity=g, fusestatic=fusestatic)
+    load = dict(gravity=g, fusestatic=fusestatic, damping=dampers is not None)
     notes: list[str] = []
     refusal = None
     ours = model
@@ -440,10 +446,25 @@ def compare_terms_urdf(urdf_path, model, *, states: int = 8, seed: int = 0,
     if floors:
         notes.append(f"MuJoCo's e + G is zero at {floors} of {states} state(s): relative to "
                      "max|M| * max(1, max|qd|^2) there")
+    err_d = None if dampers is None else _damping_error(mj, names, dampers, states, seed)
     return TermsComparison(route=route, refusal=refusal, max_rel_error_A=err_A,
-                           max_rel_error_bias=err_b, max_rel_error=max(err_A, err_b), n=len(names),
+                           max_rel_error_bias=err_b, max_rel_error=max(err_A, err_b, err_d or 0.0), n=len(names),
                            states=states, coordinates=names, worst=worst, notes=notes,
-                           tolerance=tolerance)
+                           tolerance=tolerance, max_rel_error_damping=err_d)
+
+
+def _damping_error(mj, names, dampers: dict, states: int, seed: int) -> float:
+    """Largest ``max|-c qd - qfrc_damper| / max|qfrc_damper|`` over seeded velocities (0 when neither
+    side damps anything; inf when only one does)."""
+    c = np.array([float(dampers.get(nm, 0.0)) for nm in names])
+    dofs = [mj.dof_of_joint[nm] for nm in names]
+    rng = np.random.default_rng(seed + 1)
+    worst = 0.0
+    for _ in range(states):
+        q, qd = rng.uniform(-1.0, 1.0, len(names)), rng.standard_normal(len(names))
+        d = mujoco_data_at(mj, dict(zip(names, q)), dict(zip(names, qd)))
+        worst = max(worst, _rel(-c * qd, np.asarray(d.qfrc_damper)[dofs])[0])
+    return worst
 
 
 def _seeded_errors(mj, ours, names, states, seed):

@@ -35,7 +35,14 @@
 
 4. **Base tracking** (moving base): how far MuJoCo's ``base_A`` is from the prescribed pose.
 
-5. **Wall time** of each engine's integration loop (not checked against baselines).
+5. **Wall time** of each engine, timed the same way (not checked against baselines): urdf2links'
+   integrator (:data:`urdf2links.simulate.TIMED_REGION`) after a warm-up that compiles, or loads
+   from numba's cache, every compiled function the run calls (:func:`urdf2links.simulate.warm_up`;
+   its time is reported on its own); MuJoCo's ``mj_step(nstep)`` calls
+   (:data:`urdf2links.compare.mujoco_run.TIMED_REGION`), inputs from the compiled control callback.
+   Both sample at the same times and neither timed region contains the copying or evaluation at
+   the samples; the whole calls are reported beside them (``wall_time.regions`` says what each
+   figure contains).
 
 :meth:`SceneComparison.summary` is the JSON-ready dictionary; the report is written by
 :mod:`urdf2links.compare.report`.
@@ -45,8 +52,10 @@ from __future__ import annotations
 
 import copy
 import math
+import tempfile
 import time
 import warnings
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
@@ -55,12 +64,16 @@ import mujoco
 import numpy as np
 
 from urdf2links.console import shown_path
+from urdf2links.limits import LimitExcursion
 from urdf2links.plan import compile_plan
-from urdf2links.scene import Scene, load_scene
-from urdf2links.simulate import Trajectory, simulate
+from urdf2links.scene import Scene, load_scene, robot_stem
+from urdf2links.simulate import TIMED_REGION as PROJECT_REGION
+from urdf2links.simulate import Trajectory, simulate, warm_up
+from urdf2links.xacro_input import expand_xacro, is_xacro_path
 from urdf2links.transforms import BaseState
 
 from .mjcf import MjcfModel, mjcf_from_scene
+from .mujoco_run import TIMED_REGION as MUJOCO_REGION
 from .mujoco_run import MujocoRun, energy_function, run_mujoco
 from .mujoco_urdf import MujocoRefused
 from .terms import compare_terms_urdf
@@ -88,7 +101,7 @@ ROUTE1_LABEL = "route 1: the project's tree as MJCF (same frames, H, coordinates
 def scene_key(scene: Scene) -> str:
     """``"<robot>/<scene>"``: the URDF file's stem and the scene's name (the baselines' key and the
     report's folder)."""
-    return f"{Path(scene.robot).stem}/{scene.name}"
+    return f"{robot_stem(scene.robot)}/{scene.name}"
 
 
 # --------------------------------------------------------------------------- terms
@@ -173,7 +186,7 @@ def route2_terms(scene: Scene, *, states: int = 8, seed: int = 0) -> dict:
                 "floating base: route 2 (MuJoCo's URDF import) is compared for fixed-base robots only"}
     from urdf2links import load_urdf
 
-    base_opts = {k: v for k, v in opts.items() if k in ("package_dirs",)}
+    base_opts = {k: v for k, v in opts.items() if k in ("package_dirs", "strict")}
     inertia = opts.get("inertia", "audit")
     attempts = [(inertia, None)]
     if inertia != "repair":
@@ -182,23 +195,25 @@ def route2_terms(scene: Scene, *, states: int = 8, seed: int = 0) -> dict:
     refusals: list[dict] = []
     start = time.perf_counter()
     result = None
-    for how, sphere in attempts:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
+    with _urdf_file(scene) as robot:
+        for how, sphere in attempts:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                try:
+                    model = load_urdf(robot, floating_base=False, inertia=how, mimic="independent", **base_opts)
+                except Exception as err:  # strict import refuses: try the next form
+                    refusals.append({"attempt": _attempt(how, sphere), "by": "urdf2links", "reason": str(err)})
+                    continue
+            model = _with_gravity(model, scene.gravity)
             try:
-                model = load_urdf(scene.robot, floating_base=False, inertia=how, mimic="independent", **base_opts)
-            except Exception as err:  # strict import refuses: try the next form
-                refusals.append({"attempt": _attempt(how, sphere), "by": "urdf2links", "reason": str(err)})
-                continue
-        model = _with_gravity(model, scene.gravity)
-        try:
-            result = compare_terms_urdf(scene.robot, model, states=states, seed=seed, massless_moving=sphere)
-            break
-        except MujocoRefused as err:
-            refusals.append({"attempt": _attempt(how, sphere), "by": "MuJoCo", "reason": err.reason})
-        except ValueError as err:
-            return {"route": None, "label": "route 2: not applicable", "skipped": str(err),
-                    "wall_time_s": time.perf_counter() - start}
+                result = compare_terms_urdf(robot, model, states=states, seed=seed, massless_moving=sphere,
+                                            dampers=_urdf_dampers(model) if scene.urdf_damping else None)
+                break
+            except MujocoRefused as err:
+                refusals.append({"attempt": _attempt(how, sphere), "by": "MuJoCo", "reason": err.reason})
+            except ValueError as err:
+                return {"route": None, "label": "route 2: not applicable", "skipped": str(err),
+                        "wall_time_s": time.perf_counter() - start}
     if result is None:
         return {"route": None, "label": "route 2: MuJoCo refuses the file", "error": refusals[-1]["reason"] if refusals
                 else "no attempt", "refusals": refusals, "wall_time_s": time.perf_counter() - start}
@@ -217,11 +232,34 @@ def route2_terms(scene: Scene, *, states: int = 8, seed: int = 0) -> dict:
         "max_rel_error_A": result.max_rel_error_A,
         "max_rel_error_bias": result.max_rel_error_bias,
         "max_rel_error": result.max_rel_error,
+        "max_rel_error_damping": result.max_rel_error_damping,
         "states": result.states,
         "seed": seed,
         "notes": list(result.notes),
         "wall_time_s": time.perf_counter() - start,
     }
+
+
+@contextmanager
+def _urdf_file(scene: Scene):
+    """The scene's robot as a URDF file for MuJoCo's own import: the file itself, or a ``.xacro``
+    robot expanded (with the scene's ``xacro_args``) into a temporary file."""
+    if not is_xacro_path(scene.robot):
+        yield Path(scene.robot)
+        return
+    opts = scene.load_options
+    text = expand_xacro(scene.robot, xacro_args=opts.get("xacro_args"), package_dirs=opts.get("package_dirs", ()))
+    with tempfile.TemporaryDirectory(prefix="urdf2links_route2_") as folder:
+        path = Path(folder) / f"{robot_stem(scene.robot)}.urdf"
+        path.write_text(text)
+        yield path
+
+
+def _urdf_dampers(model) -> dict:
+    """``{coordinate: c}``: the URDF damping of the model's one-coordinate joints (what MuJoCo's own
+    URDF import reads as ``dof_damping``)."""
+    return {j["coordinates"][0]: float(j["damping"]) for j in model.info.get("joints", [])
+            if j.get("damping") and j["type"] in ("revolute", "continuous", "prismatic") and len(j["coordinates"]) == 1}
 
 
 def _attempt(how: str, sphere: float | None) -> str:
@@ -354,6 +392,33 @@ class SceneComparison:
             "note": self.info["energy_note"],
         }
 
+    def _wall_time_summary(self) -> dict:
+        traj, run, warm = self.traj, self.run, self.info["warm_up"]
+        r1, r2 = self.terms["route1"], self.terms["route2"]
+        return {
+            "project_s": float(traj.stats["wall_time"]), "mujoco_s": float(run.wall_time),
+            "project_run_s": float(traj.stats["run_s"]), "mujoco_harness_s": float(run.harness_time),
+            "project_warmup_s": float(warm.seconds), "project_compiled": list(warm.functions),
+            "mujoco_inputs": run.inputs, "mujoco_callback_calls": int(run.callback_calls),
+            "mujoco_callback_load_s": float(run.compilation.seconds),
+            "mujoco_callback_compiled": list(run.compilation.functions),
+            "terms_s": float(r1.get("wall_time_s", 0.0) + r2.get("wall_time_s", 0.0)),
+            "total_s": float(self.info["total_s"]),
+            "regions": {
+                "project_s": PROJECT_REGION,
+                "mujoco_s": MUJOCO_REGION,
+                "project_run_s": "the whole simulate() call: plan, integration, samples, energies, poses",
+                "mujoco_harness_s": "the whole run_mujoco() call: model copy, control callback set-up (and its "
+                                    "loading or compilation), stepping, sample copies, the energy pass",
+                "project_warmup_s": "the warm-up run before the timed one: numba's compilation of the functions "
+                                    "in project_compiled (none: loaded from numba's disk cache)",
+                "mujoco_callback_load_s": "loading (or compiling: mujoco_callback_compiled) the compiled control "
+                                          "callback, once per process, inside mujoco_harness_s",
+            },
+            "note": "each engine's integration timed the same way (compilation and sampling outside the timed "
+                    "regions; the same sample times); not checked against baselines",
+        }
+
     def summary(self) -> dict:
         """The JSON-ready summary. Contract keys (nested): ``terms.max_rel_error``,
         ``trajectory.max_abs_error``, ``trajectory.divergence_time`` (None if none),
@@ -367,10 +432,10 @@ class SceneComparison:
         return {
             "schema": 1,
             "key": self.key,
-            "robot": Path(sc.robot).stem,
+            "robot": robot_stem(sc.robot),
             "robot_name": self.model.name,
             "scene": sc.name,
-            "scene_file": shown_path(sc.path),
+            "scene_file": shown_path(sc.path) or f"(none: the default scene of {shown_path(sc.robot)})",
             "description": sc.description,
             "chaotic": bool(sc.chaotic),
             "effects": list(self.info["effects"]),
@@ -394,12 +459,10 @@ class SceneComparison:
                       "route1": r1, "route2": r2},
             "trajectory": trajectory,
             "energy": energy,
+            "limit_excursions": list(traj.stats.get("limit_excursions", [])),
             "base": {"moving": bool(moving),
                      "tracking_error": float(run.base_tracking_error) if moving else None},
-            "wall_time": {"project_s": float(traj.stats["wall_time"]), "mujoco_s": float(run.wall_time),
-                          "terms_s": float(r1.get("wall_time_s", 0.0) + r2.get("wall_time_s", 0.0)),
-                          "total_s": float(self.info["total_s"]),
-                          "note": "integration loops only (sampling included); not checked against baselines"},
+            "wall_time": self._wall_time_summary(),
             "notes": list(self.notes),
         }
 
@@ -436,12 +499,17 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
              "route2": route2_terms(scene, states=states, seed=seed)}
 
     meth = method or scene.run.method
+    warm = warm_up(scene, model=model, methods=(meth,))
+    if warm.happened:
+        say(warm.describe("urdf2links warm-up"))
     say(f"project: {meth}" + (f" rtol {rtol or scene.run.rtol:g}" if meth not in ("RK4", "midpoint") else "")
         + f", t = 0..{T:g} s")
     traj = simulate(scene, model=model, t_end=T, method=method, rtol=rtol, atol=atol, samples=samples,
                     progress=progress)
     say(f"MuJoCo: {mujoco_integrator} dt {mujoco_dt:g}, {int(round(T / mujoco_dt))} steps")
     run = run_mujoco(mj, scene, t_end=T, samples=samples)
+    if run.compilation.happened:
+        say(run.compilation.describe("MuJoCo's control callback"))
 
     t = np.asarray(run.t, float)
     q_o, qd_o, W, EV_o, h_o, resampled = _project_at(traj, plan, t, T)
@@ -457,11 +525,16 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
         notes.append(f"the project re-charted the ZYX angles of {sorted({r['link'] for r in traj.stats['recharts']})} "
                      f"{traj.stats['n_recharts']} times near phi_y = +-pi/2 (urdf2links.charts); its q are converted "
                      "back to the loaded model's coordinates, which MuJoCo integrates as hinges through the singularity")
+    notes += [f"scene: {x}" for x in plan.spring_set.notes]
+    notes += [f"limits: {LimitExcursion(**x).text()} (urdf2links' trajectory)" for x in traj.stats["limit_excursions"]]
+    if scene.path is None:
+        notes.insert(0, f"no scene file: the robot's default scene ({scene.description}); `urdf2links inspect "
+                        f"{shown_path(scene.robot)} --scene` shows it, --write-scene FILE.toml writes it")
     notes += [f"MJCF: {x}" for x in mj.notes] + [f"MuJoCo run: {x}" for x in run.notes]
     if t_end_note:
         notes.insert(0, t_end_note)
     q0, qd0 = scene.initial_state(model)
-    info.update({"t_end": T, "t_end_note": t_end_note, "effects": plan.terms,
+    info.update({"t_end": T, "t_end_note": t_end_note, "effects": plan.terms, "warm_up": warm,
                  "q0": dict(zip(model.coordinate_names, q0.tolist())),
                  "qd0": dict(zip(model.coordinate_names, qd0.tolist())),
                  "total_s": time.perf_counter() - start})

@@ -1,7 +1,8 @@
-"""Command line: ``urdf2links inspect FILE.urdf|SCENE.toml``, ``urdf2links simulate SCENE.toml``,
-``urdf2links compare SCENE.toml``, ``urdf2links report`` and ``urdf2links tradeoff SCENE.toml`` (the
-MuJoCo comparison and the work-precision study: the handlers import the ``compare`` package, and with
-it MuJoCo, only when they run)."""
+"""Command line: ``urdf2links inspect FILE.urdf|FILE.xacro|SCENE.toml``, ``urdf2links simulate
+SCENE.toml|ROBOT.urdf``, ``urdf2links compare SCENE.toml|ROBOT.urdf``, ``urdf2links report`` and
+``urdf2links tradeoff SCENE.toml`` (the MuJoCo comparison and the work-precision study: the handlers
+import the ``compare`` package, and with it MuJoCo, only when they run). A robot file given to
+``simulate`` or ``compare`` runs in its default scene (:func:`urdf2links.scene.default_scene`)."""
 
 from __future__ import annotations
 
@@ -12,9 +13,11 @@ import warnings
 import numpy as np
 
 from .errors import DynamicsError, SceneError, URDFError
+from .limits import LimitExcursion
+from .scene_toml import scene_from_args, write_scene_option, xacro_args_of
 from .transforms import PARAMETERS
 
-__all__ = ["main", "format_tree"]
+__all__ = ["main", "format_tree", "scene_from_args", "xacro_args_of", "write_scene_option"]
 
 
 def format_tree(model) -> str:
@@ -41,6 +44,7 @@ def format_tree(model) -> str:
     lines = ["  ".join(cell.ljust(w) for cell, w in zip(r, widths)).rstrip() for r in rows]
     lines.insert(1, "  ".join("-" * w for w in widths))
     out = [f"robot {model.name!r} from {model.source}: {tree.n_links} links, {model.n} coordinates", ""] + lines
+    out += _joint_lines(model.info.get("joints", []))
     out += ["", f"inertia audit: {len(model.audit)} finding(s)"]
     out += [f"  - {r}" for r in model.audit]
     notes = model.info.get("notes", [])
@@ -49,9 +53,46 @@ def format_tree(model) -> str:
     return "\n".join(out)
 
 
+def _num(v) -> str:
+    return "-" if v is None else f"{v:.4g}"
+
+
+def _joint_lines(joints) -> list[str]:
+    """The URDF joints with what ``<limit>`` and ``<dynamics>`` say (limits are not enforced; damping acts
+    only in scenes with ``[dampers] from_urdf = true``; friction is not modelled)."""
+    moving = [j for j in joints if j["type"] != "fixed"]
+    if not moving:
+        return []
+    rows = [("joint", "type", "coordinates", "lower", "upper", "effort", "velocity", "damping", "friction")]
+    for j in moving:
+        rows.append((j["name"], j["type"], ", ".join(j["coordinates"]) or "(coupled)", _num(j["lower"]),
+                     _num(j["upper"]), _num(j["effort"]), _num(j["velocity"]), _num(j["damping"]),
+                     _num(j["friction"])))
+    widths = [max(len(r[c]) for r in rows) for c in range(len(rows[0]))]
+    lines = ["  ".join(cell.ljust(w) for cell, w in zip(r, widths)).rstrip() for r in rows]
+    lines.insert(1, "  ".join("-" * w for w in widths))
+    return ["", "joints (limits not enforced, noted when a run leaves them; damping acts in scenes with [dampers] "
+            "from_urdf = true; friction not modelled):"] + lines
+
+
 def _inspect(args) -> int:
     from .importer import load_urdf
 
+    if args.scene:
+        from .plan import compile_plan
+        from .scene import default_scene
+        from .scene_toml import scene_toml
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            model = load_urdf(args.file, floating_base=args.floating_base, inertia=args.inertia, mimic=args.mimic,
+                              package_dirs=args.package_dir, strict=args.strict, xacro_args=xacro_args_of(args))
+        scene = default_scene(args.file, floating=args.floating_base, q0=args.q0, seed=args.seed,
+                              t_end=args.t_end or 1.0, xacro_args=xacro_args_of(args), package_dirs=args.package_dir,
+                              inertia=args.inertia, mimic=args.mimic, strict=args.strict, model=model)
+        print(scene_toml(scene))
+        print(compile_plan(scene, model).describe())
+        return 0
     if str(args.file).endswith(".toml"):
         from .plan import compile_plan
         from .scene import load_scene
@@ -65,7 +106,8 @@ def _inspect(args) -> int:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the findings are printed in the table below
         model = load_urdf(args.file, floating_base=args.floating_base, inertia=args.inertia,
-                          mimic=args.mimic, package_dirs=args.package_dir)
+                          mimic=args.mimic, package_dirs=args.package_dir, strict=args.strict,
+                          xacro_args=xacro_args_of(args))
     print(format_tree(model))
     return 0
 
@@ -73,28 +115,45 @@ def _inspect(args) -> int:
 def _simulate(args) -> int:
     from pathlib import Path
 
-    from .scene import load_scene
+    from .scene import robot_stem
     from .simulate import simulate
 
-    scene = load_scene(args.scene)
-    model = scene.model()
+    scene = scene_from_args(args)
+    write_scene_option(args, scene)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore" if scene.path is None else "default")  # default scene: audit in inspect
+        model = scene.model()
     traj = simulate(scene, model=model, t_end=args.t_end, method=args.method, rtol=args.rtol, dt=args.dt,
                     progress=False if args.quiet else None)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    npz = traj.save_npz(out / f"{scene.name}.npz")
-    csv_path = traj.save_csv(out / f"{scene.name}.csv")
+    stem = scene.name if scene.path is not None else f"{robot_stem(scene.robot)}_{scene.name}"  # default scene
+    npz = traj.save_npz(out / f"{stem}.npz")
+    csv_path = traj.save_csv(out / f"{stem}.csv")
     s = traj.stats
     print(f"{scene.name}: {model.name}, {model.n} coordinates, t = 0..{traj.t[-1]:g} s, {s['method']}"
           f" (rtol {s['rtol']:g}" + (f", dt {s['dt']:g}" if s["dt"] else "") + f"): {s['nsteps']} steps, "
           f"{s['nfev']} evaluations, {s['wall_time']:.3f} s wall")
     print(f"  terms: {', '.join(s['terms'])}; energy balance error {traj.energy_error:.2e} (relative)")
+    for note in s["spring_notes"]:
+        print(f"  note: {note}")
+    for e in s["limit_excursions"]:
+        print(f"  note: {LimitExcursion(**e).text()}")
     print(f"  wrote {npz} and {csv_path}")
     if args.plot:
         from .plots import plot_trajectory
 
-        png = plot_trajectory(traj, out / f"{scene.name}.png")
+        png = plot_trajectory(traj, out / f"{stem}.png")
         print(f"  plot {png}")
+    if args.animate:
+        from .animation import write_trajectory_page
+
+        from .visuals import scene_shapes
+
+        page = write_trajectory_page(out / f"{stem}.html", traj, model, fps=args.animation_fps or 30.0,
+                                     base=scene.base_state if scene.base is not None else None,
+                                     shapes=scene_shapes(scene, model))
+        print(f"  animation {page} ({page.stat().st_size / 1e6:.1f} MB)")
     return 0
 
 
@@ -125,20 +184,50 @@ def _add_mujoco_options(p) -> None:
     p.add_argument("--factor", type=float, help="allowed growth of an error over its baseline (default: the "
                    "baselines file's factor, 10)")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    _add_animation_option(p)
+
+
+def _add_animation_option(p) -> None:
+    p.add_argument("--animation-fps", type=float, default=30.0, metavar="FPS",
+                   help="frames per second of simulated time in the report's animation (default 30; 0: no animation)")
+
+
+def _add_robot_options(p, *, inspect: bool = False) -> None:
+    """Options of a robot file run in its default scene (and of ``inspect``)."""
+    if not inspect:
+        p.add_argument("--floating", action="store_true", help="robot file: six coordinates for the root link "
+                       "(default: fixed base)")
+    p.add_argument("--q0", choices=("zero", "random"), default="zero", help="robot file: initial configuration, "
+                   "zero or seeded random within the joint limits (default zero)")
+    p.add_argument("--xacro-arg", action="append", default=[], metavar="NAME:=VALUE",
+                   help="argument of a .xacro robot (repeat for more)")
+    p.add_argument("--package-dir", action="append", default=[], help="folder searched for package:// meshes "
+                   "and $(find pkg)")
+    if not inspect:
+        p.add_argument("--write-scene", metavar="FILE.toml", help="robot file: also write its default scene to "
+                       "FILE.toml, to edit and run by name")
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="urdf2links", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
-    p = sub.add_parser("inspect", help="print a URDF's tree of links and its inertia audit")
-    p.add_argument("file", help="a .urdf file")
-    p.add_argument("--floating-base", action="store_true", help="six coordinates for the root link")
+    p = sub.add_parser("inspect", help="print a URDF's tree of links, joints, inertia audit and import notes")
+    p.add_argument("file", help="a .urdf or .xacro file (or a scene .toml: its plan)")
+    p.add_argument("--floating-base", "--floating", action="store_true", help="six coordinates for the root link")
     p.add_argument("--inertia", choices=("audit", "strict", "repair"), default="audit")
     p.add_argument("--mimic", choices=("independent", "coupled"), default="independent")
-    p.add_argument("--package-dir", action="append", default=[], help="folder searched for package:// meshes")
+    p.add_argument("--strict", action="store_true", help="refuse what the default reading tolerates like urdfdom")
+    p.add_argument("--scene", action="store_true", help="print the robot's default scene (TOML) and its plan")
+    p.add_argument("--seed", type=int, default=0, help="seed of --q0 random (default 0)")
+    p.add_argument("--t-end", type=float, help="default scene's run length in s (default 1)")
+    _add_robot_options(p, inspect=True)
     p.set_defaults(func=_inspect)
-    p = sub.add_parser("simulate", help="simulate a scene (TOML) and save the trajectory")
-    p.add_argument("scene", help="a scene .toml file")
+    p = sub.add_parser("simulate", help="simulate a scene (TOML), or a robot in its default scene, and save the "
+                                        "trajectory")
+    p.add_argument("scene", help="a scene .toml file, or a robot (.urdf, .xacro) run in its default scene: gravity, "
+                                 "fixed base, at rest, URDF damping, 1 s")
+    _add_robot_options(p)
+    p.add_argument("--seed", type=int, default=0, help="seed of --q0 random (default 0)")
     p.add_argument("--t-end", type=float, help="override [run] t_end (s)")
     p.add_argument("--method", help="RK45, DOP853, Radau, BDF, LSODA, RK4 or midpoint")
     p.add_argument("--rtol", type=float)
@@ -146,13 +235,17 @@ def main(argv=None) -> int:
     p.add_argument("--out", default="out", help="folder for .npz, .csv and .png (default: out)")
     p.add_argument("--plot", action="store_true", help="also plot coordinates and energy against time (PNG)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--animate", action="store_true", help="also write <out>/<scene>.html: the robot moving, with "
+                   "play/pause and a time slider (self-contained, works offline)")
+    _add_animation_option(p)
     p.set_defaults(func=_simulate)
     p = sub.add_parser("compare", help="run a scene with urdf2links and MuJoCo and write the comparison report",
                        description="Run a scene with urdf2links and with MuJoCo (route 1: the project's tree as MJCF, "
                                    "base motion prescribed) from the same initial state; compare the terms at identical "
                                    "states (routes 1 and 2), the trajectories, the energies and the wall times; write "
                                    "report.html, summary.json and summary.md.")
-    p.add_argument("scene", help="a scene .toml file")
+    p.add_argument("scene", help="a scene .toml file, or a robot (.urdf, .xacro) run in its default scene")
+    _add_robot_options(p)
     _add_mujoco_options(p)
     p.add_argument("--method", help="the project's integrator (default: the scene's)")
     p.add_argument("--rtol", type=float, help="the project's rtol (default: the scene's)")
@@ -168,8 +261,8 @@ def main(argv=None) -> int:
     p.add_argument("scenes", nargs="*", help="scene files (default: robots/*.toml)")
     p.add_argument("--out", default="reports", help="folder of the reports and index.html (default reports)")
     _add_mujoco_options(p)
-    p.add_argument("--cap", type=float, default=5.0, help="cap (s) on t_end of scenes that drive MuJoCo from Python "
-                   "(moving base, torques, loads); 0: none (default 5)")
+    p.add_argument("--cap", type=float, default=0.0, help="cap (s) on t_end of scenes with time-dependent inputs "
+                   "(moving base, torques, loads); 0: none (default)")
     p.add_argument("--check", metavar="BASELINE.json", help="baselines to check every scene against (default "
                    "<out>/baselines.json when it exists); exit 1 on a failure")
     p.add_argument("--write-baselines", nargs="?", const=True, metavar="FILE",

@@ -25,7 +25,9 @@ __all__ = [
     "RobotDescription",
 ]
 
-JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
+JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar", "spherical")
+#: Joint types of URDF 1.0; ``spherical`` (three ZYX angles) is an extension urdfdom does not read.
+URDF_JOINT_TYPES = JOINT_TYPES[:-1]
 
 
 @dataclass(frozen=True)
@@ -55,7 +57,9 @@ class Geometry:
 
     ``kind`` is ``"box"`` (``size`` (3,)), ``"cylinder"`` (``radius``, ``length``, axis z),
     ``"sphere"`` (``radius``) or ``"mesh"`` (``filename`` as written, ``path`` resolved or
-    None when it cannot be found, ``scale`` (3,)).
+    None when it cannot be found, ``scale`` (3,)). Any other ``kind`` is a shape the importer
+    does not know or could not read (``<capsule>``, ``<plane>``, a negative size, ...): kept so
+    that an inertia computed from the link's geometry refuses it by name; ``problem`` says why.
     """
 
     kind: str
@@ -66,6 +70,7 @@ class Geometry:
     filename: str | None = None
     path: Path | None = None
     scale: np.ndarray | None = None
+    problem: str = ""
 
 
 @dataclass(frozen=True)
@@ -87,7 +92,11 @@ class LinkDescription:
 
 @dataclass(frozen=True)
 class JointDescription:
-    """A ``<joint>``; ``axis`` (3,) as written (not normalized), default (1, 0, 0)."""
+    """A ``<joint>``; ``axis`` (3,) as written (not normalized), default (1, 0, 0).
+
+    ``limit_*``: ``<limit lower upper effort velocity>`` (None where absent); ``damping`` (N m s/rad
+    or N s/m) and ``friction`` (N m or N): ``<dynamics>``, None where absent.
+    """
 
     name: str
     type: str
@@ -98,6 +107,10 @@ class JointDescription:
     mimic: Mimic | None = None
     limit_lower: float | None = None
     limit_upper: float | None = None
+    limit_effort: float | None = None
+    limit_velocity: float | None = None
+    damping: float | None = None
+    friction: float | None = None
 
 
 @dataclass(frozen=True)
@@ -105,7 +118,8 @@ class RobotDescription:
     """A validated robot: links by name, joints in topological order (parents before children).
 
     ``source`` is the file's path, or ``"<string>"`` for text; ``root`` the one link that is no
-    joint's child; ``directory`` where relative mesh paths start.
+    joint's child; ``directory`` where relative mesh paths start; ``notes``: what the reader
+    tolerated, ignored or did not use (element, link or joint, and what was done).
     """
 
     name: str
@@ -114,6 +128,7 @@ class RobotDescription:
     joints: tuple[JointDescription, ...]
     root: str
     directory: Path | None = None
+    notes: tuple[str, ...] = ()
 
     def joint_of_child(self, link: str) -> JointDescription | None:
         for j in self.joints:

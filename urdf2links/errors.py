@@ -22,7 +22,14 @@ __all__ = [
 
 
 class URDFError(ValueError):
-    """Base class of every error raised while importing a robot description."""
+    """Base class of every error raised while importing a robot description.
+
+    ``problem`` is the defect alone (without file, line and fix), for a note when the reader
+    tolerates it; the whole message when not given."""
+
+    def __init__(self, message: str = "", *, problem: str | None = None):
+        super().__init__(message)
+        self.problem = problem if problem is not None else message
 
 
 class URDFSyntaxError(URDFError):

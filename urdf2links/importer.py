@@ -14,8 +14,15 @@ Frames (docs/equations.md (E9), (E11)). Every URDF link ``C`` lives in some tree
   ``M Ra`` (translations of ``T~`` are along the parent's axes) unless ``M Ra`` has no rotation;
 - fixed: no tree link; the child's H is added to the parent's (``H += X H_C X^T``, exact) and its
   children re-attached through ``X``;
-- floating (six coordinates ``<joint>.x ... <joint>.phi_z``) and planar (``<joint>.x``,
-  ``<joint>.y``, ``<joint>.phi_z`` in the plane normal to the axis): after a constant frame when needed.
+- floating (six coordinates ``<joint>.x ... <joint>.phi_z``), spherical (three, the ZYX angles
+  ``<joint>.phi_x``, ``<joint>.phi_y``, ``<joint>.phi_z``: ``R = Rx Ry Rz`` (E3) relative to the joint
+  frame; re-charted near ``phi_y = +-pi/2`` like a floating link, (E45), :mod:`urdf2links.charts`) and planar
+  (``<joint>.x``, ``<joint>.y``, ``<joint>.phi_z`` in the plane normal to the axis): after a constant
+  frame when needed.
+
+``model.info`` holds ``notes`` (the reader's and the importer's: what was tolerated, folded, not
+used), ``joints`` (one dict per URDF joint: type, coordinates, limits, damping, friction) for
+``inspect``, scenes (URDF dampers) and limit checks, ``coordinates``, ``frame_of``, ``repaired_H``.
 """
 
 from __future__ import annotations
@@ -25,7 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .description import RobotDescription
-from .errors import InertiaError, MeshError, URDFError, URDFValueError
+from .errors import InertiaError, MeshError, URDFError, URDFStructureError, URDFValueError
 from .inertia import (audit_pseudo_inertia, combined_geometry_inertia, inertial_from_pseudo,
                       nearest_consistent, pseudo_inertia)
 from .model import Model
@@ -63,12 +70,13 @@ class AuditRecord:
 
 
 def load_urdf(source, *, floating_base: bool = False, inertia: str = "audit", mimic: str = "independent",
-              package_dirs=(), density: float = 1000.0) -> Model:
-    """Load a URDF file (or URDF text) as a :class:`~urdf2links.model.Model`.
+              package_dirs=(), density: float = 1000.0, strict: bool = False, xacro_args=None) -> Model:
+    """Load a URDF file (or URDF text, or a xacro file) as a :class:`~urdf2links.model.Model`.
 
     Parameters
     ----------
-    source : path to a ``.urdf`` file, or the URDF text itself.
+    source : path to a ``.urdf`` file, a ``.xacro`` file (expanded with the optional ``xacro``
+        package: ``pip install "urdf2links[xacro]"``), or the URDF text itself.
     floating_base : give the root link six coordinates ``<root>.x ... <root>.phi_z`` (E3).
     inertia : ``"audit"`` (report findings in ``model.audit`` and warn once), ``"strict"`` (raise
         :class:`~urdf2links.errors.InertiaError` on any finding) or ``"repair"`` (fix every finding:
@@ -78,6 +86,9 @@ def load_urdf(source, *, floating_base: bool = False, inertia: str = "audit", mi
         them) or ``"coupled"`` (``q_follower = multiplier * q_leader + offset``; one coordinate fewer).
     package_dirs : folders searched for ``package://`` meshes, after the URDF's folder and its ancestors.
     density : kg/m^3, for inertia computed from geometry when a link has no usable mass.
+    strict : refuse what the default reading tolerates like urdfdom, each with a note in
+        ``model.info["notes"]`` (:mod:`urdf2links.parse`; docs/importing.md).
+    xacro_args : ``{name: value}`` for a ``.xacro`` source (xacro's ``name:=value`` arguments).
     """
     if inertia not in INERTIA_POLICIES:
         raise ValueError(f"inertia must be one of {INERTIA_POLICIES}, got {inertia!r}")
@@ -85,7 +96,7 @@ def load_urdf(source, *, floating_base: bool = False, inertia: str = "audit", mi
         raise ValueError(f"mimic must be one of {MIMIC_POLICIES}, got {mimic!r}")
     if not (np.isfinite(density) and density > 0):
         raise ValueError(f"density must be a positive number of kg/m^3, got {density!r}")
-    desc = parse_urdf(source, package_dirs=package_dirs)
+    desc = parse_urdf(source, package_dirs=package_dirs, strict=strict, xacro_args=xacro_args)
     return _Importer(desc, floating_base=floating_base, policy=inertia, mimic=mimic, density=density).model()
 
 
@@ -104,7 +115,7 @@ class _Importer:
         self.mimic = mimic
         self.density = density
         self.records: list[AuditRecord] = []
-        self.notes: list[str] = []
+        self.notes: list[str] = list(desc.notes)
         self.H_link = {name: self._inertial_H(link) for name, link in desc.links.items()}
         # The scale of repair spheres, fixed before any repair (so that repairs do not shrink it).
         masses = [float(h[3, 3]) for h in self.H_link.values() if h[3, 3] > 0]
@@ -217,7 +228,7 @@ class _Importer:
                 self.frame_of[j.child] = (t_parent, M)
                 self.notes.append(f"fixed joint {j.name!r}: link {j.child!r} folded into {parent_name!r}")
                 continue
-            if j.type == "floating":
+            if j.type in ("floating", "spherical"):
                 u = np.array([0.0, 0.0, 1.0])
             else:
                 u = np.asarray(j.axis, float)
@@ -227,7 +238,8 @@ class _Importer:
             Ra = homogeneous(axis_alignment(u), np.zeros(3))
             F = M @ Ra
             slots = {"revolute": ("phi_z",), "continuous": ("phi_z",), "prismatic": ("z",),
-                     "planar": ("x", "y", "phi_z"), "floating": PARAMETERS}[j.type]
+                     "planar": ("x", "y", "phi_z"), "floating": PARAMETERS,
+                     "spherical": ("phi_x", "phi_y", "phi_z")}[j.type]
             names = (j.name,) if len(slots) == 1 else tuple(f"{j.name}.{s}" for s in slots)
             rotation_only = slots == ("phi_z",)
             if rotation_only or np.array_equal(F[:3, :3], np.eye(3)):
@@ -236,8 +248,9 @@ class _Importer:
                     params[3:] = 0.0
             else:
                 frame = add(LinkSpec(f"{j.name}.frame", parent_name, params=_params(F)))
-                self.notes.append(f"joint {j.name!r} ({j.type}): massless frame {j.name + '.frame'!r} added "
-                                  f"so that its translation is along a link axis")
+                why = ("its coordinates fill the angle slots, so the joint frame's constant rotation needs a link of "
+                       "its own" if j.type == "spherical" else "so that its translation is along a link axis")
+                self.notes.append(f"joint {j.name!r} ({j.type}): massless frame {j.name + '.frame'!r} added {why}")
                 parent_name = specs[frame].name
                 params = np.zeros(6)
             t = add(LinkSpec(j.child, parent_name, params=params, coordinates=dict(zip(slots, names))))
@@ -259,6 +272,12 @@ class _Importer:
         for j in self.desc.joints:
             if j.mimic is None:
                 continue
+            if j.mimic.joint not in joints or j.mimic.joint == j.name:
+                raise URDFStructureError(f"{self.desc.source}: joint {j.name!r} <mimic joint=\"{j.mimic.joint}\">: "
+                                         + ("it mimics itself" if j.mimic.joint == j.name else
+                                            f"there is no joint named {j.mimic.joint!r}")
+                                         + "; mimic='coupled' needs the joint to follow: correct <mimic>, or load "
+                                           "with mimic='independent' (then <mimic> has no effect)")
             leader = joints[j.mimic.joint]
             odd = [jj for jj in (j, leader) if jj.type not in ("revolute", "continuous", "prismatic")]
             if odd:
@@ -347,13 +366,24 @@ class _Importer:
                           f"inertia='repair'", UserWarning, stacklevel=3)
         coupling = self._coupling(tree)
         repaired = sorted({r.link for r in self.records if r.action == "repaired"})
-        info = {"coordinates": self.coord_info, "notes": self.notes,
+        info = {"coordinates": self.coord_info, "notes": self.notes, "joints": self._joint_table(),
                 # URDF-link inertias after repair (link frame H (4, 4)), to write a repaired URDF for other tools
                 "repaired_H": {k: self.H_link[k].tolist() for k in repaired if k in self.H_link},
                 "frame_of": {
             k: (tree.link_names[t], X.tolist()) for k, (t, X) in self.frame_of.items()}}
         return Model(tree, coupling=coupling, name=self.desc.name, source=self.desc.source,
                      audit=self.records, info=info)
+
+    def _joint_table(self) -> list[dict]:
+        """One dict per URDF joint: name, type, coordinates, limits, damping, friction, mimic."""
+        coords: dict[str, list[str]] = {}
+        for c in self.coord_info:
+            if c["joint"] is not None:
+                coords.setdefault(c["joint"], []).append(c["name"])
+        return [{"name": j.name, "type": j.type, "coordinates": coords.get(j.name, []),
+                 "lower": j.limit_lower, "upper": j.limit_upper, "effort": j.limit_effort,
+                 "velocity": j.limit_velocity, "damping": j.damping, "friction": j.friction,
+                 "mimic": None if j.mimic is None else j.mimic.joint} for j in self.desc.joints]
 
     def _repair_joint(self, rec: AuditRecord) -> AuditRecord:
         # Joint findings are on tree links that carry coordinates; those are named after the URDF child.

@@ -1,12 +1,26 @@
 """Read a URDF into a validated :class:`~urdf2links.description.RobotDescription`.
 
-The values are read from the XML tree itself (lxml, strict parser) rather than from
-yourdfpy's model: yourdfpy composes every ``<origin>`` into a 4x4 matrix (the ``rpy`` as
-written is lost), fills missing inertia attributes with 1.0, accepts NaN, unknown joint
-types and dangling links without a word, and falls back to a *recovering* XML parser on
-malformed files. Every number here is checked where it is read, so each error names the
-file, the line, the element, the attribute and the value, and says what would fix it.
-The test suite cross-checks the result against yourdfpy on the installed corpus.
+The values are read from the XML tree itself (lxml) rather than from yourdfpy's model: yourdfpy
+composes every ``<origin>`` into a 4x4 matrix (the ``rpy`` as written is lost), fills missing
+inertia attributes with 1.0, accepts NaN, unknown joint types and dangling links without a word,
+and falls back to a *recovering* XML parser on malformed files. Every number is checked where it
+is read, so each error names the file, the line, the element, the attribute and the value, and
+says what would fix it. The test suite cross-checks the result against yourdfpy on the corpus.
+
+Reading like urdfdom (the ROS parser Pinocchio uses), ``strict=False`` (the default): what
+urdfdom tolerates is read, and each tolerated thing is a note (``RobotDescription.notes``):
+an unusual XML declaration version (:mod:`urdf2links.urdf_source`); visual/collision geometry
+that cannot be used -- an unknown shape (``<capsule>``, ``<plane>``), a negative size, extra
+elements in ``<geometry>`` (the first shape is read), unreadable numbers -- kept as an unusable
+:class:`~urdf2links.description.Geometry` (ignored for the dynamics, refused by name only when
+an inertia must be computed from it); a negative mass (left to the inertia audit); the ``<axis>``
+of a fixed or floating joint (urdfdom does not read it); a ``<mimic>`` naming no joint (no effect
+with ``mimic="independent"``). Every element the dynamics does not use is listed
+(:mod:`urdf2links.inventory`). ``strict=True`` refuses all of these, as before. Files that truly
+cannot be read stay errors in both modes: malformed XML, no links, a cycle, two roots, a link with
+two parents, an unknown joint type, and non-numbers (or NaN, or a wrong count) where the
+dynamics needs numbers (origins, axes, inertials, limits). docs/importing.md has the full table,
+with urdfdom's behaviour for each case.
 
 Public API: :func:`parse_urdf`, :func:`resolve_mesh_path`, :func:`require_mesh`.
 """
@@ -16,9 +30,6 @@ from __future__ import annotations
 import difflib
 import logging
 import math
-import os
-from pathlib import Path
-from urllib.parse import unquote
 
 import numpy as np
 from lxml import etree
@@ -33,7 +44,12 @@ from .description import (
     Origin,
     RobotDescription,
 )
-from .errors import MeshError, URDFError, URDFStructureError, URDFSyntaxError, URDFValueError
+from .errors import URDFError, URDFStructureError, URDFValueError
+from .inventory import inventory_notes, joint_value_notes
+from .mesh_paths import require_mesh, resolve_mesh_path
+from .rotations import matrix_to_rpy
+from .urdf_source import read_source
+from .xacro_input import is_xacro_path
 
 __all__ = ["parse_urdf", "resolve_mesh_path", "require_mesh", "JOINT_TYPES"]
 
@@ -43,56 +59,7 @@ _log = logging.getLogger(__name__)
 AXIS_JOINT_TYPES = ("revolute", "continuous", "prismatic", "planar")
 GEOMETRY_KINDS = ("box", "cylinder", "sphere", "mesh")
 _INERTIA_ATTRS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
-
-
-# --------------------------------------------------------------------------- source
-
-
-def _read_source(source) -> tuple[etree._Element, str, Path | None, str]:
-    """Return (root element, label for messages, directory, fallback robot name)."""
-    if isinstance(source, bytes):
-        source = source.decode("utf-8")
-    if isinstance(source, str) and source.lstrip().startswith("<"):
-        label, directory, stem = "<string>", None, "robot"
-        data = source.encode("utf-8")
-        parser = etree.XMLParser(remove_comments=True, resolve_entities=False,
-                                 no_network=True, encoding="utf-8")
-    elif isinstance(source, (str, os.PathLike)):
-        path = Path(source)
-        label, stem = str(path), path.stem
-        try:
-            is_file, is_dir = path.is_file(), path.is_dir()
-        except OSError as err:  # e.g. a name too long to be a path
-            raise URDFError(f"{label[:80]}: not a readable path ({err.strerror}); pass the path "
-                            "of a .urdf file or the URDF text itself (starting with '<')") from err
-        if not is_file:
-            why = "is a directory" if is_dir else "does not exist"
-            raise URDFError(f"{label}: the URDF file {why}; pass the path of a .urdf file "
-                            "or the URDF text itself (starting with '<')")
-        directory = path.resolve().parent
-        try:
-            data = path.read_bytes()
-        except OSError as err:
-            raise URDFError(f"{label}: cannot read the URDF file ({err})") from err
-        parser = etree.XMLParser(remove_comments=True, resolve_entities=False, no_network=True)
-    else:
-        raise TypeError(f"parse_urdf: source must be a path or URDF text, not {type(source).__name__}")
-    try:
-        root = etree.fromstring(data, parser=parser)
-    except etree.XMLSyntaxError as err:
-        line = f", line {err.lineno}" if getattr(err, "lineno", None) else ""
-        raise URDFSyntaxError(f"{label}{line}: malformed XML: {err.msg}; fix the XML "
-                              "(unclosed or mismatched tag, stray '&' or '<', truncated file?)") from err
-    except ValueError as err:  # e.g. lxml refusing some encodings
-        raise URDFSyntaxError(f"{label}: cannot parse the XML: {err}") from err
-    if root is None:
-        raise URDFSyntaxError(f"{label}: the document is empty; a URDF needs a <robot> element")
-    tag = etree.QName(root).localname if isinstance(root.tag, str) else str(root.tag)
-    if tag != "robot":
-        raise URDFSyntaxError(f"{label}, line {root.sourceline}: the root element is <{tag}>, "
-                              "not <robot>; a URDF file must have <robot name=\"...\"> as its "
-                              "root (is this a xacro, SDF or MJCF file?)")
-    return root, label, directory, stem
+_TOLERATED = " (or load with strict=False)"
 
 
 def _children(el, tag: str) -> list:
@@ -111,14 +78,28 @@ def _child(el, tag: str):
 
 
 class _Reader:
-    """Reads attributes of one file; every error names the file, line, element and value."""
+    """Reads attributes of one file; every error names the file, line, element and value.
+    ``notes`` collects what was tolerated (``strict=False``)."""
 
-    def __init__(self, label: str):
+    def __init__(self, label: str, *, strict: bool = False, version: tuple[int, int] = (1, 0)):
         self.label = label
+        self.strict = strict
+        self.version = version
+        self.notes: list[str] = []
 
     def fail(self, el, what: str, problem: str, fix: str, cls=URDFValueError):
         line = f", line {el.sourceline}" if el is not None and el.sourceline else ""
-        raise cls(f"{self.label}{line}: {what}: {problem}; {fix}")
+        raise cls(f"{self.label}{line}: {what}: {problem}; {fix}", problem=problem)
+
+    def note(self, el, what: str, text: str) -> None:
+        line = f" (line {el.sourceline})" if el is not None and el.sourceline else ""
+        self.notes.append(f"{what}{line}: {text}")
+
+    def tolerate(self, el, what: str, problem: str, done: str, fix: str, cls=URDFValueError) -> None:
+        """Strict: the error of :meth:`fail`. Otherwise a note that says what was done."""
+        if self.strict:
+            self.fail(el, what, problem, fix + _TOLERATED, cls)
+        self.note(el, what, f"{problem}; {done}")
 
     def text(self, el, attr: str, what: str) -> str:
         value = el.get(attr)
@@ -135,9 +116,8 @@ class _Reader:
                           f"add {attr}=\"{' '.join(['0'] * n)}\" ({n} numbers)")
             return np.array(default, dtype=float)
         where = f"{what} {attr}=\"{raw}\""
-        tokens = raw.split()
         values = []
-        for tok in tokens:
+        for tok in raw.split():
             try:
                 if "_" in tok:
                     raise ValueError(tok)
@@ -146,7 +126,8 @@ class _Reader:
                 self.fail(el, where, f"'{tok}' is not a number",
                           f"write {n} decimal number{'s' if n > 1 else ''} separated by spaces"
                           " (leftover xacro ${...} or a comma?)")
-        if allow_one and len(values) == 1:
+        if allow_one and len(values) == 1 and n > 1:
+            self.note(el, where, f"one number read as {n} equal ones (urdfdom reads exactly {n})")
             values = values * n
         if len(values) != n:
             self.fail(el, where, f"expected {n} number{'s' if n > 1 else ''}, found {len(values)}",
@@ -161,13 +142,38 @@ class _Reader:
         """One finite number; ``default`` when the attribute is absent (required if None)."""
         return float(self.floats(el, attr, 1, what, None if default is None else (default,))[0])
 
+    def optional(self, el, attr: str, what: str) -> float | None:
+        """One finite number, or None when ``el`` or the attribute is absent."""
+        return None if el is None or el.get(attr) is None else self.scalar(el, attr, what)
+
     def origin(self, parent, what: str) -> Origin:
         el = _child(parent, "origin")
         if el is None:
             return Origin()
         what = f"{what} <origin>"
-        return Origin(xyz=self.floats(el, "xyz", 3, what, (0.0, 0.0, 0.0)),
-                      rpy=self.floats(el, "rpy", 3, what, (0.0, 0.0, 0.0)))
+        xyz = self.floats(el, "xyz", 3, what, (0.0, 0.0, 0.0))
+        rpy = self.floats(el, "rpy", 3, what, (0.0, 0.0, 0.0))
+        if el.get("quat_xyzw") is not None:
+            rpy = self._quaternion(el, what, rpy)
+        return Origin(xyz=xyz, rpy=rpy)
+
+    def _quaternion(self, el, what: str, rpy) -> np.ndarray:
+        """URDF 1.1's ``quat_xyzw`` (read for ``<robot version>`` >= 1.1, ignored before, as urdfdom)."""
+        if self.version < (1, 1):
+            self.tolerate(el, what, "quat_xyzw needs <robot version=\"1.1\"> or later",
+                          "ignored, as urdfdom does (the rotation is rpy)", "declare version=\"1.1\" or use rpy")
+            return rpy
+        if el.get("rpy") is not None:
+            self.fail(el, what, "both rpy and quat_xyzw are given", "give one of them")
+        x, y, z, w = self.floats(el, "quat_xyzw", 4, what)
+        norm = math.sqrt(x * x + y * y + z * z + w * w)
+        if norm == 0.0:
+            self.fail(el, f"{what} quat_xyzw", "the quaternion is zero", "give a unit quaternion x y z w")
+        x, y, z, w = x / norm, y / norm, z / norm, w / norm
+        R = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                      [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+        return np.array(matrix_to_rpy(R))
 
 
 # --------------------------------------------------------------------------- links
@@ -181,8 +187,9 @@ def _inertial(r: _Reader, el, what: str) -> Inertial:
                "the <inertial> to make the link massless")
     mass = r.scalar(mass_el, "value", f"{what} <mass>")
     if mass < 0:
-        r.fail(mass_el, f"{what} <mass value=\"{mass_el.get('value')}\">", "the mass is negative",
-               "give a mass >= 0 (kg)")
+        r.tolerate(mass_el, f"{what} <mass value=\"{mass_el.get('value')}\">", "the mass is negative",
+                   "kept as written (urdfdom reads it); the inertia audit reports it, inertia='repair' fixes it",
+                   "give a mass >= 0 (kg)")
     inertia_el = _child(el, "inertia")
     if inertia_el is None:
         r.fail(el, what, "there is no <inertia> element",
@@ -194,17 +201,28 @@ def _inertial(r: _Reader, el, what: str) -> Inertial:
     return Inertial(mass=mass, origin=r.origin(el, what), inertia=inertia)
 
 
-def _geometry(r: _Reader, el, what: str, directory, package_dirs) -> Geometry:
-    origin = r.origin(el, what)
+def _shape(r: _Reader, el, what: str):
+    """The shape element of ``el``'s ``<geometry>``: the first known one; extras noted (strict: refused)."""
     geo = _child(el, "geometry")
     shapes = [c for c in geo if isinstance(c.tag, str)] if geo is not None else []
-    if len(shapes) != 1:
+    known = [c for c in shapes if etree.QName(c).localname in GEOMETRY_KINDS]
+    if geo is None or not shapes or (r.strict and len(shapes) != 1):
         problem = ("there is no <geometry>" if geo is None else
                    f"<geometry> holds {len(shapes)} shapes"
                    + (f" ({', '.join(etree.QName(c).localname for c in shapes)})" if shapes else ""))
         r.fail(geo if geo is not None else el, what, problem,
                f"give <geometry> exactly one of {', '.join(GEOMETRY_KINDS)}")
-    shape = shapes[0]
+    shape = known[0] if known else shapes[0]
+    extra = [etree.QName(c).localname for c in shapes if c is not shape]
+    if extra:
+        r.note(geo, f"{what} <geometry>", f"extra element(s) {', '.join(f'<{x}>' for x in extra)} ignored; "
+               f"the shape read is <{etree.QName(shape).localname}> (urdfdom reads the first element)")
+    return shape
+
+
+def _geometry_strict(r: _Reader, el, what: str, directory, package_dirs) -> Geometry:
+    origin = r.origin(el, what)
+    shape = _shape(r, el, what)
     kind = etree.QName(shape).localname
     what = f"{what} <geometry><{kind}>"
     if kind not in GEOMETRY_KINDS:
@@ -231,6 +249,25 @@ def _geometry(r: _Reader, el, what: str, directory, package_dirs) -> Geometry:
     return Geometry(kind, origin, filename=filename, path=path, scale=scale)
 
 
+def _geometry(r: _Reader, el, what: str, directory, package_dirs) -> Geometry:
+    """A ``<visual>``/``<collision>``. Not strict: one that cannot be used is kept as unusable
+    (``problem`` set; its kind the shape's name) with a note, since the dynamics does not need it."""
+    if r.strict:
+        return _geometry_strict(r, el, what, directory, package_dirs)
+    try:
+        return _geometry_strict(r, el, what, directory, package_dirs)
+    except URDFValueError as err:
+        geo = _child(el, "geometry")
+        shapes = [c for c in geo if isinstance(c.tag, str)] if geo is not None else []
+        known = [c for c in shapes if etree.QName(c).localname in GEOMETRY_KINDS]
+        kind = etree.QName((known or shapes)[0]).localname if shapes else "none"
+        problem = err.problem
+        r.note(el, f"{what} <geometry><{kind}>" if shapes else what,
+               f"{problem}: ignored for the dynamics (a geometry is used only when a link's inertia is computed "
+               "from it, and then this one is refused by name)")
+        return Geometry(kind, Origin(), problem=f"{what}: {problem}")
+
+
 def _link(r: _Reader, el, directory, package_dirs) -> LinkDescription:
     name = r.text(el, "name", "a <link>")
     what = f"link '{name}'"
@@ -249,6 +286,42 @@ def _link(r: _Reader, el, directory, package_dirs) -> LinkDescription:
 # --------------------------------------------------------------------------- joints
 
 
+def _axis(r: _Reader, el, what: str, jtype: str) -> np.ndarray:
+    axis_el = _child(el, "axis")
+    if axis_el is not None and axis_el.get("xyz") is None:
+        r.note(axis_el, f"{what} <axis>", "no xyz attribute: the default axis (1, 0, 0) is used (urdfdom leaves "
+               "the axis zero)")
+    if jtype not in AXIS_JOINT_TYPES and not r.strict and axis_el is not None:
+        try:
+            return r.floats(axis_el, "xyz", 3, f"{what} <axis>", (1.0, 0.0, 0.0))
+        except URDFValueError as err:
+            r.note(axis_el, f"{what} <axis>", f"{err.problem}: ignored, a {jtype} joint has "
+                   "no axis (urdfdom does not read it)")
+            return np.array([1.0, 0.0, 0.0])
+    axis = r.floats(axis_el, "xyz", 3, f"{what} <axis>", (1.0, 0.0, 0.0))
+    if jtype in AXIS_JOINT_TYPES and not np.any(axis):
+        r.fail(axis_el, f"{what} <axis xyz=\"{axis_el.get('xyz')}\">",
+               f"a {jtype} joint needs a nonzero axis", "give a direction such as \"0 0 1\"")
+    return axis
+
+
+def _limits(r: _Reader, el, what: str, jtype: str) -> dict:
+    """``<limit>`` (lower, upper, effort, velocity) and ``<dynamics>`` (damping, friction) as numbers."""
+    limit_el, dyn_el = _child(el, "limit"), _child(el, "dynamics")
+    lw, dw = f"{what} <limit>", f"{what} <dynamics>"
+    out = {f"limit_{a}": r.optional(limit_el, a, lw) for a in ("lower", "upper", "effort", "velocity")}
+    out.update({a: r.optional(dyn_el, a, dw) for a in ("damping", "friction")})
+    if limit_el is None and jtype in ("revolute", "prismatic"):
+        r.note(el, what, f"a {jtype} joint without <limit>: its range is unbounded (urdfdom refuses the file)")
+    lo, hi = out["limit_lower"], out["limit_upper"]
+    if lo is not None and hi is not None and lo > hi:
+        r.note(limit_el, lw, f"lower {lo:g} > upper {hi:g}: no limit check for this joint")
+        out["limit_lower"] = out["limit_upper"] = None
+    if dyn_el is not None and out["damping"] is None and out["friction"] is None:
+        r.note(dyn_el, dw, "neither damping nor friction is given: ignored (urdfdom refuses the file)")
+    return out
+
+
 def _joint(r: _Reader, el) -> JointDescription:
     name = r.text(el, "name", "a <joint>")
     what = f"joint '{name}'"
@@ -256,6 +329,9 @@ def _joint(r: _Reader, el) -> JointDescription:
     if jtype not in JOINT_TYPES:
         problem = "there is no type attribute" if jtype is None else f"the type '{jtype}' is unknown"
         r.fail(el, what, problem, f"use one of: {', '.join(JOINT_TYPES)}")
+    if jtype == "spherical":
+        r.note(el, what, "type 'spherical' is an extension of URDF (urdfdom refuses it): three coordinates, "
+               f"the ZYX angles '{name}.phi_x', '{name}.phi_y', '{name}.phi_z'")
     ends = {}
     for end in ("parent", "child"):
         end_el = _child(el, end)
@@ -263,18 +339,7 @@ def _joint(r: _Reader, el) -> JointDescription:
             r.fail(el, what, f"there is no <{end}> element", f"add <{end} link=\"...\"/>",
                    URDFStructureError)
         ends[end] = r.text(end_el, "link", f"{what} <{end}>")
-    axis_el = _child(el, "axis")
-    axis = r.floats(axis_el, "xyz", 3, f"{what} <axis>", (1.0, 0.0, 0.0))
-    if jtype in AXIS_JOINT_TYPES and not np.any(axis):
-        r.fail(axis_el, f"{what} <axis xyz=\"{axis_el.get('xyz')}\">",
-               f"a {jtype} joint needs a nonzero axis", "give a direction such as \"0 0 1\"")
-    lower = upper = None
-    limit_el = _child(el, "limit")
-    if limit_el is not None:
-        lw = f"{what} <limit>"
-        values = {a: r.scalar(limit_el, a, lw) if limit_el.get(a) is not None else None
-                  for a in ("lower", "upper", "effort", "velocity")}  # effort, velocity: checked only
-        lower, upper = values["lower"], values["upper"]
+    axis = _axis(r, el, what, jtype)
     mimic = None
     mimic_el = _child(el, "mimic")
     if mimic_el is not None:
@@ -283,8 +348,7 @@ def _joint(r: _Reader, el) -> JointDescription:
                       multiplier=r.scalar(mimic_el, "multiplier", mw, default=1.0),
                       offset=r.scalar(mimic_el, "offset", mw, default=0.0))
     return JointDescription(name=name, type=jtype, parent=ends["parent"], child=ends["child"],
-                            origin=r.origin(el, what), axis=axis, mimic=mimic,
-                            limit_lower=lower, limit_upper=upper)
+                            origin=r.origin(el, what), axis=axis, mimic=mimic, **_limits(r, el, what, jtype))
 
 
 # --------------------------------------------------------------------------- tree
@@ -302,6 +366,21 @@ def _check_unique(r: _Reader, elements, names, kind: str) -> None:
             r.fail(el, f"{kind} '{name}'", f"the name is already used by the {kind} on line "
                    f"{seen[name]}", f"give every {kind} a unique name", URDFStructureError)
         seen[name] = el.sourceline
+
+
+def _cycle(r: _Reader, links: dict, by_child: dict, unreached: list) -> None:
+    """Raise the error that names the cycle through ``unreached[0]``."""
+    link, cycle = unreached[0], []
+    while link not in cycle:
+        cycle.append(link)
+        link = by_child[link].parent
+    chain = cycle[cycle.index(link):][::-1]  # each link is the parent of the next
+    first = min(range(len(chain)), key=lambda i: list(links).index(chain[i]))
+    chain = chain[first:] + chain[:first]  # start where the file does
+    path = " -> ".join([f"'{chain[0]}'"] + [f"[{by_child[c].name}] '{c}'" for c in chain[1:] + chain[:1]])
+    names = ", ".join(f"'{by_child[c].name}'" for c in chain[1:] + chain[:1])
+    r.fail(None, f"joints {names}", f"they form a cycle {path}",
+           "a URDF is a tree: remove one joint of the cycle", URDFStructureError)
 
 
 def _build_tree(r: _Reader, links: dict, joints: list, joint_els: list) -> tuple[str, list]:
@@ -335,18 +414,7 @@ def _build_tree(r: _Reader, links: dict, joints: list, joint_els: list) -> tuple
                 order.append(by_child[link])
     unreached = [name for name in links if name not in seen]
     if unreached:  # every link has <= 1 parent, so the rest lie on cycles
-        link, cycle = unreached[0], []
-        while link not in cycle:
-            cycle.append(link)
-            link = by_child[link].parent
-        chain = cycle[cycle.index(link):][::-1]  # each link is the parent of the next
-        first = min(range(len(chain)), key=lambda i: list(links).index(chain[i]))
-        chain = chain[first:] + chain[:first]  # start where the file does
-        path = " -> ".join([f"'{chain[0]}'"] + [f"[{by_child[c].name}] '{c}'"
-                                                 for c in chain[1:] + chain[:1]])
-        names = ", ".join(f"'{by_child[c].name}'" for c in chain[1:] + chain[:1])
-        r.fail(None, f"joints {names}", f"they form a cycle {path}",
-               "a URDF is a tree: remove one joint of the cycle", URDFStructureError)
+        _cycle(r, links, by_child, unreached)
     if len(roots) > 1:
         r.fail(None, "links", f"they form {len(roots)} separate trees with roots "
                f"{', '.join(repr(x) for x in roots)}", "connect them with joints (e.g. a fixed "
@@ -356,113 +424,75 @@ def _build_tree(r: _Reader, links: dict, joints: list, joint_els: list) -> tuple
     return roots[0], order
 
 
-# --------------------------------------------------------------------------- entry point
+def _check_mimics(r: _Reader, joints: list, joint_els: list) -> None:
+    """A ``<mimic>`` naming no joint (or its own): strict, an error; otherwise a note (no effect with
+    ``mimic="independent"``; ``load_urdf(mimic="coupled")`` refuses it)."""
+    joint_names = {j.name for j in joints}
+    for j, el in zip(joints, joint_els):
+        if j.mimic is not None and (j.mimic.joint not in joint_names or j.mimic.joint == j.name):
+            problem = ("it mimics itself" if j.mimic.joint == j.name else
+                       f"there is no joint named '{j.mimic.joint}'{_hint(j.mimic.joint, joint_names)}")
+            r.tolerate(_child(el, "mimic"), f"joint '{j.name}' <mimic joint=\"{j.mimic.joint}\">", problem,
+                       "no effect with mimic='independent' (urdfdom reads the file); mimic='coupled' refuses it",
+                       "name an existing joint to follow, or remove <mimic>", URDFStructureError)
 
 
-def parse_urdf(source, *, package_dirs=()) -> RobotDescription:
+def _robot_version(root, label: str, notes: list[str]) -> tuple[int, int]:
+    """``<robot version="x.y">`` (default 1.0); one urdfdom does not know is read as 1.0, with a note."""
+    raw = (root.get("version") or "1.0").strip()
+    try:
+        major, minor = (int(p) for p in raw.split("."))
+    except ValueError:
+        major = minor = -1
+    if (major, minor) not in ((1, 0), (1, 1), (1, 2)):
+        notes.append(f"<robot version=\"{raw}\">: not a URDF version urdfdom knows (1.0 to 1.2); read as 1.0")
+        return (1, 0)
+    return (major, minor)
+
+
+def parse_urdf(source, *, package_dirs=(), strict: bool = False, xacro_args=None) -> RobotDescription:
     """Parse and validate a URDF.
 
-    ``source`` is a path (``str`` or ``Path``) to a ``.urdf`` file, or the URDF text itself
-    (a string whose first non-blank character is ``<``). ``package_dirs`` are extra folders
-    searched for ``package://`` meshes (see :func:`resolve_mesh_path`).
+    ``source`` is a path (``str`` or ``Path``) to a ``.urdf`` file (or a ``.xacro`` file, expanded
+    with ``xacro_args`` by :mod:`urdf2links.xacro_input`), or the URDF text itself (a string whose
+    first non-blank character is ``<``). ``package_dirs`` are extra folders searched for
+    ``package://`` meshes and ``$(find pkg)`` (see :func:`resolve_mesh_path`). ``strict=True``
+    refuses what ``strict=False`` tolerates with a note (module doc).
 
-    Returns a :class:`RobotDescription` with links in topological order (root first) and
-    joints in depth-first order (parents before children). Raises a
-    :class:`~urdf2links.errors.URDFError` subclass for every defect it detects.
+    Returns a :class:`RobotDescription` with links in topological order (root first), joints in
+    depth-first order (parents before children) and the reader's ``notes``. Raises a
+    :class:`~urdf2links.errors.URDFError` subclass for every defect it does not tolerate.
     """
-    root, label, directory, stem = _read_source(source)
-    package_dirs = tuple(Path(p) for p in package_dirs)
-    r = _Reader(label)
+    package_dirs = tuple(package_dirs)
+    src = read_source(source, strict=strict, xacro_args=xacro_args, package_dirs=package_dirs)
+    root, label, directory = src.root, src.label, src.directory
+    notes = list(src.notes)
+    r = _Reader(label, strict=strict, version=_robot_version(root, label, notes))
     try:
         name = (root.get("name") or "").strip()
         if not name:
-            name = stem
+            name = src.stem
             _log.info("%s: <robot> has no name attribute; using %r", label, name)
+            notes.append(f"<robot> has no name attribute: named {name!r} after the file (urdfdom refuses this)")
         link_els, joint_els = _children(root, "link"), _children(root, "joint")
         if not link_els:
             r.fail(root, f"robot '{name}'", "there are no <link> elements",
-                   "a URDF needs at least one <link name=\"...\"/>", URDFStructureError)
+                   "a URDF needs at least one <link name=\"...\"/>" + (
+                       " (a xacro file that only defines macros? load the file that calls them)"
+                       if is_xacro_path(source) else ""), URDFStructureError)
         links = [_link(r, el, directory, package_dirs) for el in link_els]
         _check_unique(r, link_els, [l.name for l in links], "link")
         joints = [_joint(r, el) for el in joint_els]
         _check_unique(r, joint_els, [j.name for j in joints], "joint")
         link_map = {l.name: l for l in links}
         root_link, ordered = _build_tree(r, link_map, joints, joint_els)
-        joint_names = {j.name for j in joints}
-        for j, el in zip(joints, joint_els):
-            if j.mimic is not None and (j.mimic.joint not in joint_names or j.mimic.joint == j.name):
-                problem = ("it mimics itself" if j.mimic.joint == j.name else
-                           f"there is no joint named '{j.mimic.joint}'{_hint(j.mimic.joint, joint_names)}")
-                r.fail(_child(el, "mimic"), f"joint '{j.name}' <mimic joint=\"{j.mimic.joint}\">",
-                       problem, "name an existing joint to follow, or remove <mimic>",
-                       URDFStructureError)
+        _check_mimics(r, joints, joint_els)
         order = [root_link] + [j.child for j in ordered]
+        notes += r.notes + inventory_notes(root) + joint_value_notes(ordered)
         return RobotDescription(name=name, source=label, links={n: link_map[n] for n in order},
-                                joints=tuple(ordered), root=root_link, directory=directory)
+                                joints=tuple(ordered), root=root_link, directory=directory, notes=tuple(notes))
     except URDFError:
         raise
     except (KeyError, AttributeError, IndexError, TypeError, ValueError) as err:
         raise URDFValueError(f"{label}: cannot read the description ({type(err).__name__}: {err}); "
                              "check the file against the URDF specification") from err
-
-
-# --------------------------------------------------------------------------- meshes
-
-
-def _package_bases(directory, package_dirs) -> list[Path]:
-    bases = []
-    if directory is not None:
-        directory = Path(directory)
-        bases += [directory, *directory.parents]
-    bases += [Path(p) for p in package_dirs]
-    bases += [Path(p) for p in os.environ.get("ROS_PACKAGE_PATH", "").split(os.pathsep) if p]
-    return bases
-
-
-def resolve_mesh_path(filename: str, *, directory=None, package_dirs=()) -> Path | None:
-    """Find the file a ``<mesh filename>`` names; ``None`` when it cannot be found.
-
-    - ``package://pkg/rest`` (also ``model://``): for each base folder -- the URDF's
-      ``directory`` and its ancestors, then each of ``package_dirs``, then ``ROS_PACKAGE_PATH``
-      -- try ``base/pkg/rest`` (and ``base/rest`` when ``base`` is itself named ``pkg``);
-      then, as a fallback, ``base/rest`` for each base.
-    - ``file:///abs/path`` is that path; ``file://rel`` is relative to ``directory``.
-    - Otherwise an absolute path, or a path relative to ``directory`` (then ``package_dirs``).
-    """
-    candidates: list[Path] = []
-    for scheme in ("package://", "model://"):
-        if filename.startswith(scheme):
-            pkg, _, rest = unquote(filename[len(scheme):]).partition("/")
-            bases = _package_bases(directory, package_dirs)
-            for base in bases:
-                candidates.append(base / pkg / rest)
-                if base.name == pkg:
-                    candidates.append(base / rest)
-            candidates += [base / rest for base in bases]
-            break
-    else:
-        name = unquote(filename[len("file://"):]) if filename.startswith("file://") else filename
-        path = Path(name).expanduser()
-        if path.is_absolute():
-            candidates.append(path)
-        else:
-            bases = ([Path(directory)] if directory is not None else []) + [Path(p) for p in package_dirs]
-            candidates += [b / path for b in bases]
-    for c in candidates:
-        if c.is_file():
-            return c.resolve()
-    return None
-
-
-def require_mesh(geometry: Geometry, *, link: str, source: str) -> Path:
-    """The resolved path of a mesh geometry, or a :class:`MeshError` naming file, link and mesh."""
-    if geometry.kind != "mesh":
-        raise MeshError(f"{source}: link '{link}': the geometry is a {geometry.kind}, not a mesh")
-    if geometry.path is not None and Path(geometry.path).is_file():
-        return Path(geometry.path)
-    fix = "correct the filename"
-    if geometry.filename and geometry.filename.startswith(("package://", "model://")):
-        pkg = geometry.filename.split("://", 1)[1].split("/", 1)[0]
-        fix = (f"pass package_dirs=[<folder that contains '{pkg}'>] to parse_urdf, "
-               "or correct the filename")
-    raise MeshError(f"{source}: link '{link}': mesh '{geometry.filename}' was not found; {fix}")

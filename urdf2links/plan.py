@@ -13,7 +13,8 @@ G               gravity as a base acceleration (kinematics)         ``[gravity]`
 Q               :func:`urdf2links.kernels.add_wrench`               ``[[force]]`` or ``[[moment]]``
 tau             joint torques ``[[torque]]``                        ``[[torque]]``
 spring          ``-k (q - rest)`` (a potential)                     a ``[[spring]]`` with k > 0
-damper          ``-c qd`` (dissipation D)                           a ``[[spring]]`` with c > 0
+damper          ``-c qd`` (dissipation D)                           a ``[[spring]]`` with c > 0, or URDF
+                                                                    damping with ``[dampers] from_urdf``
 ==============  ==================================================  ==============================
 
 The state integrated is ``y = (q, qd, W)``: ``W`` is the work done on the system by everything
@@ -52,8 +53,10 @@ class Plan:
             self.loads.append((tree.link_index(tname), X, load))
         self.torque_index = np.array([names.index(c) for c, _ in scene.torques], dtype=int)
         self.torque_funcs = [f for _, f in scene.torques]
-        springs = [s for s in scene.springs if s.stiffness > 0]
-        dampers = [s for s in scene.springs if s.damping > 0]
+        self.spring_set = scene.springs_for(model)
+        """The scene's springs and dampers on this model (URDF damping included when asked) and notes."""
+        springs = [s for s in self.spring_set.springs if s.stiffness > 0]
+        dampers = [s for s in self.spring_set.springs if s.damping > 0]
         self.spring_index = np.array([names.index(s.coordinate) for s in springs], dtype=int)
         self.stiffness = np.array([s.stiffness for s in springs])
         self.rest = np.array([s.rest for s in springs])
@@ -69,12 +72,8 @@ class Plan:
 
     # -- the scene's inputs at a time --------------------------------------------------------------
     def base_state(self, t) -> BaseState | None:
-        """Pose, rate and acceleration of {A} at ``t``; None for a fixed base."""
-        if self.base is None:
-            return None
-        f = self.base
-        return BaseState(np.array([g(t) for g in f]), np.array([g.derivative(t) for g in f]),
-                         np.array([g.second_derivative(t) for g in f]))
+        """Pose, rate and acceleration of {A} at ``t`` (:meth:`Scene.base_state`); None for a fixed base."""
+        return self.scene.base_state(t)
 
     def torques(self, t) -> np.ndarray:
         """Joint torques tau (n,) at ``t`` (zeros where none acts)."""
@@ -122,8 +121,9 @@ class Plan:
                          f"; touches the coordinates that move {load.link!r}")
         for (c, f) in s.torques:
             lines.append(f"  tau: {c}: {f.describe()}")
-        for sp in s.springs:
+        for sp in self.spring_set.springs:
             lines.append(f"  spring/damper on {sp.coordinate}: k = {sp.stiffness:g}, rest = {sp.rest:g}, c = {sp.damping:g}")
+        lines += [f"  note: {n}" for n in self.spring_set.notes]
         r = s.run
         lines.append(f"run: t_end {r.t_end:g} s, method {r.method}, rtol {r.rtol:g}, atol {r.atol:g}"
                      + (f", dt {r.dt:g}" if r.dt else "") + f", {r.samples} samples")

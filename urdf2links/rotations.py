@@ -25,6 +25,7 @@ __all__ = [
     "rot_z",
     "rpy_to_matrix",
     "matrix_to_xyz_angles",
+    "matrix_to_rpy",
     "xyz_angles_to_matrix",
     "rpy_to_xyz_angles",
     "axis_alignment",
@@ -138,6 +139,13 @@ def matrix_to_xyz_angles(R) -> tuple[float, float, float]:
         N = rot_y(phi_y).T @ rot_x(phi_x).T @ M  # = Rz(phi_z)
         phi_z = math.atan2(N[1, 0], N[0, 0])
     return phi_x, phi_y, phi_z
+
+
+def matrix_to_rpy(R) -> tuple[float, float, float]:
+    """URDF ``(roll, pitch, yaw)`` with ``Rz(yaw) @ Ry(pitch) @ Rx(roll) == R``: since
+    ``R^T = Rx(-roll) Ry(-pitch) Rz(-yaw)``, minus the angles of ``R^T`` (:func:`matrix_to_xyz_angles`)."""
+    a = matrix_to_xyz_angles(np.asarray(R, dtype=float).T)
+    return -a[0], -a[1], -a[2]
 
 
 def rpy_to_xyz_angles(rpy) -> tuple[float, float, float]:

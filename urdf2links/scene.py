@@ -7,12 +7,14 @@ not computed, see :mod:`urdf2links.plan`)::
     chaotic = false                         # the comparison reports a divergence time, not an error
 
     [robot]
-    urdf = "double_pendulum.urdf"           # path relative to this file; or
+    urdf = "double_pendulum.urdf"           # path relative to this file (.urdf or .xacro); or
     # shipped = "double_pendulum"           # a robot of robots/; or
     # example_robot_data = "ur_description/urdf/ur5_robot.urdf"
     floating_base = false
     inertia = "audit"                       # audit | strict | repair
     mimic = "independent"                   # independent | coupled
+    strict = false                          # refuse what the default reading tolerates (notes)
+    xacro_args = { prefix = "left_" }       # arguments of a .xacro robot (name:=value)
 
     [gravity]                               # absent: no gravity
     magnitude = 9.81                        # m/s^2
@@ -29,6 +31,10 @@ not computed, see :mod:`urdf2links.plan`)::
     [[moment]]                              # (E23): link, frame, value [N m]
     [[torque]]                              # coordinate = "shoulder"; value = function [N m or N]
     [[spring]]                              # coordinate, stiffness [N m/rad], rest [rad], damping [N m s/rad]
+
+    [dampers]
+    from_urdf = true                        # each joint's <dynamics damping> as a damper (a [[spring]]'s
+                                            # own damping on the same coordinate takes precedence)
 
     [initial]
     q = { shoulder = 1.2 }                  # by coordinate name; unnamed coordinates start at 0
@@ -55,13 +61,30 @@ from .errors import SceneError
 from .functions import Constant, SceneValueError, TimeFunction, VectorFunction, parse_function, vector_function
 from .integrators import METHODS
 from .locations import example_robot_data_dir, shipped_robots_dir
-from .transforms import PARAMETERS
+from .transforms import PARAMETERS, BaseState
 
-__all__ = ["Scene", "AppliedLoad", "Spring", "RunSettings", "load_scene", "shipped_robots_dir"]
+__all__ = ["Scene", "AppliedLoad", "Spring", "SpringSet", "RunSettings", "load_scene", "shipped_robots_dir",
+           "robot_stem", "default_scene", "DEFAULT_SCENE_NAME", "Q0_CHOICES"]
+
+#: Name of the scene :func:`default_scene` makes (reports go to ``reports/<robot>/default/``).
+DEFAULT_SCENE_NAME = "default"
+Q0_CHOICES = ("zero", "random")
 
 _TOP = ("description", "chaotic", "robot", "gravity", "base", "force", "moment", "torque", "spring",
-        "initial", "run", "record")
-_ROBOT = ("urdf", "shipped", "example_robot_data", "floating_base", "inertia", "mimic", "package_dirs")
+        "dampers", "initial", "run", "record")
+_ROBOT = ("urdf", "shipped", "example_robot_data", "floating_base", "inertia", "mimic", "package_dirs", "strict",
+          "xacro_args")
+#: Joint types whose URDF damping becomes a damper on their one coordinate.
+_DAMPED_TYPES = ("revolute", "continuous", "prismatic")
+
+
+def robot_stem(path) -> str:
+    """The robot file's name without ``.xacro`` and ``.urdf`` (``robot.urdf.xacro`` -> ``robot``): the
+    ``<robot>`` part of a report's key."""
+    name = Path(path).name
+    for suffix in (".xacro", ".urdf"):
+        name = name.removesuffix(suffix)
+    return name
 _RUN = ("t_end", "method", "rtol", "atol", "dt", "samples", "recharting")
 
 
@@ -86,6 +109,16 @@ class Spring:
     stiffness: float = 0.0
     rest: float = 0.0
     damping: float = 0.0
+
+
+@dataclass(frozen=True)
+class SpringSet:
+    """The springs and dampers that act in a scene on a model (:meth:`Scene.springs_for`): the
+    scene's ``[[spring]]`` blocks merged with the URDF's damping when ``[dampers] from_urdf``;
+    ``notes`` says what was added, overridden or left out, and that Coulomb friction is not modelled."""
+
+    springs: tuple[Spring, ...]
+    notes: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -118,6 +151,7 @@ class Scene:
     qd0: dict = field(default_factory=dict)
     run: RunSettings = RunSettings()
     link_poses: tuple[str, ...] = ()
+    urdf_damping: bool = False
 
     def model(self):
         """Load the scene's robot with its options (a :class:`~urdf2links.model.Model`)."""
@@ -145,6 +179,56 @@ class Scene:
             if coord not in names:
                 raise SceneError(f"{where}: [{what}] coordinate {coord!r} is not a coordinate of robot {model.name!r}"
                                  f"{_hint(coord, names)}; coordinates are {list(names)}")
+
+    def base_state(self, t) -> BaseState | None:
+        """Pose, rate and acceleration of {A} at ``t`` from ``[base]``; None for a fixed base."""
+        if self.base is None:
+            return None
+        f = self.base
+        return BaseState(np.array([g(t) for g in f]), np.array([g.derivative(t) for g in f]),
+                         np.array([g.second_derivative(t) for g in f]))
+
+    def springs_for(self, model) -> SpringSet:
+        """The springs and dampers acting on ``model``: ``[[spring]]`` blocks, plus with ``[dampers]
+        from_urdf = true`` a damper ``c = <dynamics damping>`` on the coordinate of every revolute,
+        continuous or prismatic joint (the URDF joint position), unless a ``[[spring]]`` gives that
+        coordinate a damping of its own. Damping of floating, planar or spherical joints, of coupled
+        mimic followers and negative damping are left out, with a note."""
+        joints = model.info.get("joints", [])
+        friction = [j["name"] for j in joints if j.get("friction")]
+        notes = [f"URDF <dynamics friction> (Coulomb friction) is not modelled, on either engine: joints "
+                 f"{', '.join(friction)}"] if friction else []
+        if not self.urdf_damping:
+            damped = [j["name"] for j in joints if j.get("damping")]
+            if damped:
+                notes.append(f"URDF <dynamics damping> not applied (the scene does not ask: [dampers] from_urdf = "
+                             f"true): joints {', '.join(damped)}")
+            return SpringSet(self.springs, tuple(notes))
+        own = {s.coordinate: s for s in self.springs}
+        added, skipped = {}, []
+        for j in joints:
+            c = j.get("damping")
+            if not c:
+                continue
+            coord = j["coordinates"][0] if len(j["coordinates"]) == 1 else None
+            if j["type"] not in _DAMPED_TYPES:
+                skipped.append(f"{j['name']} ({j['type']} joint: no single joint axis to damp)")
+            elif coord is None or coord not in model.coordinate_names:
+                skipped.append(f"{j['name']} (coupled to the joint it mimics)")
+            elif c < 0:
+                skipped.append(f"{j['name']} (negative damping {c:g})")
+            elif own.get(coord) is not None and own[coord].damping > 0:
+                skipped.append(f"{j['name']} (the scene's [[spring]] damping {own[coord].damping:g} is used instead)")
+            else:
+                added[coord] = c
+        springs = [Spring(s.coordinate, s.stiffness, s.rest, added.get(s.coordinate, s.damping)) for s in self.springs]
+        springs += [Spring(coord, damping=c) for coord, c in added.items() if coord not in own]
+        if added:
+            notes.append("URDF <dynamics damping> applied as dampers ([dampers] from_urdf = true): "
+                         + ", ".join(f"{coord} {c:g}" for coord, c in added.items()))
+        if skipped:
+            notes.append(f"URDF <dynamics damping> not applied: {'; '.join(skipped)}")
+        return SpringSet(tuple(springs), tuple(notes))
 
     def initial_state(self, model) -> tuple[np.ndarray, np.ndarray]:
         names = model.coordinate_names
@@ -204,6 +288,62 @@ class _Reader:
             raise SceneError(str(err)) from None
 
 
+def _random_q0(model, rng) -> dict:
+    """A seeded initial configuration: each joint coordinate uniform within its URDF limits when both
+    are finite (and lower < upper), else uniform in [-1, 1] (rad or m); a floating root's position
+    stays at the origin."""
+    limits = {j["coordinates"][0]: (j["lower"], j["upper"]) for j in model.info.get("joints", [])
+              if len(j["coordinates"]) == 1 and j["lower"] is not None and j["upper"] is not None
+              and j["lower"] < j["upper"]}
+    root = {c["name"] for c in model.info.get("coordinates", []) if c.get("joint") is None and c["slot"] in "xyz"}
+    q0 = {}
+    for name in model.coordinate_names:
+        lo, hi = limits.get(name, (-1.0, 1.0))
+        value = float(rng.uniform(lo, hi))
+        if name not in root:
+            q0[name] = value
+    return q0
+
+
+def default_scene(robot, *, floating: bool = False, q0: str = "zero", seed: int = 0, t_end: float = 1.0,
+                  xacro_args=None, package_dirs=(), inertia: str = "audit", mimic: str = "independent",
+                  strict: bool = False, model=None) -> Scene:
+    """The scene ``urdf2links simulate|compare ROBOT.urdf`` runs when no scene file is given.
+
+    Gravity (9.81 m/s^2 along -z); a fixed base, or with ``floating`` six coordinates for the root
+    link; the URDF's joint damping as dampers (``[dampers] from_urdf = true``); initial state at rest,
+    ``q0="zero"`` or ``"random"`` (:func:`_random_q0`, seeded by ``seed``); ``t_end`` seconds with the
+    default integrator (``RunSettings``: DOP853, rtol 1e-10), 500 samples a second (at least 101).
+    ``robot`` is a ``.urdf`` or ``.xacro`` path (with ``xacro_args``); ``model`` an already loaded model
+    of it (loaded here otherwise, to know its coordinates and limits). The scene is named
+    :data:`DEFAULT_SCENE_NAME`; :func:`urdf2links.scene_toml.write_scene` writes it as TOML to edit.
+    """
+    where = f"default scene of {robot}"
+    r = _Reader(where)
+    r.choice(q0, "q0", Q0_CHOICES)
+    t_end = r.number(t_end, "t_end", positive=True)
+    options = {"floating_base": bool(floating), "inertia": inertia, "mimic": mimic, "strict": bool(strict)}
+    if package_dirs:
+        options["package_dirs"] = tuple(Path(p) for p in package_dirs)
+    if xacro_args:
+        options["xacro_args"] = {str(k): str(v) for k, v in xacro_args.items()}
+    if model is None:
+        import warnings
+
+        from .importer import load_urdf
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the audit is in model.audit; inspect shows it
+            model = load_urdf(robot, **options)
+    q_init = _random_q0(model, np.random.default_rng(seed)) if q0 == "random" else {}
+    base = "floating base" if floating else "fixed base"
+    return Scene(name=DEFAULT_SCENE_NAME, path=None, robot=Path(robot), load_options=options,
+                 description=f"default scene: gravity, {base}, q0 {q0}" + (f" (seed {seed})" if q0 == "random" else "")
+                             + ", URDF damping, at rest",
+                 gravity=np.array([0.0, 0.0, -9.81]), q0=q_init, urdf_damping=True,
+                 run=RunSettings(t_end=t_end, samples=max(101, int(round(500 * t_end)) + 1)))
+
+
 def load_scene(path) -> Scene:
     """Read and validate a scene file (names of links and coordinates are checked by :meth:`Scene.model`)."""
     path = Path(path)
@@ -231,6 +371,7 @@ def scene_from_dict(data: dict, *, where: str = "<scene>", directory: Path | Non
     options, gravity, base = _robot_options(r, robot_t, directory), _gravity(r, data), _base(r, data)
     loads, torques, springs = _loads(r, data), _torques(r, data), _springs(r, data)
     (q0, qd0), run, link_poses = _initial(r, data), _run(r, data), _record(r, data)
+    urdf_damping = _dampers(r, data)
     description = data.get("description", "")
     chaotic = data.get("chaotic", False)
     if not isinstance(description, str):
@@ -239,7 +380,18 @@ def scene_from_dict(data: dict, *, where: str = "<scene>", directory: Path | Non
         r.fail("chaotic", f"must be true or false, got {chaotic!r}")
     return Scene(name=name, path=path, robot=robot, load_options=options, description=description,
                  chaotic=chaotic, gravity=gravity, base=base, loads=loads, torques=torques, springs=springs,
-                 q0=q0, qd0=qd0, run=run, link_poses=link_poses)
+                 q0=q0, qd0=qd0, run=run, link_poses=link_poses, urdf_damping=urdf_damping)
+
+
+def _dampers(r: _Reader, data: dict) -> bool:
+    """``[dampers] from_urdf``: whether the URDF's joint damping acts (:meth:`Scene.springs_for`)."""
+    if "dampers" not in data:
+        return False
+    r.keys(data["dampers"], ("from_urdf",), "dampers")
+    value = data["dampers"].get("from_urdf", False)
+    if not isinstance(value, bool):
+        r.fail("dampers.from_urdf", f"must be true or false, got {value!r}")
+    return value
 
 
 def _robot_options(r: _Reader, robot_t: dict, directory) -> dict:
@@ -255,6 +407,14 @@ def _robot_options(r: _Reader, robot_t: dict, directory) -> dict:
         options["mimic"] = r.choice(robot_t["mimic"], "robot.mimic", ("independent", "coupled"))
     if "package_dirs" in robot_t:
         options["package_dirs"] = tuple((directory or Path.cwd()) / p for p in robot_t["package_dirs"])
+    if "strict" in robot_t:
+        if not isinstance(robot_t["strict"], bool):
+            r.fail("robot.strict", f"must be true or false, got {robot_t['strict']!r}")
+        options["strict"] = robot_t["strict"]
+    if "xacro_args" in robot_t:
+        args = robot_t["xacro_args"]
+        r.keys(args, tuple(args) if isinstance(args, dict) else (), "robot.xacro_args")
+        options["xacro_args"] = {str(k): str(v) for k, v in args.items()}
     return options
 
 

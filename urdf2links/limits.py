@@ -1,0 +1,71 @@
+"""Joint limits along a trajectory: not enforced, but never passed over in silence.
+
+The importer reads ``<limit lower upper>`` (``model.info["joints"]``); neither engine of a comparison
+enforces them (route 1 writes no limits, route 2 disables MuJoCo's). :func:`limit_excursions` finds,
+for every coordinate that is a limited joint's position (revolute and prismatic joints with
+``lower < upper``), the first sample outside ``[lower, upper]``, the largest excess and when it
+happens. ``urdf2links simulate`` prints them; ``urdf2links compare`` puts them in the report's notes.
+
+Public API: :func:`limit_excursions`, :class:`LimitExcursion`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+__all__ = ["LimitExcursion", "limit_excursions"]
+
+
+@dataclass(frozen=True)
+class LimitExcursion:
+    """Coordinate ``coordinate`` (of joint ``joint``) left ``[lower, upper]`` first at ``t_first`` (s),
+    by ``worst`` at most (rad or m, ``units``) at ``t_worst``; ``side`` is where the worst excess is
+    (``"lower"`` or ``"upper"``); ``fraction``: the share of samples outside."""
+
+    joint: str
+    coordinate: str
+    lower: float
+    upper: float
+    t_first: float
+    t_worst: float
+    worst: float
+    side: str
+    fraction: float
+    units: str
+
+    def text(self) -> str:
+        bound = self.lower if self.side == "lower" else self.upper
+        return (f"joint {self.joint!r} left its limits [{self.lower:.4g}, {self.upper:.4g}] {self.units} at "
+                f"t = {self.t_first:.4g} s; worst {self.worst:.3g} {self.units} past the {self.side} limit "
+                f"{bound:.4g} at t = {self.t_worst:.4g} s ({100 * self.fraction:.0f} % of the samples outside; "
+                "limits are not enforced)")
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def limit_excursions(model, t, q) -> list[LimitExcursion]:
+    """The excursions of trajectory ``q`` (m, n) at times ``t`` (m,) of ``model`` (module doc)."""
+    t, q = np.asarray(t, float), np.asarray(q, float)
+    names = list(model.coordinate_names)
+    out = []
+    for j in model.info.get("joints", []):
+        lo, hi = j.get("lower"), j.get("upper")
+        if j["type"] not in ("revolute", "prismatic") or lo is None or hi is None or not lo < hi:
+            continue
+        if len(j["coordinates"]) != 1 or j["coordinates"][0] not in names:
+            continue  # a coupled mimic follower: not a coordinate of the model
+        x = q[:, names.index(j["coordinates"][0])]
+        below, above = lo - x, x - hi
+        excess = np.maximum(below, above)
+        outside = excess > 0
+        if not outside.any():
+            continue
+        k = int(np.argmax(excess))
+        out.append(LimitExcursion(joint=j["name"], coordinate=j["coordinates"][0], lower=float(lo), upper=float(hi),
+                                  t_first=float(t[np.argmax(outside)]), t_worst=float(t[k]), worst=float(excess[k]),
+                                  side="lower" if below[k] > above[k] else "upper",
+                                  fraction=float(outside.mean()), units="m" if j["type"] == "prismatic" else "rad"))
+    return out
