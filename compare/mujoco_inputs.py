@@ -12,9 +12,9 @@ Here the same steps are numba code (:func:`control`), installed as a C function 
 ``mj_step``). What it reads:
 
 * the scene's time functions and loads as the project's own right-hand side compiled them
-  (:func:`urdf2links.scene_kernels.compile_scene`, read once per run by
-  :func:`~urdf2links.scene_kernels.scene_view` into the flat sections :data:`INT_SECTIONS` and
-  :data:`FLOAT_SECTIONS`; evaluated by :func:`~urdf2links.scene_kernels.fn_eval`), so both engines
+  (:func:`urdf2links.scene_arrays.compile_scene`, read once per run by
+  :func:`~urdf2links.scene_arrays.scene_view` into the flat sections :data:`INT_SECTIONS` and
+  :data:`FLOAT_SECTIONS`; evaluated by :func:`~urdf2links.scene_kernels.fn_data_eval`), so both engines
   evaluate literally the same functions;
 * MuJoCo's arrays of the run's ``MjData`` (``qfrc_applied``, ``xfrc_applied``, ``xpos``, ``xmat``,
   ``xipos``, ``qfrc_passive``, ``qfrc_actuator``, ``qfrc_bias``, ``qpos``) at the addresses the
@@ -48,8 +48,9 @@ from llvmlite import ir
 from numba import carray, cfunc, njit, types
 from numba.extending import intrinsic
 
-from urdf2links.kernels import cholesky_solve
-from urdf2links.scene_kernels import fn_eval, scene_view
+from urdf2links.factor import cholesky, cholesky_solve
+from urdf2links.scene_arrays import scene_view
+from urdf2links.scene_kernels import fn_data_eval
 from urdf2links.simulate import Compilation, record_compilation
 
 __all__ = ["CompiledInputs", "LayoutError", "mjdata_offsets", "check_offsets", "callback_pointer", "control",
@@ -306,10 +307,10 @@ def _float(H, F, k):
 @njit(cache=True, inline="always")
 def _fn(H, I, F, j, t, order):
     """d^order f / dt^order at ``t`` of the scene's time function ``j``
-    (:func:`urdf2links.scene_kernels.fn_eval` on the data the project's right-hand side uses)."""
+    (:func:`urdf2links.scene_kernels.fn_data_eval` on the data the project's right-hand side uses)."""
     ptr = _int(H, I, I_FN_PTR)
     data = _float(H, F, F_FN_DATA)
-    return fn_eval(_int(H, I, I_FN_KIND)[j], data[ptr[j]:ptr[j + 1]], t, order)
+    return fn_data_eval(_int(H, I, I_FN_KIND)[j], data, ptr[j], t, order)
 
 
 @njit(cache=True)
@@ -419,7 +420,7 @@ def _prescribe_base(m, d, H, I, F, t, xfrc, qfrc):
     f, fx, rhs_r, a_r = scr[o:o + nv], scr[o + nv:o + 2 * nv], scr[o + 2 * nv:o + 2 * nv + n], \
         scr[o + 2 * nv + n:o + 2 * nv + 2 * n]
     o += 2 * nv + 2 * n
-    Mrr, Lf = scr[o:o + n * n].reshape((n, n)), scr[o + n * n:o + 2 * n * n].reshape((n, n))
+    Mrr = scr[o:o + n * n].reshape((n, n))          # its factor L follows it in scr
     a_b = scr[o + 2 * n * n:o + 2 * n * n + 6]   # the scene's base motion, or a base held at the origin
     for j in range(6):
         a_b[j] = _fn(H, I, F, base_fn[j], t, 2) if base_fn[j] >= 0 else 0.0
@@ -446,7 +447,11 @@ def _prescribe_base(m, d, H, I, F, t, xfrc, qfrc):
         for j in range(n):
             Mrr[i, j] = M[dof[i], dof[j]]
     if n:
-        pivot = cholesky_solve(Mrr, rhs_r, Lf, a_r)
+        pivot = cholesky(scr, o, n, scr, o + n * n)       # Mrr = L L^T (E46)
+        if pivot < 0:
+            for i in range(n):
+                a_r[i] = rhs_r[i]
+            cholesky_solve(scr, o + n * n, n, a_r, 0)
         if pivot >= 0:
             H[ERROR] = pivot + 1
             H[ERROR_COUNT] += 1

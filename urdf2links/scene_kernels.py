@@ -22,23 +22,22 @@ from .scene_arrays import (S_BASE_FN, S_C, S_D, S_DAMPER_IDX, S_DAMPING, S_FN_DA
                            S_SPRING_IDX, S_STIFFNESS, S_TORQUE_FN, S_TORQUE_IDX, compile_scene, scratch_size)
 from .tree_arrays import W_B, W_Q, W_SIZE, nn
 
-__all__ = ["CompiledScene", "scene_rhs", "scene_energies", "fn_eval"]
+__all__ = ["CompiledScene", "scene_rhs", "scene_energies", "fn_eval", "fn_data_eval"]
 
 
 @njit(cache=True)
-def fn_eval(SI, SF, j, t, order):
-    """``d^order f_j / dt^order`` at ``t`` of the scene's time function ``j`` (see
-    :func:`urdf2links.scene_arrays.function_data`)."""
-    o = SI[S_FN_DATA] + SI[SI[S_FN_PTR] + j]
-    if SI[SI[S_FN_KIND] + j] == 0:
+def fn_data_eval(kind, data, o, t, order):
+    """``d^order f / dt^order`` at ``t`` of a time function of ``kind`` whose data
+    (:func:`urdf2links.scene_arrays.function_data`) starts at ``data[o]``."""
+    if kind == 0:
         if order == 0:
-            out = SF[o] + SF[o + 1] * t
+            out = data[o] + data[o + 1] * t
         elif order == 1:
-            out = SF[o + 1]
+            out = data[o + 1]
         else:
             out = 0.0
-        for k in range(int(SF[o + 2])):
-            a, w, ph = SF[o + 3 + 3 * k], SF[o + 4 + 3 * k], SF[o + 5 + 3 * k]
+        for k in range(int(data[o + 2])):
+            a, w, ph = data[o + 3 + 3 * k], data[o + 4 + 3 * k], data[o + 5 + 3 * k]
             x = w * t + ph
             if order == 0:
                 out += a * np.sin(x)
@@ -47,9 +46,9 @@ def fn_eval(SI, SF, j, t, order):
             else:
                 out -= a * w * w * np.sin(x)
         return out
-    m = int(SF[o])
-    k = int(SF[o + 1])
-    x = SF[o + 2:o + 3 + m]
+    m = int(data[o])
+    k = int(data[o + 1])
+    x = data[o + 2:o + 3 + m]
     c = o + 3 + m
     if t < x[0] or t > x[m]:
         if order > 0:
@@ -62,11 +61,17 @@ def fn_eval(SI, SF, j, t, order):
         pw = k - j
         if pw < order:
             continue
-        coef = SF[c + j * m + i]
+        coef = data[c + j * m + i]
         for r in range(order):
             coef *= pw - r
         out += coef * s ** (pw - order)
     return out
+
+
+@njit(cache=True)
+def fn_eval(SI, SF, j, t, order):
+    """``d^order f_j / dt^order`` at ``t`` of the scene's time function ``j`` (:func:`fn_data_eval`)."""
+    return fn_data_eval(SI[SI[S_FN_KIND] + j], SF, SI[S_FN_DATA] + SI[SI[S_FN_PTR] + j], t, order)
 
 
 # -- the right-hand side ------------------------------------------------------------------------------
