@@ -182,7 +182,7 @@ class Model:
         V = np.empty((1, 0) if what == MK.MASS else (B, n))
         args = (BASE, has_base, g[0], g[1], g[2], LD, self._Ck, self._dk, self._C is not None, what)
         if rows.batched:
-            MK.terms_batch(self.compiled.TI, self.compiled.TF, Q, QD, qd is not None, *args, A, V)
+            MK.terms_batch(self.compiled.TI, self.compiled.TF, Q, QD, qd is not None, *args, A, V, MK.chunks(B))
         else:
             MK.terms_one(self.compiled.TI, self.compiled.TF, Q[0], QD[0], qd is not None, BASE[0], *args[1:],
                          A[0], V[0])
@@ -198,7 +198,7 @@ class Model:
         args = (qd is not None, BASE, has_base, g[0], g[1], g[2], self._Ck, self._dk, self._C is not None)
         if rows.batched:
             E, V = np.empty(B), np.empty(B)
-            MK.energy_batch(self.compiled.TI, self.compiled.TF, Q, QD, *args, E, V)
+            MK.energy_batch(self.compiled.TI, self.compiled.TF, Q, QD, *args, E, V, MK.chunks(B))
             return E, V
         E, V = MK.energy_one(self.compiled.TI, self.compiled.TF, Q[0], QD[0], args[0], BASE[0], *args[2:])
         return float(E), float(V)
@@ -327,7 +327,7 @@ class Model:
         TI, TF = self.compiled.TI, self.compiled.TF
         if rows.batched:
             status = np.empty(B, np.int64)
-            MK.fd_batch(TI, TF, Q, QD, Q if tau is None else TAU, *args, OUT, status)
+            MK.fd_batch(TI, TF, Q, QD, Q if tau is None else TAU, *args, OUT, status, MK.chunks(B))
             bad = np.flatnonzero(status >= 0)
             if bad.size:
                 b = int(bad[0])

@@ -27,7 +27,7 @@ from .kernels import add_wrench, clear_wrenches, dynamics, energies, kinematics,
 from .tree_arrays import I_ANCIDX, I_ANCPTR, W_A, W_B, W_Q, W_SIZE, nn
 
 __all__ = ["coupled_size", "fd_plain_frozen", "fd_one", "fd_batch", "terms_one", "terms_batch", "energy_one",
-           "energy_batch", "poses_one", "MASS", "BIAS", "FORCES"]
+           "energy_batch", "poses_one", "chunks", "MASS", "BIAS", "FORCES"]
 
 MASS, BIAS, FORCES = 0, 1, 2        # what terms_row returns: A, -b (e, or G), Q
 
@@ -245,18 +245,18 @@ def poses_one(TI, TF, q, base, has_base, C, d, coupled, R, o):
 
 
 # -- batches: chunks of rows in parallel ------------------------------------------------------------
-@njit(cache=True)
-def _chunks(B):
-    """Number of chunks of a batch of ``B`` rows: a few per thread (each chunk has its own scratch)."""
+def chunks(B: int) -> int:
+    """Number of chunks of a batch of ``B`` rows: a few per thread (each chunk has its own scratch),
+    for numba's thread count now. Computed here, not in the compiled code: a compiled function that
+    asks numba for the thread count cannot be cached."""
     return max(1, min(B, 4 * get_num_threads()))
 
 
 @njit(cache=True, parallel=True)
-def fd_batch(TI, TF, Q, QD, TAU, has_tau, BASE, has_base, gx, gy, gz, loads, C, d, coupled, OUT, status):
+def fd_batch(TI, TF, Q, QD, TAU, has_tau, BASE, has_base, gx, gy, gz, loads, C, d, coupled, OUT, status, nc):
     """:func:`fd_row` for every row ``b`` of ``Q``, ``QD``, ``TAU`` (B, n) and ``BASE`` (B or 1, 18)
-    into ``OUT[b]``; ``status[b]`` the failing pivot or -1."""
+    into ``OUT[b]``; ``status[b]`` the failing pivot or -1; rows in ``nc`` chunks (:func:`chunks`)."""
     B = Q.shape[0]
-    nc = _chunks(B)
     Ws = np.empty((nc, TI[W_SIZE]))
     Xs = np.empty((nc, coupled_size(C.shape[0], C.shape[1]) if coupled else 0))
     nb = BASE.shape[0]
@@ -267,10 +267,9 @@ def fd_batch(TI, TF, Q, QD, TAU, has_tau, BASE, has_base, gx, gy, gz, loads, C, 
 
 
 @njit(cache=True, parallel=True)
-def terms_batch(TI, TF, Q, QD, moving, BASE, has_base, gx, gy, gz, loads, C, d, coupled, what, A, V):
+def terms_batch(TI, TF, Q, QD, moving, BASE, has_base, gx, gy, gz, loads, C, d, coupled, what, A, V, nc):
     """:func:`terms_row` for every row: ``A[b]`` (n, n) for MASS, else ``V[b]`` (n,)."""
     B = Q.shape[0]
-    nc = _chunks(B)
     Ws = np.empty((nc, TI[W_SIZE]))
     Xs = np.empty((nc, coupled_size(C.shape[0], C.shape[1]) if coupled else 0))
     nb = BASE.shape[0]
@@ -281,10 +280,9 @@ def terms_batch(TI, TF, Q, QD, moving, BASE, has_base, gx, gy, gz, loads, C, d, 
 
 
 @njit(cache=True, parallel=True)
-def energy_batch(TI, TF, Q, QD, moving, BASE, has_base, gx, gy, gz, C, d, coupled, E, V):
+def energy_batch(TI, TF, Q, QD, moving, BASE, has_base, gx, gy, gz, C, d, coupled, E, V, nc):
     """:func:`energy_row` for every row into ``E[b]``, ``V[b]``."""
     B = Q.shape[0]
-    nc = _chunks(B)
     Ws = np.empty((nc, TI[W_SIZE]))
     Xs = np.empty((nc, coupled_size(C.shape[0], C.shape[1]) if coupled else 0))
     nb = BASE.shape[0]
