@@ -230,3 +230,27 @@ def test_batch_against_mujoco_mj_forward(name):
         theirs = d.qacc[mj.dof_index]
         bound = 1e3 * eps * np.linalg.cond(model.mass_matrix(Q[b])) * np.abs(theirs).max()
         assert np.abs(QDD[b] - theirs).max() <= bound, (b, QDD[b], theirs)
+
+
+def test_read_only_and_strided_inputs_compile_nothing_new():
+    """A read-only or strided array is another numba type: the model hands the kernels a writable
+    C-contiguous copy, so such inputs (rows of a memory map, frozen arrays) reuse the compiled code
+    (a fresh environment's second run once recompiled ``poses_one`` for them)."""
+    from urdf2links.simulate import record_compilation
+
+    model = _shipped("ur5_like.urdf")
+    Q, QD, TAU = _states(model, 7)
+    calls = [lambda q, qd: model.link_poses(q[0]), lambda q, qd: model.forward_dynamics(q, qd),
+             lambda q, qd: model.forward_dynamics(q[0], qd[0], base=SHARED), lambda q, qd: model.mass_matrix(q),
+             lambda q, qd: model.kinetic_energy(q[0], qd[0])]
+    for call in calls:
+        call(Q, QD)
+    frozen = [np.array(a) for a in (Q, QD)]
+    for a in frozen:
+        a.setflags(write=False)
+    strided = [np.asfortranarray(a) for a in (Q, QD)]
+    with record_compilation() as rec:
+        for call in calls:
+            for q, qd in (frozen, strided):
+                call(q, qd)
+    assert not rec.happened, rec.functions

@@ -32,7 +32,7 @@ import scipy.linalg
 from . import model_kernels as MK
 from .errors import DynamicsError
 from .loads import Wrench
-from .rows import NO_LOADS, base_rows, load_rows, state_rows
+from .rows import NO_LOADS, base_rows, kernel_array, load_rows, state_rows
 from .transforms import base_state_at, resolve_base
 from .tree import LinkTree
 from .tree_arrays import flat_tree
@@ -90,7 +90,8 @@ class Model:
             if C.shape != (tree.n, len(names)) or d.shape != (tree.n,):
                 raise ValueError(f"coupling shapes {C.shape}, {d.shape} do not fit a tree of {tree.n} coordinates")
             self._C, self._d, self._names = C, d, tuple(names)
-            self._Ck, self._dk = np.ascontiguousarray(C), np.ascontiguousarray(d)
+            # writable C-contiguous copies: a read-only array is another numba type (another compilation)
+            self._Ck, self._dk = np.array(C, float, order="C"), np.array(d, float, order="C")
 
     # -- identity --------------------------------------------------------------------------------
     @property
@@ -280,7 +281,7 @@ class Model:
 
     def link_poses(self, q, *, t: float = 0.0, base=None) -> np.ndarray:
         """(L, 4, 4): the {0}-pose ``T^(p)`` of every link (E4)."""
-        q = np.ascontiguousarray(self.vector(q, "q"))
+        q = kernel_array(self.vector(q, "q"))
         state = base_state_at(base, t)
         L = self.tree.n_links
         R, o = np.empty((L, 3, 3)), np.empty((L, 3))

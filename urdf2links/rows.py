@@ -16,7 +16,7 @@ import numpy as np
 from .loads import Wrench
 from .transforms import BaseState, base_state_at
 
-__all__ = ["Rows", "state_rows", "base_rows", "load_rows", "NO_BASE", "NO_LOADS"]
+__all__ = ["Rows", "kernel_array", "state_rows", "base_rows", "load_rows", "NO_BASE", "NO_LOADS"]
 
 NO_BASE = np.zeros((1, 18))
 """Base rows of a fixed base (never read by the kernels)."""
@@ -24,6 +24,13 @@ NO_LOADS = np.zeros((0, 11))
 
 Rows = namedtuple("Rows", ["batched", "arrays"])
 """``batched``: the arguments had a batch axis; ``arrays``: each (B, n) float C-contiguous, or None."""
+
+
+def kernel_array(a) -> np.ndarray:
+    """``a`` as a float64, C-contiguous, writable array (a copy only when it is not one): every
+    compiled call sees one array type, so a read-only or strided input (a row of a memory map, a
+    frozen array) does not compile another variant of the kernels."""
+    return np.require(a, dtype=float, requirements=["C", "W"])
 
 
 def state_rows(n: int, names, named) -> Rows:
@@ -35,7 +42,7 @@ def state_rows(n: int, names, named) -> Rows:
     if a.ndim not in (1, 2) or a.shape[-1] != n:
         raise ValueError(f"{first} must have shape ({n},) for one state or (B, {n}) for a batch, for coordinates "
                          f"{tuple(names)}; got shape {a.shape}")
-    out = [np.ascontiguousarray(a.reshape(-1, n))]
+    out = [kernel_array(a.reshape(-1, n))]
     for name, v in named[1:]:
         if v is None:
             out.append(None)
@@ -44,7 +51,7 @@ def state_rows(n: int, names, named) -> Rows:
         if b.shape != a.shape:
             raise ValueError(f"{name} must have the shape of {first}, {a.shape}, for coordinates {tuple(names)}; "
                              f"got shape {b.shape}")
-        out.append(np.ascontiguousarray(b.reshape(-1, n)))
+        out.append(kernel_array(b.reshape(-1, n)))
     return Rows(a.ndim == 2, out)
 
 
@@ -54,7 +61,7 @@ def _as_rows(state: BaseState, B: int, batched: bool) -> np.ndarray:
     if shapes == {(6,)}:
         return np.concatenate(parts)[None, :]
     if batched and shapes == {(B, 6)}:
-        return np.ascontiguousarray(np.concatenate(parts, axis=1))
+        return np.concatenate(parts, axis=1)
     want = f"(6,) or ({B}, 6)" if batched else "(6,)"
     raise ValueError(f"base: pose, rate and accel must have shape {want}; got shapes "
                      f"{[p.shape for p in parts]}")
