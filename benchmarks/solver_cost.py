@@ -37,7 +37,7 @@ SWEEP_SAMPLES = 101
 
 
 @njit(cache=True)
-def _eval_loop(y, out, reps, I, F, W, SI, SF, X):
+def eval_loop(y, out, reps, I, F, W, SI, SF, X):
     for r in range(reps):
         scene_rhs(0.01 * r, y, out, I, F, W, SI, SF, X)
 
@@ -45,11 +45,11 @@ def _eval_loop(y, out, reps, I, F, W, SI, SF, X):
 def eval_cost(plan, y):
     """Seconds per evaluation of the compiled right-hand side inside a compiled loop (best of 5)."""
     out = np.empty(y.size)
-    _eval_loop(y, out, 10, *plan.rhs.args)
+    eval_loop(y, out, 10, *plan.rhs.args)
     best = np.inf
     for _ in range(5):
         t0 = time.perf_counter()
-        _eval_loop(y, out, 20000, *plan.rhs.args)
+        eval_loop(y, out, 20000, *plan.rhs.args)
         best = min(best, (time.perf_counter() - t0) / 20000)
     return best
 
