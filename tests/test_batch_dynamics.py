@@ -254,3 +254,13 @@ def test_read_only_and_strided_inputs_compile_nothing_new():
             for q, qd in (frozen, strided):
                 call(q, qd)
     assert not rec.happened, rec.functions
+
+
+def test_a_model_without_coordinates():
+    """n = 0 (a welded robot): one state and a batch give empty results, not a reshape error."""
+    H = np.diag([0.1, 0.1, 0.1, 1.0])
+    model = Model(build_tree([LinkSpec("body", None, H=H)]), name="welded")
+    assert model.mass_matrix(np.zeros(0)).shape == (0, 0)
+    assert model.forward_dynamics(np.zeros(0), np.zeros(0)).shape == (0,)
+    assert model.forward_dynamics(np.zeros((3, 0)), np.zeros((3, 0))).shape == (3, 0)
+    assert model.potential_energy(np.zeros((3, 0))).shape == (3,)

@@ -15,7 +15,7 @@ import pytest
 pytest.importorskip("mujoco")
 
 ROOT = Path(__file__).resolve().parent.parent
-BENCHMARKS = ("eval_cost", "solver_cost", "sweeps", "mujoco_harness")
+BENCHMARKS = ("eval_cost", "solver_cost", "sweeps", "mujoco_harness", "loop_cost", "batch_cost")
 
 
 @pytest.mark.parametrize("name", BENCHMARKS)
@@ -46,3 +46,23 @@ def test_tables_state_what_the_issue_asks():
     growth = json.loads((bench / "eval_cost.json").read_text())["growth"]
     for key in ("forward_dynamics", "mj_forward"):
         assert len(growth[key]["local"]) >= 5 and len(growth[key]["large_n"]["n"]) >= 3
+
+
+def test_loop_and_batch_tables_state_issue_14s_ratios():
+    """Per evaluation against one MuJoCo Euler step on every model the issue names, and the batch
+    at B = 1000 and 10000 on 1 thread and all threads, with equal q'' on both engines."""
+    bench = ROOT / "reports" / "benchmarks"
+    loop = json.loads((bench / "loop_cost.json").read_text())
+    names = {r["robot"] for r in loop["rows"]}
+    assert {"double_pendulum", "ur5_like", "chain64"} <= names
+    assert all(r["ratio_rhs"] > 0 and r["evals"] >= 2000 for r in loop["rows"])
+    assert "rhs / mj_step" in (bench / "loop_cost.md").read_text()
+    assert len(loop["slopes"]["rhs"]) >= 3
+    batch = json.loads((bench / "batch_cost.json").read_text())
+    assert {1000, 10000} <= set(batch["batches"])
+    for r in batch["rows"]:
+        for k in sorted({1, batch["threads"]}):
+            t = r[f"threads_{k}"]
+            # q'' against MuJoCo's (q'_1 - q'_0) / dt: the Euler update's rounding / dt (1e-4 s) is
+            # ~1e-12 of |q''|; a different q'' (another model, a wrong row) is O(1)
+            assert t["ratio"] > 0 and t["max_rel_difference"] < 1e-9, (r["robot"], r["B"], k)

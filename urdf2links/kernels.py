@@ -49,7 +49,7 @@ __all__ = ["kinematics", "dynamics", "energies", "add_wrench", "clear_wrenches",
 @njit(cache=True, inline="always")
 def _turn(k, c, sn, R):
     """``R Rot_k``: a rotation about the local axis ``k`` turns two columns ``a, b`` of R by
-    ``(c, sn)`` (``a, b`` = 1, 2 about x; 2, 0 about y; 0, 1 about z)."""
+    ``(c, sn)`` (``a, b`` = 1, 2 about x; 2, 0 about y; 0, 1 about z): a 2x2 rotation (E48)."""
     R00, R01, R02, R10, R11, R12, R20, R21, R22 = R
     if k == 0:
         return (R00, c * R01 + sn * R02, -sn * R01 + c * R02, R10, c * R11 + sn * R12, -sn * R11 + c * R12,
@@ -63,7 +63,7 @@ def _turn(k, c, sn, R):
 
 @njit(cache=True, inline="always")
 def _slot(slot, x, R, o):
-    """``E_slot(x)`` applied to the pose ``(R, o)``; returns the new pose and the factor's unit twist
+    """``E_slot(x)`` applied to the pose ``(R, o)`` (E48); returns the new pose and the factor's unit twist
     ``s = (w, v)`` (E27): a translation moves o along column ``slot`` (``s = (0, R e)``), a rotation
     turns R (``s = (R e, o x R e)``)."""
     if slot < 3:

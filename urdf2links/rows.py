@@ -42,7 +42,8 @@ def state_rows(n: int, names, named) -> Rows:
     if a.ndim not in (1, 2) or a.shape[-1] != n:
         raise ValueError(f"{first} must have shape ({n},) for one state or (B, {n}) for a batch, for coordinates "
                          f"{tuple(names)}; got shape {a.shape}")
-    out = [kernel_array(a.reshape(-1, n))]
+    B = a.shape[0] if a.ndim == 2 else 1      # not reshape(-1, n): a model without coordinates has n = 0
+    out = [kernel_array(a.reshape(B, n))]
     for name, v in named[1:]:
         if v is None:
             out.append(None)
@@ -51,7 +52,7 @@ def state_rows(n: int, names, named) -> Rows:
         if b.shape != a.shape:
             raise ValueError(f"{name} must have the shape of {first}, {a.shape}, for coordinates {tuple(names)}; "
                              f"got shape {b.shape}")
-        out.append(kernel_array(b.reshape(-1, n)))
+        out.append(kernel_array(b.reshape(B, n)))
     return Rows(a.ndim == 2, out)
 
 
