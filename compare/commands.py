@@ -115,7 +115,7 @@ def compare_command(args) -> int:
             return 2
     c = compare_scene(scene, t_end=args.t_end, mujoco_integrator=args.mujoco_integrator, mujoco_dt=args.mujoco_dt,
                       method=args.method, rtol=args.rtol, states=args.states, seed=args.seed,
-                      progress=False if quiet else None, log=log)
+                      progress=False if quiet else None, log=log, max_wall=args.max_wall)
     summary = json_ready(c.summary())
     check = None
     if baselines is not None:
@@ -162,7 +162,8 @@ def report_command(args) -> int:
         try:
             c = compare_scene(scene, t_end=T, mujoco_integrator=args.mujoco_integrator, mujoco_dt=args.mujoco_dt,
                               states=args.states, t_end_note=note, progress=False if args.quiet else None,
-                              log=(lambda m: None) if args.quiet else (lambda m: err(f"    {m}")))
+                              log=(lambda m: None) if args.quiet else (lambda m: err(f"    {m}")),
+                              max_wall=args.max_wall)
         except Exception as exc:  # keep going: one broken scene must not hide the others
             err(f"    FAILED: {type(exc).__name__}: {exc}")
             errors.append(f"{f}: {exc}")

@@ -57,6 +57,7 @@ import mujoco
 import numpy as np
 
 from urdf2links.console import shown_path
+from urdf2links.errors import IntegrationError
 from urdf2links.limits import LimitExcursion
 from urdf2links.plan import compile_plan
 from urdf2links.scene import Scene, load_scene, robot_stem
@@ -438,13 +439,16 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
                   method: str | None = None, rtol: float | None = None, atol: float | None = None,
                   samples: int | None = None, states: int = 8, seed: int = 0,
                   threshold: float = DIVERGENCE_THRESHOLD, t_end_note: str | None = None,
-                  progress: bool | None = None, log: Callable[[str], None] | None = None) -> SceneComparison:
+                  progress: bool | None = None, log: Callable[[str], None] | None = None,
+                  max_wall: float | None = None) -> SceneComparison:
     """Run ``scene`` (a :class:`~urdf2links.scene.Scene` or a path to its TOML) with the project's
     integrator (the scene's ``[run]`` unless ``method``/``rtol``/``atol`` say otherwise) and with
     MuJoCo (``mujoco_integrator``, ``mujoco_dt``) over ``t_end`` (default the scene's) and compare
     them (module doc). ``samples`` defaults to the scene's, scaled down with a shortened
     ``t_end`` (at least 101). ``t_end_note`` is recorded when the caller capped ``t_end``.
-    ``log(message)`` receives stage messages; ``progress`` the project's progress bar."""
+    ``log(message)`` receives stage messages; ``progress`` the project's progress bar. ``max_wall``
+    (seconds, from the start of the comparison) bounds the project's integration, and MuJoCo's run is
+    not started once it is spent: :class:`~urdf2links.errors.IntegrationError` says so."""
     start = time.perf_counter()
     say = log or (lambda _m: None)
     if isinstance(scene, (str, Path)):
@@ -468,8 +472,14 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     meth = method or scene.run.method
     say(f"project: {meth}" + (f" rtol {rtol or scene.run.rtol:g}" if meth not in ("RK4", "midpoint") else "")
         + f", t = 0..{T:g} s")
+    left = None if max_wall is None else max_wall - (time.perf_counter() - start)
+    if left is not None and left <= 0:
+        raise IntegrationError(f"{scene.path or scene.name}: max_wall={max_wall:g} s spent before the project's run "
+                               "(loading and terms)")
     traj = simulate(scene, model=model, t_end=T, method=method, rtol=rtol, atol=atol, samples=samples,
-                    progress=progress)
+                    progress=progress, max_wall=left)
+    if max_wall is not None and time.perf_counter() - start > max_wall:
+        raise IntegrationError(f"{scene.path or scene.name}: max_wall={max_wall:g} s spent before MuJoCo's run")
     say(f"MuJoCo: {mujoco_integrator} dt {mujoco_dt:g}, {int(round(T / mujoco_dt))} steps")
     run = run_mujoco(mj, scene, t_end=T, samples=samples)
 

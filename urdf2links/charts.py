@@ -322,13 +322,15 @@ class ChartedRun:
 
 def integrate_charted(original: Model, make_plan, y0, t_span, *, t_eval, method, rtol, atol, dt=None,
                       callback=None, recharting: bool = True, cos_min: float = CHART_COS_MIN,
-                      exclude=(), base_state=lambda t: None) -> ChartedRun:
+                      exclude=(), base_state=lambda t: None, max_steps: int | None = None,
+                      max_wall: float | None = None) -> ChartedRun:
     """Integrate ``y = (q, qd, W)`` (2n + 1,) of ``original`` over ``t_span`` in segments: each runs
     ``make_plan(model).rhs`` until an :class:`AngleGuard` on the floating links' ``phi_y`` fires, then
     the links whose guard fired are re-charted (:func:`rechart`) and the next segment starts from the
     same ``t``. Links not re-charted (``recharting=False``, or a coordinate of theirs in ``exclude``)
     raise :class:`~urdf2links.errors.DynamicsError` at ``|cos phi_y| < SINGULAR_COS_MIN``. ``base_state(t)``: the base for the reported condition
-    numbers. Other arguments as :func:`~urdf2links.integrators.integrate`."""
+    numbers. ``max_steps`` and ``max_wall`` bound the whole run (all segments). Other arguments as
+    :func:`~urdf2links.integrators.integrate`."""
     from .errors import DynamicsError
 
     start = time.perf_counter()
@@ -353,8 +355,10 @@ def integrate_charted(original: Model, make_plan, y0, t_span, *, t_eval, method,
             continue
         plan = make_plan(chart.model)
         te = t_eval[(t_eval >= t) if not segments else (t_eval > t)]
+        budget = {"max_steps": None if max_steps is None else max(1, max_steps - nsteps),
+                  "max_wall": None if max_wall is None else max(1e-3, max_wall - (time.perf_counter() - start))}
         res = integrate(plan.rhs, (t, t1), y, method=method, rtol=rtol, atol=atol, dt=dt, t_eval=te,
-                        dense=True, callback=callback, stop=guard)
+                        dense=True, callback=callback, stop=guard, **budget)
         nfev, nsteps = nfev + res.nfev, nsteps + res.nsteps
         seg = Segment(chart, plan, t, float(res.sol.t_max), res)
         segments.append(seg)

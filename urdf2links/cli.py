@@ -12,7 +12,7 @@ import warnings
 
 import numpy as np
 
-from .errors import DynamicsError, SceneError, URDFError
+from .errors import DynamicsError, IntegrationError, SceneError, URDFError
 from .limits import LimitExcursion
 from .transforms import PARAMETERS
 
@@ -149,7 +149,7 @@ def _simulate(args) -> int:
         warnings.simplefilter("ignore" if scene.path is None else "default")  # default scene: audit in inspect
         model = scene.model()
     traj = simulate(scene, model=model, t_end=args.t_end, method=args.method, rtol=args.rtol, dt=args.dt,
-                    progress=False if args.quiet else None)
+                    progress=False if args.quiet else None, max_wall=args.max_wall)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     stem = scene.name if scene.path is not None else f"{robot_stem(scene.robot)}_{scene.name}"  # default scene
@@ -200,6 +200,24 @@ def _add_mujoco_options(p) -> None:
     p.add_argument("--factor", type=float, help="allowed growth of an error over its baseline (default: the "
                    "baselines file's factor, 10)")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    _add_max_wall(p)
+
+
+def _max_wall(text: str) -> float:
+    """``--max-wall SECONDS``: a positive number of seconds."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--max-wall {text!r}: not a number of seconds") from None
+    if not (value > 0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"--max-wall {text!r}: must be a finite number of seconds > 0")
+    return value
+
+
+def _add_max_wall(p) -> None:
+    p.add_argument("--max-wall", type=_max_wall, metavar="SECONDS", help="wall-clock budget of the project's "
+                   "integration (per scene): past it the run ends with an IntegrationError (exit 2) instead of "
+                   "running on (default: none; step-size underflow and 1e7 steps end a run anyway)")
 
 
 def _add_robot_options(p, *, inspect: bool = False) -> None:
@@ -245,6 +263,7 @@ def main(argv=None) -> int:
     p.add_argument("--out", default="out", help="folder for .npz, .csv and .png (default: out)")
     p.add_argument("--plot", action="store_true", help="also plot coordinates and energy against time (PNG)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    _add_max_wall(p)
     p.set_defaults(func=_simulate)
     p = sub.add_parser("compare", help="run a scene with urdf2links and MuJoCo and write the comparison report",
                        description="Run a scene with urdf2links and with MuJoCo (route 1: the project's tree as MJCF, "
@@ -299,7 +318,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     try:
         return args.func(args)
-    except (URDFError, SceneError, DynamicsError) as err:
+    except (URDFError, SceneError, DynamicsError, IntegrationError) as err:
         print(f"urdf2links {args.command}: error: {err}", file=sys.stderr)
         return 2
 

@@ -25,12 +25,12 @@ Properties used throughout:
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
 from urdf2links.description import Geometry
 from urdf2links.errors import InertiaError, MeshError, URDFValueError
+from urdf2links.mesh_paths import check_mesh_file
 from urdf2links.rotations import homogeneous, rpy_to_matrix
 
 __all__ = [
@@ -318,9 +318,7 @@ def _mesh_unit_H(geometry: Geometry) -> tuple[float, np.ndarray, str, list[str]]
     name = geometry.filename or (str(geometry.path) if geometry.path else "<unnamed>")
     if geometry.path is None:
         raise MeshError(f"mesh {name!r} could not be resolved to a file")
-    path = Path(geometry.path)
-    if not path.is_file():
-        raise MeshError(f"mesh {name!r}: file {str(path)!r} does not exist")
+    path = check_mesh_file(geometry.path, name=name)   # a regular file with a mesh suffix, or MeshError
     try:
         mesh = trimesh.load(str(path), force="mesh")
     except Exception as exc:  # trimesh raises many types for bad files

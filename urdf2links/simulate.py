@@ -16,10 +16,12 @@ import numpy as np
 
 from .charts import integrate_charted, link_poses
 from .console import Progress
+from .errors import IntegrationError
 from .limits import limit_excursions
 from .model import Model
 from .plan import compile_plan
-from .scene import RunSettings, Scene
+from .ranges import MAX_STEPS
+from .scene import RunSettings, Scene, check_run
 
 __all__ = ["Trajectory", "simulate", "Progress"]
 
@@ -80,7 +82,8 @@ class Trajectory:
 
 def simulate(scene_or_model, *, t_end: float | None = None, method: str | None = None, rtol: float | None = None,
              atol: float | None = None, dt: float | None = None, samples: int | None = None, q0=None, qd0=None,
-             progress: bool | None = None, model: Model | None = None, recharting: bool | None = None) -> Trajectory:
+             progress: bool | None = None, model: Model | None = None, recharting: bool | None = None,
+             max_wall: float | None = None, max_steps: int = MAX_STEPS) -> Trajectory:
     """Integrate a scene (a :class:`~urdf2links.scene.Scene`, a path to a scene file) or a bare
     :class:`~urdf2links.model.Model` (gravity as the model says, nothing else acting).
 
@@ -93,6 +96,12 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
     on): the run is then integrated in segments, ``q``/``qd`` are reported in the loaded model's
     coordinates, the re-charted links' poses are recorded, and ``stats['recharts']`` lists the
     switches. Without re-charting, reaching the singularity raises a DynamicsError.
+
+    A run that cannot finish raises :class:`~urdf2links.errors.IntegrationError` saying why: the step
+    size fell below the spacing of floating-point numbers, more than ``max_steps`` accepted steps
+    (default :data:`~urdf2links.ranges.MAX_STEPS`), more than ``max_wall`` seconds of wall time
+    (default: no budget; ``--max-wall`` on the command line), a non-finite state. Overrides are checked
+    like a scene's ``[run]`` (:func:`~urdf2links.scene.check_run`: SceneError naming the value and its range).
     """
     from .scene import load_scene
 
@@ -109,10 +118,11 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
     else:
         raise TypeError(f"simulate takes a Scene, a scene file path or a Model; got {type(scene_or_model).__name__}")
     run = scene.run
-    run = RunSettings(t_end=run.t_end if t_end is None else float(t_end), method=method or run.method,
-                      rtol=run.rtol if rtol is None else rtol, atol=run.atol if atol is None else atol,
-                      dt=run.dt if dt is None else dt, samples=run.samples if samples is None else int(samples),
-                      recharting=run.recharting if recharting is None else bool(recharting))
+    run = check_run(RunSettings(t_end=run.t_end if t_end is None else t_end, method=method or run.method,
+                                rtol=run.rtol if rtol is None else rtol, atol=run.atol if atol is None else atol,
+                                dt=run.dt if dt is None else dt, samples=run.samples if samples is None else samples,
+                                recharting=run.recharting if recharting is None else bool(recharting)),
+                    f"{scene.path or scene.name}: simulate()", prefix="")
     plan = compile_plan(scene, model)
     q, qd = scene.initial_state(model)
     if q0 is not None:
@@ -129,9 +139,14 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
         res = integrate_charted(model, lambda m: plan if m is model else compile_plan(scene, m), y0,
                                 (0.0, run.t_end), t_eval=t_eval, method=run.method, rtol=run.rtol, atol=run.atol,
                                 dt=run.dt if run.method in ("RK4", "midpoint") else None, callback=bar,
-                                recharting=run.recharting, exclude=exclude, base_state=plan.base_state)
+                                recharting=run.recharting, exclude=exclude, base_state=plan.base_state,
+                                max_steps=max_steps, max_wall=max_wall)
     finally:
         bar.close()
+    if not res.success:
+        raise IntegrationError(f"{scene.path or scene.name}: {run.method} (rtol {run.rtol:g}"
+                               + (f", dt {run.dt:g}" if run.dt and run.method in ("RK4", "midpoint") else "")
+                               + f") could not finish the run to t_end = {run.t_end:g} s: {res.message}")
     t = res.t
     qs, qds, W = res.y[:, :n], res.y[:, n:2 * n], res.y[:, 2 * n]
     # energies and poses in the chart that computed each sample (regular there)
