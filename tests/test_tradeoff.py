@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-pytest.importorskip("mujoco")
+import mujoco  # noqa: F401,E402 -- a declared dependency: a broken MuJoCo fails the suite
 
 from urdf2links.compare.tradeoff import crossover, run_study
 from urdf2links.compare.tradeoff_report import write_study  # noqa: E402

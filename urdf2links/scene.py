@@ -263,7 +263,9 @@ class _Reader:
         valid = (f"{'(' if positive and low is None else '['}{lo:g}, {hi:g}]{unit}")
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
             self.fail(key, f"must be a finite number in {valid}, got {value!r}")
-        if (positive and value <= 0) or value < lo or value > hi:
+        if lo == 0 and (value < 0 or (positive and value == 0)):
+            self.fail(key, f"must {'be positive' if positive else 'not be negative'}, got {value!r}: valid range {valid}")
+        if value < lo or value > hi:
             self.fail(key, f"{value!r} is outside the valid range {valid}")
         return float(value)
 
