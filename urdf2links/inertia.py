@@ -30,7 +30,7 @@ import numpy as np
 
 from urdf2links.description import Geometry
 from urdf2links.errors import InertiaError, MeshError, URDFValueError
-from urdf2links.mesh_paths import check_mesh_file
+from urdf2links.mesh_paths import check_mesh_file, unresolved_mesh_problem
 from urdf2links.rotations import homogeneous, rpy_to_matrix
 
 __all__ = [
@@ -317,7 +317,7 @@ def _mesh_unit_H(geometry: Geometry) -> tuple[float, np.ndarray, str, list[str]]
 
     name = geometry.filename or (str(geometry.path) if geometry.path else "<unnamed>")
     if geometry.path is None:
-        raise MeshError(f"mesh {name!r} could not be resolved to a file")
+        raise MeshError(f"mesh {name!r}: {unresolved_mesh_problem(geometry.filename or '')}")
     path = check_mesh_file(geometry.path, name=name)   # a regular file with a mesh suffix, or MeshError
     try:
         mesh = trimesh.load(str(path), force="mesh")

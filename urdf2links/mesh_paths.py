@@ -22,7 +22,7 @@ from .description import Geometry
 from .errors import MeshError
 
 __all__ = ["resolve_mesh_path", "require_mesh", "find_package_dir", "check_mesh_file", "MESH_SUFFIXES",
-           "leaves_package"]
+           "leaves_package", "unresolved_mesh_problem"]
 
 #: Suffixes of the mesh formats trimesh reads (and the corpus uses: stl, dae, obj); others are refused.
 MESH_SUFFIXES = (".stl", ".dae", ".obj", ".ply", ".off", ".glb", ".gltf", ".3mf", ".stp", ".step", ".xaml",
@@ -126,27 +126,31 @@ def resolve_mesh_path(filename: str, *, directory=None, package_dirs=()) -> Path
     return None
 
 
+def unresolved_mesh_problem(filename: str) -> str:
+    """Why a mesh ``filename`` did not resolve to a readable file, in words (for a MeshError)."""
+    name = filename or ""
+    if name.startswith(("package://", "model://")):
+        pkg, _, rest = unquote(name.split("://", 1)[1]).partition("/")
+        if not pkg or leaves_package(rest) or leaves_package(pkg):
+            return ("it leaves its package folder ('..' or an absolute path after the package name); it is not read: "
+                    "name a file inside the package")
+        return (f"it was not found; pass package_dirs=[<folder that contains '{pkg}'>] to parse_urdf, "
+                "or correct the filename")
+    plain = _plain_path(name)
+    kind = _kind_of(plain) if plain.is_absolute() else None
+    if kind is not None:
+        return f"it is {kind}, not a regular file; it is not read"
+    return "it was not found; correct the filename"
+
+
 def require_mesh(geometry: Geometry, *, link: str, source: str) -> Path:
     """The resolved path of a mesh geometry, or a :class:`MeshError` naming file, link and mesh."""
     if geometry.kind != "mesh":
         raise MeshError(f"{source}: link '{link}': the geometry is a {geometry.kind}, not a mesh")
     if geometry.path is not None:
         return check_mesh_file(geometry.path, name=geometry.filename or str(geometry.path))
-    fix = "correct the filename"
-    name = geometry.filename or ""
-    if name.startswith(("package://", "model://")):
-        pkg, _, rest = unquote(name.split("://", 1)[1]).partition("/")
-        if not pkg or leaves_package(rest) or leaves_package(pkg):
-            raise MeshError(f"{source}: link '{link}': mesh '{name}' leaves its package folder ('..' or an absolute "
-                            "path after the package name); it is not read: name a file inside the package")
-        fix = (f"pass package_dirs=[<folder that contains '{pkg}'>] to parse_urdf, "
-               "or correct the filename")
-    else:
-        plain = _plain_path(name)
-        kind = _kind_of(plain) if plain.is_absolute() else None
-        if kind is not None:
-            raise MeshError(f"{source}: link '{link}': mesh '{name}' is {kind}, not a regular file; it is not read")
-    raise MeshError(f"{source}: link '{link}': mesh '{geometry.filename}' was not found; {fix}")
+    raise MeshError(f"{source}: link '{link}': mesh '{geometry.filename}': "
+                    f"{unresolved_mesh_problem(geometry.filename or '')}")
 
 
 def find_package_dir(pkg: str, *, directory=None, package_dirs=()) -> Path | None:

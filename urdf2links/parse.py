@@ -155,9 +155,9 @@ class _Reader:
         return None if el is None or el.get(attr) is None else self.scalar(el, attr, what, quantity=quantity)
 
     def direction(self, el, attr: str, n: int, what: str, default) -> np.ndarray:
-        """``n`` finite numbers whose norm is finite and not below 1e-12 (a direction to normalize), or
-        all zeros (the caller says whether a zero vector is allowed)."""
-        v = self.floats(el, attr, n, what, default)
+        """``n`` numbers within +-1e6 whose norm is not below 1e-12 (a direction to normalize), or all
+        zeros (the caller says whether a zero vector is allowed)."""
+        v = self.floats(el, attr, n, what, default, quantity="multiplier")
         norm = math.hypot(*v)
         if v.any() and not (math.isfinite(norm) and norm >= 1e-12):
             self.fail(el, f"{what} {attr}=\"{el.get(attr)}\"", f"the vector's length {norm:g} cannot be "

@@ -146,7 +146,8 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
     if not res.success:
         raise IntegrationError(f"{scene.path or scene.name}: {run.method} (rtol {run.rtol:g}"
                                + (f", dt {run.dt:g}" if run.dt and run.method in ("RK4", "midpoint") else "")
-                               + f") could not finish the run to t_end = {run.t_end:g} s: {res.message}")
+                               + f") could not finish the run to t_end = {run.t_end:g} s: {res.message}"
+                               + (f" (max_wall {max_wall:g} s for the whole run)" if max_wall is not None else ""))
     t = res.t
     qs, qds, W = res.y[:, :n], res.y[:, n:2 * n], res.y[:, 2 * n]
     # energies and poses in the chart that computed each sample (regular there)

@@ -71,7 +71,7 @@ Outcome = namedtuple("Outcome", ["t", "y", "sol", "nfev", "njev", "nrejected", "
 
 def wall_message(max_wall: float, t: float, steps: int) -> str:
     """The message of a run ended by its wall-clock budget."""
-    return (f"max_wall={max_wall:g} s of wall time reached at t={t!r} after {steps} steps (the run did not finish "
+    return (f"max_wall={max_wall:.3g} s of wall time reached at t={t!r} after {steps} steps (the run did not finish "
             "within its wall-clock budget)")
 
 
