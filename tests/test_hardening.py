@@ -17,7 +17,7 @@ import pytest
 
 from urdf2links import load_urdf, load_urdf_string
 from urdf2links.description import Geometry, Origin
-from urdf2links.errors import IntegrationError, MeshError, SceneError, URDFValueError
+from urdf2links.errors import IntegrationError, MeshError, SceneError, URDFSyntaxError, URDFValueError
 from urdf2links.inertia import geometry_inertia
 from urdf2links.integrators import integrate
 from urdf2links.mesh_paths import require_mesh, resolve_mesh_path
@@ -85,6 +85,18 @@ def test_joint_limits_need_only_be_finite():
     """The corpus writes 1e16 for "no limit": read as written (the limits are never used in the dynamics)."""
     model = load_urdf_string(two_links())
     assert model.info["joints"][0]["lower"] == -1e16
+
+
+@pytest.mark.parametrize("prolog", [
+    '<!DOCTYPE robot [<!ENTITY a "aaaaaaaaaa"><!ENTITY b "&a;&a;&a;&a;&a;&a;&a;&a;&a;&a;">]>',
+    '<!DOCTYPE robot [<!ENTITY x SYSTEM "file:///etc/passwd">]>',
+    '<!DOCTYPE robot [\n <!ENTITY x SYSTEM "http://example.invalid/x">\n]>',
+])
+def test_entity_declarations_stay_refused(prolog):
+    """Entity bombs and external entities: refused before parsing, naming the line (nothing expanded)."""
+    text = f'<?xml version="1.0"?>\n{prolog}\n<robot name="r"><link name="a"/></robot>'
+    with pytest.raises(URDFSyntaxError, match=r"<string>, line 2: the document declares XML entities"):
+        load_urdf_string(text)
 
 
 # ---------------------------------------------------------------------------------------- mesh paths
