@@ -58,6 +58,7 @@ import numpy as np
 
 from urdf2links.console import shown_path
 from urdf2links.errors import IntegrationError
+from urdf2links.ranges import MAX_STEPS
 from urdf2links.limits import LimitExcursion
 from urdf2links.plan import compile_plan
 from urdf2links.scene import Scene, load_scene, robot_stem
@@ -457,6 +458,11 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
         warnings.simplefilter("ignore")  # audit findings: the scene chose how to load its robot
         model = scene.model()
     T = float(scene.run.t_end if t_end is None else t_end)
+    steps = T / mujoco_dt if isinstance(mujoco_dt, (int, float)) and mujoco_dt > 0 else math.inf
+    if not steps <= MAX_STEPS:     # MuJoCo's run is t_end / timestep steps: refused before it starts
+        raise IntegrationError(f"{scene.path or scene.name}: MuJoCo timestep {mujoco_dt!r} over t_end = {T:g} s makes "
+                               f"{steps:.3g} steps, more than the {MAX_STEPS:g} a run may take: give a timestep in "
+                               f"[{T / MAX_STEPS:g}, {T:g}] s")
     if samples is None:
         s = scene.run.samples
         samples = s if T >= scene.run.t_end else max(101, int(round((s - 1) * T / scene.run.t_end)) + 1)

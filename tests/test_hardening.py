@@ -278,3 +278,13 @@ def test_cli_max_wall_ends_simulate_with_a_clean_error(tmp_path):
     bad = subprocess.run([sys.executable, "-m", "urdf2links.cli", "simulate", "x.toml", "--max-wall", "-1"],
                          capture_output=True, text=True, timeout=300)
     assert bad.returncode == 2 and "--max-wall '-1': must be a finite number of seconds > 0" in bad.stderr
+
+
+@pytest.mark.parametrize("mujoco_dt", [1e-12, 0.0, -1e-3, float("nan")])
+def test_a_mujoco_run_of_too_many_steps_is_refused_before_it_starts(mujoco_dt):
+    """compare: MuJoCo's run is t_end / timestep steps, known in advance: beyond the step limit (or with a
+    timestep that is not positive) it is refused with an IntegrationError before anything runs."""
+    from urdf2links.compare.trajectory import compare_scene
+
+    with pytest.raises(IntegrationError, match=r"MuJoCo timestep .* more than the 1e\+07 a run may take"):
+        compare_scene(ROBOTS / "double_pendulum_chaos.toml", t_end=1.0, mujoco_dt=mujoco_dt, progress=False)
