@@ -137,6 +137,8 @@ def robot_text(draw, *, max_joints: int = 6) -> str:
 BAD_NUMBERS = ("nan", "NaN", "inf", "-inf", "1e308", "-1e308", "1e999", "-1", "0", "-0", "1e-320", "5e-324",
                "1e9", "1e15", "1e4", "2e4", "abc", "", " ", "1,5", "0x10", "${x}", "1_000", "1e", "--1",
                "1 2", "1 2 3 4", "nan nan nan", "1e308 1e308 1e308", "1e-320 0 0", "-1 -1 -1", "0 0 0")
+#: finite numbers whose products overflow float64 (m c c^T, T H T^T, the audit's eigenvalues)
+OVERFLOWING = ("1e308", "-1e308", "1.7e308", "1e200", "1e160", "3e154", "1e300 1e300 1e300", "0 0 1e200")
 BAD_PATHS = ("../../etc/passwd", "/etc/passwd", "/dev/zero", "/dev/null", "/", "/proc/self/environ",
              "package://pkg/../../etc/passwd", "package://../etc/passwd", "package://pkg/%2e%2e/%2e%2e/etc/passwd",
              "file:///dev/zero", "meshes/folder.stl", "meshes/missing.stl", "~nobody_here/x.stl", "package://",
@@ -158,13 +160,15 @@ def _mutate_tree(draw, root) -> None:
                                "dup_name", "cycle", "type", "mesh", "unknown_el", "swap_child"]))
     if op in ("number", "delete_attr"):
         owners = [(el, a) for el in els for a in el.attrib]
+        numeric = [(el, a) for el, a in owners if a in ("value", "xyz", "ixx", "ixy", "ixz", "iyy", "iyz", "izz",
+                                                         "size", "radius", "length", "scale", "damping", "multiplier")]
         if not owners:
             return
-        el, attr = draw(st.sampled_from(owners))
+        el, attr = draw(st.sampled_from(numeric if numeric and draw(st.booleans()) else owners))
         if op == "delete_attr":
             del el.attrib[attr]
         else:
-            el.set(attr, draw(st.sampled_from(BAD_NUMBERS)))
+            el.set(attr, draw(st.sampled_from(OVERFLOWING if draw(st.integers(0, 2)) == 0 else BAD_NUMBERS)))
     elif op in ("delete_el", "duplicate_el"):
         el = draw(st.sampled_from(els[1:] or els))
         parent = el.getparent()
@@ -354,3 +358,26 @@ def mutated_scene(draw) -> tuple[str, str]:
         i = draw(st.integers(0, len(text)))
         return name, text[:i] + draw(st.sampled_from(["", "=", "[", "\x00", "]]", "nan", "\n[run]\nt_end = -1\n"]))
     return name, toml_text(mutate_scene_data(draw, tomllib.loads(text)))
+
+
+# ------------------------------------------------------------------------- the issue's known failures
+
+def known_bad_urdf() -> list[tuple[str, dict]]:
+    """(text, load options) of the failure classes issue 15 found by hand, run as explicit examples in every
+    profile: finite values whose products overflow (before: a bare LinAlgError "Eigenvalues did not
+    converge", ValueError "H must be a finite symmetric (4, 4) matrix", or NaN terms), device and escaping
+    mesh paths read by a repair, an entity bomb and an external entity."""
+    text = (ROBOTS / "pendulum.urdf").read_text()
+    massless = text.replace('<mass value="1.3"/>', '<mass value="0"/>').replace(
+        'ixx="0.05" iyy="0.05" izz="0.005"', 'ixx="0" iyy="0" izz="0"')
+    cases = [(text.replace('<mass value="1.3"/>', f'<mass value="{v}"/>'), {}) for v in ("1e308", "-1e308", "1e200")]
+    cases += [(text.replace('ixx="0.05"', f'ixx="{v}"'), {}) for v in ("1e308", "1e200")]
+    cases += [(text.replace('<origin xyz="0 0 -0.7"', f'<origin xyz="{v}"'), {}) for v in ("0 0 1e200", "1e308 0 0")]
+    cases += [(text.replace('<axis xyz="1 0 0"/>', '<axis xyz="1 0 0"/><origin xyz="1e200 0 0"/>'), {})]
+    cases += [(text.replace('<axis xyz="1 0 0"/>', f'<axis xyz="{v}"/>'), {}) for v in ("1e308 1e308 0", "1e-320 0 0")]
+    for path in ("/dev/zero", "package://pkg/../../etc/passwd", "../../../../../../etc/passwd", "meshes/folder.stl"):
+        mesh = f'<collision><geometry><mesh filename="{path}"/></geometry></collision>'
+        cases.append((massless.replace("</visual>\n  </link>", f"</visual>{mesh}\n  </link>"), {"inertia": "repair"}))
+    cases.append((ENTITY_BOMB + text.split("?>", 1)[1].replace("<robot", '<robot note="&d;"', 1), {}))
+    cases.append((EXTERNAL_ENTITY + text.split("?>", 1)[1].replace('name="rod"', 'name="&x;"', 1), {}))
+    return cases

@@ -32,10 +32,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
-from fuzz_inputs import mutated_scene, mutated_urdf, robot_text, write_mesh_folder
+from fuzz_inputs import known_bad_urdf, mutated_scene, mutated_urdf, robot_text, write_mesh_folder
 from urdf2links import load_urdf
 from urdf2links.errors import DynamicsError, IntegrationError, SceneError, URDFError
 from urdf2links.scene import load_scene
@@ -116,7 +116,16 @@ def test_random_valid_trees_load_and_agree_with_the_literal_oracle(text, floatin
     COUNTS["valid trees"]["loaded and agreed"] += 1
 
 
+def _with_known_failures(test):
+    """The issue's hand-found failures as explicit examples (run first, in every profile)."""
+    for text, options in reversed(known_bad_urdf()):
+        test = example(text=text, options={"inertia": "audit", "floating_base": False, "mimic": "independent",
+                                           "strict": False, **options})(test)
+    return test
+
+
 @settings(max_examples=BASE, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@_with_known_failures
 @given(text=mutated_urdf(), options=st.fixed_dictionaries({
     "inertia": st.sampled_from(["audit", "repair", "strict"]), "floating_base": st.booleans(),
     "mimic": st.sampled_from(["independent", "coupled"]), "strict": st.booleans()}))
