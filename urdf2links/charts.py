@@ -76,6 +76,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .integrators import AngleGuard, integrate
+from .loops import wall_message
 from .model import Model
 from .rotations import matrix_to_xyz_angles, xyz_angles_to_matrix
 from .tree import LinkSpec, build_tree
@@ -350,6 +351,14 @@ def integrate_charted(original: Model, make_plan, y0, t_span, *, t_eval, method,
     success, message = True, "reached t_end"
     t = t0
     while True:
+        # the budgets bound the whole run: a run that re-charts at every step (rates of ~1e6 rad/s) has
+        # segments of one step each, every one inside its own integrate() budget
+        if segments and max_wall is not None and time.perf_counter() - start > max_wall:
+            success, message = False, wall_message(max_wall, float(t), nsteps)
+            break
+        if segments and max_steps is not None and nsteps >= max_steps:
+            success, message = False, f"max_steps={max_steps} reached at t={float(t)!r}"
+            break
         if movable and _due(movable, y, cos_min):  # at the start of a segment: switch at once
             chart, y = _switch(original, chart, movable, t, y, cos_min, recharts, base_state)
             continue
