@@ -288,3 +288,18 @@ def test_a_mujoco_run_of_too_many_steps_is_refused_before_it_starts(mujoco_dt):
 
     with pytest.raises(IntegrationError, match=r"MuJoCo timestep .* more than the 1e\+07 a run may take"):
         compare_scene(ROBOTS / "double_pendulum_chaos.toml", t_end=1.0, mujoco_dt=mujoco_dt, progress=False)
+
+
+def test_the_budget_bounds_a_run_that_re_charts_at_every_step():
+    """Found by the slow fuzz profile: a free body spinning at 1e5 rad/s passes phi_y = +-pi/2 at nearly every
+    step, so the run is thousands of one-step segments, each re-charted and compiled. Every segment kept its
+    own budget and the run went on past 60 s with a 2 s budget; now the budget bounds the whole run."""
+    import tomllib
+
+    data = tomllib.loads((ROBOTS / "free_body_gimbal.toml").read_text())
+    data["initial"]["qd"] = {k: 1e5 for k in ("body.phi_x", "body.phi_y", "body.phi_z")}
+    scene = scene_from_dict(data, directory=ROBOTS)
+    start = time.perf_counter()
+    with pytest.raises(IntegrationError, match=r"wall time reached at t=.*\(max_wall 1 s for the whole run\)"):
+        simulate(scene, progress=False, max_wall=1.0)
+    assert time.perf_counter() - start < 30
