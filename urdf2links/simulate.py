@@ -9,6 +9,7 @@ the work of non-potential forces, and the power-balance error ``h - h(0) - W`` a
 from __future__ import annotations
 
 import csv
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -132,6 +133,7 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
     n = model.n
     y0 = np.r_[q, qd, 0.0]
     t_eval = np.linspace(0.0, run.t_end, max(run.samples, 2))
+    started = time.perf_counter()
     bar = Progress(run.t_end, label=f"{scene.name} {run.method}", enabled=progress)
     # torques and springs act on coordinates: their links keep their chart
     exclude = {c for c, _ in scene.torques} | {sp.coordinate for sp in plan.spring_set.springs}
@@ -162,6 +164,9 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
     recorded = list(dict.fromkeys([*scene.link_poses, *(r["link"] for r in res.recharts)]))
     poses = {link: np.empty((len(t), 4, 4)) for link in recorded}
     for i, (p, ti, a) in enumerate(zip(plans, t, qc)):
+        if recorded and max_wall is not None and i % 1000 == 0 and time.perf_counter() - started > max_wall:
+            raise IntegrationError(f"{scene.path or scene.name}: max_wall={max_wall:g} s spent while recording the poses "
+                                   f"of {', '.join(recorded)} at sample {i} of {len(t)} (fewer samples would do)")
         P = link_poses(p.model, recorded, a, t=ti, base=p.base_state(ti))
         for link in recorded:
             poses[link][i] = P[link]
