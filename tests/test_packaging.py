@@ -3,6 +3,7 @@ subpackages, no top-level `compare`, and shipped scenes that load from any folde
 
 from __future__ import annotations
 
+import functools
 import shutil
 import subprocess
 import sys
@@ -133,13 +134,17 @@ def _third_party_imports(folders) -> dict[str, set[str]]:
     return found
 
 
-def _distributions(module: str) -> set[str]:
+@functools.cache
+def _packages_distributions() -> dict:
     import importlib.metadata
 
+    return importlib.metadata.packages_distributions()   # scans every installed distribution: once
+
+
+def _distributions(module: str) -> set[str]:
     if module in IMPORT_ALIASES:
         return {IMPORT_ALIASES[module]}
-    names = importlib.metadata.packages_distributions().get(module, [])
-    return {n.lower().replace("_", "-") for n in names}
+    return {n.lower().replace("_", "-") for n in _packages_distributions().get(module, [])}
 
 
 def test_every_import_is_a_declared_dependency():
