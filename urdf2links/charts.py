@@ -332,7 +332,7 @@ def integrate_charted(original: Model, make_plan, y0, t_span, *, t_eval, method,
     raise :class:`~urdf2links.errors.DynamicsError` at ``|cos phi_y| < SINGULAR_COS_MIN``. ``base_state(t)``: the base for the reported condition
     numbers. ``max_steps`` and ``max_wall`` bound the whole run (all segments). Other arguments as
     :func:`~urdf2links.integrators.integrate`."""
-    from .errors import DynamicsError
+    from .errors import DynamicsError, IntegrationError
 
     start = time.perf_counter()
     t0, t1 = float(t_span[0]), float(t_span[1])
@@ -396,7 +396,11 @@ def integrate_charted(original: Model, make_plan, y0, t_span, *, t_eval, method,
     y_prev = np.array(y0, float)
     for k, (seg, (tk, yk)) in enumerate(zip(segments, pieces)):
         at, ay = [seg.t0], [_convert(seg, links, seg.result.sol(seg.t0), y_prev)]
-        for ti, yi in zip(tk, yk):
+        for i, (ti, yi) in enumerate(zip(tk, yk)):
+            if i % 1000 == 999 and max_wall is not None and time.perf_counter() - start > max_wall:
+                raise IntegrationError(f"model {original.name!r}: max_wall={max_wall:g} s spent while converting the "
+                                       f"samples back to the loaded chart's angles ({len(ts)} of {t_eval.size} done; "
+                                       f"{len(segments)} charts): fewer samples would do")
             # the loaded chart's states are the original ones (no per-sample dense evaluation: 1e6 samples took
             # ~10 minutes through _track)
             ay.append(np.array(yi, float) if not seg.chart.rotations else _track(seg, links, at[-1], ay[-1], ti))
