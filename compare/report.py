@@ -1,8 +1,10 @@
 """Reports of the MuJoCo cross-validation: a self-contained HTML page, ``summary.json`` and
 ``summary.md`` per scene, and an index page over scenes.
 
-* :func:`write_report` writes ``report.html`` (plots embedded as base64 PNG: coordinates of both
-  engines overlaid, error against time (log), energy of both engines, agreement of the terms),
+* :func:`write_report` writes ``report.html`` (the robot moving in both engines, MuJoCo's run a
+  translucent ghost (:mod:`urdf2links.compare.report_motion`); plots embedded as base64 PNG:
+  coordinates of both engines overlaid, error against time (log), energy of both engines,
+  agreement of the terms),
   ``summary.json`` (:meth:`urdf2links.compare.trajectory.SceneComparison.summary`, non-finite numbers
   written as the strings ``"nan"``/``"inf"``) and ``summary.md`` into
   ``<root>/<robot>/<scene>/`` (or a given folder).
@@ -22,6 +24,9 @@ from pathlib import Path
 
 from .baselines import CheckResult
 from .formatting import fmt, fmt_md, fmt_t, json_ready
+from urdf2links.animation import DEFAULT_FPS
+
+from .report_motion import motion_section
 from .report_plots import plot_coordinates, plot_energy, plot_error, plot_terms
 from .tradeoff_report import insert_section
 
@@ -81,8 +86,10 @@ def _headline(s) -> list:
     if s["base"]["moving"]:
         head.append(("base tracking error (MuJoCo)", fmt(s["base"]["tracking_error"]),
                      "max |base_A qpos - prescribed pose| (m, rad)"))
-    head += [("wall time, urdf2links", fmt(wt["project_s"], 2, " s"), f"{pr['method']}, {pr['nsteps']} steps, {pr['nfev']} evaluations"),
-             ("wall time, MuJoCo", fmt(wt["mujoco_s"], 2, " s"), f"{mj['integrator']} dt {mj['timestep']:g} s, {mj['nsteps']} steps")]
+    head += [("wall time, urdf2links", fmt(wt["project_s"], 3, " s"), f"{pr['method']}, {pr['nsteps']} steps, "
+              f"{pr['nfev']} evaluations; the integrator (section {_wall_section(s)})"),
+             ("wall time, MuJoCo", fmt(wt["mujoco_s"], 3, " s"), f"{mj['integrator']} dt {mj['timestep']:g} s, "
+              f"{mj['nsteps']} steps; the engine, mj_step(nstep) (section {_wall_section(s)})")]
     return head
 
 
@@ -184,6 +191,30 @@ def _energy_section(c, s) -> list[str]:
             f"<img alt='energy' src='data:image/png;base64,{plot_energy(c, s)}'>"]
 
 
+def _wall_section(s) -> int:
+    return 5 if s["base"]["moving"] else 4
+
+
+def _inputs_words(wt) -> str:
+    return {"none": "none (no control callback)",
+            "compiled": f"the compiled control callback ({wt['mujoco_callback_calls']} calls)",
+            "python": f"the Python control callback ({wt['mujoco_callback_calls']} calls; its time is in the engine's)",
+            }.get(wt["mujoco_inputs"], str(wt["mujoco_inputs"]))
+
+
+def _compile_words(wt) -> str:
+    """Compilation, on its own line when it happened."""
+    out = []
+    if wt["project_compiled"]:
+        out.append(f"urdf2links warm-up: numba compiled {len(wt['project_compiled'])} function(s) in "
+                   f"{wt['project_warmup_s']:.1f} s (once; not in the timed run).")
+    else:
+        out.append(f"urdf2links warm-up {wt['project_warmup_s']:.2f} s (compiled code loaded from numba's cache).")
+    if wt["mujoco_callback_compiled"]:
+        out.append(f"MuJoCo's control callback compiled in {wt['mujoco_callback_load_s']:.1f} s (once).")
+    return " ".join(out)
+
+
 def _closing_sections(s, command) -> list[str]:
     """Base motion (when it moves), wall time, notes, where the figures are."""
     e = html.escape
@@ -197,11 +228,17 @@ def _closing_sections(s, command) -> list[str]:
                      f"from the prescribed pose over the run: <b>{fmt(s['base']['tracking_error'])}</b> (m, rad).</p>")
         n_sec += 1
     parts.append(f"<h2>{n_sec}. Wall time</h2>")
-    parts.append(_rows([["urdf2links", e(pr["method"]), str(pr["nsteps"]), fmt(wt["project_s"], 2, " s")],
-                        ["MuJoCo", e(f"{mj['integrator']} dt {mj['timestep']:g}"), str(mj["nsteps"]), fmt(wt["mujoco_s"], 2, " s")]],
-                       ["engine", "integrator", "steps", "wall time"], num_cols=(2, 3)))
-    parts.append(f"<p class='small'>{e(wt['note'])}. Terms: {fmt(wt['terms_s'], 2, ' s')}; whole comparison "
-                 f"{fmt(wt['total_s'], 2, ' s')}.</p>")
+    parts.append(_rows([["urdf2links", e(pr["method"]), str(pr["nsteps"]), fmt(wt["project_s"], 3, " s"),
+                         fmt(wt["project_run_s"], 3, " s")],
+                        ["MuJoCo", e(f"{mj['integrator']} dt {mj['timestep']:g}"), str(mj["nsteps"]),
+                         fmt(wt["mujoco_s"], 3, " s"), fmt(wt["mujoco_harness_s"], 3, " s")]],
+                       ["engine", "integrator", "steps", "timed: the integration", "whole call"], num_cols=(2, 3, 4)))
+    regions = wt["regions"]
+    parts.append("<p class='small'><b>Timed.</b> " + e(regions["project_s"]) + ". " + e(regions["mujoco_s"])
+                 + ". <b>Whole call.</b> urdf2links: " + e(regions["project_run_s"]) + "; MuJoCo: "
+                 + e(regions["mujoco_harness_s"]) + f". MuJoCo's inputs: {e(_inputs_words(wt))}.</p>")
+    parts.append(f"<p class='small'>{e(_compile_words(wt))} Terms: {fmt(wt['terms_s'], 2, ' s')}; whole comparison "
+                 f"{fmt(wt['total_s'], 2, ' s')}; {e(wt['note'])}.</p>")
     if s["notes"]:
         parts.append("<h2>Notes</h2><ul class='notes'>" + "".join(f"<li>{e(n)}</li>" for n in s["notes"]) + "</ul>")
     if r2.get("notes"):
@@ -213,11 +250,13 @@ def _closing_sections(s, command) -> list[str]:
 
 
 def render_html(c, summary: dict, *, command: str | None = None, check: "CheckResult | None" = None,
-                index_link: str | None = None) -> str:
-    """The scene's self-contained report page (plots as base64 PNG); ``index_link``: relative
-    address of the index page, if any."""
-    parts = (_top(summary, check, index_link) + _terms_section(summary) + _trajectory_section(c, summary)
-             + _energy_section(c, summary) + _closing_sections(summary, command) + ["</body></html>"])
+                index_link: str | None = None, animation_fps: float = DEFAULT_FPS) -> str:
+    """The scene's self-contained report page (plots as base64 PNG, the motion section's viewer
+    inlined); ``index_link``: relative address of the index page, if any; ``animation_fps``: frames
+    per second of simulated time of the motion section (0: no motion section)."""
+    parts = (_top(summary, check, index_link) + motion_section(c, fps=animation_fps) + _terms_section(summary)
+             + _trajectory_section(c, summary) + _energy_section(c, summary) + _closing_sections(summary, command)
+             + ["</body></html>"])
     return "\n".join(parts)
 
 
@@ -245,9 +284,13 @@ def render_markdown(s: dict) -> str:
               f"| energy drift MuJoCo | {fmt_md(en['mujoco_drift'])} J ({fmt_md(en['mujoco_drift_rel'])} relative) |"]
     if s["base"]["moving"]:
         lines.append(f"| base tracking error | {fmt_md(s['base']['tracking_error'])} |")
-    lines += [f"| wall time urdf2links | {wt['project_s']:.2f} s ({pr['nsteps']} steps) |",
-              f"| wall time MuJoCo | {wt['mujoco_s']:.2f} s ({mj['nsteps']} steps) |", "",
-              f"Energy: {en['quantity']}; {en['note']}.", ""]
+    lines += [f"| wall time urdf2links (the integrator) | {wt['project_s']:.3g} s ({pr['nsteps']} steps; whole "
+              f"simulate() {wt['project_run_s']:.3g} s) |",
+              f"| wall time MuJoCo (the engine) | {wt['mujoco_s']:.3g} s ({mj['nsteps']} steps; whole run "
+              f"{wt['mujoco_harness_s']:.3g} s; inputs: {_inputs_words(wt)}) |", "",
+              f"Energy: {en['quantity']}; {en['note']}.", "",
+              f"Timed regions: urdf2links: {wt['regions']['project_s']}. MuJoCo: {wt['regions']['mujoco_s']}. "
+              + _compile_words(wt), ""]
     return "\n".join(lines)
 
 
@@ -255,11 +298,12 @@ def render_markdown(s: dict) -> str:
 
 
 def write_report(c, out_dir=None, *, root="reports", json_path=None, command: str | None = None,
-                 check: "CheckResult | None" = None, index_link: str | None = None) -> dict:
+                 check: "CheckResult | None" = None, index_link: str | None = None,
+                 animation_fps: float = DEFAULT_FPS) -> dict:
     """Write ``report.html``, ``summary.json`` and ``summary.md`` for comparison ``c`` into
     ``out_dir`` (default ``<root>/<robot>/<scene>/``, whose page then links ``../../index.html``;
-    else ``index_link``) and, if given, the summary also to ``json_path``. Returns
-    ``{"dir", "html", "json", "md", "summary"}``."""
+    else ``index_link``) and, if given, the summary also to ``json_path``; ``animation_fps`` as
+    :func:`render_html`. Returns ``{"dir", "html", "json", "md", "summary"}``."""
     summary = json_ready(c.summary())
     if out_dir is None:
         out = Path(root) / summary["robot"] / summary["scene"]
@@ -274,7 +318,8 @@ def write_report(c, out_dir=None, *, root="reports", json_path=None, command: st
         jp.parent.mkdir(parents=True, exist_ok=True)
         jp.write_text(text)
     (out / "summary.md").write_text(render_markdown(summary))
-    (out / "report.html").write_text(render_html(c, summary, command=command, check=check, index_link=index_link))
+    (out / "report.html").write_text(render_html(c, summary, command=command, check=check, index_link=index_link,
+                                                 animation_fps=animation_fps), encoding="utf-8")
     if (out / "tradeoff.json").is_file():  # a work-precision study of this scene (urdf2links tradeoff): its section
         try:
             insert_section(out / "report.html", json.loads((out / "tradeoff.json").read_text()))

@@ -14,6 +14,7 @@ import numpy as np
 
 from .errors import DynamicsError, IntegrationError, SceneError, URDFError
 from .limits import LimitExcursion
+from .scene_toml import scene_from_args, write_scene_option, xacro_args_of
 from .transforms import PARAMETERS
 
 __all__ = ["main", "format_tree", "scene_from_args", "xacro_args_of", "write_scene_option"]
@@ -72,32 +73,6 @@ def _joint_lines(joints) -> list[str]:
     lines.insert(1, "  ".join("-" * w for w in widths))
     return ["", "joints (limits not enforced, noted when a run leaves them; damping acts in scenes with [dampers] "
             "from_urdf = true; friction not modelled):"] + lines
-
-
-def xacro_args_of(args) -> dict:
-    """``--xacro-arg name:=value`` options as a dict (a URDFError names a malformed one)."""
-    from .xacro_input import parse_xacro_arg
-
-    try:
-        return dict(parse_xacro_arg(a) for a in (getattr(args, "xacro_arg", None) or []))
-    except ValueError as err:
-        raise URDFError(f"--xacro-arg: {err}") from None
-
-
-def scene_from_args(args):
-    """The scene a ``simulate``/``compare`` command runs: ``args.scene`` as a scene file, or a robot file in
-    its default scene with ``--floating``, ``--q0``, ``--seed``, ``--t-end``, ``--xacro-arg``, ``--package-dir``."""
-    from .scene_toml import scene_or_robot
-
-    return scene_or_robot(args.scene, floating=args.floating, q0=args.q0, seed=args.seed, t_end=args.t_end,
-                          xacro_args=xacro_args_of(args), package_dirs=args.package_dir)
-
-
-def write_scene_option(args, scene) -> None:
-    if getattr(args, "write_scene", None):
-        from .scene_toml import write_scene
-
-        print(f"  scene written to {write_scene(scene, args.write_scene)} (edit it, then run it by name)")
 
 
 def _inspect(args) -> int:
@@ -170,6 +145,15 @@ def _simulate(args) -> int:
 
         png = plot_trajectory(traj, out / f"{stem}.png")
         print(f"  plot {png}")
+    if args.animate:
+        from .animation import write_trajectory_page
+
+        from .visuals import scene_shapes
+
+        page = write_trajectory_page(out / f"{stem}.html", traj, model, fps=args.animation_fps or 30.0,
+                                     base=scene.base_state if scene.base is not None else None,
+                                     shapes=scene_shapes(scene, model))
+        print(f"  animation {page} ({page.stat().st_size / 1e6:.1f} MB)")
     return 0
 
 
@@ -200,6 +184,7 @@ def _add_mujoco_options(p) -> None:
     p.add_argument("--factor", type=float, help="allowed growth of an error over its baseline (default: the "
                    "baselines file's factor, 10)")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    _add_animation_option(p)
     _add_max_wall(p)
 
 
@@ -218,6 +203,11 @@ def _add_max_wall(p) -> None:
     p.add_argument("--max-wall", type=_max_wall, metavar="SECONDS", help="wall-clock budget of the project's "
                    "integration (per scene): past it the run ends with an IntegrationError (exit 2) instead of "
                    "running on (default: none; step-size underflow and 1e7 steps end a run anyway)")
+
+
+def _add_animation_option(p) -> None:
+    p.add_argument("--animation-fps", type=float, default=30.0, metavar="FPS",
+                   help="frames per second of simulated time in the report's animation (default 30; 0: no animation)")
 
 
 def _add_robot_options(p, *, inspect: bool = False) -> None:
@@ -263,6 +253,9 @@ def main(argv=None) -> int:
     p.add_argument("--out", default="out", help="folder for .npz, .csv and .png (default: out)")
     p.add_argument("--plot", action="store_true", help="also plot coordinates and energy against time (PNG)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--animate", action="store_true", help="also write <out>/<scene>.html: the robot moving, with "
+                   "play/pause and a time slider (self-contained, works offline)")
+    _add_animation_option(p)
     _add_max_wall(p)
     p.set_defaults(func=_simulate)
     p = sub.add_parser("compare", help="run a scene with urdf2links and MuJoCo and write the comparison report",
@@ -287,8 +280,8 @@ def main(argv=None) -> int:
     p.add_argument("scenes", nargs="*", help="scene files (default: robots/*.toml)")
     p.add_argument("--out", default="reports", help="folder of the reports and index.html (default reports)")
     _add_mujoco_options(p)
-    p.add_argument("--cap", type=float, default=5.0, help="cap (s) on t_end of scenes that drive MuJoCo from Python "
-                   "(moving base, torques, loads); 0: none (default 5)")
+    p.add_argument("--cap", type=float, default=0.0, help="cap (s) on t_end of scenes with time-dependent inputs "
+                   "(moving base, torques, loads); 0: none (default)")
     p.add_argument("--check", metavar="BASELINE.json", help="baselines to check every scene against (default "
                    "<out>/baselines.json when it exists); exit 1 on a failure")
     p.add_argument("--write-baselines", nargs="?", const=True, metavar="FILE",
