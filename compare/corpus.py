@@ -42,6 +42,7 @@ from urdf2links.scene import default_scene
 from .baselines import check_baseline
 from .formatting import json_ready
 from .mjcf import MjcfRefused
+from .mujoco_run import instability_note
 
 __all__ = ["RobotFile", "CorpusSettings", "RobotResult", "find_robots", "evaluate_robot", "failed_result",
            "robot_thumbnail", "worst_ratio",
@@ -122,19 +123,19 @@ def _matches(folder: Path) -> list[Path]:
     return sorted(p for p in folder.rglob("*") if p.is_file() and p.name.endswith(CORPUS_SUFFIXES))
 
 
-def _expand(arg: str) -> list[tuple[Path, Path | None]]:
-    """``(file, folder it was found in, or None for a file named itself)`` for one argument: a folder,
-    a file or a glob pattern."""
+def _expand(arg: str) -> list[tuple[Path, Path]]:
+    """``(file, its base folder)`` for one argument: every robot under a folder (the folder is the
+    base), a file (its own folder), the files and folders a glob pattern matches."""
     path = Path(arg)
     if path.is_dir():
         return [(p, path) for p in _matches(path)]
     if path.is_file():
-        return [(path, None)]
+        return [(path, path.parent)]
     if glob.has_magic(arg):
         out = []
         for hit in sorted(glob.glob(arg, recursive=True)):
             h = Path(hit)
-            out += [(p, h) for p in _matches(h)] if h.is_dir() else [(h, None)] if h.name.endswith(CORPUS_SUFFIXES) else []
+            out += [(p, h) for p in _matches(h)] if h.is_dir() else [(h, h.parent)] if h.name.endswith(CORPUS_SUFFIXES) else []
         return out
     raise FileNotFoundError(f"--corpus {arg}: no such folder or file, and not a glob pattern (give a folder of "
                             "robots, a .urdf/.xacro file or a pattern such as 'robots/**/*.urdf')")
@@ -142,35 +143,24 @@ def _expand(arg: str) -> list[tuple[Path, Path | None]]:
 
 def find_robots(paths) -> list[RobotFile]:
     """The robots of a corpus, in the order given (sorted within a folder): every ``*.urdf`` and
-    ``*.xacro`` under a folder (recursively), a file itself, the files a glob pattern matches. Ids
-    are paths relative to their folder (a file's name for a file); when two arguments give the same
-    id, the folder's name is put in front. The same file reached twice is kept once. FileNotFoundError names an argument that
-    is nothing, ValueError says when nothing was found."""
-    found: list[tuple[str, Path, Path | None]] = []
+    ``*.xacro`` under a folder (recursively), a file itself, the files a glob pattern matches; the
+    same file reached twice is kept once. Ids are paths relative to the deepest folder that holds
+    every argument's base folder (a folder argument itself, a file's own folder): relative to the
+    folder when one folder is given, ``fleet/arm.urdf`` and ``other/arm.urdf`` for two. FileNotFoundError
+    names an argument that is nothing; ValueError one where nothing was found."""
+    found: list[tuple[Path, Path]] = []
     seen: set[Path] = set()
     for arg in paths:
         hits = _expand(str(arg))
         if not hits:
             raise ValueError(f"--corpus {arg}: no .urdf or .xacro file there")
-        for p, folder in hits:
+        for p, base in hits:
             real = p.resolve()
-            if real in seen:
-                continue
-            seen.add(real)
-            folder = folder if folder is not None else p.parent   # a file: its name (its folder's on a clash)
-            found.append((p.relative_to(folder).as_posix(), real, folder))
-    counts: dict[str, int] = {}
-    for rel, _, _ in found:
-        counts[rel] = counts.get(rel, 0) + 1
-    out = []
-    for rel, real, folder in found:
-        rid = f"{folder.resolve().name}/{rel}" if counts[rel] > 1 else rel
-        out.append(RobotFile(id=rid, path=str(real)))
-    ids = [r.id for r in out]
-    if len(set(ids)) != len(ids):
-        dup = sorted({i for i in ids if ids.count(i) > 1})
-        raise ValueError(f"--corpus: robots {dup} have the same name in two places; give their folders one by one")
-    return out
+            if real not in seen:
+                seen.add(real)
+                found.append((real, base.resolve()))
+    top = Path(os.path.commonpath([str(base) for _, base in found]))
+    return [RobotFile(id=real.relative_to(top).as_posix(), path=str(real)) for real, _ in found]
 
 
 # --------------------------------------------------------------------------- one robot
@@ -253,6 +243,10 @@ def _compared_row(row: dict, s: dict) -> None:
                      "scale": en["scale"]}
     row["limit_excursions"] = len(s.get("limit_excursions", []))
     row["mujoco_notes"] = list(s["mujoco"].get("notes", []))
+    row["mujoco_blow_ups"] = dict(s["mujoco"]["blow_ups"])
+    if row["mujoco_blow_ups"]:   # the index's note column says it: the difference is MuJoCo's blow-up
+        note = instability_note(row["mujoco_blow_ups"], s["mujoco"]["integrator"], s["mujoco"]["timestep"])
+        row["reason"] = note + (f"; {row['reason']}" if row.get("reason") else "")
     row["worst"] = worst_ratio(row["terms"], row["trajectory"])
 
 
@@ -298,7 +292,7 @@ def _robot_files(robot: RobotFile, c, summary: dict, row: dict, check, settings:
     from .corpus_page import render_robot_page
 
     depth = robot.id.count("/") + 1
-    files = {"summary.json": json.dumps(summary, indent=2) + "\n"}
+    files = {"summary.json": json.dumps({**summary, "import": row["import"]}, indent=2) + "\n"}
     png = robot_thumbnail(c.model, c.q_ours[0], package_dirs=settings.package_dirs)
     if png:
         files["thumbnail.png"] = png
@@ -370,7 +364,14 @@ def failed_result(robot: RobotFile, settings: CorpusSettings, stage: str, exc: B
     row = _new_row(robot, settings)
     row["worker"] = None
     _fail(row, stage, exc)
-    return RobotResult(row=_shorten(json_ready(row), robot))
+    return RobotResult(row=_finished(row, robot))
+
+
+def _finished(row: dict, robot: RobotFile) -> dict:
+    """The row as ``corpus.json`` holds it: JSON-ready, paths shortened, the import notes counted
+    (``import.n_notes``; the robot's page and summary.json list them)."""
+    row["import"]["n_notes"] = len(row["import"].pop("notes"))
+    return _shorten(json_ready(row), robot)
 
 
 def evaluate_robot(robot: RobotFile, settings: CorpusSettings = CorpusSettings()) -> RobotResult:
@@ -404,5 +405,5 @@ def evaluate_robot(robot: RobotFile, settings: CorpusSettings = CorpusSettings()
     except Exception as exc:  # noqa: BLE001 - one robot's fault must not stop the corpus: its row says why
         _fail(row, at.name, exc)
     times["total_s"] = time.perf_counter() - start
-    result.row = _shorten(json_ready(row), robot)
+    result.row = _finished(row, robot)
     return result

@@ -80,6 +80,7 @@ th.sorted-asc::after { content: ' \\25B2'; } th.sorted-desc::after { content: ' 
 td.num { text-align: right; font-family: 'DejaVu Sans Mono', Menlo, monospace; white-space: nowrap; }
 tr.failed td { background: #fbeeee; } tr.refused td { background: #f6f6f6; color: #5a6272; }
 td.out { color: #c9302c; font-weight: 600; } .small { font-size: 0.85em; color: #5a6272; }
+td.reason { min-width: 240px; max-width: 420px; overflow-wrap: anywhere; }
 .ok { color: #1e7b34; font-weight: 600; } .fail { color: #c9302c; font-weight: 600; }
 .controls { margin: 10px 0 4px; font-size: 0.9em; } .controls label { margin-right: 12px; }
 img.thumb { width: 96px; height: auto; border: 0; } img.fig { max-width: 100%; border: 1px solid #e3e6ec; }
@@ -217,7 +218,8 @@ def _row_html(r: dict, order: int, *, thumbs: bool, checks: bool) -> str:
             + e(", ".join(chk["failures"])) + "</span>")
         cells.append(f"<td data-v='{'' if not chk or chk.get('ok') is None else int(bool(chk['ok']))}'>{text}</td>")
     reason = r.get("reason") or ""
-    cells.append(f"<td class='small' data-v='{e(reason[:60], quote=True)}'>{e(reason[:400])}</td>")
+    cells.append(f"<td class='small reason' data-v='{e(reason[:60], quote=True)}'>{e(reason[:400])}"
+                 + ("..." if len(reason) > 400 else "") + "</td>")
     return (f"<tr class='{e(r['status'])}' data-status='{e(r['status'])}' data-out='{int(out)}' data-order='{order}'>"
             + "".join(cells) + "</tr>")
 

@@ -48,7 +48,8 @@ from urdf2links.transforms import BaseState
 
 from .mjcf import INTEGRATORS, MjcfModel
 
-__all__ = ["MujocoRun", "run_mujoco", "mujoco_accelerations", "robot_energy", "energy_function", "ENERGY_COLUMNS"]
+__all__ = ["MujocoRun", "run_mujoco", "mujoco_accelerations", "robot_energy", "energy_function", "instability_note",
+           "ENERGY_COLUMNS"]
 
 ENERGY_COLUMNS = ("kinetic", "potential")
 
@@ -67,7 +68,9 @@ class MujocoRun:
     ``t`` (m,) actual sample times; ``q``, ``qd`` (m, n); ``energy`` (m, 2) columns
     :data:`ENERGY_COLUMNS` (kinetic, potential; see module doc); ``base_tracking_error``: max over
     samples of ``|base qpos - prescribed pose|`` (0.0 for a fixed base); ``wall_time`` (s) of the
-    stepping loop (sampling included); ``nsteps`` MuJoCo steps; ``timestep``, ``integrator``.
+    stepping loop (sampling included); ``nsteps`` MuJoCo steps; ``timestep``, ``integrator``;
+    ``blow_ups``: how often MuJoCo met NaN, Inf or huge values and reset its state (``{"BADQACC": 3}``;
+    empty when it never did; ``notes`` then says what it means).
     """
 
     t: np.ndarray
@@ -82,6 +85,7 @@ class MujocoRun:
     coordinate_names: tuple[str, ...]
     base_pose: np.ndarray | None = None
     notes: list[str] = field(default_factory=list)
+    blow_ups: dict = field(default_factory=dict)
 
     @property
     def kinetic(self) -> np.ndarray:
@@ -323,9 +327,31 @@ def run_mujoco(mj: MjcfModel, scene=None, *, q0=None, qd0=None, t_end: float | N
     out, track, wall = _stepping(mj, m, d, driver, ks)
     if not np.all(np.isfinite(out["q"])):
         notes.append("MuJoCo's state became non-finite")
+    blow_ups = _blow_ups(d)
+    if blow_ups:
+        notes.append(instability_note(blow_ups, integ, dt))
     return MujocoRun(t=out["t"], q=out["q"], qd=out["qd"], energy=out["energy"], base_tracking_error=track,
-                     wall_time=wall, nsteps=int(ks[-1]), timestep=dt, integrator=integ,
+                     wall_time=wall, nsteps=int(ks[-1]), timestep=dt, integrator=integ, blow_ups=blow_ups,
                      coordinate_names=mj.coordinate_names, base_pose=out["base"], notes=notes)
+
+
+#: MuJoCo's warnings that its state blew up (it then resets the state: ``mj_checkPos/Vel/Acc``).
+_BLOW_UP = ("mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC")
+
+
+def _blow_ups(d) -> dict:
+    """``{"BADQACC": count, ...}``: how often MuJoCo met NaN, Inf or huge values in the run (each time it
+    resets its state: its automatic reset)."""
+    counts = {w.removeprefix("mjWARN_"): int(d.warning[int(getattr(mujoco.mjtWarning, w))].number) for w in _BLOW_UP}
+    return {w: k for w, k in counts.items() if k}
+
+
+def instability_note(blow_ups: dict, integ: str, dt: float) -> str:
+    """What a run's ``blow_ups`` mean, for the notes."""
+    return (f"MuJoCo's simulation became unstable ({', '.join(f'{w} x{k}' for w, k in blow_ups.items())}: NaN, Inf or "
+            f"huge values) and it reset its state each time: its trajectory is not a solution from the first reset "
+            f"on. {integ} at dt {dt:g} s is likely unstable for this model (stiff: large damping or springs on small "
+            f"inertias); a smaller --mujoco-dt or --mujoco-integrator implicit would tell")
 
 
 def _scene_inputs(mj, scene, q0, qd0, t_end, samples, base, torques, loads):
