@@ -124,7 +124,8 @@ def compare_command(args) -> int:
         except KeyError as exc:
             err(f"urdf2links compare: error: {exc.args[0]}")
             return 2
-    paths = write_report(c, args.out, json_path=args.json, command=_compare_cmd(args), check=check)
+    paths = write_report(c, args.out, json_path=args.json, command=_compare_cmd(args), check=check,
+                         animation_fps=args.animation_fps)
     _print_headline(paths["summary"])
     print(f"  report     {shown_path(paths['html'])} (summary.json, summary.md)" + (f"; JSON also {args.json}" if args.json else ""))
     if check is not None:
@@ -182,7 +183,7 @@ def report_command(args) -> int:
                 failed.append(f"{summary['key']}: {', '.join(check.failures)}")
         cmd = f"urdf2links compare {shown_path(f)}" + (f" --t-end {T:g}" if T != scene.run.t_end else "")
         write_report(c, out / summary["robot"] / summary["scene"], command=cmd, check=check,
-                     index_link="../../index.html")
+                     index_link="../../index.html", animation_fps=args.animation_fps)
         summaries.append(summary)
         entries.append({"summary": summary, "link": f"{summary['robot']}/{summary['scene']}/report.html", "check": check})
         tr, en = summary["trajectory"], summary["energy"]

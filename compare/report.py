@@ -1,8 +1,10 @@
 """Reports of the MuJoCo cross-validation: a self-contained HTML page, ``summary.json`` and
 ``summary.md`` per scene, and an index page over scenes.
 
-* :func:`write_report` writes ``report.html`` (plots embedded as base64 PNG: coordinates of both
-  engines overlaid, error against time (log), energy of both engines, agreement of the terms),
+* :func:`write_report` writes ``report.html`` (the robot moving in both engines, MuJoCo's run a
+  translucent ghost (:mod:`urdf2links.compare.report_motion`); plots embedded as base64 PNG:
+  coordinates of both engines overlaid, error against time (log), energy of both engines,
+  agreement of the terms),
   ``summary.json`` (:meth:`urdf2links.compare.trajectory.SceneComparison.summary`, non-finite numbers
   written as the strings ``"nan"``/``"inf"``) and ``summary.md`` into
   ``<root>/<robot>/<scene>/`` (or a given folder).
@@ -22,6 +24,9 @@ from pathlib import Path
 
 from .baselines import CheckResult
 from .formatting import fmt, fmt_md, fmt_t, json_ready
+from urdf2links.animation import DEFAULT_FPS
+
+from .report_motion import motion_section
 from .report_plots import plot_coordinates, plot_energy, plot_error, plot_overview, plot_terms
 from .tradeoff_report import insert_section
 
@@ -219,14 +224,17 @@ def _closing_sections(s, command) -> list[str]:
 
 
 def render_html(c, summary: dict, *, command: str | None = None, check: "CheckResult | None" = None,
-                index_link: str | None = None, index_label: str = "all scenes", light: bool = False,
-                extra_sections=()) -> str:
-    """The scene's self-contained report page (plots as base64 PNG); ``index_link``: relative
-    address of the index page, if any, shown as ``index_label``. ``light``: one overview figure
+                index_link: str | None = None, animation_fps: float = DEFAULT_FPS, index_label: str = "all scenes",
+                light: bool = False, extra_sections=()) -> str:
+    """The scene's self-contained report page (plots as base64 PNG, the motion section's viewer
+    inlined); ``index_link``: relative address of the index page, if any, shown as ``index_label``;
+    ``animation_fps``: frames per second of simulated time of the motion section (0: no motion
+    section). ``light``: no motion section and one overview figure
     (:func:`~urdf2links.compare.report_plots.plot_overview`: the difference and both energy balances)
-    instead of the four plots, for pages made by the hundred (a corpus). ``extra_sections``: HTML
+    instead of the four plots, for pages made by the dozen (a corpus); ``extra_sections``: HTML
     fragments put after the energy section."""
-    parts = (_top(summary, check, index_link, index_label) + _terms_section(summary, light)
+    motion = [] if light else motion_section(c, fps=animation_fps)
+    parts = (_top(summary, check, index_link, index_label) + motion + _terms_section(summary, light)
              + _trajectory_section(c, summary, light) + _energy_section(c, summary, light) + list(extra_sections)
              + _closing_sections(summary, command) + ["</body></html>"])
     return "\n".join(parts)
@@ -266,11 +274,12 @@ def render_markdown(s: dict) -> str:
 
 
 def write_report(c, out_dir=None, *, root="reports", json_path=None, command: str | None = None,
-                 check: "CheckResult | None" = None, index_link: str | None = None) -> dict:
+                 check: "CheckResult | None" = None, index_link: str | None = None,
+                 animation_fps: float = DEFAULT_FPS) -> dict:
     """Write ``report.html``, ``summary.json`` and ``summary.md`` for comparison ``c`` into
     ``out_dir`` (default ``<root>/<robot>/<scene>/``, whose page then links ``../../index.html``;
-    else ``index_link``) and, if given, the summary also to ``json_path``. Returns
-    ``{"dir", "html", "json", "md", "summary"}``."""
+    else ``index_link``) and, if given, the summary also to ``json_path``; ``animation_fps`` as
+    :func:`render_html`. Returns ``{"dir", "html", "json", "md", "summary"}``."""
     summary = json_ready(c.summary())
     if out_dir is None:
         out = Path(root) / summary["robot"] / summary["scene"]
@@ -285,7 +294,8 @@ def write_report(c, out_dir=None, *, root="reports", json_path=None, command: st
         jp.parent.mkdir(parents=True, exist_ok=True)
         jp.write_text(text)
     (out / "summary.md").write_text(render_markdown(summary))
-    (out / "report.html").write_text(render_html(c, summary, command=command, check=check, index_link=index_link))
+    (out / "report.html").write_text(render_html(c, summary, command=command, check=check, index_link=index_link,
+                                                 animation_fps=animation_fps), encoding="utf-8")
     if (out / "tradeoff.json").is_file():  # a work-precision study of this scene (urdf2links tradeoff): its section
         try:
             insert_section(out / "report.html", json.loads((out / "tradeoff.json").read_text()))

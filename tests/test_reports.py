@@ -21,6 +21,7 @@ from urdf2links.compare.baselines import check_baseline, load_baselines  # noqa:
 from urdf2links.compare.formatting import json_ready  # noqa: E402
 from urdf2links.compare.report import write_index, write_report  # noqa: E402
 from urdf2links.compare.trajectory import compare_scene, divergence_time, growth_fit  # noqa: E402
+from pages import assert_offline, poses_4x4  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 ROBOTS = ROOT / "robots"
@@ -107,11 +108,39 @@ def test_json_contract_and_files(pendulum, tmp_path):
     for key in CONTRACT:
         dig(on_disk, key)
     page = paths["html"].read_text()
-    assert page.count("data:image/png;base64,") == 4  # terms, coordinates, error, energy
-    assert "http://" not in page and "https://" not in page and "<script" not in page  # self-contained
+    assert page.count("src='data:image/png;base64,") == 4  # terms, coordinates, error, energy
+    assert_offline(page)  # self-contained: the viewer and the data inline
     assert "chaotic" in page and "double_pendulum_chaos" in (tmp_path / "r" / "summary.md").read_text()
     idx = write_index([{"summary": s, "link": "r/report.html"}], tmp_path)
     assert "r/report.html" in idx["html"].read_text() and "double_pendulum_chaos" in idx["md"].read_text()
+
+
+@pytest.mark.parametrize("which", ["pendulum", "crane"])
+def test_report_animates_both_engines(which, request, tmp_path):
+    """The report's Motion section: urdf2links solid and MuJoCo as a ghost, each drawn from its own q
+    at the frame times (at most 30 per simulated second), the difference plotted beside them."""
+    from urdf2links import urdf_link_poses
+    from urdf2links.animation import read_animation_data
+
+    c, s = request.getfixturevalue(which)
+    page = write_report(c, tmp_path / "r")["html"].read_text()
+    assert "<h2>Motion</h2>" in page and "largest coordinate" in page and "u2l-cursor" in page
+    data = read_animation_data(page)
+    assert [(r["name"], r["ghost"]) for r in data["runs"]] == [("urdf2links", False), ("MuJoCo", True)]
+    t = np.array(data["t"])
+    assert t[-1] == pytest.approx(s["t_end"]) and len(t) <= 30 * s["t_end"] + 2
+    assert set(data["links"]) == set(c.model.info["frame_of"])
+    k = np.searchsorted(c.t, t)
+    base = c.scene.base_state if c.scene.base is not None else None
+    for run, q in zip(data["runs"], (c.q_ours, c.q_mujoco)):
+        for i in (1, len(t) - 1):
+            want = urdf_link_poses(c.model, q[k[i]], t=float(t[i]), base=base)
+            got = poses_4x4(run["poses"][i])
+            assert all(np.allclose(P, want[nm], atol=1e-5) for nm, P in zip(data["links"], got))  # float32
+    assert (data["base"] is not None) == s["base"]["moving"]
+    readout = data["readout"][0]
+    assert readout["label"] == "max |dq|" and max(readout["values"]) <= s["trajectory"]["max_abs_error"]
+    assert "u2l-motion" not in write_report(c, tmp_path / "none", animation_fps=0)["html"].read_text()
 
 
 def test_chaos_is_reported_as_chaos(pendulum):
@@ -255,7 +284,8 @@ import corpus  # noqa: E402
 @pytest.mark.parametrize("name", ["ur5", "panda", "talos", "g1"])
 def test_real_robot_reports(name, tmp_path):
     """UR5, Panda, Talos, G1 of example-robot-data falling for 0.2 s: a report is written and the
-    terms agree with MuJoCo to 1e-9 on both routes (route 2 repaired where MuJoCo refuses)."""
+    terms agree with MuJoCo to 1e-9 on both routes (route 2 repaired where MuJoCo refuses); the
+    report animates the robot's meshes in both engines within the 5 MB budget."""
     scene = tmp_path / f"{name}_falling.toml"
     scene.write_text(f'[robot]\nexample_robot_data = "{corpus.NAMED[name]}"\ninertia = "repair"\n'
                      f'[gravity]\nmagnitude = 9.81\n[run]\nt_end = 0.2\nrtol = 1e-10\nsamples = 21\n')
@@ -265,5 +295,14 @@ def test_real_robot_reports(name, tmp_path):
     # 0.2 s from rest: both integrators are far below 1e-6 rad apart
     assert dig(summary, "trajectory.max_abs_error") < 1e-6
     write_report(c, tmp_path / "report")
-    assert (tmp_path / "report" / "report.html").stat().st_size > 10_000
+    page_path = tmp_path / "report" / "report.html"
+    assert 10_000 < page_path.stat().st_size < 5_000_000  # the budget: 5 MB with the animation and its meshes
     assert json.loads((tmp_path / "report" / "summary.json").read_text())["terms"]["max_rel_error"] < 1e-9
+    from urdf2links.animation import read_animation_data
+
+    page = page_path.read_text()
+    assert_offline(page)
+    data = read_animation_data(page)  # the robot's meshes, both engines
+    assert [r["name"] for r in data["runs"]] == ["urdf2links", "MuJoCo"]
+    assert set(data["links"]) == set(c.model.info["frame_of"])
+    assert sum(sh["kind"] == "mesh" for sh in data["shapes"]) >= 6

@@ -171,6 +171,15 @@ def _simulate(args) -> int:
 
         png = plot_trajectory(traj, out / f"{stem}.png")
         print(f"  plot {png}")
+    if args.animate:
+        from .animation import write_trajectory_page
+
+        from .visuals import scene_shapes
+
+        page = write_trajectory_page(out / f"{stem}.html", traj, model, fps=args.animation_fps or 30.0,
+                                     base=scene.base_state if scene.base is not None else None,
+                                     shapes=scene_shapes(scene, model))
+        print(f"  animation {page} ({page.stat().st_size / 1e6:.1f} MB)")
     return 0
 
 
@@ -250,6 +259,12 @@ def _add_mujoco_options(p) -> None:
     p.add_argument("--factor", type=float, help="allowed growth of an error over its baseline (default: the "
                    "baselines file's factor, 10)")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    _add_animation_option(p)
+
+
+def _add_animation_option(p) -> None:
+    p.add_argument("--animation-fps", type=float, default=30.0, metavar="FPS",
+                   help="frames per second of simulated time in the report's animation (default 30; 0: no animation)")
 
 
 def _add_robot_options(p, *, inspect: bool = False) -> None:
@@ -295,6 +310,9 @@ def main(argv=None) -> int:
     p.add_argument("--out", default="out", help="folder for .npz, .csv and .png (default: out)")
     p.add_argument("--plot", action="store_true", help="also plot coordinates and energy against time (PNG)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--animate", action="store_true", help="also write <out>/<scene>.html: the robot moving, with "
+                   "play/pause and a time slider (self-contained, works offline)")
+    _add_animation_option(p)
     p.set_defaults(func=_simulate)
     p = sub.add_parser("compare", help="run a scene with urdf2links and MuJoCo and write the comparison report",
                        description="Run a scene with urdf2links and with MuJoCo (route 1: the project's tree as MJCF, "

@@ -31,6 +31,7 @@ import numpy as np
 
 from urdf2links.description import Geometry
 from urdf2links.errors import InertiaError, MeshError, URDFValueError
+from urdf2links.meshes import load_mesh
 from urdf2links.rotations import homogeneous, rpy_to_matrix
 
 __all__ = [
@@ -313,31 +314,8 @@ def _mass(mass) -> float | None:
 
 def _mesh_unit_H(geometry: Geometry) -> tuple[float, np.ndarray, str, list[str]]:
     """``(volume, H per unit mass, method, notes)`` of a mesh in its own (scaled) frame."""
-    import trimesh
-
-    name = geometry.filename or (str(geometry.path) if geometry.path else "<unnamed>")
-    if geometry.path is None:
-        raise MeshError(f"mesh {name!r} could not be resolved to a file")
-    path = Path(geometry.path)
-    if not path.is_file():
-        raise MeshError(f"mesh {name!r}: file {str(path)!r} does not exist")
-    try:
-        mesh = trimesh.load(str(path), force="mesh")
-    except Exception as exc:  # trimesh raises many types for bad files
-        raise MeshError(f"mesh {name!r}: cannot read {str(path)!r}: {type(exc).__name__}: {exc}") from exc
-    if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
-        raise MeshError(f"mesh {name!r}: {str(path)!r} contains no triangles")
-    notes: list[str] = []
-    scale = np.ones(3) if geometry.scale is None else np.asarray(geometry.scale, dtype=float).reshape(3)
-    if not np.all(np.isfinite(scale)) or np.any(scale == 0.0):
-        raise URDFValueError(f"mesh {name!r}: scale {scale.tolist()} must be finite and non-zero")
-    units = getattr(mesh, "units", None)
-    if path.suffix.lower() == ".dae" and units and units not in ("meters", "meter", "m"):
-        # COLLADA <unit meter="...">: trimesh records it in mesh.units but does not apply it.
-        factor = float(trimesh.units.unit_conversion(units, "meters"))
-        scale = scale * factor
-        notes.append(f"COLLADA unit {units!r} applied (factor {factor:g})")
-    mesh.apply_transform(np.diag([*scale, 1.0]))  # flips the faces itself when det < 0
+    mesh, notes = load_mesh(geometry)
+    name, path = geometry.filename or str(geometry.path), Path(geometry.path)
     # Loaders keep vertices split along texture / normal seams (typical of DAE and some STL),
     # which makes a closed surface look open; merge by position only (geometry unchanged).
     mesh.merge_vertices(merge_tex=True, merge_norm=True)

@@ -72,12 +72,8 @@ class Plan:
 
     # -- the scene's inputs at a time --------------------------------------------------------------
     def base_state(self, t) -> BaseState | None:
-        """Pose, rate and acceleration of {A} at ``t``; None for a fixed base."""
-        if self.base is None:
-            return None
-        f = self.base
-        return BaseState(np.array([g(t) for g in f]), np.array([g.derivative(t) for g in f]),
-                         np.array([g.second_derivative(t) for g in f]))
+        """Pose, rate and acceleration of {A} at ``t`` (:meth:`Scene.base_state`); None for a fixed base."""
+        return self.scene.base_state(t)
 
     def torques(self, t) -> np.ndarray:
         """Joint torques tau (n,) at ``t`` (zeros where none acts)."""

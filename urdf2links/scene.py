@@ -61,7 +61,7 @@ from .errors import SceneError
 from .functions import Constant, SceneValueError, TimeFunction, VectorFunction, parse_function, vector_function
 from .integrators import METHODS
 from .locations import example_robot_data_dir, shipped_robots_dir
-from .transforms import PARAMETERS
+from .transforms import PARAMETERS, BaseState
 
 __all__ = ["Scene", "AppliedLoad", "Spring", "SpringSet", "RunSettings", "load_scene", "shipped_robots_dir",
            "robot_stem", "default_scene", "DEFAULT_SCENE_NAME", "Q0_CHOICES"]
@@ -179,6 +179,14 @@ class Scene:
             if coord not in names:
                 raise SceneError(f"{where}: [{what}] coordinate {coord!r} is not a coordinate of robot {model.name!r}"
                                  f"{_hint(coord, names)}; coordinates are {list(names)}")
+
+    def base_state(self, t) -> BaseState | None:
+        """Pose, rate and acceleration of {A} at ``t`` from ``[base]``; None for a fixed base."""
+        if self.base is None:
+            return None
+        f = self.base
+        return BaseState(np.array([g(t) for g in f]), np.array([g.derivative(t) for g in f]),
+                         np.array([g.second_derivative(t) for g in f]))
 
     def springs_for(self, model) -> SpringSet:
         """The springs and dampers acting on ``model``: ``[[spring]]`` blocks, plus with ``[dampers]

@@ -71,7 +71,7 @@ def scene_toml(scene: Scene, *, folder=None) -> str:
         raise SceneError(f"scene {scene.name!r}: {', '.join(functions)} hold functions of time, which cannot be "
                          "written back as TOML; copy the scene file instead")
     folder = None if folder is None else Path(folder)
-    out = [f"# urdf2links scene (edit freely; `urdf2links simulate` / `compare` run it)",
+    out = ["# urdf2links scene (edit freely; `urdf2links simulate` / `compare` run it)",
            f"description = {_value(scene.description)}", f"chaotic = {_value(scene.chaotic)}", ""]
     out += _robot_lines(scene, folder) + [""]
     if scene.gravity is not None:
