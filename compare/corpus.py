@@ -78,7 +78,8 @@ class CorpusSettings:
 
     ``t_end`` (s), ``q0`` and ``seed`` of the default scene; ``states`` and ``seed`` of the terms;
     MuJoCo's ``mujoco_integrator`` and ``mujoco_dt``; the import's ``inertia`` policy and
-    ``package_dirs``; ``pages``: render each robot's light report page; ``baselines`` (the parsed
+    ``package_dirs``; ``pages``: render each robot's light report page, with ``thumbnails`` a still
+    picture of the robot for the index (a few seconds a robot: meshes are read); ``baselines`` (the parsed
     baselines file, or None) with ``factor`` and ``baselines_source`` (its path, for the messages)."""
 
     t_end: float = 0.5
@@ -90,6 +91,7 @@ class CorpusSettings:
     inertia: str = "audit"
     package_dirs: tuple[str, ...] = ()
     pages: bool = True
+    thumbnails: bool = True
     baselines: dict | None = None
     factor: float | None = None
     baselines_source: str = ""
@@ -98,7 +100,8 @@ class CorpusSettings:
         """The settings as ``corpus.json`` records them (the baselines by their source only)."""
         return {"t_end": self.t_end, "q0": self.q0, "seed": self.seed, "states": self.states,
                 "mujoco_integrator": self.mujoco_integrator, "mujoco_dt": self.mujoco_dt, "inertia": self.inertia,
-                "package_dirs": list(self.package_dirs), "baselines": self.baselines_source or None,
+                "package_dirs": list(self.package_dirs), "pages": self.pages, "thumbnails": self.thumbnails,
+                "baselines": self.baselines_source or None,
                 "scene": "default scene: gravity, fixed base, seeded random q0 within the joint limits, at rest, "
                          "URDF damping"}
 
@@ -166,12 +169,13 @@ def find_robots(paths) -> list[RobotFile]:
 # --------------------------------------------------------------------------- one robot
 
 
-def robot_thumbnail(model, q, *, package_dirs=()) -> bytes | None:
-    """Hook for a still picture of the robot at ``q`` (its initial pose), shown beside its row in the
-    corpus index and linked to its page: PNG bytes, or None for no picture (the index then shows
-    none). None for now; a thumbnail renderer (issue 17: ``render_thumbnail(model, q, size=...)``)
-    plugs in here."""
-    return None
+def robot_thumbnail(model, q, *, package_dirs=()) -> bytes:
+    """A still picture of the robot at ``q`` (its initial pose), shown beside its row in the corpus
+    index and linked to its page: PNG bytes (:func:`urdf2links.thumbnail.render_thumbnail`, 192 x 144
+    pixels, meshes decimated to 2000 faces)."""
+    from urdf2links.thumbnail import render_thumbnail
+
+    return render_thumbnail(model, q, package_dirs=package_dirs, size=(192, 144), max_faces=2000)
 
 
 def _shorten(x, robot: RobotFile):
@@ -286,17 +290,19 @@ def _check(row: dict, summary: dict, settings: CorpusSettings) -> object | None:
 
 
 def _robot_files(robot: RobotFile, c, summary: dict, row: dict, check, settings: CorpusSettings) -> dict:
-    """The robot's page, summary and thumbnail (when the hook gives one); their links in ``row``."""
+    """The robot's page, summary and (with ``settings.thumbnails``) thumbnail; their links in ``row``."""
     import json
 
     from .corpus_page import render_robot_page
 
     depth = robot.id.count("/") + 1
     files = {"summary.json": json.dumps({**summary, "import": row["import"]}, indent=2) + "\n"}
-    png = robot_thumbnail(c.model, c.q_ours[0], package_dirs=settings.package_dirs)
-    if png:
-        files["thumbnail.png"] = png
-        row["thumbnail"] = f"{robot.id}/thumbnail.png"
+    if settings.thumbnails:
+        try:
+            files["thumbnail.png"] = robot_thumbnail(c.model, c.q_ours[0], package_dirs=settings.package_dirs)
+            row["thumbnail"] = f"{robot.id}/thumbnail.png"
+        except Exception as exc:  # noqa: BLE001 - a picture that cannot be drawn is no reason to fail the robot
+            row["thumbnail_note"] = f"no thumbnail: {type(exc).__name__}: {exc}"
     row["report"] = f"{robot.id}/report.html"
     files["report.html"] = render_robot_page(c, summary, row, check=check, index_link="../" * depth + "index.html")
     return files

@@ -87,6 +87,7 @@ def _settings(args, baselines, path) -> CorpusSettings:
     return CorpusSettings(t_end=float(args.t_end if args.t_end is not None else CORPUS_T_END), seed=int(args.seed),
                           states=int(args.states), mujoco_integrator=args.mujoco_integrator,
                           mujoco_dt=float(args.mujoco_dt), package_dirs=tuple(str(p) for p in args.package_dir),
+                          thumbnails=not args.no_thumbnails,
                           baselines=baselines, factor=args.factor,
                           baselines_source=shown_path(path) if baselines is not None else "")
 

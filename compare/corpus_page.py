@@ -28,9 +28,11 @@ def import_section(row: dict) -> str:
     route 2's status and MuJoCo's reason."""
     e = html.escape
     imp, te = row["import"], row["terms"]
-    parts = ["<h2>Import</h2>",
-             f"<p><code>{e(row['file'])}</code>: robot <b>{e(str(row['name']))}</b>, {row['links']} links, "
-             f"{row['n']} coordinates (fixed base).</p>"]
+    parts = ["<h2>Import</h2>"]
+    if row.get("thumbnail"):
+        parts.append("<img src='thumbnail.png' alt='the robot at its initial pose' style='float: right; border: 0'>")
+    parts.append(f"<p><code>{e(row['file'])}</code>: robot <b>{e(str(row['name']))}</b>, {row['links']} links, "
+                 f"{row['n']} coordinates (fixed base).</p>")
     audit = imp["audit"]
     parts.append(f"<p><b>Inertia audit</b>: {len(audit)} finding(s)"
                  + (f", {len(imp['repairs'])} repaired" if imp["repairs"] else "") + ".</p>")

@@ -5,14 +5,14 @@
 ``on_result`` as each robot finishes (progress lines). Three ways, one answer (a robot's row does
 not depend on where it ran, apart from ``wall_time`` and ``worker``):
 
-* ``jobs=1``: one robot after the other in this process;
+* ``jobs=1``: one robot after the other in this process (warmed like a worker first);
 * ``jobs=N`` (default: every core, :func:`urdf2links.distributed.cores`): N worker processes on this
   machine (``spawn``: a fresh interpreter each, nothing inherited from this one's threads). Each
-  worker first loads the compiled kernels (:func:`warm_worker`: numba's on-disk cache, compiled
-  once per installation, not per robot), then takes robots one at a time. A worker that dies (a
-  crash inside MuJoCo, the memory killer) does not stop the run: the robots it may have been
-  running are run again one by one in a fresh worker, and the one that kills it again gets a
-  ``failed`` row saying so;
+  worker first loads what a robot needs (:func:`warm_worker`: the compiled kernels from numba's
+  on-disk cache -- compiled once per installation, never per robot --, MuJoCo, matplotlib), then
+  takes robots one at a time. A worker that dies (a crash inside MuJoCo, the memory killer) does
+  not stop the run: the robots it may have been running are run again one by one in a fresh
+  worker, and the one that kills it again gets a ``failed`` row saying so;
 * ``client`` (a ``dask.distributed.Client``, e.g. from ``--scheduler ADDRESS``): one task per robot on
   the cluster's workers, each warmed first (``client.run(warm_worker)``). Workers need urdf2links
   installed and the robot files at the same paths (a shared folder); the rows and pages come back
@@ -40,17 +40,16 @@ __all__ = ["run_corpus", "warm_worker", "robot_task"]
 
 
 def warm_worker() -> float:
-    """Load the compiled kernels into this process (numba reads them from its disk cache; the first
-    process of a fresh installation compiles them, a few minutes): a 5 ms run of the shipped double
-    pendulum through the project's integrator. Returns the seconds it took."""
+    """Load into this process everything a robot's evaluation uses -- the compiled kernels (numba
+    reads them from its disk cache; the first process of a fresh installation compiles them, a few
+    minutes), MuJoCo, matplotlib, the mesh reader -- by evaluating the shipped double pendulum for
+    5 ms with its page and thumbnail, so that no robot's wall time pays for it. Returns the seconds
+    it took."""
     start = time.perf_counter()
-    with ONE_AT_A_TIME:
-        from urdf2links.locations import shipped_robots_dir
-        from urdf2links.scene import load_scene
-        from urdf2links.simulate import simulate
+    from urdf2links.locations import shipped_robots_dir
 
-        simulate(load_scene(shipped_robots_dir() / "double_pendulum_chaos.toml"), t_end=0.005, samples=3,
-                 progress=False)
+    pendulum = shipped_robots_dir() / "double_pendulum.urdf"
+    robot_task(RobotFile(id=pendulum.name, path=str(pendulum)), CorpusSettings(t_end=0.005, states=1))
     return time.perf_counter() - start
 
 
@@ -78,6 +77,7 @@ def run_corpus(robots: list[RobotFile], settings: CorpusSettings, *, jobs: int |
 
 
 def _here(robots, settings, done) -> dict:
+    warm_worker()   # as a worker process does: no robot's wall time pays for loading the kernels
     results = {}
     for r in robots:
         results[r.id] = res = robot_task(r, settings)
@@ -140,7 +140,8 @@ def _on_dask(robots, settings, client, done, say) -> dict:
     from dask.distributed import as_completed as dask_completed
 
     warm = client.run(warm_worker)
-    say(f"{len(warm)} Dask worker(s) warmed (kernels loaded in {max(warm.values(), default=0.0):.1f} s at most)")
+    say(f"{len(warm)} Dask worker(s) warmed (kernels, MuJoCo, matplotlib loaded in {max(warm.values(), default=0.0):.1f} "
+        "s at most)")
     run_id = uuid.uuid4().hex[:8]
     futures = client.map(robot_task, robots, settings=settings, pure=False,
                          key=[f"urdf2links-corpus-{run_id}-{i}" for i in range(len(robots))])

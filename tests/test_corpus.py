@@ -37,7 +37,7 @@ SUBSET = UR3, PENDULUM, UR5, FINGER, ROMEO = (
     "ur_description/urdf/ur3.urdf", "double_pendulum_description/urdf/double_pendulum.urdf",
     "ur_description/urdf/ur5_robot.urdf", "finger_edu_description/robots/finger_edu.urdf",
     "romeo_description/urdf/romeo_laas_small.urdf")
-SETTINGS = CorpusSettings(t_end=0.1, states=2)
+SETTINGS = CorpusSettings(t_end=0.1, states=2, thumbnails=False)
 
 
 def subset_args() -> list[str]:
@@ -140,7 +140,7 @@ def test_a_robot_that_fails_does_not_stop_the_others(monkeypatch, tmp_path, caps
     monkeypatch.setattr(trajectory, "compare_scene", broken_for_ur5)
     args = [str(CORPUS_ROOT / SUBSET[1]), str(CORPUS_ROOT / SUBSET[2])]
     code = main(["report", "--corpus", *args, "--jobs", "1", "--t-end", "0.05", "--states", "1", "--out",
-                 str(tmp_path), "--quiet"])
+                 str(tmp_path), "--quiet", "--no-thumbnails"])
     assert code == 1
     assert f"{UR5} failed at comparison: comparison: RuntimeError: injected fault" in capsys.readouterr().err
     rows = {r["file"]: r for r in json.loads((tmp_path / "corpus.json").read_text())["robots"]}
@@ -158,7 +158,7 @@ def test_processes_and_dask_give_the_serial_figures(serial, dask_client, tmp_pat
     (timings and the worker's name aside). Equality is exact: every robot's run is seeded and
     deterministic, only where it runs changes."""
     jobs = subprocess.run([sys.executable, "-m", "urdf2links.cli", "report", "--corpus", *subset_args(), "--jobs", "2",
-                           "--t-end", "0.1", "--states", "2", "--out", str(tmp_path / "jobs")],
+                           "--t-end", "0.1", "--states", "2", "--no-thumbnails", "--out", str(tmp_path / "jobs")],
                           capture_output=True, text=True)
     assert jobs.returncode == 0, jobs.stderr[-3000:]
     assert jobs.stderr.count("[") >= len(SUBSET) and "[5/5]" in jobs.stderr       # one line per robot
@@ -255,3 +255,18 @@ def test_urdf2links_imports_neither_dask_nor_mujoco():
     code = ("import sys, urdf2links, urdf2links.batch, urdf2links.distributed, urdf2links.cli; "
             "bad = {'dask', 'distributed', 'mujoco'} & set(sys.modules); assert not bad, bad")
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+@needs_corpus
+def test_thumbnail_beside_each_robot(tmp_path):
+    """Each compared robot's picture (urdf2links.thumbnail) is in its folder, on its page and in the
+    index, linked to the page."""
+    robot = find_robots([CORPUS_ROOT / PENDULUM])[0]
+    res = evaluate_robot(robot, CorpusSettings(t_end=0.05, states=1))
+    assert res.files["thumbnail.png"][:8] == b"\x89PNG\r\n\x1a\n" and res.row["thumbnail"] == "double_pendulum.urdf/thumbnail.png"
+    assert "src='thumbnail.png'" in res.files["report.html"]
+    paths = write_corpus([res], tmp_path, settings={**SETTINGS.describe(), "t_end": 0.05}, run={"how": "here"})
+    index = paths["html"].read_text()
+    assert ("<a href='double_pendulum.urdf/report.html'><img class='thumb' alt='' "
+            "src='double_pendulum.urdf/thumbnail.png'></a>") in index
+    assert (tmp_path / "double_pendulum.urdf" / "thumbnail.png").is_file()

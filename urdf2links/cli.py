@@ -352,6 +352,8 @@ def main(argv=None) -> int:
                    "terms' states (default 0)")
     p.add_argument("--package-dir", action="append", default=[], help="--corpus: folder searched for package:// "
                    "meshes and $(find pkg)")
+    p.add_argument("--no-thumbnails", action="store_true", help="--corpus: no picture of each robot in the index "
+                   "(saves the few seconds a robot its meshes take)")
     _add_mujoco_options(p)
     p.add_argument("--cap", type=float, default=5.0, help="cap (s) on t_end of scenes that drive MuJoCo from Python "
                    "(moving base, torques, loads); 0: none (default 5)")
