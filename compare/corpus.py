@@ -46,7 +46,7 @@ from .mujoco_run import instability_note
 
 __all__ = ["RobotFile", "CorpusSettings", "RobotResult", "find_robots", "evaluate_robot", "failed_result",
            "robot_thumbnail", "worst_ratio",
-           "STATUSES", "ROW_KEYS", "RUN_DEPENDENT_KEYS", "TERMS_TOLERANCE", "CORPUS_SUFFIXES"]
+           "STATUSES", "ROW_KEYS", "RUN_DEPENDENT_KEYS", "TERMS_TOLERANCE", "CORPUS_SUFFIXES", "EXAMPLE_ROBOT_DATA"]
 
 #: What a row's ``status`` can be (module doc).
 STATUSES = ("compared", "refused", "failed")
@@ -58,6 +58,8 @@ RUN_DEPENDENT_KEYS = ("wall_time", "worker")
 #: Route 1 compares the project's own tree written as MJCF with itself through MuJoCo: its terms
 #: agree to rounding (~1e-15 relative on every corpus robot), so anything past 1e-9 is a bug.
 TERMS_TOLERANCE = 1e-9
+#: The name that stands for the installed example-robot-data robots (when no such folder is here).
+EXAMPLE_ROBOT_DATA = "example-robot-data"
 #: File names a folder is searched for.
 CORPUS_SUFFIXES = (".urdf", ".xacro")
 _STAGES = ("import", "scene", "comparison", "page")
@@ -130,6 +132,13 @@ def _expand(arg: str) -> list[tuple[Path, Path]]:
     """``(file, its base folder)`` for one argument: every robot under a folder (the folder is the
     base), a file (its own folder), the files and folders a glob pattern matches."""
     path = Path(arg)
+    if arg == EXAMPLE_ROBOT_DATA and not path.exists():
+        from urdf2links.locations import example_robot_data_dir
+
+        path = example_robot_data_dir()
+        if path is None:
+            raise FileNotFoundError(f"--corpus {arg}: the example-robot-data package is not installed (pip install "
+                                    "example-robot-data), and there is no such folder here")
     if path.is_dir():
         return [(p, path) for p in _matches(path)]
     if path.is_file():
@@ -147,7 +156,8 @@ def _expand(arg: str) -> list[tuple[Path, Path]]:
 def find_robots(paths) -> list[RobotFile]:
     """The robots of a corpus, in the order given (sorted within a folder): every ``*.urdf`` and
     ``*.xacro`` under a folder (recursively), a file itself, the files a glob pattern matches; the
-    same file reached twice is kept once. Ids are paths relative to the deepest folder that holds
+    same file reached twice is kept once. :data:`EXAMPLE_ROBOT_DATA` names the installed
+    example-robot-data robots (:func:`urdf2links.locations.example_robot_data_dir`). Ids are paths relative to the deepest folder that holds
     every argument's base folder (a folder argument itself, a file's own folder): relative to the
     folder when one folder is given, ``fleet/arm.urdf`` and ``other/arm.urdf`` for two. FileNotFoundError
     names an argument that is nothing; ValueError one where nothing was found."""

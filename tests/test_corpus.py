@@ -90,6 +90,14 @@ def test_find_robots_folders_files_and_patterns(tmp_path):
         find_robots([tmp_path / "empty"])
 
 
+@needs_corpus
+def test_example_robot_data_by_name(monkeypatch, tmp_path):
+    """`--corpus example-robot-data` is the installed corpus, ids relative to its robots folder."""
+    monkeypatch.chdir(tmp_path)
+    robots = find_robots(["example-robot-data"])
+    assert len(robots) >= 69 and set(SUBSET) <= {r.id for r in robots}
+
+
 # --------------------------------------------------------------------------- rows
 
 
