@@ -226,18 +226,13 @@ def _route2(r2: dict) -> tuple[str, str | None]:
 
 def worst_ratio(terms: dict, trajectory: dict) -> float | None:
     """The largest of a compared robot's figures over its tolerance: route 1 and route 2 terms over
-    :data:`TERMS_TOLERANCE`, the trajectory difference over the divergence threshold. Above 1: out
-    of tolerance (the index sorts by it, worst first)."""
-    ratios = [v / TERMS_TOLERANCE for v in (terms.get("route1"), terms.get("route2")) if _finite_or_inf(v)]
-    if _finite_or_inf(trajectory.get("max_abs_error")):
-        ratios.append(trajectory["max_abs_error"] / trajectory["divergence_threshold"])
-    nonfinite = [v for v in (terms.get("route1"), terms.get("route2"), trajectory.get("max_abs_error"))
-                 if isinstance(v, str)]
-    return math.inf if nonfinite else (max(ratios) if ratios else None)
-
-
-def _finite_or_inf(v) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool)
+    :data:`TERMS_TOLERANCE`, the trajectory difference over the divergence threshold (infinite when
+    one of them is not finite: JSON-ready rows write those as strings). Above 1: out of tolerance
+    (the index sorts by it, worst first); None when none was measured."""
+    figures = [(terms.get("route1"), TERMS_TOLERANCE), (terms.get("route2"), TERMS_TOLERANCE),
+               (trajectory.get("max_abs_error"), trajectory.get("divergence_threshold"))]
+    ratios = [math.inf if isinstance(v, str) else v / tol for v, tol in figures if v is not None]
+    return max(ratios) if ratios else None
 
 
 def _compared_row(row: dict, s: dict) -> None:
@@ -326,10 +321,10 @@ def _load(robot: RobotFile, settings: CorpusSettings, inertia: str):
         return load_urdf(robot.path, inertia=inertia, package_dirs=tuple(settings.package_dirs))
 
 
-def _import_info(row: dict, model, inertia: str) -> None:
+def _import_info(row: dict, robot: RobotFile, model, inertia: str) -> None:
     row.update(name=model.name, n=int(model.n), links=int(model.tree.n_links), inertia=inertia)
-    row["import"] = {"audit": _audit_rows(model), "notes": list(model.info.get("notes", [])),
-                     "repairs": [str(r) for r in model.audit if r.action == "repaired"]}
+    row["import"] = _shorten({"audit": _audit_rows(model), "notes": list(model.info.get("notes", [])),
+                              "repairs": [str(r) for r in model.audit if r.action == "repaired"]}, robot)
 
 
 class _Stage:
@@ -370,7 +365,7 @@ def _compare_or_repair(robot: RobotFile, model, settings: CorpusSettings, row: d
         row["reason"] = _repair_reason(exc, len(model.audit))
     at.name = "import (repair)"
     repaired = _load(robot, settings, "repair")
-    _import_info(row, repaired, "repair")
+    _import_info(row, robot, repaired, "repair")
     return _compare(robot, repaired, settings, "repair", at)
 
 
@@ -401,7 +396,7 @@ def evaluate_robot(robot: RobotFile, settings: CorpusSettings = CorpusSettings()
     try:
         model = _load(robot, settings, settings.inertia)
         times["import_s"] = time.perf_counter() - start
-        _import_info(row, model, settings.inertia)
+        _import_info(row, robot, model, settings.inertia)
         c = _compare_or_repair(robot, model, settings, row, at)
         summary = _shorten(json_ready(c.summary()), robot)
         summary["key"] = robot.id

@@ -80,7 +80,8 @@ th.sorted-asc::after { content: ' \\25B2'; } th.sorted-desc::after { content: ' 
 td.num { text-align: right; font-family: 'DejaVu Sans Mono', Menlo, monospace; white-space: nowrap; }
 tr.failed td { background: #fbeeee; } tr.refused td { background: #f6f6f6; color: #5a6272; }
 td.out { color: #c9302c; font-weight: 600; } .small { font-size: 0.85em; color: #5a6272; }
-td.reason { min-width: 240px; max-width: 420px; overflow-wrap: anywhere; }
+td.reason { min-width: 200px; max-width: 340px; overflow-wrap: anywhere; }
+td.file { max-width: 260px; overflow-wrap: anywhere; }
 .ok { color: #1e7b34; font-weight: 600; } .fail { color: #c9302c; font-weight: 600; }
 .controls { margin: 10px 0 4px; font-size: 0.9em; } .controls label { margin-right: 12px; }
 img.thumb { width: 96px; height: auto; border: 0; } img.fig { max-width: 100%; border: 1px solid #e3e6ec; }
@@ -198,7 +199,7 @@ def _row_html(r: dict, order: int, *, thumbs: bool, checks: bool) -> str:
         img = (f"<a href='{e(link or '')}'><img class='thumb' alt='' src='{e(r['thumbnail'])}'></a>"
                if r.get("thumbnail") else "")
         cells.append(f"<td data-v=''>{img}</td>")
-    cells.append(f"<td data-v='{e(r['file'], quote=True)}'>{name}{robot}</td>")
+    cells.append(f"<td class='file' data-v='{e(r['file'], quote=True)}'>{name}{robot}</td>")
     stage = f"<br><span class='small'>{e(r['stage'])}</span>" if r["status"] == "failed" and r.get("stage") else ""
     cells.append(f"<td data-v='{_RANK.get(r['status'], 3)}'>{e(r['status'])}{stage}</td>")
     cells.append(f"<td class='num' data-v='{_num(r.get('n'))}'>{'' if r.get('n') is None else r['n']}</td>")
@@ -208,7 +209,8 @@ def _row_html(r: dict, order: int, *, thumbs: bool, checks: bool) -> str:
     mx = tr.get("max_abs_error")
     cells.append(_cell(mx, out=isinstance(mx, (int, float)) and mx > tr.get("divergence_threshold", math.inf)))
     div = tr.get("divergence_time")
-    cells.append(f"<td class='num' data-v='{_num(div)}'>{'none' if div is None and r['status'] == 'compared' else fmt(div, 3)}</td>")
+    div_text = ("none" if r["status"] == "compared" else "&ndash;") if div is None else f"{div:.3g} s"
+    cells.append(f"<td class='num' data-v='{_num(div)}'>{div_text}</td>")
     cells += [_cell(en.get("project_drift_rel")), _cell(en.get("mujoco_drift_rel")), _cell(worst, out=out)]
     cells.append(f"<td class='num' data-v='{_num(wt.get('total_s'))}'>{fmt(wt.get('total_s'), 1)}</td>")
     if checks:
@@ -295,7 +297,8 @@ def render_markdown_table(data: dict) -> str:
         te, tr, en = r["terms"], r["trajectory"], r["energy"]
         r2 = fmt_md(te.get("route2")) + (f" ({te['route2_status']})" if te.get("route2_status") not in (None, "as written") else "")
         link = f"[{r['file']}]({r['report']})" if r.get("report") else r["file"]
-        div = "none" if tr.get("divergence_time") is None and r["status"] == "compared" else fmt_md(tr.get("divergence_time"), 3)
+        div = tr.get("divergence_time")
+        div = ("none" if r["status"] == "compared" else "-") if div is None else f"{div:.3g} s"
         reason = (r.get("reason") or "").replace("|", "\\|").replace("\n", " ")
         lines.append(f"| {link} | {r['status']} | {'' if r.get('n') is None else r['n']} | {fmt_md(te.get('route1'))} | "
                      f"{r2} | {fmt_md(tr.get('max_abs_error'))} | {div} | {fmt_md(en.get('project_drift_rel'))} / "

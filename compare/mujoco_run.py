@@ -330,6 +330,7 @@ def run_mujoco(mj: MjcfModel, scene=None, *, q0=None, qd0=None, t_end: float | N
     blow_ups = _blow_ups(d)
     if blow_ups:
         notes.append(instability_note(blow_ups, integ, dt))
+        out["t"] = ks * dt   # MuJoCo's reset also set d.time back to 0: the samples' times are the steps
     return MujocoRun(t=out["t"], q=out["q"], qd=out["qd"], energy=out["energy"], base_tracking_error=track,
                      wall_time=wall, nsteps=int(ks[-1]), timestep=dt, integrator=integ, blow_ups=blow_ups,
                      coordinate_names=mj.coordinate_names, base_pose=out["base"], notes=notes)
