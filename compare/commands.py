@@ -7,10 +7,10 @@ declared in :mod:`urdf2links.cli`, which imports this module only when one of th
 ``--check BASELINES.json`` a non-zero exit naming every figure that grew past its baseline.
 
 ``urdf2links report``: every shipped scene (``robots/*.toml``) and ``reports/index.html``.
-Scenes whose MuJoCo run is driven from Python at every integrator stage (a moving base, joint
-torques, loads) are capped at ``--cap`` seconds (default :data:`REPORT_CAP_S`), as MuJoCo then
-costs ~0.2-0.4 ms per step at dt 1e-4 s; the report says so. ``--t-end`` sets every scene's
-``t_end`` instead. With ``<out>/baselines.json`` present (or ``--check FILE``) every scene is
+Every scene runs its whole ``t_end`` (MuJoCo's inputs come from a compiled control callback,
+:mod:`urdf2links.compare.mujoco_inputs`); ``--cap`` seconds caps the scenes with time-dependent
+inputs (a moving base, joint torques, loads; default :data:`REPORT_CAP_S`, 0: none) and the
+report says so. ``--t-end`` sets every scene's ``t_end`` instead. With ``<out>/baselines.json`` present (or ``--check FILE``) every scene is
 checked against it (exit 1 on a failure); ``--write-baselines [FILE]`` adds this run's figures
 to it (or to FILE), replacing an accepted run of the same length and MuJoCo setting.
 """
@@ -22,7 +22,7 @@ import sys
 import time
 from pathlib import Path
 
-from urdf2links.cli import scene_from_args, write_scene_option
+from urdf2links.scene_toml import scene_from_args, write_scene_option
 from urdf2links.console import err, shown_path
 from urdf2links.integrators import METHODS
 from urdf2links.locations import shipped_robots_dir
@@ -37,8 +37,8 @@ from .tradeoff_report import write_study
 
 __all__ = ["compare_command", "report_command", "tradeoff_command", "shipped_scenes", "report_t_end", "REPORT_CAP_S"]
 
-#: Default cap (s) of ``urdf2links report`` on scenes that drive MuJoCo from Python every stage.
-REPORT_CAP_S = 5.0
+#: Default cap (s) of ``urdf2links report`` on scenes with time-dependent inputs (0: none).
+REPORT_CAP_S = 0.0
 
 
 def shipped_scenes() -> list[Path]:
@@ -64,9 +64,8 @@ def report_t_end(scene, *, t_end: float | None, cap: float) -> tuple[float, str 
     driven = _driven(scene)
     if cap and cap > 0 and driven and scene.run.t_end > cap:
         return float(cap), (
-            f"t_end capped at {cap:g} s (the scene's is {scene.run.t_end:g} s) by `urdf2links report` to keep it "
-            f"CI-friendly: MuJoCo applies {_words(driven)} from a Python control callback at every RK4 stage, "
-            f"about 0.2-0.4 ms per step. `urdf2links compare {shown_path(scene.path)}` runs the whole scene.")
+            f"t_end capped at {cap:g} s (the scene's is {scene.run.t_end:g} s) by `urdf2links report --cap` on "
+            f"scenes with {_words(driven)}. `urdf2links compare {shown_path(scene.path)}` runs the whole scene.")
     return float(scene.run.t_end), None
 
 
@@ -86,7 +85,13 @@ def _print_headline(s: dict, stream=sys.stdout) -> None:
           f"(relative {en['project_drift_rel']:.1e}, {en['mujoco_drift_rel']:.1e})", file=stream)
     if s["base"]["moving"]:
         print(f"  base       tracking error {s['base']['tracking_error']:.2e}", file=stream)
-    print(f"  wall time  urdf2links {wt['project_s']:.2f} s, MuJoCo {wt['mujoco_s']:.2f} s", file=stream)
+    print(f"  wall time  urdf2links {wt['project_s']:.3g} s (integrator), MuJoCo {wt['mujoco_s']:.3g} s (engine, "
+          f"mj_step nstep); whole calls {wt['project_run_s']:.3g} s / {wt['mujoco_harness_s']:.3g} s", file=stream)
+    if wt["project_compiled"]:
+        print(f"  compiled   urdf2links: numba compiled {len(wt['project_compiled'])} function(s) in "
+              f"{wt['project_warmup_s']:.1f} s before the timed run (cached for the next runs)", file=stream)
+    if wt["mujoco_callback_compiled"]:
+        print(f"  compiled   MuJoCo's control callback in {wt['mujoco_callback_load_s']:.1f} s (cached)", file=stream)
 
 
 def _compare_cmd(args) -> str:
@@ -194,9 +199,9 @@ def report_command(args) -> int:
     if args.t_end is not None:
         note = f"Every scene run for t_end = {args.t_end:g} s (--t-end)."
     elif args.cap and args.cap > 0:
-        note = (f"Scenes whose MuJoCo run is driven from a Python callback at every RK4 stage (moving base, joint "
-                f"torques, loads) are capped at t_end = {args.cap:g} s; the others run their whole t_end. "
-                "`urdf2links compare SCENE.toml` runs any scene in full.")
+        note = (f"Scenes with time-dependent inputs (moving base, joint torques, loads) are capped at t_end = "
+                f"{args.cap:g} s (--cap); the others run their whole t_end. `urdf2links compare SCENE.toml` runs any "
+                "scene in full.")
     if baselines is not None:
         note += f" Baseline check against {shown_path(baselines_path)} (errors may grow {baselines.get('factor', 10):g}x)."
     corpus = out / "corpus" / "index.html"

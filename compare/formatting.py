@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["json_ready", "get", "fmt", "fmt_t", "fmt_md"]
+__all__ = ["json_ready", "get", "fmt", "fmt_t", "fmt_md", "machine_info"]
 
 
 def json_ready(x):
@@ -66,3 +66,30 @@ def fmt_t(x) -> str:
 
 def fmt_md(x, digits=2, unit="") -> str:
     return fmt(x, digits, unit).replace("&ndash;", "-")
+
+
+def machine_info() -> dict:
+    """The machine and the versions a timing was taken with (JSON-ready): platform, processor,
+    CPU count, Python, numpy, scipy, numba, MuJoCo, matplotlib, urdf2links and the git commit of
+    the source tree (None outside a checkout)."""
+    import os
+    import platform
+    import subprocess
+    import sys
+    from importlib.metadata import PackageNotFoundError, version
+
+    def ver(name):
+        try:
+            return version(name)
+        except PackageNotFoundError:
+            return None
+
+    try:
+        commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
+                                timeout=5, cwd=Path(__file__).resolve().parent).stdout.strip() or None
+    except (OSError, subprocess.SubprocessError):
+        commit = None
+    return {"platform": platform.platform(), "processor": platform.processor() or platform.machine(),
+            "cpu_count": os.cpu_count(), "python": sys.version.split()[0], "numpy": np.__version__,
+            "scipy": ver("scipy"), "numba": ver("numba"), "mujoco": ver("mujoco"), "matplotlib": ver("matplotlib"),
+            "urdf2links": ver("urdf2links"), "git_commit": commit}

@@ -1,9 +1,15 @@
 """Run the route-1 MJCF model (:mod:`urdf2links.compare.mjcf`) in MuJoCo: trajectories, energies, time.
 
-Everything time-dependent is applied from MuJoCo's control callback (``mujoco.set_mjcb_control``),
-which ``mj_forward`` calls after positions and velocities are computed and before the
-accelerations -- at every stage of RK4 too, with ``d.time`` set to the stage's time. So ``qM``
-(through ``mj_fullM``), ``qfrc_bias`` and ``qfrc_passive`` are current when it runs:
+**How MuJoCo is run** (as its experts run it): ``mujoco.mj_step(m, d, nstep=k)`` from one sample to
+the next, the energy flag ``mjENBL_ENERGY`` off; the states at the samples are copied between the
+calls. ``MujocoRun.wall_time`` is the time inside those ``mj_step`` calls only (MuJoCo's engine);
+``harness_time`` the whole :func:`run_mujoco` call (model copy, inputs, the sample copies, the
+energy pass). Energies come from an untimed pass over the recorded states (below).
+
+**Time-dependent inputs** are applied from MuJoCo's control callback (``mjcb_control``), which
+``mj_forward`` calls after positions and velocities are computed and before the accelerations --
+at every stage of RK4 too, with ``d.time`` set to the stage's time. So ``qM`` (through
+``mj_fullM``), ``qfrc_bias`` and ``qfrc_passive`` are current when it runs:
 
 * joint torques ``tau(t)`` (n,) of the project's coordinates -> ``qfrc_applied`` on their dofs;
 * loads on links (force at a point, moment; link or world axes) -> ``xfrc_applied`` of the link's
@@ -20,6 +26,16 @@ accelerations -- at every stage of RK4 too, with ``d.time`` set to the stage's t
   the acceleration after the callback: the base then only approximately follows;
   ``base_tracking_error`` shows by how much).
 
+Two implementations of that callback, chosen by ``inputs``:
+
+* ``"compiled"`` (default, a scene's inputs): :class:`urdf2links.compare.mujoco_inputs.CompiledInputs`,
+  numba code installed as a C function pointer: no Python runs during ``mj_step``. It evaluates
+  the scene's time functions as the project's compiled right-hand side does.
+* ``"python"``: :class:`PythonInputs`, the same steps in numpy from a Python callback (about a
+  millisecond per RK4 step: the harness's time, not MuJoCo's). It serves inputs given as Python
+  callables (``base``, ``torques``, ``loads`` arguments) and is the compiled one's oracle (the
+  tests require equal trajectories to 1e-12).
+
 The callback is process-global: it is installed for the run only, acts only on the run's own
 ``MjData`` and is always removed afterwards (the previous callback, normally None, is restored),
 also when something raises.
@@ -27,14 +43,16 @@ also when something raises.
 Sampling: the run takes ``K = round(t_end / timestep)`` steps and records at the steps nearest to
 ``linspace(0, t_end, samples)``; ``MujocoRun.t`` holds the actual times (``d.time``), equal to
 the requested ones when the timestep divides the sample interval (otherwise ``notes`` gives the
-largest offset). Energies are MuJoCo's (``mjENBL_ENERGY``), evaluated by an ``mj_forward`` at each
-sample; with a moving base the ``base_A`` body's own kinetic and potential energy is removed, so
-they are the robot's energies in {0} like the project's ``E`` and ``V`` (spring energy
-``0.5 k (q - rest)^2`` included in the potential).
+largest offset). Energies are MuJoCo's (``mjENBL_ENERGY``: ``mj_energyPos``, ``mj_energyVel``)
+evaluated after the run at each recorded state (``qpos``, ``qvel``) with the energy flag on; with a
+moving base the ``base_A`` body's own kinetic and potential energy is removed, so they are the
+robot's energies in {0} like the project's ``E`` and ``V`` (spring energy ``0.5 k (q - rest)^2``
+included in the potential).
 """
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import time as _time
 from dataclasses import dataclass, field
@@ -44,14 +62,22 @@ import mujoco
 import numpy as np
 
 from urdf2links.loads import Wrench
+from urdf2links.simulate import Compilation
 from urdf2links.transforms import BaseState
 
 from .mjcf import INTEGRATORS, MjcfModel
+from .mujoco_inputs import CompiledInputs
 
-__all__ = ["MujocoRun", "run_mujoco", "mujoco_accelerations", "robot_energy", "energy_function", "instability_note",
-           "ENERGY_COLUMNS"]
+__all__ = ["MujocoRun", "run_mujoco", "mujoco_accelerations", "robot_energy", "energy_function", "ENERGY_COLUMNS",
+           "PythonInputs", "INPUTS", "TIMED_REGION", "instability_note"]
 
 ENERGY_COLUMNS = ("kinetic", "potential")
+#: The implementations of the control callback (see the module doc).
+INPUTS = ("compiled", "python")
+#: What ``MujocoRun.wall_time`` contains.
+TIMED_REGION = ("MuJoCo's engine: the mujoco.mj_step(m, d, nstep=k) calls from sample to sample, energy flag off, "
+                "the control callback (if the scene has inputs) included; not the model copy, the sample copies, "
+                "the energy pass nor the callback's compilation")
 
 _INTEGRATOR_ENUM = {
     "Euler": mujoco.mjtIntegrator.mjINT_EULER,
@@ -67,10 +93,15 @@ class MujocoRun:
 
     ``t`` (m,) actual sample times; ``q``, ``qd`` (m, n); ``energy`` (m, 2) columns
     :data:`ENERGY_COLUMNS` (kinetic, potential; see module doc); ``base_tracking_error``: max over
-    samples of ``|base qpos - prescribed pose|`` (0.0 for a fixed base); ``wall_time`` (s) of the
-    stepping loop (sampling included); ``nsteps`` MuJoCo steps; ``timestep``, ``integrator``;
-    ``blow_ups``: how often MuJoCo met NaN, Inf or huge values and reset its state (``{"BADQACC": 3}``;
-    empty when it never did; ``notes`` then says what it means).
+    samples of ``|base qpos - prescribed pose|`` (0.0 for a fixed base); ``wall_time`` (s): MuJoCo's
+    engine, the ``mj_step(nstep)`` calls only (:data:`TIMED_REGION`); ``harness_time`` (s): the whole
+    :func:`run_mujoco` call; ``nsteps`` MuJoCo steps; ``timestep``, ``integrator``; ``inputs``:
+    ``"none"``, ``"compiled"`` or ``"python"`` (the control callback used); ``callback_calls`` its
+    calls (4 per RK4 step); ``compilation`` the compiled callback's
+    :class:`~urdf2links.simulate.Compilation` in this run (its loading from numba's cache, or its
+    compilation, once per process; empty afterwards); ``blow_ups``: how often MuJoCo met NaN, Inf or huge
+    values and reset its state (``{"BADQACC": 3}``; empty when it never did; ``notes`` then says what
+    it means).
     """
 
     t: np.ndarray
@@ -85,6 +116,10 @@ class MujocoRun:
     coordinate_names: tuple[str, ...]
     base_pose: np.ndarray | None = None
     notes: list[str] = field(default_factory=list)
+    harness_time: float = 0.0
+    inputs: str = "none"
+    callback_calls: int = 0
+    compilation: Compilation = field(default_factory=Compilation)
     blow_ups: dict = field(default_factory=dict)
 
     @property
@@ -113,8 +148,9 @@ def _as_base_fn(base) -> Callable[[float], BaseState] | None:
     raise TypeError(f"base must be None, a BaseState or a callable t -> BaseState; got {type(base).__name__}")
 
 
-class _Driver:
-    """What the control callback does for one ``MjData``: torques, loads, prescribed base."""
+class PythonInputs:
+    """The control callback in Python for one ``MjData``: torques, loads, prescribed base (module
+    doc). ``base``, ``torques``, ``loads``: callables of ``t`` (see :func:`run_mujoco`)."""
 
     def __init__(self, mj: MjcfModel, m: mujoco.MjModel, d: mujoco.MjData, *, base=None, torques=None,
                  loads=None):
@@ -143,12 +179,17 @@ class _Driver:
         b, r = mj.base_dofs, mj.dof_index
         self._rr, self._rb, self._bb, self._br = np.ix_(r, r), np.ix_(r, b), np.ix_(b, b), np.ix_(b, r)
         self.active = bool(self.base is not None or torques is not None or loads is not None)
-        self.error: BaseException | None = None
+        self.calls = 0
 
     def __call__(self, m, d):
         if d is not self.d:  # the callback is global: leave other MjData alone
             return
+        self.calls += 1
         self.apply(d)
+
+    def installed(self):
+        """Context in which this is MuJoCo's control callback (restored afterwards)."""
+        return _Installed(self)
 
     def apply(self, d) -> None:
         mj = self.mj
@@ -220,7 +261,7 @@ _HELD = BaseState.fixed()
 class _Installed:
     """Context manager: install the driver as MuJoCo's control callback, always restore."""
 
-    def __init__(self, driver: _Driver):
+    def __init__(self, driver: PythonInputs):
         self.driver = driver
         self.previous = None
 
@@ -255,9 +296,9 @@ def mujoco_accelerations(mj: MjcfModel, q, qd, *, t: float = 0.0, base=None, tau
     mj.set_state(d, q, qd, base=None if fn is None else fn(float(t)))
     loads = list(loads)
     tau_a = None if tau is None else np.asarray(tau, float)
-    driver = _Driver(mj, m, d, base=fn, torques=None if tau_a is None else (lambda _t: tau_a),
-                     loads=(lambda _t: loads) if loads else None)
-    with _Installed(driver):
+    driver = PythonInputs(mj, m, d, base=fn, torques=None if tau_a is None else (lambda _t: tau_a),
+                          loads=(lambda _t: loads) if loads else None)
+    with driver.installed():
         mujoco.mj_forward(m, d)
     return np.array(d.qacc[mj.dof_index])
 
@@ -279,7 +320,8 @@ def robot_energy(mj: MjcfModel, m, d) -> tuple[float, float]:
 
 def run_mujoco(mj: MjcfModel, scene=None, *, q0=None, qd0=None, t_end: float | None = None,
                timestep: float | None = None, integrator: str | None = None, samples: int | None = None,
-               base=None, torques: Callable | None = None, loads: Callable | None = None) -> MujocoRun:
+               base=None, torques: Callable | None = None, loads: Callable | None = None,
+               inputs: str = "compiled") -> MujocoRun:
     """Integrate the route-1 model in MuJoCo and sample the trajectory (see module doc).
 
     Parameters
@@ -295,11 +337,19 @@ def run_mujoco(mj: MjcfModel, scene=None, *, q0=None, qd0=None, t_end: float | N
     base : BaseState or callable ``t -> BaseState`` of {A}; needs ``moving_base=True``.
     torques : callable ``t -> (n,)`` generalized joint forces.
     loads : callable ``t -> iterable`` of Wrench or ``(tree link index, force, moment, point, frame)``.
+    inputs : ``"compiled"`` (the scene's inputs from the compiled callback) or ``"python"`` (the
+        Python callback). Inputs given as callables (``base``, ``torques``, ``loads``) always run
+        the Python callback (``notes`` says so).
     """
+    start = _time.perf_counter()
+    if inputs not in INPUTS:
+        raise ValueError(f"inputs must be one of {INPUTS}, got {inputs!r}")
     notes: list[str] = []
+    explicit = base is not None or torques is not None or loads is not None
+    plan = None
     if scene is not None:
-        q0, qd0, t_end, samples, base, torques, loads = _scene_inputs(mj, scene, q0, qd0, t_end, samples, base,
-                                                                      torques, loads)
+        plan, q0, qd0, t_end, samples, base, torques, loads = _scene_inputs(mj, scene, q0, qd0, t_end, samples,
+                                                                            base, torques, loads)
     n = mj.n
     q0 = np.zeros(n) if q0 is None else np.asarray(q0, float)
     qd0 = np.zeros(n) if qd0 is None else np.asarray(qd0, float)
@@ -307,7 +357,7 @@ def run_mujoco(mj: MjcfModel, scene=None, *, q0=None, qd0=None, t_end: float | N
     samples = 101 if samples is None else int(samples)
     if samples < 1 or not t_end >= 0:
         raise ValueError(f"need samples >= 1 and t_end >= 0, got {samples}, {t_end}")
-    m, integ = _configured(mj, timestep, integrator)
+    m, integ = _configured(mj, timestep, integrator, energy=False)
     dt = float(m.opt.timestep)
     t_req = np.linspace(0.0, t_end, samples)
     ks = np.rint(t_req / dt).astype(np.int64)
@@ -319,21 +369,40 @@ def run_mujoco(mj: MjcfModel, scene=None, *, q0=None, qd0=None, t_end: float | N
     base_fn = _as_base_fn(base)
     if mj.moving_base and base_fn is None:
         notes.append("the model has a base_A body but no base motion was given: base held at the origin")
-    driver = _Driver(mj, m, d, base=base_fn, torques=torques, loads=loads)
-    mj.set_state(d, q0, qd0, base=driver.base(0.0) if driver.base is not None else None)
+        base_fn = _as_base_fn(_HELD)
+    mj.set_state(d, q0, qd0, base=base_fn(0.0) if base_fn is not None else None)
     if mj.moving_base and integ not in ("RK4",):
         notes.append(f"integrator {integ}: the prescribed base is exact only when nothing changes the "
                      "acceleration after the control callback (RK4; Euler without dampers)")
-    out, track, wall = _stepping(mj, m, d, driver, ks)
-    if not np.all(np.isfinite(out["q"])):
-        notes.append("MuJoCo's state became non-finite")
+    driver = _inputs(mj, m, d, plan, inputs, explicit, base_fn, torques, loads, notes)
+    rec, wall = _stepping(m, d, driver, ks)
     blow_ups = _blow_ups(d)
     if blow_ups:
         notes.append(instability_note(blow_ups, integ, dt))
-        out["t"] = ks * dt   # MuJoCo's reset also set d.time back to 0: the samples' times are the steps
-    return MujocoRun(t=out["t"], q=out["q"], qd=out["qd"], energy=out["energy"], base_tracking_error=track,
+        rec["t"] = ks * dt   # MuJoCo's reset also set d.time back to 0: the samples' times are the steps'
+    out = _recorded(mj, m, rec, base_fn)
+    if not np.all(np.isfinite(out["q"])):
+        notes.append("MuJoCo's state became non-finite")
+    used = "none" if driver is None else ("compiled" if isinstance(driver, CompiledInputs) else "python")
+    return MujocoRun(t=rec["t"], q=out["q"], qd=out["qd"], energy=out["energy"], base_tracking_error=out["track"],
                      wall_time=wall, nsteps=int(ks[-1]), timestep=dt, integrator=integ, blow_ups=blow_ups,
-                     coordinate_names=mj.coordinate_names, base_pose=out["base"], notes=notes)
+                     coordinate_names=mj.coordinate_names, base_pose=out["base"], notes=notes,
+                     harness_time=_time.perf_counter() - start, inputs=used,
+                     callback_calls=0 if driver is None else int(driver.calls),
+                     compilation=driver.compilation if isinstance(driver, CompiledInputs) else Compilation())
+
+
+def _inputs(mj, m, d, plan, inputs, explicit, base_fn, torques, loads, notes):
+    """The run's control callback: None without inputs, the compiled one for a scene's inputs,
+    else the Python one."""
+    if base_fn is None and torques is None and loads is None:
+        return None
+    if inputs == "compiled" and plan is not None and not explicit:
+        return CompiledInputs(mj, plan, m, d)
+    if inputs == "compiled":
+        notes.append("inputs given as Python callables: MuJoCo is driven from the Python control callback at every "
+                     "stage (its wall time includes that harness)")
+    return PythonInputs(mj, m, d, base=base_fn, torques=torques, loads=loads)
 
 
 #: MuJoCo's warnings that its state blew up (it then resets the state: ``mj_checkPos/Vel/Acc``).
@@ -356,8 +425,8 @@ def instability_note(blow_ups: dict, integ: str, dt: float) -> str:
 
 
 def _scene_inputs(mj, scene, q0, qd0, t_end, samples, base, torques, loads):
-    """What a scene supplies where the caller gave nothing: initial state, run length, samples,
-    base motion, joint torques and loads (through the scene's plan)."""
+    """The scene's plan, and what the scene supplies where the caller gave nothing: initial state,
+    run length, samples, base motion, joint torques and loads (through the scene's plan)."""
     _check_scene(mj, scene)
     from urdf2links.plan import compile_plan
 
@@ -374,12 +443,12 @@ def _scene_inputs(mj, scene, q0, qd0, t_end, samples, base, torques, loads):
         torques = plan.torques
     if loads is None and plan.loads:
         loads = plan.wrenches
-    return q0, qd0, t_end, samples, base, torques, loads
+    return plan, q0, qd0, t_end, samples, base, torques, loads
 
 
-def _configured(mj, timestep, integrator):
-    """A copy of ``mj``'s model with the timestep and integrator asked for and energies enabled;
-    the integrator's name."""
+def _configured(mj, timestep, integrator, *, energy: bool):
+    """A copy of ``mj``'s model with the timestep and integrator asked for and the energy flag on
+    or off; the integrator's name."""
     m = copy.deepcopy(mj.model)
     if timestep is not None:
         m.opt.timestep = float(timestep)
@@ -389,37 +458,59 @@ def _configured(mj, timestep, integrator):
         m.opt.integrator = int(_INTEGRATOR_ENUM[integrator])
     integ = mujoco.mjtIntegrator(int(m.opt.integrator)).name.removeprefix("mjINT_")
     integ = {"EULER": "Euler", "RK4": "RK4", "IMPLICIT": "implicit", "IMPLICITFAST": "implicitfast"}.get(integ, integ)
-    m.opt.enableflags |= int(mujoco.mjtEnableBit.mjENBL_ENERGY)
+    flag = int(mujoco.mjtEnableBit.mjENBL_ENERGY)
+    m.opt.enableflags = (m.opt.enableflags | flag) if energy else (m.opt.enableflags & ~flag)
     return m, integ
 
 
-def _stepping(mj, m, d, driver, ks):
-    """Step to ``ks[-1]``, sampling (``mj_forward``) at the steps ``ks``; the samples, the base's
-    tracking error and the wall time of the loop."""
-    m_s, n = len(ks), mj.n
-    out = {"t": np.empty(m_s), "q": np.empty((m_s, n)), "qd": np.empty((m_s, n)), "energy": np.empty((m_s, 2)),
-           "base": np.empty((m_s, 6)) if mj.moving_base else None}
-    track = 0.0
-    j = 0
-    K = int(ks[-1])
-    with _Installed(driver):
-        start = _time.perf_counter()
-        for k in range(K + 1):
-            while j < m_s and ks[j] == k:
-                mujoco.mj_forward(m, d)
-                out["t"][j] = d.time
-                out["q"][j] = d.qpos[mj.qpos_index]
-                out["qd"][j] = d.qvel[mj.dof_index]
-                out["energy"][j] = robot_energy(mj, m, d)
-                if mj.moving_base:
-                    bp = np.array(d.qpos[mj.base_qpos])
-                    out["base"][j] = bp
-                    track = max(track, float(np.max(np.abs(bp - np.asarray(driver.base(float(d.time)).pose)))))
-                j += 1
-            if k < K:
-                mujoco.mj_step(m, d)
-        wall = _time.perf_counter() - start
-    return out, track, wall
+def _stepping(m, d, driver, ks):
+    """``mj_step(m, d, nstep)`` from sample to sample (the steps ``ks``), the callback installed;
+    the recorded ``t``, ``qpos``, ``qvel`` and the time spent inside ``mj_step`` (MuJoCo's engine)."""
+    S = len(ks)
+    rec = {"t": np.empty(S), "qpos": np.empty((S, m.nq)), "qvel": np.empty((S, m.nv))}
+    engine = 0.0
+    k_done = 0
+    clock = _time.perf_counter
+    with (driver.installed() if driver is not None else contextlib.nullcontext()):
+        for j in range(S):
+            k = int(ks[j])
+            if k > k_done:
+                t0 = clock()
+                mujoco.mj_step(m, d, nstep=k - k_done)
+                engine += clock() - t0
+                k_done = k
+            rec["t"][j] = d.time
+            rec["qpos"][j] = d.qpos
+            rec["qvel"][j] = d.qvel
+    if isinstance(driver, CompiledInputs):
+        driver.check()
+    return rec, engine
+
+
+def _recorded(mj, m, rec, base_fn) -> dict:
+    """The project's ``q``, ``qd`` at the recorded states, MuJoCo's energies there (the untimed
+    energy pass, see the module doc), the base's pose and its largest tracking error."""
+    q, qd = rec["qpos"][:, mj.qpos_index], rec["qvel"][:, mj.dof_index]
+    me = copy.deepcopy(m)
+    me.opt.enableflags |= int(mujoco.mjtEnableBit.mjENBL_ENERGY)
+    de = mujoco.MjData(me)
+    energy = np.empty((len(rec["t"]), 2))
+    for j in range(len(rec["t"])):
+        de.time = rec["t"][j]
+        de.qpos[:] = rec["qpos"][j]
+        de.qvel[:] = rec["qvel"][j]
+        mujoco.mj_fwdPosition(me, de)
+        mujoco.mj_energyPos(me, de)
+        mujoco.mj_fwdVelocity(me, de)
+        mujoco.mj_energyVel(me, de)
+        energy[j] = robot_energy(mj, me, de)
+    out = {"q": q, "qd": qd, "energy": energy, "base": None, "track": 0.0}
+    if mj.moving_base:
+        bp = np.array(rec["qpos"][:, mj.base_qpos])
+        want = np.array([np.asarray(base_fn(float(t)).pose, float) for t in rec["t"]])
+        out["base"] = bp
+        out["track"] = float(np.max(np.abs(bp - want))) if len(bp) else 0.0
+    return out
 
 
 def _check_scene(mj: MjcfModel, scene) -> None:

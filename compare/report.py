@@ -86,8 +86,10 @@ def _headline(s) -> list:
     if s["base"]["moving"]:
         head.append(("base tracking error (MuJoCo)", fmt(s["base"]["tracking_error"]),
                      "max |base_A qpos - prescribed pose| (m, rad)"))
-    head += [("wall time, urdf2links", fmt(wt["project_s"], 2, " s"), f"{pr['method']}, {pr['nsteps']} steps, {pr['nfev']} evaluations"),
-             ("wall time, MuJoCo", fmt(wt["mujoco_s"], 2, " s"), f"{mj['integrator']} dt {mj['timestep']:g} s, {mj['nsteps']} steps")]
+    head += [("wall time, urdf2links", fmt(wt["project_s"], 3, " s"), f"{pr['method']}, {pr['nsteps']} steps, "
+              f"{pr['nfev']} evaluations; the integrator (section {_wall_section(s)})"),
+             ("wall time, MuJoCo", fmt(wt["mujoco_s"], 3, " s"), f"{mj['integrator']} dt {mj['timestep']:g} s, "
+              f"{mj['nsteps']} steps; the engine, mj_step(nstep) (section {_wall_section(s)})")]
     return head
 
 
@@ -195,6 +197,30 @@ def _energy_section(c, s, light=False) -> list[str]:
     return parts
 
 
+def _wall_section(s) -> int:
+    return 5 if s["base"]["moving"] else 4
+
+
+def _inputs_words(wt) -> str:
+    return {"none": "none (no control callback)",
+            "compiled": f"the compiled control callback ({wt['mujoco_callback_calls']} calls)",
+            "python": f"the Python control callback ({wt['mujoco_callback_calls']} calls; its time is in the engine's)",
+            }.get(wt["mujoco_inputs"], str(wt["mujoco_inputs"]))
+
+
+def _compile_words(wt) -> str:
+    """Compilation, on its own line when it happened."""
+    out = []
+    if wt["project_compiled"]:
+        out.append(f"urdf2links warm-up: numba compiled {len(wt['project_compiled'])} function(s) in "
+                   f"{wt['project_warmup_s']:.1f} s (once; not in the timed run).")
+    else:
+        out.append(f"urdf2links warm-up {wt['project_warmup_s']:.2f} s (compiled code loaded from numba's cache).")
+    if wt["mujoco_callback_compiled"]:
+        out.append(f"MuJoCo's control callback compiled in {wt['mujoco_callback_load_s']:.1f} s (once).")
+    return " ".join(out)
+
+
 def _closing_sections(s, command) -> list[str]:
     """Base motion (when it moves), wall time, notes, where the figures are."""
     e = html.escape
@@ -208,11 +234,17 @@ def _closing_sections(s, command) -> list[str]:
                      f"from the prescribed pose over the run: <b>{fmt(s['base']['tracking_error'])}</b> (m, rad).</p>")
         n_sec += 1
     parts.append(f"<h2>{n_sec}. Wall time</h2>")
-    parts.append(_rows([["urdf2links", e(pr["method"]), str(pr["nsteps"]), fmt(wt["project_s"], 2, " s")],
-                        ["MuJoCo", e(f"{mj['integrator']} dt {mj['timestep']:g}"), str(mj["nsteps"]), fmt(wt["mujoco_s"], 2, " s")]],
-                       ["engine", "integrator", "steps", "wall time"], num_cols=(2, 3)))
-    parts.append(f"<p class='small'>{e(wt['note'])}. Terms: {fmt(wt['terms_s'], 2, ' s')}; whole comparison "
-                 f"{fmt(wt['total_s'], 2, ' s')}.</p>")
+    parts.append(_rows([["urdf2links", e(pr["method"]), str(pr["nsteps"]), fmt(wt["project_s"], 3, " s"),
+                         fmt(wt["project_run_s"], 3, " s")],
+                        ["MuJoCo", e(f"{mj['integrator']} dt {mj['timestep']:g}"), str(mj["nsteps"]),
+                         fmt(wt["mujoco_s"], 3, " s"), fmt(wt["mujoco_harness_s"], 3, " s")]],
+                       ["engine", "integrator", "steps", "timed: the integration", "whole call"], num_cols=(2, 3, 4)))
+    regions = wt["regions"]
+    parts.append("<p class='small'><b>Timed.</b> " + e(regions["project_s"]) + ". " + e(regions["mujoco_s"])
+                 + ". <b>Whole call.</b> urdf2links: " + e(regions["project_run_s"]) + "; MuJoCo: "
+                 + e(regions["mujoco_harness_s"]) + f". MuJoCo's inputs: {e(_inputs_words(wt))}.</p>")
+    parts.append(f"<p class='small'>{e(_compile_words(wt))} Terms: {fmt(wt['terms_s'], 2, ' s')}; whole comparison "
+                 f"{fmt(wt['total_s'], 2, ' s')}; {e(wt['note'])}.</p>")
     if s["notes"]:
         parts.append("<h2>Notes</h2><ul class='notes'>" + "".join(f"<li>{e(n)}</li>" for n in s["notes"]) + "</ul>")
     if r2.get("notes"):
@@ -264,9 +296,13 @@ def render_markdown(s: dict) -> str:
               f"| energy drift MuJoCo | {fmt_md(en['mujoco_drift'])} J ({fmt_md(en['mujoco_drift_rel'])} relative) |"]
     if s["base"]["moving"]:
         lines.append(f"| base tracking error | {fmt_md(s['base']['tracking_error'])} |")
-    lines += [f"| wall time urdf2links | {wt['project_s']:.2f} s ({pr['nsteps']} steps) |",
-              f"| wall time MuJoCo | {wt['mujoco_s']:.2f} s ({mj['nsteps']} steps) |", "",
-              f"Energy: {en['quantity']}; {en['note']}.", ""]
+    lines += [f"| wall time urdf2links (the integrator) | {wt['project_s']:.3g} s ({pr['nsteps']} steps; whole "
+              f"simulate() {wt['project_run_s']:.3g} s) |",
+              f"| wall time MuJoCo (the engine) | {wt['mujoco_s']:.3g} s ({mj['nsteps']} steps; whole run "
+              f"{wt['mujoco_harness_s']:.3g} s; inputs: {_inputs_words(wt)}) |", "",
+              f"Energy: {en['quantity']}; {en['note']}.", "",
+              f"Timed regions: urdf2links: {wt['regions']['project_s']}. MuJoCo: {wt['regions']['mujoco_s']}. "
+              + _compile_words(wt), ""]
     return "\n".join(lines)
 
 

@@ -8,11 +8,15 @@
    method converges regularly). The largest coordinate difference of the two over the samples is
    the reference's **error estimate**; errors below it are not resolved by the study.
 2. **every method of the project** (:data:`urdf2links.integrators.METHODS`): the adaptive ones
-   over a ladder of rtol (``atol = 1e-2 rtol``), ``RK4`` and ``midpoint`` (Newton tolerance rtol
-   1e-10, atol 1e-12) over a ladder of steps ``dt``;
-3. **MuJoCo's** ``Euler``, ``implicitfast`` and ``RK4`` over a ladder of timesteps (route 1: the
-   project's tree as MJCF, :func:`urdf2links.compare.mjcf.mjcf_from_scene`, run by
-   :func:`urdf2links.compare.mujoco_run.run_mujoco`).
+   over a ladder of rtol (``atol = 1e-2 rtol``; a decade costs DOP853 about 1.25-1.35x more
+   evaluations), ``RK4`` and ``midpoint`` (Newton tolerance rtol 1e-10, atol 1e-12) over the
+   ladder of steps :data:`DTS`;
+3. **MuJoCo's** ``Euler``, ``implicitfast`` and ``RK4`` over the ladder of timesteps
+   :data:`MUJOCO_DTS` (route 1: the project's tree as MJCF,
+   :func:`urdf2links.compare.mjcf.mjcf_from_scene`, run by
+   :func:`urdf2links.compare.mujoco_run.run_mujoco`). Both step ladders are ``0.01 s / j``
+   with ``j`` about 1.25x apart (1, 2, 4, 5, 8, 10, 16, 20, 25, 32, ...): steps that divide the
+   0.01 s sample interval and a cost axis resolved as finely as the rtol ladder's.
 
 For each run: the error against the reference in the coordinates (max over coordinates of
 ``|q - q_ref|``, rad or m) at the final time and the maximum over the common sample times (the
@@ -23,21 +27,31 @@ time; the dynamics evaluations (project: every call of the right-hand side, Jaco
 included; MuJoCo: steps x stages, Euler 1, implicitfast 1, RK4 4).
 
 **Timing.** Every run is first made once, with samples, for its errors (not timed). Then
-``repeats`` rounds run every configuration that succeeded once more each, with two samples only
-(start and end), engines interleaved and the order reversed every other round; the median is
-kept. The project's time is the integrator's own ``wall_time`` (``Trajectory.stats``: the
-integration loop and the dense output at the two sample times; not the plan compilation nor the
-energies); MuJoCo's is ``MujocoRun.wall_time`` (its stepping loop with two ``mj_forward`` samples).
-Both engines run in this one process.
+``repeats`` rounds run every configuration that succeeded once more each, from t = 0 to T with
+nothing sampled in between, engines interleaved and the order reversed every other round; the
+median, minimum and maximum over the rounds are kept (the spread). Both engines are timed the same
+way, in this one process, after a warm-up (:func:`urdf2links.simulate.warm_up`: numba's
+compilation is never timed): the project's time is :func:`urdf2links.integrators.integrate`'s
+``wall_time`` on the scene's compiled right-hand side (the integration loop; no dense output, no
+samples, no energies; a scene whose floating links are re-charted is timed through
+:func:`~urdf2links.simulate.simulate`); MuJoCo's is ``MujocoRun.wall_time``, one
+``mj_step(m, d, nstep=K)`` call with the energy flag off (inputs from the compiled control
+callback).
 
 **Budget.** A configuration whose predicted wall time exceeds ``budget`` seconds (evaluations x
 the measured cost of one, extrapolated from the looser rungs for the adaptive methods) is skipped,
-and so are the tighter rungs of the same method (a failed rung does not stop the ladder); so are the rungs after one whose error came within
-:data:`FLOOR_STOP` times the reference's error estimate (they would not be resolved); runs that fail (step underflow, non-finite
-state, failed factorization, MuJoCo's instability reset) are recorded as failed with the reason.
+and so are the tighter rungs of the same method (a failed rung does not stop the ladder); so are the
+rungs after one whose error came within :data:`FLOOR_STOP` times the reference's error estimate
+(they would not be resolved), and after one that reached the method's own rounding floor: within
+:data:`ROUNDING_BAND` times the estimate, its error no smaller than a looser rung's (MuJoCo's RK4
+levels off near 1e-10 on the UR5-like arm while the estimate is 4e-11). Runs that fail (step
+underflow, non-finite state, failed factorization, MuJoCo's instability reset) are recorded as
+failed with the reason.
 
 **Crossover** (:func:`crossover`): at each error level, the fastest run of each engine reaching
-it; the level below which the project is faster than MuJoCo, or the statement that it is not.
+it (median time); an engine is faster there only when its slowest round beats the other's fastest
+(the spreads do not overlap), otherwise the level is a tie; the level below which the project is
+faster than MuJoCo, with the spread of both times, or the statement that it is not.
 
 Files, plots and the report section: :mod:`urdf2links.compare.tradeoff_report`. Command: ``urdf2links tradeoff``
 (:mod:`urdf2links.compare.commands`).
@@ -46,28 +60,24 @@ Files, plots and the report section: :mod:`urdf2links.compare.tradeoff_report`. 
 from __future__ import annotations
 
 import math
-import os
-import platform
 import statistics
-import subprocess
-import sys
 import time
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-import mujoco
 import numpy as np
 
-from urdf2links.integrators import METHODS
+from urdf2links.charts import floating_links
+from urdf2links.console import shown_path
+from urdf2links.integrators import METHODS, integrate
 from urdf2links.plan import compile_plan
 from urdf2links.scene import load_scene
-from urdf2links.simulate import simulate
+from urdf2links.simulate import simulate, warm_up
 
-from urdf2links.console import shown_path
-
-from .formatting import json_ready
+from .crossover import crossover
+from .formatting import json_ready, machine_info
 from .mjcf import mjcf_from_scene
 from .mujoco_run import energy_function, run_mujoco
 from .trajectory import scene_key
@@ -82,9 +92,14 @@ STAGES = {"Euler": 1, "implicitfast": 1, "implicit": 1, "RK4": 4}
 
 RTOLS = (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12)
 QUICK_RTOLS = (1e-4, 1e-6, 1e-8)
-DTS = (1e-2, 5e-3, 2e-3, 1e-3, 5e-4, 2e-4, 1e-4, 5e-5, 2e-5, 1e-5)
+#: Steps per 0.01 s of the fixed-step ladders: 2^a 5^b, about 1.25x apart from 4 on.
+STEPS_PER_CENTISECOND = (1, 2, 4, 5, 8, 10, 16, 20, 25, 32, 40, 50, 64, 80, 100, 125, 160, 200, 250, 320, 400, 500,
+                         640, 800, 1000, 1250, 1600, 2000, 2500, 3200, 4000, 5000, 6400, 8000, 10000)
+#: The project's RK4 and midpoint steps: 1e-2 .. 1e-5 s.
+DTS = tuple(1e-2 / j for j in STEPS_PER_CENTISECOND if j <= 1000)
 QUICK_DTS = (1e-2, 5e-3, 2.5e-3)
-MUJOCO_DTS = (1e-2, 5e-3, 2e-3, 1e-3, 5e-4, 2e-4, 1e-4, 5e-5, 2e-5, 1e-5, 5e-6, 2e-6, 1e-6)
+#: MuJoCo's timesteps: 1e-2 .. 1e-6 s.
+MUJOCO_DTS = tuple(1e-2 / j for j in STEPS_PER_CENTISECOND)
 QUICK_MUJOCO_DTS = (8e-3, 4e-3, 2e-3, 1e-3)
 REFERENCE = {"method": "DOP853", "rtol": 1e-13, "atol": 1e-14}
 CHECK = {"method": "Radau", "rtol": 1e-13, "atol": 1e-14}
@@ -93,8 +108,9 @@ MIDPOINT_NEWTON = {"rtol": 1e-10, "atol": 1e-12}
 DEFAULT_T_CAP = 2.0
 #: A method's ladder stops once a run's error is within this factor of the reference's error estimate.
 FLOOR_STOP = 3.0
-#: Error levels per decade at which the crossover compares the engines.
-GRID_PER_DECADE = 4
+#: ... or once a run within this factor of the estimate is no more accurate than a looser rung of
+#: its ladder (the method's own rounding floor: tighter runs cost more and gain nothing).
+ROUNDING_BAND = 100.0
 DEFAULT_BUDGET = 30.0
 QUICK_BUDGET = 5.0
 
@@ -123,7 +139,8 @@ def _qerr(q, q_ref) -> tuple[float, float]:
     return float(e[-1]), float(e.max())
 
 
-def _project(scene, model, T, S, cfg: Config, repeat_only=False):
+def _options(cfg: Config) -> dict:
+    """The integrator's options of a project rung (method, step or tolerances)."""
     kw = {"method": cfg.method}
     if cfg.param == "dt":
         kw["dt"] = cfg.value
@@ -131,13 +148,32 @@ def _project(scene, model, T, S, cfg: Config, repeat_only=False):
             kw.update(MIDPOINT_NEWTON)
     else:
         kw.update(rtol=cfg.value, atol=1e-2 * cfg.value)
+    return kw
+
+
+def _project(st: "_Study", cfg: Config):
+    """The run for the errors: :func:`simulate` with the study's samples (not timed)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return simulate(scene, model=model, t_end=T, samples=2 if repeat_only else S, progress=False, **kw)
+        return simulate(st.scene, model=st.model, t_end=st.T, samples=st.S, progress=False, **_options(cfg))
 
 
-def _mujoco(mj, scene, T, S, cfg: Config, repeat_only=False):
-    return run_mujoco(mj, scene, t_end=T, timestep=cfg.value, integrator=cfg.method, samples=2 if repeat_only else S)
+def _time_project(st: "_Study", cfg: Config) -> float:
+    """One timing run: :func:`integrate` of the compiled right-hand side from 0 to T, nothing
+    sampled (re-charted scenes: :func:`simulate` with the two end samples); its ``wall_time``."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        if st.charted:
+            return float(simulate(st.scene, model=st.model, t_end=st.T, samples=2, progress=False,
+                                  **_options(cfg)).stats["wall_time"])
+        res = integrate(st.plan.rhs, (0.0, st.T), st.y0, **_options(cfg))
+    if not res.success:
+        raise RuntimeError(res.message)
+    return float(res.wall_time)
+
+
+def _mujoco(st: "_Study", cfg: Config, samples: int):
+    return run_mujoco(st.mj, st.scene, t_end=st.T, timestep=cfg.value, integrator=cfg.method, samples=samples)
 
 
 def _mujoco_failure(run, T) -> str | None:
@@ -184,26 +220,6 @@ def _ladder(quick, methods, mujoco_integrators):
     return cfgs
 
 
-def _machine() -> dict:
-    import matplotlib
-    import scipy
-
-    try:
-        from importlib.metadata import version
-        u2l = version("urdf2links")
-    except Exception:
-        u2l = None
-    try:
-        commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
-                                timeout=5, cwd=Path(__file__).resolve().parent).stdout.strip() or None
-    except Exception:
-        commit = None
-    return {"platform": platform.platform(), "processor": platform.processor() or platform.machine(),
-            "cpu_count": os.cpu_count(), "python": sys.version.split()[0], "numpy": np.__version__,
-            "scipy": scipy.__version__, "mujoco": mujoco.__version__, "matplotlib": matplotlib.__version__,
-            "urdf2links": u2l, "git_commit": commit}
-
-
 @dataclass
 class _Study:
     """What one study works with: the scene, its model, plan and MJCF, run length and samples, the
@@ -220,6 +236,9 @@ class _Study:
     scale: float = 1.0
     work_terms: bool = False
     cost: dict | None = None
+    y0: np.ndarray | None = None
+    charted: bool = False
+    warm: dict | None = None
 
 
 def _settings(scene, t_end, quick, repeats, budget, samples, methods, mujoco_integrators, check):
@@ -250,14 +269,15 @@ def _settings(scene, t_end, quick, repeats, budget, samples, methods, mujoco_int
     return methods, mujoco_integrators, repeats, budget, T, t_note, S, check
 
 
-def _warm_up(st: _Study, methods, check) -> None:
-    """Compiled code is compiled at its first call, which must not be timed nor predict costs."""
-    for m in methods + (REFERENCE["method"], check["method"]):
-        try:
-            simulate(st.scene, model=st.model, t_end=min(st.T, 0.02), samples=2, progress=False, method=m,
-                     **({"dt": 0.01} if m in FIXED else {"rtol": 1e-6, "atol": 1e-8}))
-        except Exception:  # noqa: BLE001 -- a method that fails here fails (and is recorded) below
-            pass
+def _warm_up(st: _Study, methods, check, log) -> dict:
+    """numba compiles at the first call, which must be neither timed nor used to predict costs:
+    one short run of every method here (:func:`urdf2links.simulate.warm_up`; the timing runs call
+    the same compiled loops). Returns what was compiled and how long it took."""
+    wu = warm_up(st.scene, model=st.model, methods=tuple(dict.fromkeys(methods + (REFERENCE["method"], check["method"]))),
+                 t_end=min(st.T, 0.02))
+    if wu.happened:
+        _say(log, wu.describe("warm-up"))
+    return {"seconds": wu.seconds, "compiled": list(wu.functions)}
 
 
 def _reference(st: _Study, check, log):
@@ -297,7 +317,8 @@ def _costs(st: _Study, mujoco_integrators) -> dict:
 def _new_row(cfg: Config) -> dict:
     row = {"engine": cfg.engine, "method": cfg.method, "param": cfg.param, "value": cfg.value,
            "status": "ok", "reason": None, "error_final": None, "error_max": None, "energy_drift_rel": None,
-           "wall_time_s": None, "wall_times_s": [], "nfev": None, "nsteps": None, "notes": []}
+           "wall_time_s": None, "wall_time_min_s": None, "wall_time_max_s": None, "wall_times_s": [], "nfev": None,
+           "nsteps": None, "notes": []}
     if cfg.engine == "urdf2links" and cfg.method == "midpoint":
         row["notes"].append(f"Newton tolerance rtol {MIDPOINT_NEWTON['rtol']:g}, atol {MIDPOINT_NEWTON['atol']:g}")
     if cfg.engine == "urdf2links" and cfg.param == "rtol":
@@ -311,6 +332,7 @@ def _skip_reason(st: _Study, cfg: Config, done: list[dict], budget: float, row: 
     coarse step that blows up or whose Newton iteration fails says nothing of finer ones)."""
     stop = next((r for r in done if r["status"] == "skipped" and "budget" in (r["reason"] or "")), None)
     floored = next((r for r in done if r["status"] == "ok" and r["error_max"] <= FLOOR_STOP * st.est_max), None)
+    stalled, best = _rounding_floor(done, st.est_max)
     pred = _predict(cfg, st.T, done, st.cost)
     row["predicted_s"] = pred
     if stop is not None:
@@ -319,13 +341,32 @@ def _skip_reason(st: _Study, cfg: Config, done: list[dict], budget: float, row: 
         return (f"a looser rung ({floored['param']} {floored['value']:g}) already reached the reference's error "
                 f"estimate (error {floored['error_max']:.1e} <= {FLOOR_STOP:g} x {st.est_max:.1e}): tighter runs "
                 "are not resolved")
+    if stalled is not None:
+        return (f"the rung {stalled['param']} {stalled['value']:g} reached this method's rounding floor: its error "
+                f"{stalled['error_max']:.1e} is no smaller than a looser rung's ({best:.1e}), within "
+                f"{ROUNDING_BAND:g} x the reference's error estimate {st.est_max:.1e}: tighter runs cost more and "
+                "gain nothing")
     if pred > budget:
         return f"predicted {pred:.3g} s > budget {budget:g} s"
     return None
 
 
+def _rounding_floor(done: list[dict], est: float) -> tuple[dict | None, float]:
+    """The first run of a ladder (loosest first) that is within :data:`ROUNDING_BAND` times the
+    reference's error estimate ``est`` and no more accurate than a looser successful rung, with
+    that rung's error; ``(None, inf)`` when there is none."""
+    best = math.inf
+    for r in done:
+        if r["status"] != "ok":
+            continue
+        if r["error_max"] <= ROUNDING_BAND * est and r["error_max"] >= best:
+            return r, best
+        best = min(best, r["error_max"])
+    return None, math.inf
+
+
 def _measure_project(st: _Study, cfg: Config, row: dict) -> None:
-    tr = _project(st.scene, st.model, st.T, st.S, cfg)
+    tr = _project(st, cfg)
     if not tr.stats["success"]:
         row.update(status="failed", reason=str(tr.stats["message"]))
     elif not np.all(np.isfinite(tr.q)):
@@ -338,7 +379,7 @@ def _measure_project(st: _Study, cfg: Config, row: dict) -> None:
 
 def _measure_mujoco(st: _Study, cfg: Config, row: dict) -> None:
     n = st.model.n
-    run = _mujoco(st.mj, st.scene, st.T, st.S, cfg)
+    run = _mujoco(st, cfg, st.S)
     row.update(nsteps=int(run.nsteps), nfev=int(run.nsteps) * STAGES[cfg.method], first_run_s=float(run.wall_time))
     row["notes"] += list(run.notes)
     bad = _mujoco_failure(run, st.T)
@@ -376,7 +417,7 @@ def _ladders(st: _Study, cfgs, budget, log) -> list[dict]:
 
 
 def _timing_rounds(st: _Study, cfgs, rows, repeats, log) -> None:
-    """Timing rounds: engines interleaved, order reversed every other round, median kept."""
+    """Timing rounds: engines interleaved, order reversed every other round; median, min and max."""
     ok = [(cfg, row) for cfg, row in zip(cfgs, rows) if row["status"] == "ok"]
     proj = [x for x in ok if x[0].engine == "urdf2links"]
     mjc = [x for x in ok if x[0].engine == "MuJoCo"]
@@ -386,15 +427,17 @@ def _timing_rounds(st: _Study, cfgs, rows, repeats, log) -> None:
         for cfg, row in (order if r % 2 == 0 else order[::-1]):
             try:
                 if cfg.engine == "urdf2links":
-                    row["wall_times_s"].append(float(_project(st.scene, st.model, st.T, st.S, cfg, True).stats["wall_time"]))
+                    row["wall_times_s"].append(_time_project(st, cfg))
                 else:
-                    row["wall_times_s"].append(float(_mujoco(st.mj, st.scene, st.T, st.S, cfg, True).wall_time))
+                    row["wall_times_s"].append(float(_mujoco(st, cfg, 2).wall_time))
             except Exception as err:
                 row["notes"].append(f"timing round {r + 1} failed: {type(err).__name__}: {err}")
         _say(log, f"timing round {r + 1}/{repeats}: {len(order)} runs in {time.perf_counter() - t0:.1f} s")
     for _, row in ok:
         if row["wall_times_s"]:
             row["wall_time_s"] = float(statistics.median(row["wall_times_s"]))
+            row["wall_time_min_s"] = float(min(row["wall_times_s"]))
+            row["wall_time_max_s"] = float(max(row["wall_times_s"]))
 
 
 def _reference_record(st: _Study, chk, check, est_final) -> dict:
@@ -425,11 +468,15 @@ def _study_record(st: _Study, rows, reference, *, quick, budget, repeats, t_note
                    "metric": "max |h - h(0) - W| / scale (h = E + V for a fixed base; MuJoCo: its own energies"
                              + ("; W: the reference's work along the reference trajectory" if st.work_terms else "")
                              + ")"},
-        "timing": {"repeats": repeats, "statistic": "median", "interleaved": True,
-                   "project": "the integrator's wall_time (Trajectory.stats): integration loop and dense output at "
-                              "the 2 sample times of a timing run; not the plan compilation nor the energies",
-                   "mujoco": "MujocoRun.wall_time: the mj_step loop with 2 mj_forward samples",
-                   "same_process": True},
+        "timing": {"repeats": repeats, "statistic": "median", "spread": "min and max over the rounds",
+                   "interleaved": True, "same_process": True, "warm_up": st.warm,
+                   "project": ("urdf2links.integrators.integrate() of the scene's compiled right-hand side from 0 to T: "
+                               "the integration loop only (no dense output, no samples, no energies)"
+                               if not st.charted else "simulate()'s wall_time with 2 samples (re-charted floating "
+                               "links): the integration with its dense output, not the sampling nor the energies"),
+                   "mujoco": "MujocoRun.wall_time: one mujoco.mj_step(m, d, nstep=K) call, energy flag off (inputs "
+                             "from the compiled control callback)",
+                   "compilation": "numba's compilation happens in the warm-up, before any run (warm_up)"},
         "ladders": {"rtol": list(QUICK_RTOLS if quick else RTOLS), "atol": "1e-2 x rtol",
                     "dt": list(QUICK_DTS if quick else DTS), "mujoco_dt": list(QUICK_MUJOCO_DTS if quick else MUJOCO_DTS),
                     "midpoint_newton": MIDPOINT_NEWTON},
@@ -438,7 +485,7 @@ def _study_record(st: _Study, rows, reference, *, quick, budget, repeats, t_note
         "evaluations": "project: calls of the right-hand side (Jacobian differences included); MuJoCo: steps x "
                        "stages (Euler 1, implicitfast 1, RK4 4)",
         "rows": rows,
-        "machine": _machine(),
+        "machine": machine_info(),
         "total_s": None,
     }
 
@@ -460,7 +507,10 @@ def run_study(scene, *, t_end: float | None = None, quick: bool = False, repeats
         warnings.simplefilter("ignore")
         model = scene.model()
     st = _Study(scene, model, compile_plan(scene, model), mjcf_from_scene(scene, model), T, S)
-    _warm_up(st, methods, check)
+    q0, qd0 = scene.initial_state(model)
+    st.y0 = np.r_[q0, qd0, 0.0]
+    st.charted = bool(floating_links(model)) and bool(scene.run.recharting)
+    st.warm = _warm_up(st, methods, check, log)
     chk, est_final = _reference(st, check, log)
     st.cost = _costs(st, mujoco_integrators)
     cfgs = _ladder(quick, methods, mujoco_integrators)
@@ -472,84 +522,3 @@ def run_study(scene, *, t_end: float | None = None, quick: bool = False, repeats
     data["total_s"] = time.perf_counter() - start
     _say(log, data["crossover"]["statement"])
     return json_ready(data)
-
-
-def _front(rows, engine, level) -> tuple[float, dict | None]:
-    best, who = math.inf, None
-    for r in rows:
-        if r["engine"] == engine and r["status"] == "ok" and r["wall_time_s"] is not None and r["error_max"] <= level:
-            if r["wall_time_s"] < best:
-                best, who = r["wall_time_s"], r
-    return best, who
-
-
-def crossover(rows: list[dict], floor: float = 0.0, *, per_decade: int = GRID_PER_DECADE) -> dict:
-    """Where the project becomes faster than MuJoCo. At error levels ``e`` on a grid of
-    ``per_decade`` levels per decade (``10**(j / per_decade)``) between the tightest error both
-    engines reach and the loosest any run has (errors below ``floor``, the reference's error
-    estimate, count as ``floor``), the fastest run of each engine with an error (max over the run)
-    <= e, and which is faster. The crossover ``e*`` is the top of the tightest contiguous stretch
-    of grid levels where the project is faster: "urdf2links is faster below e*" when the stretch
-    starts at the tightest level, "between a and e*" when MuJoCo is faster at tighter ones. Returns
-    ``statement`` (a sentence), ``error_level`` (e* or None), ``region`` [a, e*], ``levels`` (every
-    grid level's fastest runs and winner), the speed ratios (MuJoCo / project wall time) at e* and
-    the largest below it, and the tightest error each engine reached."""
-    def err(r):
-        return max(r["error_max"], floor)
-    ok = [dict(r, error_max=err(r)) for r in rows if r["status"] == "ok" and r["wall_time_s"] is not None]
-    best = {e: min((r["error_max"] for r in ok if r["engine"] == e), default=None) for e in ("urdf2links", "MuJoCo")}
-    out = {"metric": f"error = max over the run, on a grid of {per_decade} levels per decade; faster = smaller "
-                     "median wall time", "error_level": None, "region": None, "tightest_error": best,
-           "ratio_at_crossover": None, "largest_speedup": None, "levels": []}
-    if best["urdf2links"] is None or best["MuJoCo"] is None:
-        out["statement"] = "no crossover: one of the engines has no successful run"
-        return out
-    lo, hi = max(best.values()), max(r["error_max"] for r in ok)
-    j0, j1 = math.ceil(per_decade * math.log10(lo) - 1e-9), math.floor(per_decade * math.log10(hi) + 1e-9)
-    for j in range(j0, max(j1, j0) + 1):
-        e = 10.0 ** (j / per_decade)
-        tp, rp = _front(ok, "urdf2links", e)
-        tm, rm = _front(ok, "MuJoCo", e)
-        if rp is None or rm is None:
-            continue
-        out["levels"].append({"error": e, "project_s": tp, "mujoco_s": tm, "project_faster": tp < tm,
-                              "project_run": f"{rp['method']} {rp['param']} {rp['value']:g}",
-                              "mujoco_run": f"{rm['method']} dt {rm['value']:g}"})
-    lv = out["levels"]
-
-    def at(x):
-        r = x["mujoco_s"] / x["project_s"]
-        return (f"at {x['error']:.1e} urdf2links ({x['project_run']}) takes {x['project_s']:.3g} s and MuJoCo "
-                f"({x['mujoco_run']}) {x['mujoco_s']:.3g} s ("
-                + (f"MuJoCo {1 / r:.3g}x faster)" if r < 1 else f"urdf2links {r:.3g}x faster)"))
-
-    extra = ""
-    if best["urdf2links"] < best["MuJoCo"]:
-        extra = (f"; only urdf2links reached errors below {best['MuJoCo']:.1e} within the ladders and budget "
-                 f"(down to {best['urdf2links']:.1e})")
-    elif best["MuJoCo"] < best["urdf2links"]:
-        extra = (f"; only MuJoCo reached errors below {best['urdf2links']:.1e} within the ladders and budget "
-                 f"(down to {best['MuJoCo']:.1e})")
-    start = next((k for k, x in enumerate(lv) if x["project_faster"]), None)
-    if start is None:
-        out["statement"] = ("urdf2links is not (yet) faster than MuJoCo at any error level both reach"
-                            + (f": {at(lv[0])}" if lv else "") + extra)
-        return out
-    end = start
-    while end + 1 < len(lv) and lv[end + 1]["project_faster"]:
-        end += 1
-    x = lv[end]
-    out["error_level"] = x["error"]
-    out["region"] = [lv[start]["error"], x["error"]]
-    out["ratio_at_crossover"] = x["mujoco_s"] / x["project_s"]
-    top = max(lv[start:end + 1], key=lambda y: y["mujoco_s"] / y["project_s"])
-    out["largest_speedup"] = {"error": top["error"], "ratio": top["mujoco_s"] / top["project_s"]}
-    where = (f"below {x['error']:.1e}" if start == 0 else
-             f"between {lv[start]['error']:.1e} and {x['error']:.1e} (MuJoCo is faster below, {at(lv[0])})")
-    above = lv[end + 1:]
-    later = sum(y["project_faster"] for y in above)
-    tail = ("" if not above else "; MuJoCo is faster above it" + (
-        f" (urdf2links again at {later} of the {len(above)} looser levels)" if later else ""))
-    out["statement"] = (f"urdf2links is faster than MuJoCo for errors {where}{tail}: {at(x)}; largest advantage "
-                        f"{at(top)}" + extra)
-    return out

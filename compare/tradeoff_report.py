@@ -4,9 +4,9 @@
   two figures, and puts the section into the scene's ``report.html`` when there is one.
 
 * :func:`plot_work_precision`: error (max over the run) against wall time, log-log, every method a
-  line, both engines on one figure (urdf2links: solid lines, cool colours, round markers; MuJoCo:
-  dashed lines, warm colours, square markers); beside it the same errors against dynamics
-  evaluations. The band under the reference's error estimate is shaded: errors there are not
+  line through the median times with the rounds' spread (min-max) as horizontal bars, both engines
+  on one figure (urdf2links: solid lines, cool colours, round markers; MuJoCo: dashed lines, warm
+  colours, square markers); beside it the same errors against dynamics evaluations. The band under the reference's error estimate is shaded: errors there are not
   resolved. The crossover level, if any, is a dotted line.
 * :func:`plot_energy_drift`: relative energy drift against wall time, same styles.
 * :func:`render_section`: the HTML section of the scene's report (figures embedded as base64 PNG);
@@ -59,6 +59,24 @@ def _figure(w, h):
     return figure(w, h, dpi=100)
 
 
+def _spread_bars(ax, rows, y, colour):
+    """Horizontal bars from each run's fastest to its slowest timing round."""
+    med = np.array([r["wall_time_s"] for r in rows])
+    lo = np.array([r.get("wall_time_min_s") or r["wall_time_s"] for r in rows])
+    hi = np.array([r.get("wall_time_max_s") or r["wall_time_s"] for r in rows])
+    if np.any(hi > lo):
+        ax.errorbar(med, y, xerr=[med - lo, hi - med], fmt="none", ecolor=colour, elinewidth=1.0, capsize=2.5,
+                    alpha=0.85)
+
+
+def _wall(r) -> str:
+    """``median (min-max)`` of a row's timing rounds."""
+    if r.get("wall_time_s") is None:
+        return "-"
+    lo, hi = r.get("wall_time_min_s"), r.get("wall_time_max_s")
+    return f"{r['wall_time_s']:.3g}" + (f" ({lo:.3g}-{hi:.3g})" if lo is not None and hi is not None and hi > lo else "")
+
+
 def _floor(ax, data):
     f = data["reference"]["error_estimate"]
     if f and f > 0:
@@ -70,9 +88,9 @@ def _finish(fig, axes, data, title):
     fails = [r for r in data["rows"] if r["status"] == "failed"]
     skips = [r for r in data["rows"] if r["status"] == "skipped"]
     ref = data["reference"]
-    sub = (f"t = 0..{data['t_end']:g} s; reference {ref['method']} rtol {ref['rtol']:g}; wall time: median of "
-           f"{data['timing']['repeats']} interleaved rounds, same process; {len(fails)} failed and {len(skips)} "
-           f"skipped runs not drawn (see the table)")
+    sub = (f"t = 0..{data['t_end']:g} s; reference {ref['method']} rtol {ref['rtol']:g}; {len(fails)} failed and "
+           f"{len(skips)} skipped runs not drawn (see the table)\nwall time: median of {data['timing']['repeats']} "
+           "interleaved rounds (bars: min-max), both engines in one process, compilation excluded")
     fig.suptitle(f"{data['robot']} / {data['scene']}: {title}\n{sub}", fontsize=10)
     handles, labels = axes[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside right center", fontsize=8, frameon=False)
@@ -90,6 +108,7 @@ def plot_work_precision(data: dict, path=None):
         err = np.array([max(r["error_max"], 1e-17) for r in rows])
         lo.append(err.min())
         ax.loglog([r["wall_time_s"] for r in rows], err, **st)
+        _spread_bars(ax, rows, err, st["color"])
         bx.loglog([r["nfev"] for r in rows], err, **{k: v for k, v in st.items() if k != "label"})
     for a in (ax, bx):
         a.grid(alpha=0.3, which="both")
@@ -98,8 +117,9 @@ def plot_work_precision(data: dict, path=None):
         _floor(a, data)
     lvl = data["crossover"].get("error_level")
     if lvl:
-        ax.axhline(lvl, color="k", ls=":", lw=1.3, label=f"crossover: urdf2links faster below {lvl:.1e}")
-    ax.set_xlabel("wall time (s, median)")
+        ax.axhline(lvl, color="k", ls=":", lw=1.3,
+                   label=f"crossover: urdf2links faster (beyond the spread) below {lvl:.1e}")
+    ax.set_xlabel("wall time (s): median, bars min-max over the rounds")
     ax.set_ylabel("error: max over the run of max |q - q_ref| (rad or m)")
     bx.set_xlabel("dynamics evaluations (MuJoCo: steps x stages)")
     bx.set_title("the same errors against evaluations", fontsize=9)
@@ -114,12 +134,14 @@ def plot_energy_drift(data: dict, path=None):
     fig = _figure(11.5, 5.2)
     ax = fig.subplots()
     for (engine, method), rows in _series(data, "energy_drift_rel").items():
-        ax.loglog([r["wall_time_s"] for r in rows], [max(r["energy_drift_rel"], 1e-17) for r in rows],
-                  **style(engine, method))
+        y = np.array([max(r["energy_drift_rel"], 1e-17) for r in rows])
+        st = style(engine, method)
+        ax.loglog([r["wall_time_s"] for r in rows], y, **st)
+        _spread_bars(ax, rows, y, st["color"])
     d = data["reference"]["energy_drift_rel"]
     ax.axhline(max(d, 1e-17), color="0.4", ls=":", lw=1.2, label=f"the reference's own drift {d:.1e}")
     ax.grid(alpha=0.3, which="both")
-    ax.set_xlabel("wall time (s, median)")
+    ax.set_xlabel("wall time (s): median, bars min-max over the rounds")
     ax.set_ylabel("energy drift: max |h - h(0) - W| / energy scale")
     _finish(fig, [ax], data, "energy drift against wall time")
     if path is not None:
@@ -141,7 +163,7 @@ def render_section(data: dict) -> str:
     for r in data["rows"]:
         cls = "" if r["status"] == "ok" else " class='small'"
         status = "ok" if r["status"] == "ok" else f"<span class='fail'>{e(r['status'])}</span>: {e(str(r['reason']))}"
-        wt = "&ndash;" if r.get("wall_time_s") is None else f"{r['wall_time_s']:.3g}"
+        wt = "&ndash;" if r.get("wall_time_s") is None else _wall(r)
         rows.append(f"<tr{cls}><td>{e(r['engine'])}</td><td>{e(r['method'])}</td><td class='num'>{e(r['param'])} "
                     f"{r['value']:g}</td><td class='num'>{_num(r.get('error_max'))}</td><td class='num'>"
                     f"{_num(r.get('error_final'))}</td><td class='num'>{_num(r.get('energy_drift_rel'), 1)}</td>"
@@ -158,12 +180,15 @@ def render_section(data: dict) -> str:
              f"rtol {ref['check']['rtol']:g}; the reference's <b>error estimate</b> (their largest difference) is "
              f"<b>{ref['error_estimate']:.1e}</b> (final {ref['error_estimate_final']:.1e}): smaller errors are not "
              f"resolved (grey band). Error: {e(data['error']['metric'])}. Wall time: median of "
-             f"{data['timing']['repeats']} interleaved rounds in one process; urdf2links: {e(data['timing']['project'])}; "
-             f"MuJoCo: {e(data['timing']['mujoco'])}. Runs predicted to exceed {data['budget_s']:g} s are skipped.</p>",
+             f"{data['timing']['repeats']} interleaved rounds in one process, bars from the fastest to the slowest "
+             f"round; an engine is faster at an error level only when its slowest round beats the other's fastest. "
+             f"urdf2links: {e(data['timing']['project'])}; MuJoCo: {e(data['timing']['mujoco'])}; "
+             f"{e(data['timing'].get('compilation', ''))}. Runs predicted to exceed {data['budget_s']:g} s are "
+             "skipped.</p>",
              f"<img alt='work-precision diagram' src='data:image/png;base64,{wp}'>",
              f"<img alt='energy drift against wall time' src='data:image/png;base64,{ed}'>",
              "<details><summary>all runs</summary><table><tr><th>engine</th><th>method</th><th>setting</th>"
-             "<th>error max</th><th>error final</th><th>energy drift</th><th>wall s</th><th>evaluations</th>"
+             "<th>error max</th><th>error final</th><th>energy drift</th><th>wall s, median (min-max)</th><th>evaluations</th>"
              "<th>status</th></tr>" + "\n".join(rows) + "</table></details>",
              f"<p class='small'>Energy drift: {e(data['energy']['metric'])}. Evaluations: {e(data['evaluations'])}. "
              f"Machine: {e(m['platform'])}, {m['cpu_count']} CPUs, Python {e(m['python'])}, numpy {e(m['numpy'])}, "
@@ -211,14 +236,16 @@ def render_markdown(data: dict) -> str:
              f"Reference: {ref['method']} rtol {ref['rtol']:g} atol {ref['atol']:g} ({ref['nsteps']} steps, "
              f"{ref['nfev']} evaluations); checked against {ref['check']['method']} rtol {ref['check']['rtol']:g}: "
              f"error estimate {ref['error_estimate']:.2e} (max over the run), {ref['error_estimate_final']:.2e} (final).",
-             "", f"Error: {data['error']['metric']}. Energy drift: {data['energy']['metric']}. Wall time: median of "
-             f"{data['timing']['repeats']} interleaved rounds; urdf2links: {data['timing']['project']}; MuJoCo: "
-             f"{data['timing']['mujoco']}. Budget {data['budget_s']:g} s per run.", "",
-             "| engine | method | setting | status | error max | error final | energy drift | wall s | evaluations | steps |",
+             "", f"Error: {data['error']['metric']}. Energy drift: {data['energy']['metric']}. Wall time: median "
+             f"(min-max) of {data['timing']['repeats']} interleaved rounds; urdf2links: {data['timing']['project']}; "
+             f"MuJoCo: {data['timing']['mujoco']}; {data['timing'].get('compilation', '')}. Budget "
+             f"{data['budget_s']:g} s per run.", "",
+             "| engine | method | setting | status | error max | error final | energy drift | wall s, median (min-max) "
+             "| evaluations | steps |",
              "|---|---|---|---|---|---|---|---|---|---|"]
     for r in data["rows"]:
         st = r["status"] if r["status"] == "ok" else f"{r['status']}: {r['reason']}"
-        wt = "-" if r["wall_time_s"] is None else f"{r['wall_time_s']:.3g}"
+        wt = _wall(r)
         lines.append(f"| {r['engine']} | {r['method']} | {r['param']} {r['value']:g} | {st} | {_fmt(r['error_max'])} | "
                      f"{_fmt(r['error_final'])} | {_fmt(r['energy_drift_rel'], 1)} | {wt} | {_fmt(r['nfev'])} | "
                      f"{_fmt(r['nsteps'])} |")

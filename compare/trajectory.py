@@ -35,7 +35,14 @@
 
 4. **Base tracking** (moving base): how far MuJoCo's ``base_A`` is from the prescribed pose.
 
-5. **Wall time** of each engine's integration loop (not checked against baselines).
+5. **Wall time** of each engine, timed the same way (not checked against baselines): urdf2links'
+   integrator (:data:`urdf2links.simulate.TIMED_REGION`) after a warm-up that compiles, or loads
+   from numba's cache, every compiled function the run calls (:func:`urdf2links.simulate.warm_up`;
+   its time is reported on its own); MuJoCo's ``mj_step(nstep)`` calls
+   (:data:`urdf2links.compare.mujoco_run.TIMED_REGION`), inputs from the compiled control callback.
+   Both sample at the same times and neither timed region contains the copying or evaluation at
+   the samples; the whole calls are reported beside them (``wall_time.regions`` says what each
+   figure contains).
 
 :meth:`SceneComparison.summary` is the JSON-ready dictionary; the report is written by
 :mod:`urdf2links.compare.report`.
@@ -60,11 +67,13 @@ from urdf2links.console import shown_path
 from urdf2links.limits import LimitExcursion
 from urdf2links.plan import compile_plan
 from urdf2links.scene import Scene, load_scene, robot_stem
+from urdf2links.simulate import TIMED_REGION as PROJECT_REGION
+from urdf2links.simulate import Trajectory, simulate, warm_up
 from urdf2links.xacro_input import expand_xacro, is_xacro_path
-from urdf2links.simulate import Trajectory, simulate
 from urdf2links.transforms import BaseState
 
 from .mjcf import MjcfModel, mjcf_from_scene
+from .mujoco_run import TIMED_REGION as MUJOCO_REGION
 from .mujoco_run import MujocoRun, energy_function, run_mujoco
 from .mujoco_urdf import MujocoRefused
 from .terms import compare_terms_urdf
@@ -383,6 +392,33 @@ class SceneComparison:
             "note": self.info["energy_note"],
         }
 
+    def _wall_time_summary(self) -> dict:
+        traj, run, warm = self.traj, self.run, self.info["warm_up"]
+        r1, r2 = self.terms["route1"], self.terms["route2"]
+        return {
+            "project_s": float(traj.stats["wall_time"]), "mujoco_s": float(run.wall_time),
+            "project_run_s": float(traj.stats["run_s"]), "mujoco_harness_s": float(run.harness_time),
+            "project_warmup_s": float(warm.seconds), "project_compiled": list(warm.functions),
+            "mujoco_inputs": run.inputs, "mujoco_callback_calls": int(run.callback_calls),
+            "mujoco_callback_load_s": float(run.compilation.seconds),
+            "mujoco_callback_compiled": list(run.compilation.functions),
+            "terms_s": float(r1.get("wall_time_s", 0.0) + r2.get("wall_time_s", 0.0)),
+            "total_s": float(self.info["total_s"]),
+            "regions": {
+                "project_s": PROJECT_REGION,
+                "mujoco_s": MUJOCO_REGION,
+                "project_run_s": "the whole simulate() call: plan, integration, samples, energies, poses",
+                "mujoco_harness_s": "the whole run_mujoco() call: model copy, control callback set-up (and its "
+                                    "loading or compilation), stepping, sample copies, the energy pass",
+                "project_warmup_s": "the warm-up run before the timed one: numba's compilation of the functions "
+                                    "in project_compiled (none: loaded from numba's disk cache)",
+                "mujoco_callback_load_s": "loading (or compiling: mujoco_callback_compiled) the compiled control "
+                                          "callback, once per process, inside mujoco_harness_s",
+            },
+            "note": "each engine's integration timed the same way (compilation and sampling outside the timed "
+                    "regions; the same sample times); not checked against baselines",
+        }
+
     def summary(self) -> dict:
         """The JSON-ready summary. Contract keys (nested): ``terms.max_rel_error``,
         ``trajectory.max_abs_error``, ``trajectory.divergence_time`` (None if none),
@@ -427,10 +463,7 @@ class SceneComparison:
             "limit_excursions": list(traj.stats.get("limit_excursions", [])),
             "base": {"moving": bool(moving),
                      "tracking_error": float(run.base_tracking_error) if moving else None},
-            "wall_time": {"project_s": float(traj.stats["wall_time"]), "mujoco_s": float(run.wall_time),
-                          "terms_s": float(r1.get("wall_time_s", 0.0) + r2.get("wall_time_s", 0.0)),
-                          "total_s": float(self.info["total_s"]),
-                          "note": "integration loops only (sampling included); not checked against baselines"},
+            "wall_time": self._wall_time_summary(),
             "notes": list(self.notes),
         }
 
@@ -467,12 +500,17 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
              "route2": route2_terms(scene, states=states, seed=seed)}
 
     meth = method or scene.run.method
+    warm = warm_up(scene, model=model, methods=(meth,))
+    if warm.happened:
+        say(warm.describe("urdf2links warm-up"))
     say(f"project: {meth}" + (f" rtol {rtol or scene.run.rtol:g}" if meth not in ("RK4", "midpoint") else "")
         + f", t = 0..{T:g} s")
     traj = simulate(scene, model=model, t_end=T, method=method, rtol=rtol, atol=atol, samples=samples,
                     progress=progress)
     say(f"MuJoCo: {mujoco_integrator} dt {mujoco_dt:g}, {int(round(T / mujoco_dt))} steps")
     run = run_mujoco(mj, scene, t_end=T, samples=samples)
+    if run.compilation.happened:
+        say(run.compilation.describe("MuJoCo's control callback"))
 
     t = np.asarray(run.t, float)
     q_o, qd_o, W, EV_o, h_o, resampled = _project_at(traj, plan, t, T)
@@ -497,7 +535,7 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     if t_end_note:
         notes.insert(0, t_end_note)
     q0, qd0 = scene.initial_state(model)
-    info.update({"t_end": T, "t_end_note": t_end_note, "effects": plan.terms,
+    info.update({"t_end": T, "t_end_note": t_end_note, "effects": plan.terms, "warm_up": warm,
                  "q0": dict(zip(model.coordinate_names, q0.tolist())),
                  "qd0": dict(zip(model.coordinate_names, qd0.tolist())),
                  "total_s": time.perf_counter() - start})

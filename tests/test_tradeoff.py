@@ -8,6 +8,7 @@ errors, the JSON contract, the files, the report section. The crossover is teste
 from __future__ import annotations
 
 import json
+import math
 import subprocess
 import sys
 from pathlib import Path
@@ -17,7 +18,7 @@ import pytest
 
 pytest.importorskip("mujoco")
 
-from urdf2links.compare.tradeoff import crossover, run_study
+from urdf2links.compare.tradeoff import MUJOCO_DTS, ROUNDING_BAND, _rounding_floor, crossover, run_study
 from urdf2links.compare.tradeoff_report import write_study  # noqa: E402
 from urdf2links.compare.tradeoff_report import BEGIN, END, insert_section, render_section  # noqa: E402
 from urdf2links.cli import main  # noqa: E402
@@ -25,7 +26,7 @@ from urdf2links.cli import main  # noqa: E402
 ROOT = Path(__file__).resolve().parent.parent
 SCENE = ROOT / "robots" / "double_pendulum_chaos.toml"
 ROW_KEYS = ("engine", "method", "param", "value", "status", "reason", "error_final", "error_max",
-            "energy_drift_rel", "wall_time_s", "wall_times_s", "nfev", "nsteps")
+            "energy_drift_rel", "wall_time_s", "wall_time_min_s", "wall_time_max_s", "wall_times_s", "nfev", "nsteps")
 
 
 @pytest.fixture(scope="module")
@@ -95,6 +96,7 @@ def test_rows_have_costs_and_timing(study):
         assert set(ROW_KEYS) <= set(r)
         assert r["status"] == "ok", r
         assert r["wall_time_s"] > 0 and len(r["wall_times_s"]) == 1
+        assert r["wall_time_min_s"] == r["wall_time_s"] == r["wall_time_max_s"]  # one round: no spread
         assert r["nfev"] >= r["nsteps"] > 0
         if r["engine"] == "MuJoCo":
             stages = {"Euler": 1, "RK4": 4}[r["method"]]
@@ -143,7 +145,8 @@ def test_crossover_where_the_project_wins_tight_accuracy():
     # 10**-4.25 (its 1e-8 run, 2 s, against MuJoCo's 5 s); at 1e-4 MuJoCo's 0.1 s run wins
     assert c["error_level"] == pytest.approx(10 ** -4.25)
     assert c["region"][0] == pytest.approx(1e-10)
-    assert "faster than MuJoCo for errors below 5.6e-05; MuJoCo is faster above it" in c["statement"]
+    assert ("faster than MuJoCo (beyond the timing spread) for errors below 5.6e-05; MuJoCo is faster above it"
+            in c["statement"])
     assert c["ratio_at_crossover"] == pytest.approx(5.0 / 2.0)
     assert c["largest_speedup"]["ratio"] == pytest.approx(50.0 / 3.0)
     assert "only urdf2links reached errors below 1.0e-10" in c["statement"]
@@ -157,10 +160,52 @@ def test_crossover_when_mujoco_wins_the_tightest_level():
     c = crossover(rows)
     assert c["error_level"] == pytest.approx(10 ** -3.25)
     assert c["region"][0] == pytest.approx(1e-10)
-    assert "for errors between 1.0e-10 and 5.6e-04 (MuJoCo is faster below" in c["statement"]
+    assert "for errors between 1.0e-10 and 5.6e-04 (not below: at 1.0e-11" in c["statement"]
     assert c["largest_speedup"]["ratio"] == pytest.approx(100.0)
     winners = "".join("P" if x["project_faster"] else "M" for x in c["levels"])
     assert winners == "MMMM" + "P" * 28 + "MMMMM"  # 1e-11..10**-10.25, 1e-10..10**-3.25, 1e-3..1e-2
+
+
+def with_spread(rows, spread):
+    """The rows with timing rounds spread by the factor ``spread`` around their median."""
+    return [dict(r, wall_time_min_s=r["wall_time_s"] / spread, wall_time_max_s=r["wall_time_s"] * spread) for r in rows]
+
+
+def test_crossover_needs_more_than_the_spread():
+    # the project's median is 2.5x faster at 1e-8 (2 s against 5 s)
+    rows = synthetic([(1e-4, 1.0), (1e-8, 2.0), (1e-11, 3.0)], [(1e-4, 0.1), (1e-8, 5.0), (1e-10, 50.0)])
+    # spreads of +-1.2x: 2.4 < 4.17, still a win; crossover and statement as without spread
+    c = crossover(with_spread(rows, 1.2))
+    assert c["error_level"] == pytest.approx(10 ** -4.25) and c["ties"] == 0
+    assert "takes 2 s (1.67-2.4) and MuJoCo (RK4 dt 0.1) 5 s (4.17-6)" in c["statement"]
+    # spreads of +-1.6x: 3.2 > 3.125, the levels where 2 s meets 5 s become ties, 3 s against 50 s still wins
+    c = crossover(with_spread(rows, 1.6))
+    winners = {round(math.log10(x["error"]) * 4): x["winner"] for x in c["levels"]}
+    assert winners[-40] == "urdf2links" and winners[-32] == "tie" and winners[-16] == "MuJoCo"
+    assert c["error_level"] == pytest.approx(10 ** -8.25) and c["ties"] > 0
+    assert "levels are ties" in c["statement"] and "the engines tie (within the timing spread) at" in c["statement"]
+    # spreads of +-10x: nothing is called
+    c = crossover(with_spread(rows, 10.0))
+    assert c["error_level"] is None and c["ties"] == len(c["levels"])
+    assert "not (yet) faster than MuJoCo beyond the timing spread" in c["statement"] and "a tie" in c["statement"]
+
+
+def test_rounding_floor_stops_a_ladder():
+    est = 1e-11
+    row = lambda v, e, status="ok": {"status": status, "value": v, "param": "dt", "error_max": e}  # noqa: E731
+    # truncation error falling, then MuJoCo-RK4-like rounding: 3e-10 is no better than 2.7e-10
+    done = [row(1e-3, 3e-5), row(5e-4, 2e-6), row(1e-4, 2.7e-10), row(5e-5, 3e-10)]
+    stalled, best = _rounding_floor(done, est)
+    assert stalled is done[3] and best == 2.7e-10
+    # a non-monotone error far above the band (adaptive jitter, Euler's plateau) does not stop a ladder
+    assert _rounding_floor([row(1e-3, 0.09), row(1e-4, 0.091), row(1e-5, 1e-4)], est) == (None, math.inf)
+    assert _rounding_floor([row(1e-3, 1e-8), row(1e-4, 2e-8)], est)[0] is None      # 2e-8 > 100 x 1e-11
+    assert _rounding_floor([row(1e-3, 1e-9), row(1e-4, 1e-9, "failed")], est)[0] is None  # a failure is no floor
+    assert ROUNDING_BAND * est == pytest.approx(1e-9)
+    # MuJoCo's step ladder: 0.01 s / j, about 1.25x apart from j = 4 on, every step dividing 0.01 s
+    ratios = np.array(MUJOCO_DTS[2:-1]) / np.array(MUJOCO_DTS[3:])
+    assert np.all(ratios <= 1.6 + 1e-12) and np.median(ratios) == pytest.approx(1.25, abs=0.03)
+    assert all(abs(0.01 / dt - round(0.01 / dt)) < 1e-9 for dt in MUJOCO_DTS) and min(MUJOCO_DTS) == pytest.approx(1e-6)
 
 
 def test_crossover_not_yet_and_floor():

@@ -15,6 +15,7 @@ import numpy as np
 
 from .errors import DynamicsError, SceneError, URDFError
 from .limits import LimitExcursion
+from .scene_toml import scene_from_args, write_scene_option, xacro_args_of
 from .transforms import PARAMETERS
 
 __all__ = ["main", "format_tree", "scene_from_args", "xacro_args_of", "write_scene_option"]
@@ -73,32 +74,6 @@ def _joint_lines(joints) -> list[str]:
     lines.insert(1, "  ".join("-" * w for w in widths))
     return ["", "joints (limits not enforced, noted when a run leaves them; damping acts in scenes with [dampers] "
             "from_urdf = true; friction not modelled):"] + lines
-
-
-def xacro_args_of(args) -> dict:
-    """``--xacro-arg name:=value`` options as a dict (a URDFError names a malformed one)."""
-    from .xacro_input import parse_xacro_arg
-
-    try:
-        return dict(parse_xacro_arg(a) for a in (getattr(args, "xacro_arg", None) or []))
-    except ValueError as err:
-        raise URDFError(f"--xacro-arg: {err}") from None
-
-
-def scene_from_args(args):
-    """The scene a ``simulate``/``compare`` command runs: ``args.scene`` as a scene file, or a robot file in
-    its default scene with ``--floating``, ``--q0``, ``--seed``, ``--t-end``, ``--xacro-arg``, ``--package-dir``."""
-    from .scene_toml import scene_or_robot
-
-    return scene_or_robot(args.scene, floating=args.floating, q0=args.q0, seed=args.seed, t_end=args.t_end,
-                          xacro_args=xacro_args_of(args), package_dirs=args.package_dir)
-
-
-def write_scene_option(args, scene) -> None:
-    if getattr(args, "write_scene", None):
-        from .scene_toml import write_scene
-
-        print(f"  scene written to {write_scene(scene, args.write_scene)} (edit it, then run it by name)")
 
 
 def _inspect(args) -> int:
@@ -356,8 +331,8 @@ def main(argv=None) -> int:
     p.add_argument("--no-thumbnails", action="store_true", help="--corpus: no picture of each robot in the index "
                    "(saves the few seconds a robot its meshes take)")
     _add_mujoco_options(p)
-    p.add_argument("--cap", type=float, default=5.0, help="cap (s) on t_end of scenes that drive MuJoCo from Python "
-                   "(moving base, torques, loads); 0: none (default 5)")
+    p.add_argument("--cap", type=float, default=0.0, help="cap (s) on t_end of scenes with time-dependent inputs "
+                   "(moving base, torques, loads); 0: none (default)")
     p.add_argument("--check", metavar="BASELINE.json", help="baselines to check every scene against (default "
                    "<out>/baselines.json when it exists); exit 1 on a failure")
     p.add_argument("--write-baselines", nargs="?", const=True, metavar="FILE",

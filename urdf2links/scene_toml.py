@@ -16,10 +16,11 @@ import json
 from dataclasses import fields
 from pathlib import Path
 
-from .errors import SceneError
+from .errors import SceneError, URDFError
 from .scene import RunSettings, Scene, default_scene, load_scene
+from .xacro_input import parse_xacro_arg
 
-__all__ = ["scene_toml", "write_scene", "scene_or_robot"]
+__all__ = ["scene_toml", "write_scene", "scene_or_robot", "scene_from_args", "write_scene_option", "xacro_args_of"]
 
 
 def _value(v) -> str:
@@ -117,3 +118,25 @@ def scene_or_robot(path, *, floating: bool = False, q0: str = "zero", seed: int 
         return load_scene(path)
     return default_scene(path, floating=floating, q0=q0, seed=seed, t_end=1.0 if t_end is None else t_end,
                          xacro_args=xacro_args, package_dirs=package_dirs)
+
+
+# -- command-line options shared by simulate and compare -------------------------------------
+def xacro_args_of(args) -> dict:
+    """``--xacro-arg name:=value`` options as a dict (a URDFError names a malformed one)."""
+    try:
+        return dict(parse_xacro_arg(a) for a in (getattr(args, "xacro_arg", None) or []))
+    except ValueError as err:
+        raise URDFError(f"--xacro-arg: {err}") from None
+
+
+def scene_from_args(args):
+    """The scene a ``simulate``/``compare`` command runs: ``args.scene`` as a scene file, or a robot file in
+    its default scene with ``--floating``, ``--q0``, ``--seed``, ``--t-end``, ``--xacro-arg``, ``--package-dir``."""
+    return scene_or_robot(args.scene, floating=args.floating, q0=args.q0, seed=args.seed, t_end=args.t_end,
+                          xacro_args=xacro_args_of(args), package_dirs=args.package_dir)
+
+
+def write_scene_option(args, scene) -> None:
+    """``--write-scene FILE``: write the scene a command ran as TOML, and say where."""
+    if getattr(args, "write_scene", None):
+        print(f"  scene written to {write_scene(scene, args.write_scene)} (edit it, then run it by name)")

@@ -4,11 +4,18 @@
 :class:`~urdf2links.plan.Plan` (only the scene's terms); the integrator is any of
 :data:`urdf2links.integrators.METHODS`. The trajectory records coordinates, velocities, energies,
 the work of non-potential forces, and the power-balance error ``h - h(0) - W`` at every sample.
+
+Timing: ``stats["wall_time"]`` is the integration only (:data:`TIMED_REGION`);
+``stats["run_s"]`` the whole call. numba compiles the kernels and loops at their first call in a
+process (or loads them from its disk cache); :func:`warm_up` makes that happen before a timed
+run and :func:`record_compilation` says whether anything was compiled and how long it took.
 """
 
 from __future__ import annotations
 
+import contextlib
 import csv
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -21,7 +28,13 @@ from .model import Model
 from .plan import compile_plan
 from .scene import RunSettings, Scene
 
-__all__ = ["Trajectory", "simulate", "Progress"]
+__all__ = ["Trajectory", "simulate", "Progress", "warm_up", "record_compilation", "Compilation", "TIMED_REGION"]
+
+#: What ``Trajectory.stats["wall_time"]`` contains.
+TIMED_REGION = ("urdf2links' integrator: the integration loop from the first evaluation of the compiled right-hand "
+                "side to the last step, with the dense output's coefficients the samples are read from (re-charting "
+                "switches included); not the plan's compilation, the evaluation at the samples, the energies, the "
+                "poses, nor numba's compilation (warmed up before)")
 
 
 @dataclass(frozen=True, eq=False)
@@ -31,7 +44,8 @@ class Trajectory:
     ``t`` (m,), ``q`` and ``qd`` (m, n) with columns ``coordinate_names``; ``energy`` dict of (m,)
     arrays: ``kinetic`` E, ``potential`` V (gravity and springs), ``work`` W (non-potential forces
     and base), ``function`` h (E + V for a fixed base), ``error`` ``h - h(0) - W``;
-    ``poses`` dict link -> (m, 4, 4); ``stats`` (method, rtol, atol, dt, nfev, nsteps, wall_time,
+    ``poses`` dict link -> (m, 4, 4); ``stats`` (method, rtol, atol, dt, nfev, nsteps, ``wall_time`` the
+    integration (:data:`TIMED_REGION`), ``run_s`` the whole :func:`simulate` call,
     ``limit_excursions``: :class:`~urdf2links.limits.LimitExcursion` dicts, ``spring_notes``);
     ``sol`` the integrator's dense interpolant ``t -> (q, qd, W)`` or None; ``charts`` the
     :class:`~urdf2links.charts.ChartedRun` (segments, states in each chart) when floating links were
@@ -96,6 +110,7 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
     """
     from .scene import load_scene
 
+    started = time.perf_counter()
     if isinstance(scene_or_model, (str, Path)):
         scene_or_model = load_scene(scene_or_model)
     if isinstance(scene_or_model, Model):
@@ -154,8 +169,67 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
              "message": res.message, "recharting": run.recharting, "n_recharts": len(res.recharts),
              "recharts": res.recharts, "segments": len(res.segments),
              "limit_excursions": [e.as_dict() for e in limit_excursions(model, t, qs)],
-             "spring_notes": list(plan.spring_set.notes)}
+             "spring_notes": list(plan.spring_set.notes), "run_s": time.perf_counter() - started}
     return Trajectory(t=t, q=qs, qd=qds, coordinate_names=model.coordinate_names,
                       energy={"kinetic": E, "potential": V, "work": W, "function": h, "error": h - h[0] - W},
                       poses=poses, stats=stats, scene=scene.name, robot=model.name, sol=res.sol,
                       charts=res if res.recharts else None)
+
+
+@dataclass
+class Compilation:
+    """What :func:`record_compilation` saw: ``seconds`` the block's duration, ``functions`` the
+    numba functions compiled in it (not loaded from the disk cache)."""
+
+    seconds: float = 0.0
+    functions: list = field(default_factory=list)
+
+    @property
+    def happened(self) -> bool:
+        return bool(self.functions)
+
+    def describe(self, what: str) -> str:
+        return (f"{what}: numba compiled {len(self.functions)} function(s) in {self.seconds:.1f} s (once; cached on disk "
+                "for the next runs; not in the timed runs)")
+
+
+@contextlib.contextmanager
+def record_compilation():
+    """Context yielding a :class:`Compilation`, filled on exit: the block's seconds and the numba
+    functions it compiled (numba's ``numba:compile`` events; a function loaded from the cache
+    raises none)."""
+    from numba.core import event
+
+    out = Compilation()
+    start = time.perf_counter()
+    with event.install_recorder("numba:compile") as rec:
+        yield out
+    out.seconds = time.perf_counter() - start
+    names = []
+    for _, ev in rec.buffer:
+        if ev.is_start:
+            fn = getattr(ev.data.get("dispatcher"), "py_func", None)
+            names.append(getattr(fn, "__qualname__", str(fn)))
+    out.functions.extend(sorted(set(names)))
+
+
+def warm_up(scene, *, model: Model | None = None, methods=("DOP853",), t_end: float | None = None) -> Compilation:
+    """Run ``scene`` once with each of ``methods`` over a few steps, so that every compiled function
+    a run of it calls is compiled (or loaded from numba's cache) here and not inside a timed run.
+    ``t_end`` defaults to the shorter of the scene's and 0.01 s. Returns the
+    :class:`Compilation` of the whole warm-up. A method that fails here is left to fail (and be
+    reported) in the real run."""
+    from .scene import load_scene
+
+    if isinstance(scene, (str, Path)):
+        scene = load_scene(scene)
+    model = model if model is not None else scene.model()
+    T = min(scene.run.t_end, 0.01) if t_end is None else float(t_end)
+    with record_compilation() as rec:
+        for m in methods:
+            kw = {"dt": T / 4} if m in ("RK4", "midpoint") else {"rtol": 1e-6, "atol": 1e-8}
+            try:
+                simulate(scene, model=model, t_end=T, samples=3, progress=False, method=m, **kw)
+            except Exception:  # noqa: BLE001 -- a method that fails here fails (and is reported) in the run
+                pass
+    return rec
