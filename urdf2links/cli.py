@@ -317,8 +317,8 @@ def main(argv=None) -> int:
     p.add_argument("--out", help="folder of the reports and index.html (default reports; with --corpus "
                    "reports/corpus)")
     p.add_argument("--corpus", nargs="+", metavar="DIR|FILE|GLOB", help="every .urdf and .xacro under these folders "
-                   "(and these files, and the files these patterns match): one row each; 'example-robot-data': the "
-                   "installed example-robot-data robots")
+                   "(and these files, and the files these patterns match): one row each, its default scene run for 0.5 s "
+                   "(--t-end); 'example-robot-data': the installed example-robot-data robots")
     p.add_argument("--jobs", type=int, help="--corpus: run the robots in N processes on this machine (default: "
                    "every core; 1: one after the other here)")
     p.add_argument("--scheduler", metavar="ADDRESS", help="--corpus: run the robots on the Dask cluster whose "
