@@ -453,6 +453,7 @@ class SceneComparison:
                         "dt": traj.stats["dt"], "nsteps": int(traj.stats["nsteps"]), "nfev": int(traj.stats["nfev"]),
                         "terms": list(traj.stats["terms"])},
             "mujoco": {"integrator": run.integrator, "timestep": float(run.timestep), "nsteps": int(run.nsteps),
+                       "blow_ups": dict(run.blow_ups),
                        "version": mujoco.__version__, "folded_links": list(self.mj.folded_links),
                        "tiny_mass_links": list(self.mj.tiny_mass_links), "notes": list(run.notes)},
             "terms": {"max_rel_error": float(term_max),

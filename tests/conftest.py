@@ -124,3 +124,18 @@ def pytest_sessionfinish(session, exitstatus):
         if entry["note"]:
             lines += ["", entry["note"]]
         (folder / f"{stem}.md").write_text("\n".join(lines) + "\n")
+
+
+@pytest.fixture(scope="session")
+def dask_client():
+    """A Dask client of a two-worker ``LocalCluster`` (one thread and one process each, as
+    docs/corpus.md recommends), shared by the tests that compare a distributed run with the serial
+    one (the test extra installs the distributed extra)."""
+    import logging
+
+    import dask.distributed as distributed
+
+    logging.getLogger("distributed").setLevel(logging.ERROR)  # the nanny's shutdown chatter
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        with distributed.Client(cluster) as client:
+            yield client

@@ -312,13 +312,18 @@ class _Reader:
             raise SceneError(str(err)) from None
 
 
+#: A joint limit this large (rad or m) stands for "none": files written for Gazebo put +-1e16 on
+#: joints that turn freely (example-robot-data's iris rotors); drawing q0 there would start at 1e15 rad.
+NO_LIMIT = 1e6
+
+
 def _random_q0(model, rng) -> dict:
     """A seeded initial configuration: each joint coordinate uniform within its URDF limits when both
-    are finite (and lower < upper), else uniform in [-1, 1] (rad or m); a floating root's position
-    stays at the origin."""
+    are finite, below :data:`NO_LIMIT` in magnitude and lower < upper, else uniform in [-1, 1] (rad or
+    m); a floating root's position stays at the origin."""
     limits = {j["coordinates"][0]: (j["lower"], j["upper"]) for j in model.info.get("joints", [])
               if len(j["coordinates"]) == 1 and j["lower"] is not None and j["upper"] is not None
-              and j["lower"] < j["upper"]}
+              and j["lower"] < j["upper"] and max(abs(j["lower"]), abs(j["upper"])) < NO_LIMIT}
     root = {c["name"] for c in model.info.get("coordinates", []) if c.get("joint") is None and c["slot"] in "xyz"}
     q0 = {}
     for name in model.coordinate_names:
