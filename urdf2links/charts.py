@@ -334,9 +334,7 @@ def integrate_charted(original: Model, make_plan, y0, t_span, *, t_eval, method,
     raise :class:`~urdf2links.errors.DynamicsError` at ``|cos phi_y| < SINGULAR_COS_MIN``. ``base_state(t)``: the base for the reported condition
     numbers. ``max_steps`` and ``max_wall`` bound the whole run (all segments). Other arguments as
     :func:`~urdf2links.integrators.integrate`."""
-    from .errors import DynamicsError, IntegrationError
-
-    busy = 0.0
+    run_start, busy = time.perf_counter(), 0.0
     t0, t1 = float(t_span[0]), float(t_span[1])
     t_eval = np.asarray(t_eval, float)
     links = floating_links(original)
@@ -355,7 +353,7 @@ def integrate_charted(original: Model, make_plan, y0, t_span, *, t_eval, method,
     while True:
         # the budgets bound the whole run: a run that re-charts at every step (rates of ~1e6 rad/s) has
         # segments of one step each, every one inside its own integrate() budget
-        if segments and max_wall is not None and time.perf_counter() - start > max_wall:
+        if segments and max_wall is not None and time.perf_counter() - run_start > max_wall:
             success, message = False, wall_message(max_wall, float(t), nsteps)
             break
         if segments and max_steps is not None and nsteps >= max_steps:
@@ -369,7 +367,7 @@ def integrate_charted(original: Model, make_plan, y0, t_span, *, t_eval, method,
         plan = make_plan(chart.model)
         te = t_eval[(t_eval >= t) if not segments else (t_eval > t)]
         budget = {"max_steps": None if max_steps is None else max(1, max_steps - nsteps),
-                  "max_wall": None if max_wall is None else max(1e-3, max_wall - (time.perf_counter() - start))}
+                  "max_wall": None if max_wall is None else max(1e-3, max_wall - (time.perf_counter() - run_start))}
         res = integrate(plan.rhs, (t, t1), y, method=method, rtol=rtol, atol=atol, dt=dt, t_eval=te,
                         dense=True, callback=callback, stop=guard, **budget)
         nfev, nsteps, busy = nfev + res.nfev, nsteps + res.nsteps, busy + res.wall_time
@@ -384,28 +382,51 @@ def integrate_charted(original: Model, make_plan, y0, t_span, *, t_eval, method,
         t, y = seg.t1, np.array(res.sol(seg.t1))
         stuck = _due(fixed, y, SINGULAR_COS_MIN)
         if stuck:
-            ln = stuck[0]
-            why = ("re-charting is off" if not recharting else
-                   "it is not re-charted because [[torque]] or [[spring]] acts on its angles")
-            raise DynamicsError(
-                f"ZYX angles of link {ln.name!r} of model {original.name!r} reach the singularity of their chart at "
-                f"t={t:.6g}: phi_y = {y[ln.angles[1]]:.6f}, |cos phi_y| = {abs(math.cos(y[ln.angles[1]])):.2e} < "
-                f"{SINGULAR_COS_MIN:g}, condition of the angle block of A "
-                f"{angle_block_condition(chart.model, ln, y[:n], t=t, base=base_state(t)):.2e}; {why}, and past this "
-                f"point q'' would lose most of its digits (recharting passes through: urdf2links.charts)",
-                q=y[:n], coordinates=tuple(original.coordinate_names[i] for i in ln.angles))
+            raise _singular(original, chart, stuck[0], t, y, recharting=recharting, base_state=base_state)
         start = time.perf_counter()
         chart, y = _switch(original, chart, movable, t, y, cos_min, recharts, base_state)
         busy += time.perf_counter() - start
-    # samples in original coordinates, the angles tracked segment by segment
+    ts, ys, yc, seg_of, anchors = _samples_in_original(original, segments, pieces, links, y0, t_eval.size,
+                                                       run_start=run_start, max_wall=max_wall)
+    sol = segments[0].result.sol if len(segments) == 1 else ChartedSolution(segments, links, anchors)
+    dim = y.size
+    return ChartedRun(t=np.array(ts), y=np.array(ys).reshape(-1, dim), y_chart=np.array(yc).reshape(-1, dim),
+                      segment_of=np.array(seg_of, dtype=int), segments=segments, recharts=recharts, sol=sol,
+                      nfev=nfev, nsteps=nsteps, wall_time=busy, success=success,
+                      message=message)
+
+
+def _singular(original: Model, chart, ln, t, y, *, recharting: bool, base_state):
+    """The DynamicsError of a link that reaches ``phi_y = +-pi/2`` and may not be re-charted."""
+    from .errors import DynamicsError
+
+    n = original.n
+    why = ("re-charting is off" if not recharting else
+           "it is not re-charted because [[torque]] or [[spring]] acts on its angles")
+    return DynamicsError(
+        f"ZYX angles of link {ln.name!r} of model {original.name!r} reach the singularity of their chart at "
+        f"t={t:.6g}: phi_y = {y[ln.angles[1]]:.6f}, |cos phi_y| = {abs(math.cos(y[ln.angles[1]])):.2e} < "
+        f"{SINGULAR_COS_MIN:g}, condition of the angle block of A "
+        f"{angle_block_condition(chart.model, ln, y[:n], t=t, base=base_state(t)):.2e}; {why}, and past this "
+        f"point q'' would lose most of its digits (recharting passes through: urdf2links.charts)",
+        q=y[:n], coordinates=tuple(original.coordinate_names[i] for i in ln.angles))
+
+
+def _samples_in_original(original: Model, segments, pieces, links, y0, n_eval: int, *, run_start: float,
+                         max_wall: float | None):
+    """The samples of every segment in the original coordinates, the angles tracked segment by segment:
+    lists of times, states, states in their own chart, segment indices, and each segment's anchors
+    for the dense output. The wall-clock budget bounds this too."""
+    from .errors import IntegrationError
+
     anchors, ts, ys, yc, seg_of = [], [], [], [], []
     y_prev = np.array(y0, float)
     for k, (seg, (tk, yk)) in enumerate(zip(segments, pieces)):
         at, ay = [seg.t0], [_convert(seg, links, seg.result.sol(seg.t0), y_prev)]
         for i, (ti, yi) in enumerate(zip(tk, yk)):
-            if i % 1000 == 999 and max_wall is not None and time.perf_counter() - start > max_wall:
+            if i % 1000 == 999 and max_wall is not None and time.perf_counter() - run_start > max_wall:
                 raise IntegrationError(f"model {original.name!r}: max_wall={max_wall:g} s spent while converting the "
-                                       f"samples back to the loaded chart's angles ({len(ts)} of {t_eval.size} done; "
+                                       f"samples back to the loaded chart's angles ({len(ts)} of {n_eval} done; "
                                        f"{len(segments)} charts): fewer samples would do")
             # the loaded chart's states are the original ones (no per-sample dense evaluation: 1e6 samples took
             # ~10 minutes through _track)
@@ -415,12 +436,7 @@ def integrate_charted(original: Model, make_plan, y0, t_span, *, t_eval, method,
         end = _track(seg, links, at[-1], ay[-1], seg.t1)
         anchors.append((np.array(at), np.array(ay)))
         y_prev = end
-    sol = segments[0].result.sol if len(segments) == 1 else ChartedSolution(segments, links, anchors)
-    dim = y.size
-    return ChartedRun(t=np.array(ts), y=np.array(ys).reshape(-1, dim), y_chart=np.array(yc).reshape(-1, dim),
-                      segment_of=np.array(seg_of, dtype=int), segments=segments, recharts=recharts, sol=sol,
-                      nfev=nfev, nsteps=nsteps, wall_time=busy, success=success,
-                      message=message)
+    return ts, ys, yc, seg_of, anchors
 
 
 def _due(links, y, threshold):

@@ -18,7 +18,7 @@ from .limits import LimitExcursion
 from .scene_toml import scene_from_args, write_scene_option, xacro_args_of
 from .transforms import PARAMETERS
 
-__all__ = ["main", "format_tree", "scene_from_args", "xacro_args_of", "write_scene_option"]
+__all__ = ["main", "build_parser", "format_tree", "scene_from_args", "xacro_args_of", "write_scene_option"]
 
 
 def format_tree(model) -> str:
@@ -276,9 +276,8 @@ def _add_robot_options(p, *, inspect: bool = False) -> None:
                        "FILE.toml, to edit and run by name")
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="urdf2links", description=__doc__.splitlines()[0])
-    sub = parser.add_subparsers(dest="command", required=True)
+def _inspect_parser(sub) -> None:
+    """The ``inspect`` command's options."""
     p = sub.add_parser("inspect", help="print a URDF's tree of links, joints, inertia audit and import notes")
     p.add_argument("file", help="a .urdf or .xacro file (or a scene .toml: its plan)")
     p.add_argument("--floating-base", "--floating", action="store_true", help="six coordinates for the root link")
@@ -290,6 +289,10 @@ def main(argv=None) -> int:
     p.add_argument("--t-end", type=float, help="default scene's run length in s (default 1)")
     _add_robot_options(p, inspect=True)
     p.set_defaults(func=_inspect)
+
+
+def _simulate_parser(sub) -> None:
+    """The ``simulate`` command's options."""
     p = sub.add_parser("simulate", help="simulate a scene (TOML), or a robot in its default scene, and save the "
                                         "trajectory")
     p.add_argument("scene", help="a scene .toml file, or a robot (.urdf, .xacro) run in its default scene: gravity, "
@@ -308,6 +311,10 @@ def main(argv=None) -> int:
     _add_animation_option(p)
     _add_max_wall(p)
     p.set_defaults(func=_simulate)
+
+
+def _compare_parser(sub) -> None:
+    """The ``compare`` command's options."""
     p = sub.add_parser("compare", help="run a scene with urdf2links and MuJoCo and write the comparison report",
                        description="Run a scene with urdf2links and with MuJoCo (route 1: the project's tree as MJCF, "
                                    "base motion prescribed) from the same initial state; compare the terms at identical "
@@ -324,6 +331,10 @@ def main(argv=None) -> int:
     p.add_argument("--check", metavar="BASELINE.json", help="exit 1, naming the figure, when a discrepancy grew "
                    "past its baseline (wall times are not checked)")
     p.set_defaults(func=_compare)
+
+
+def _report_parser(sub) -> None:
+    """The ``report`` command's options."""
     p = sub.add_parser("report", help="compare every shipped scene (or every robot of a corpus) with MuJoCo; "
                                       "reports and an index page",
                        description="Run `compare` on every shipped scene (robots/*.toml, or the scenes given) and "
@@ -358,6 +369,10 @@ def main(argv=None) -> int:
                    help="accept this run's figures: add them to <out>/baselines.json (or FILE), replacing a run of "
                         "the same t_end and MuJoCo setting")
     p.set_defaults(func=_report)
+
+
+def _sweep_parser(sub) -> None:
+    """The ``sweep`` command's options."""
     p = sub.add_parser("sweep", help="integrate many initial states of a scene at once (compiled, in parallel; on a "
                                      "Dask cluster with --scheduler)",
                        description="Draw COUNT initial states around a scene's (each coordinate of q0 moved by a seeded "
@@ -379,6 +394,10 @@ def main(argv=None) -> int:
     p.add_argument("--chunks", type=int, help="with --scheduler: number of chunks (default: one per worker)")
     p.add_argument("--out", default="out", help="folder of the .npz (default: out)")
     p.set_defaults(func=_sweep)
+
+
+def _tradeoff_parser(sub) -> None:
+    """The ``tradeoff`` command's options."""
     p = sub.add_parser("tradeoff", help="work-precision study of a scene: error against wall time, both engines",
                        description="Run a scene with every method of urdf2links over a ladder of tolerances or steps "
                                    "and with MuJoCo's Euler, implicitfast and RK4 over a ladder of timesteps, against a "
@@ -399,7 +418,20 @@ def main(argv=None) -> int:
     p.add_argument("--mujoco-integrators", help="comma-separated MuJoCo integrators (default Euler,implicitfast,RK4)")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     p.set_defaults(func=_tradeoff)
-    args = parser.parse_args(argv)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The ``urdf2links`` command line: one sub-command per handler above."""
+    parser = argparse.ArgumentParser(prog="urdf2links", description="URDF robots as trees of links of the trace "
+                                     "method, simulated, and compared with MuJoCo.")
+    sub = parser.add_subparsers(dest="command", required=True)
+    for add in (_inspect_parser, _simulate_parser, _compare_parser, _report_parser, _sweep_parser, _tradeoff_parser):
+        add(sub)
+    return parser
+
+
+def main(argv=None) -> int:
+    args = build_parser().parse_args(argv)
     try:
         return args.func(args)
     except (URDFError, SceneError, DynamicsError, IntegrationError) as err:
