@@ -63,11 +63,12 @@ def _run_id(entry: dict) -> tuple:
     return (st.get("t_end"), st.get("mujoco.integrator"), st.get("mujoco.timestep"))
 
 
-def write_baselines(summaries, path, *, factor: float | None = None) -> Path:
+def write_baselines(summaries, path, *, factor: float | None = None, about: str | None = None) -> Path:
     """Write ``baselines.json``: ``{"about", "factor", "floors", "scenes": {"<robot>/<scene>":
     {"runs": [entry, ...]}}}``, one entry (:func:`baseline_entry`) per accepted run length and MuJoCo
     setting. Runs already in an existing file are kept unless this run replaces them (same
-    ``t_end``, integrator and timestep): a capped run and a whole-scene run can both be accepted."""
+    ``t_end``, integrator and timestep): a capped run and a whole-scene run can both be accepted.
+    ``about`` replaces the file's description (a corpus' baselines say how they were made)."""
     path = Path(path)
     old = load_baselines(path) if path.is_file() else {"scenes": {}}
     scenes = {k: {"runs": _runs(v)} for k, v in old.get("scenes", {}).items()}
@@ -78,7 +79,7 @@ def write_baselines(summaries, path, *, factor: float | None = None) -> Path:
         runs.sort(key=lambda r: (r["settings"].get("t_end") or 0.0))
         scenes[summ["key"]] = {"runs": runs}
     data = {
-        "about": ("Accepted figures of the MuJoCo cross-validation per shipped scene and run length (urdf2links "
+        "about": about or ("Accepted figures of the MuJoCo cross-validation per shipped scene and run length (urdf2links "
                   "report --write-baselines). `urdf2links compare SCENE --check THIS_FILE` compares a run with the "
                   "shortest accepted run at least as long (same MuJoCo integrator and timestep preferred) and fails "
                   "when a figure grows past factor x max(baseline, floor) or a divergence comes earlier than the "

@@ -120,7 +120,7 @@ def compare_command(args) -> int:
             return 2
     c = compare_scene(scene, t_end=args.t_end, mujoco_integrator=args.mujoco_integrator, mujoco_dt=args.mujoco_dt,
                       method=args.method, rtol=args.rtol, states=args.states, seed=args.seed,
-                      progress=False if quiet else None, log=log)
+                      progress=False if quiet else None, log=log, max_wall=args.max_wall)
     summary = json_ready(c.summary())
     check = None
     if baselines is not None:
@@ -142,7 +142,11 @@ def compare_command(args) -> int:
 
 
 def report_command(args) -> int:
-    out = Path(args.out)
+    if getattr(args, "corpus", None):
+        from .corpus_command import corpus_command
+
+        return corpus_command(args)
+    out = Path(args.out or "reports")
     files = [Path(p) for p in args.scenes] if args.scenes else shipped_scenes()
     if not files:
         err("urdf2links report: error: no scenes found (robots/*.toml)")
@@ -168,7 +172,8 @@ def report_command(args) -> int:
         try:
             c = compare_scene(scene, t_end=T, mujoco_integrator=args.mujoco_integrator, mujoco_dt=args.mujoco_dt,
                               states=args.states, t_end_note=note, progress=False if args.quiet else None,
-                              log=(lambda m: None) if args.quiet else (lambda m: err(f"    {m}")))
+                              log=(lambda m: None) if args.quiet else (lambda m: err(f"    {m}")),
+                              max_wall=args.max_wall)
         except Exception as exc:  # keep going: one broken scene must not hide the others
             err(f"    FAILED: {type(exc).__name__}: {exc}")
             errors.append(f"{f}: {exc}")
@@ -200,7 +205,9 @@ def report_command(args) -> int:
                 "scene in full.")
     if baselines is not None:
         note += f" Baseline check against {shown_path(baselines_path)} (errors may grow {baselines.get('factor', 10):g}x)."
-    idx = write_index(entries, out, note=note.strip(), command="urdf2links report" + (f" --out {args.out}" if str(args.out) != "reports" else ""))
+    corpus = out / "corpus" / "index.html"
+    idx = write_index(entries, out, note=note.strip(), command="urdf2links report" + (f" --out {args.out}" if args.out
+                      and str(args.out) != "reports" else ""), corpus_link="corpus/index.html" if corpus.is_file() else None)
     if args.write_baselines:
         bp = write_baselines(summaries, args.write_baselines, factor=args.factor)
         err(f"wrote {shown_path(bp)}")

@@ -75,6 +75,7 @@ from urdf2links.transforms import PARAMETERS, BaseState, elementary, link_transf
 
 __all__ = [
     "MjcfModel",
+    "MjcfRefused",
     "mjcf_from_model",
     "mjcf_from_scene",
     "INTEGRATORS",
@@ -83,6 +84,17 @@ __all__ = [
     "TINY_MASS_FRACTION",
     "BASE_MASS_FRACTION",
 ]
+
+
+class MjcfRefused(ValueError):
+    """MuJoCo's compiler refused the route-1 MJCF of a model (most often an inertia it will not take:
+    a link whose principal moments are negative or break the triangle inequality, which the project's
+    audit reports and ``inertia="repair"`` fixes). ``reason`` is MuJoCo's own text."""
+
+    def __init__(self, model_name: str, reason: str):
+        self.model_name, self.reason = model_name, reason
+        super().__init__(f"MuJoCo refused the MJCF of model {model_name!r}: {reason}")
+
 
 #: MJCF integrator names accepted (MuJoCo's spelling).
 INTEGRATORS = ("Euler", "RK4", "implicit", "implicitfast")
@@ -509,7 +521,7 @@ def mjcf_from_model(model, *, gravity=None, springs: Iterable = (), moving_base:
     try:
         mm = mujoco.MjModel.from_xml_string(xml)
     except ValueError as err:
-        raise ValueError(f"MuJoCo refused the MJCF of model {model.name!r}: {str(err).strip()}") from None
+        raise MjcfRefused(model.name, str(err).strip()) from None
     return _compiled(mm, xml, model, names, base_joint_names, bname, bodies, folded, g, springs, notes)
 
 

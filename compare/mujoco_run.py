@@ -69,7 +69,7 @@ from .mjcf import INTEGRATORS, MjcfModel
 from .mujoco_inputs import CompiledInputs
 
 __all__ = ["MujocoRun", "run_mujoco", "mujoco_accelerations", "robot_energy", "energy_function", "ENERGY_COLUMNS",
-           "PythonInputs", "INPUTS", "TIMED_REGION"]
+           "PythonInputs", "INPUTS", "TIMED_REGION", "instability_note"]
 
 ENERGY_COLUMNS = ("kinetic", "potential")
 #: The implementations of the control callback (see the module doc).
@@ -99,7 +99,9 @@ class MujocoRun:
     ``"none"``, ``"compiled"`` or ``"python"`` (the control callback used); ``callback_calls`` its
     calls (4 per RK4 step); ``compilation`` the compiled callback's
     :class:`~urdf2links.simulate.Compilation` in this run (its loading from numba's cache, or its
-    compilation, once per process; empty afterwards).
+    compilation, once per process; empty afterwards); ``blow_ups``: how often MuJoCo met NaN, Inf or huge
+    values and reset its state (``{"BADQACC": 3}``; empty when it never did; ``notes`` then says what
+    it means).
     """
 
     t: np.ndarray
@@ -118,6 +120,7 @@ class MujocoRun:
     inputs: str = "none"
     callback_calls: int = 0
     compilation: Compilation = field(default_factory=Compilation)
+    blow_ups: dict = field(default_factory=dict)
 
     @property
     def kinetic(self) -> np.ndarray:
@@ -373,12 +376,16 @@ def run_mujoco(mj: MjcfModel, scene=None, *, q0=None, qd0=None, t_end: float | N
                      "acceleration after the control callback (RK4; Euler without dampers)")
     driver = _inputs(mj, m, d, plan, inputs, explicit, base_fn, torques, loads, notes)
     rec, wall = _stepping(m, d, driver, ks)
+    blow_ups = _blow_ups(d)
+    if blow_ups:
+        notes.append(instability_note(blow_ups, integ, dt))
+        rec["t"] = ks * dt   # MuJoCo's reset also set d.time back to 0: the samples' times are the steps'
     out = _recorded(mj, m, rec, base_fn)
     if not np.all(np.isfinite(out["q"])):
         notes.append("MuJoCo's state became non-finite")
     used = "none" if driver is None else ("compiled" if isinstance(driver, CompiledInputs) else "python")
     return MujocoRun(t=rec["t"], q=out["q"], qd=out["qd"], energy=out["energy"], base_tracking_error=out["track"],
-                     wall_time=wall, nsteps=int(ks[-1]), timestep=dt, integrator=integ,
+                     wall_time=wall, nsteps=int(ks[-1]), timestep=dt, integrator=integ, blow_ups=blow_ups,
                      coordinate_names=mj.coordinate_names, base_pose=out["base"], notes=notes,
                      harness_time=_time.perf_counter() - start, inputs=used,
                      callback_calls=0 if driver is None else int(driver.calls),
@@ -396,6 +403,25 @@ def _inputs(mj, m, d, plan, inputs, explicit, base_fn, torques, loads, notes):
         notes.append("inputs given as Python callables: MuJoCo is driven from the Python control callback at every "
                      "stage (its wall time includes that harness)")
     return PythonInputs(mj, m, d, base=base_fn, torques=torques, loads=loads)
+
+
+#: MuJoCo's warnings that its state blew up (it then resets the state: ``mj_checkPos/Vel/Acc``).
+_BLOW_UP = ("mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC")
+
+
+def _blow_ups(d) -> dict:
+    """``{"BADQACC": count, ...}``: how often MuJoCo met NaN, Inf or huge values in the run (each time it
+    resets its state: its automatic reset)."""
+    counts = {w.removeprefix("mjWARN_"): int(d.warning[int(getattr(mujoco.mjtWarning, w))].number) for w in _BLOW_UP}
+    return {w: k for w, k in counts.items() if k}
+
+
+def instability_note(blow_ups: dict, integ: str, dt: float) -> str:
+    """What a run's ``blow_ups`` mean, for the notes."""
+    return (f"MuJoCo's simulation became unstable ({', '.join(f'{w} x{k}' for w, k in blow_ups.items())}: NaN, Inf or "
+            f"huge values) and it reset its state each time: its trajectory is not a solution from the first reset "
+            f"on. {integ} at dt {dt:g} s is likely unstable for this model (stiff: large damping or springs on small "
+            f"inertias); a smaller --mujoco-dt or --mujoco-integrator implicit would tell")
 
 
 def _scene_inputs(mj, scene, q0, qd0, t_end, samples, base, torques, loads):

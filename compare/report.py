@@ -27,7 +27,7 @@ from .formatting import fmt, fmt_md, fmt_t, json_ready
 from urdf2links.animation import DEFAULT_FPS
 
 from .report_motion import motion_section
-from .report_plots import plot_coordinates, plot_energy, plot_error, plot_terms
+from .report_plots import plot_coordinates, plot_energy, plot_error, plot_overview, plot_terms
 from .tradeoff_report import insert_section
 
 __all__ = ["write_report", "render_html", "render_markdown", "write_index"]
@@ -93,7 +93,7 @@ def _headline(s) -> list:
     return head
 
 
-def _top(s, check, index_link) -> list[str]:
+def _top(s, check, index_link, index_label="all scenes") -> list[str]:
     """Title, verdict, notes on the run length and the baseline check, headline figures, setup."""
     e = html.escape
     tr, mj, pr = s["trajectory"], s["mujoco"], s["project"]
@@ -101,7 +101,7 @@ def _top(s, check, index_link) -> list[str]:
     verdict_cls = "box chaos" if s["chaotic"] else ("box bad" if tr["divergence_time"] is not None else "box")
     parts = [f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>{e(title)}</title>"
              f"<style>{_CSS}</style></head><body>",
-             f"<p class='small'><a href='{e(index_link)}'>&larr; all scenes</a></p>" if index_link else "",
+             f"<p class='small'><a href='{e(index_link)}'>&larr; {e(index_label)}</a></p>" if index_link else "",
              f"<h1>{e(s['robot'])} / {e(s['scene'])}</h1>",
              f"<p class='sub'>{e(s['description'])}</p>",
              f"<div class='{verdict_cls}'><b>Trajectories:</b> {e(tr['verdict'])}</div>"]
@@ -128,7 +128,7 @@ def _top(s, check, index_link) -> list[str]:
     return parts
 
 
-def _terms_section(s) -> list[str]:
+def _terms_section(s, light=False) -> list[str]:
     e = html.escape
     r1, r2 = s["terms"]["route1"], s["terms"]["route2"]
     parts = ["<h2>1. Terms at identical states</h2>",
@@ -154,16 +154,20 @@ def _terms_section(s) -> list[str]:
         for ref in r2["refusals"]:
             parts.append(f"<li>{e(ref['attempt'])}: refused by {e(ref['by'])}: <code>{e(ref['reason'].splitlines()[0])}</code></li>")
         parts.append(f"<li>accepted: {e(r2.get('label', ''))}</li></ul>")
-    parts.append(f"<img alt='terms' src='data:image/png;base64,{plot_terms(s)}'>")
+    if not light:
+        parts.append(f"<img alt='terms' src='data:image/png;base64,{plot_terms(s)}'>")
     return parts
 
 
-def _trajectory_section(c, s) -> list[str]:
+def _trajectory_section(c, s, light=False) -> list[str]:
     e = html.escape
     tr = s["trajectory"]
-    parts = ["<h2>2. Trajectories</h2>",
-             f"<img alt='coordinates' src='data:image/png;base64,{plot_coordinates(c)}'>",
-             f"<img alt='error' src='data:image/png;base64,{plot_error(c, s)}'>"]
+    parts = ["<h2>2. Trajectories</h2>"]
+    if light:
+        parts.append(f"<img alt='difference and energy balance' src='data:image/png;base64,{plot_overview(c, s)}'>")
+    else:
+        parts += [f"<img alt='coordinates' src='data:image/png;base64,{plot_coordinates(c)}'>",
+                  f"<img alt='error' src='data:image/png;base64,{plot_error(c, s)}'>"]
     rows = [[e(k), fmt(v)] for k, v in tr["max_abs_error_by_coordinate"].items()]
     parts.append(_rows(rows, ["coordinate", "max |&Delta;q|"], num_cols=(1,)))
     g = tr.get("growth")
@@ -178,17 +182,19 @@ def _trajectory_section(c, s) -> list[str]:
     return parts
 
 
-def _energy_section(c, s) -> list[str]:
+def _energy_section(c, s, light=False) -> list[str]:
     e = html.escape
     en = s["energy"]
-    return ["<h2>3. Energy</h2>",
+    parts = ["<h2>3. Energy</h2>",
             f"<p>Quantity balanced: {e(en['quantity'])}. {e(en['note'][0].upper() + en['note'][1:])}. Energy scale (max of "
             f"|E|, |V &minus; V(0)|, |W|): {fmt(en['scale'])} J; largest difference of E + V between the engines: "
             f"{fmt(en['max_engine_difference'])} J.</p>",
             _rows([["urdf2links", fmt(en["project_drift"]), fmt(en["project_drift_rel"])],
                    ["MuJoCo", fmt(en["mujoco_drift"]), fmt(en["mujoco_drift_rel"])]],
-                  ["engine", "drift (J)", "relative to scale"], num_cols=(1, 2)),
-            f"<img alt='energy' src='data:image/png;base64,{plot_energy(c, s)}'>"]
+                  ["engine", "drift (J)", "relative to scale"], num_cols=(1, 2))]
+    if not light:
+        parts.append(f"<img alt='energy' src='data:image/png;base64,{plot_energy(c, s)}'>")
+    return parts
 
 
 def _wall_section(s) -> int:
@@ -250,13 +256,19 @@ def _closing_sections(s, command) -> list[str]:
 
 
 def render_html(c, summary: dict, *, command: str | None = None, check: "CheckResult | None" = None,
-                index_link: str | None = None, animation_fps: float = DEFAULT_FPS) -> str:
+                index_link: str | None = None, animation_fps: float = DEFAULT_FPS, index_label: str = "all scenes",
+                light: bool = False, extra_sections=()) -> str:
     """The scene's self-contained report page (plots as base64 PNG, the motion section's viewer
-    inlined); ``index_link``: relative address of the index page, if any; ``animation_fps``: frames
-    per second of simulated time of the motion section (0: no motion section)."""
-    parts = (_top(summary, check, index_link) + motion_section(c, fps=animation_fps) + _terms_section(summary)
-             + _trajectory_section(c, summary) + _energy_section(c, summary) + _closing_sections(summary, command)
-             + ["</body></html>"])
+    inlined); ``index_link``: relative address of the index page, if any, shown as ``index_label``;
+    ``animation_fps``: frames per second of simulated time of the motion section (0: no motion
+    section). ``light``: no motion section and one overview figure
+    (:func:`~urdf2links.compare.report_plots.plot_overview`: the difference and both energy balances)
+    instead of the four plots, for pages made by the dozen (a corpus); ``extra_sections``: HTML
+    fragments put after the energy section."""
+    motion = [] if light else motion_section(c, fps=animation_fps)
+    parts = (_top(summary, check, index_link, index_label) + motion + _terms_section(summary, light)
+             + _trajectory_section(c, summary, light) + _energy_section(c, summary, light) + list(extra_sections)
+             + _closing_sections(summary, command) + ["</body></html>"])
     return "\n".join(parts)
 
 
@@ -329,10 +341,11 @@ def write_report(c, out_dir=None, *, root="reports", json_path=None, command: st
             "summary": summary}
 
 
-def write_index(entries, out_root, *, note: str = "", command: str | None = None) -> dict:
+def write_index(entries, out_root, *, note: str = "", command: str | None = None, corpus_link: str | None = None) -> dict:
     """``index.html`` and ``index.md`` in ``out_root``: one row per (summary, link, check) entry,
     ``entries`` a list of dicts ``{"summary": ..., "link": relative path of report.html, "check":
-    CheckResult or None}``."""
+    CheckResult or None}``; ``corpus_link``: relative address of a corpus report
+    (``urdf2links report --corpus``), linked under the title."""
     root = Path(out_root)
     root.mkdir(parents=True, exist_ok=True)
     e = html.escape
@@ -385,6 +398,9 @@ def write_index(entries, out_root, *, note: str = "", command: str | None = None
              "<p class='sub'>Every shipped scene run by both engines from the same initial state with the same loads; "
              "terms at identical states, trajectories, energies, wall time.</p>",
              f"<div class='box'>{settings}{e(note)}</div>",
+             (f"<p><b><a href='{e(corpus_link)}'>Corpus report</a></b>: every robot of a corpus of real robot "
+              "descriptions against MuJoCo, each in its default scene (<code>urdf2links report --corpus</code>).</p>"
+              if corpus_link else ""),
              _rows(rows, header, num_cols=(3, 4, 5, 7, 8, 9, 10, 11)),
              "<p class='small'>terms: max |ours &minus; MuJoCo| / max |MuJoCo| of A (mj_fullM) and e + G (qfrc_bias) at "
              "seeded random states; route 1 = the project's tree as MJCF, route 2 = MuJoCo's own URDF import (fixed base "
@@ -396,6 +412,9 @@ def write_index(entries, out_root, *, note: str = "", command: str | None = None
         parts.append(f"<p class='small'>Regenerate: <code>{e(command)}</code></p>")
     parts.append("</body></html>")
     (root / "index.html").write_text("\n".join(parts))
-    md_text = "\n".join(["# urdf2links against MuJoCo", "", (note + "\n") if note else "", *md, ""])
+    md_link = corpus_link.removesuffix("index.html") + "corpus.md" if corpus_link else None
+    corpus_md = [f"Corpus report: [{md_link}]({md_link}) and {corpus_link} (every robot of a corpus against MuJoCo, "
+                 "each in its default scene).", ""] if corpus_link else []
+    md_text = "\n".join(["# urdf2links against MuJoCo", "", (note + "\n") if note else "", *corpus_md, *md, ""])
     (root / "index.md").write_text(md_text)
     return {"html": root / "index.html", "md": root / "index.md", "table": "\n".join(md)}

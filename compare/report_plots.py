@@ -8,7 +8,7 @@ import numpy as np
 
 from .figures import figure, png_base64
 
-__all__ = ["plot_coordinates", "plot_error", "plot_energy", "plot_terms"]
+__all__ = ["plot_coordinates", "plot_error", "plot_energy", "plot_terms", "plot_overview"]
 
 
 def _every(m: int, most: int = 1500) -> slice:
@@ -143,4 +143,53 @@ def plot_terms(summary) -> str:
     ax.set_xlabel(f"max relative error over {r1['states']} seeded states")
     ax.legend(loc="lower right", fontsize=8)
     ax.grid(alpha=0.3, axis="x", which="both")
+    return png_base64(fig)
+
+
+def _log_axis(ax) -> None:
+    """A log y axis with a handful of labelled decades and no minor labels (drawing hundreds of tick
+    labels is what made a small figure cost seconds)."""
+    from matplotlib.ticker import LogLocator, NullFormatter
+
+    ax.yaxis.set_major_locator(LogLocator(numticks=6))
+    ax.yaxis.set_minor_locator(LogLocator(subs=(), numticks=6))
+    ax.yaxis.set_minor_formatter(NullFormatter())
+
+
+def plot_overview(c, summary) -> str:
+    """One small figure for a light page (a corpus robot): left, the largest difference over the
+    coordinates ``max_j |q_ours - q_MuJoCo|`` against time with the divergence threshold; right, each
+    engine's energy balance ``|h - h(0) - W|`` (``h = E + V`` for a fixed base). Zeros (identical
+    results) are not drawn on the log axes."""
+    fig = figure(11, 3.0, dpi=72)
+    fig.set_layout_engine(None)
+    fig.subplots_adjust(left=0.07, right=0.99, bottom=0.16, top=0.9, wspace=0.22)
+    ax, bx = fig.subplots(1, 2)
+    k = _every(len(c.t), 600)
+    if c.error.size and np.any(c.error > 0):
+        e = c.error.max(axis=1)
+        ax.plot(c.t[k], np.where(e > 0, e, np.nan)[k], color="k", lw=1.2, label="max over coordinates")
+    ax.axhline(c.threshold, color="C3", ls="--", lw=1.0, label=f"divergence threshold {c.threshold:g}")
+    div = summary["trajectory"]["divergence_time"]
+    if div is not None:
+        ax.axvline(div, color="C3", ls=":", lw=1.3, label=f"divergence t = {div:.3g} s")
+    ax.set_yscale("log")
+    ax.set_xlabel("t (s)")
+    ax.set_ylabel("|q urdf2links - q MuJoCo| (rad, m)")
+    ax.set_title("trajectory difference", fontsize=10)
+    work = summary["energy"]["work_terms"]
+    for key, color, label in (("ours_balance", "C0", "urdf2links"), ("mujoco_balance", "C1", "MuJoCo")):
+        b = np.abs(c.energy[key])
+        if np.any(b > 0):
+            bx.plot(c.t[k], np.where(b > 0, b, np.nan)[k], color=color, lw=1.0, label=label)
+    bx.set_yscale("log")
+    sym = "h" if c.scene.base is not None else "(E + V)"
+    bx.set_xlabel("t (s)")
+    bx.set_ylabel(f"|{sym} - {sym}(0)" + (" - W|" if work else "|") + " (J)")
+    bx.set_title("energy balance of each engine (zero: not drawn)", fontsize=10)
+    for a in (ax, bx):
+        _log_axis(a)
+        a.grid(alpha=0.3, which="major")
+        if a.get_legend_handles_labels()[0]:
+            a.legend(loc="lower right", fontsize=7)
     return png_base64(fig)

@@ -6,7 +6,7 @@
    [-1, 1] rad or m, ``qd`` standard normal; with a moving base also a random base pose
    (uniform in [-1, 1]) and rate (standard normal), accelerations zero since ``qfrc_bias``
    holds none), ``A`` against ``mj_fullM`` and ``e + G`` (the scene's gravity) against
-   ``qfrc_bias``, as ``max|ours - MuJoCo| / max|MuJoCo|``:
+   ``qfrc_bias``, as ``max|ours - MuJoCo| / max|MuJoCo|`` (:mod:`urdf2links.compare.scene_terms`):
 
    * route 1: the project's own tree written as MJCF (:mod:`urdf2links.compare.mjcf`), built for the scene
      (its gravity, springs, moving base);
@@ -50,12 +50,9 @@
 
 from __future__ import annotations
 
-import copy
 import math
-import tempfile
 import time
 import warnings
-from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
@@ -64,209 +61,36 @@ import mujoco
 import numpy as np
 
 from urdf2links.console import shown_path
+from urdf2links.errors import IntegrationError
+from urdf2links.ranges import MAX_STEPS
 from urdf2links.limits import LimitExcursion
 from urdf2links.plan import compile_plan
 from urdf2links.scene import Scene, load_scene, robot_stem
 from urdf2links.simulate import TIMED_REGION as PROJECT_REGION
 from urdf2links.simulate import Trajectory, simulate, warm_up
-from urdf2links.xacro_input import expand_xacro, is_xacro_path
-from urdf2links.transforms import BaseState
 
 from .mjcf import MjcfModel, mjcf_from_scene
 from .mujoco_run import TIMED_REGION as MUJOCO_REGION
 from .mujoco_run import MujocoRun, energy_function, run_mujoco
-from .mujoco_urdf import MujocoRefused
-from .terms import compare_terms_urdf
+from .scene_terms import ROUTE1_LABEL, route1_terms, route2_terms
 
 __all__ = [
     "SceneComparison",
     "compare_scene",
-    "route1_terms",
-    "route2_terms",
     "growth_fit",
     "divergence_time",
     "scene_key",
     "DIVERGENCE_THRESHOLD",
-    "ROUTE1_LABEL",
-    "MASSLESS_SPHERE_KG",
 ]
 
 #: Error (rad or m, largest over the coordinates) whose first crossing is the divergence time.
 DIVERGENCE_THRESHOLD = 1e-3
-#: Mass (kg) of the sphere put on each massless moving link when MuJoCo refuses them (route 2).
-MASSLESS_SPHERE_KG = 1e-3
-ROUTE1_LABEL = "route 1: the project's tree as MJCF (same frames, H, coordinates; only the scene's effects)"
 
 
 def scene_key(scene: Scene) -> str:
     """``"<robot>/<scene>"``: the URDF file's stem and the scene's name (the baselines' key and the
     report's folder)."""
     return f"{robot_stem(scene.robot)}/{scene.name}"
-
-
-# --------------------------------------------------------------------------- terms
-
-
-def _rel(ours, theirs, floor: float = 0.0) -> float:
-    theirs = np.asarray(theirs, float)
-    if theirs.size == 0:
-        return 0.0
-    diff = float(np.max(np.abs(np.asarray(ours, float) - theirs)))
-    scale = float(np.max(np.abs(theirs)))
-    if scale <= 1e-12 * floor:
-        scale = floor
-    if scale == 0.0:
-        return 0.0 if diff == 0.0 else math.inf
-    return diff / scale
-
-
-def _with_gravity(model, gravity):
-    """A shallow copy of ``model`` whose gravity is ``gravity`` (zero when None)."""
-    g = np.zeros(3) if gravity is None else np.asarray(gravity, float)
-    if np.array_equal(np.asarray(model.gravity_vector), g):
-        return model
-    out = copy.copy(model)
-    g = g.copy()
-    g.setflags(write=False)
-    out.gravity_vector = g
-    return out
-
-
-def route1_terms(mj: MjcfModel, model, scene: Scene, *, states: int = 8, seed: int = 0) -> dict:
-    """Route 1: ``A`` vs ``mj_fullM`` and ``e + G`` vs ``qfrc_bias`` of the scene's MJCF model at
-    seeded random states (see the module doc). Returns a JSON-ready dict."""
-    ours = _with_gravity(model, scene.gravity)
-    rng = np.random.default_rng(seed)
-    n = model.n
-    err_A = err_b = 0.0
-    per_state = []
-    start = time.perf_counter()
-    for _ in range(states):
-        q = rng.uniform(-1.0, 1.0, n)
-        qd = rng.standard_normal(n)
-        bs = None
-        if mj.moving_base:
-            bs = BaseState(rng.uniform(-1.0, 1.0, 6), rng.standard_normal(6), np.zeros(6))
-        M, bias = mj.terms(q, qd, base=bs)
-        A = ours.mass_matrix(q, base=bs)
-        eG = ours.bias(q, qd, base=bs)
-        if scene.gravity is not None:
-            eG = eG + ours.gravity(q, base=bs)
-        floor = float(np.max(np.abs(M))) * max(1.0, float(np.max(np.abs(qd))) ** 2) if n else 0.0
-        ra, rb = _rel(A, M), _rel(eG, bias, floor)
-        per_state.append([ra, rb])
-        err_A, err_b = max(err_A, ra), max(err_b, rb)
-    return {
-        "label": ROUTE1_LABEL,
-        "route": "mjcf",
-        "max_rel_error_A": err_A,
-        "max_rel_error_bias": err_b,
-        "max_rel_error": max(err_A, err_b),
-        "states": states,
-        "seed": seed,
-        "moving_base": bool(mj.moving_base),
-        "per_state": per_state,
-        "wall_time_s": time.perf_counter() - start,
-        "notes": list(mj.notes),
-    }
-
-
-def route2_terms(scene: Scene, *, states: int = 8, seed: int = 0) -> dict:
-    """Route 2: MuJoCo's own URDF import of the scene's robot file against the project's import.
-
-    Tried in order until MuJoCo accepts a text: the file as the scene loads it; the project's
-    repair (``inertia="repair"``) written into the text; that plus a
-    :data:`MASSLESS_SPHERE_KG` sphere on each massless moving link on both sides. Every refusal
-    is recorded (``refusals``); ``label`` says which route produced the figures. A floating-base
-    robot is skipped (``skipped`` says why); so is a file MuJoCo refuses in every form
-    (``error``). Returns a JSON-ready dict."""
-    opts = dict(scene.load_options)
-    if opts.get("floating_base"):
-        return {"route": None, "label": "route 2: skipped", "skipped":
-                "floating base: route 2 (MuJoCo's URDF import) is compared for fixed-base robots only"}
-    from urdf2links import load_urdf
-
-    base_opts = {k: v for k, v in opts.items() if k in ("package_dirs", "strict")}
-    inertia = opts.get("inertia", "audit")
-    attempts = [(inertia, None)]
-    if inertia != "repair":
-        attempts.append(("repair", None))
-    attempts.append(("repair", MASSLESS_SPHERE_KG))
-    refusals: list[dict] = []
-    start = time.perf_counter()
-    result = None
-    with _urdf_file(scene) as robot:
-        for how, sphere in attempts:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                try:
-                    model = load_urdf(robot, floating_base=False, inertia=how, mimic="independent", **base_opts)
-                except Exception as err:  # strict import refuses: try the next form
-                    refusals.append({"attempt": _attempt(how, sphere), "by": "urdf2links", "reason": str(err)})
-                    continue
-            model = _with_gravity(model, scene.gravity)
-            try:
-                result = compare_terms_urdf(robot, model, states=states, seed=seed, massless_moving=sphere,
-                                            dampers=_urdf_dampers(model) if scene.urdf_damping else None)
-                break
-            except MujocoRefused as err:
-                refusals.append({"attempt": _attempt(how, sphere), "by": "MuJoCo", "reason": err.reason})
-            except ValueError as err:
-                return {"route": None, "label": "route 2: not applicable", "skipped": str(err),
-                        "wall_time_s": time.perf_counter() - start}
-    if result is None:
-        return {"route": None, "label": "route 2: MuJoCo refuses the file", "error": refusals[-1]["reason"] if refusals
-                else "no attempt", "refusals": refusals, "wall_time_s": time.perf_counter() - start}
-    if result.route == "mujoco-urdf":
-        label = "route 2: MuJoCo's own URDF import of the file as written"
-    elif sphere is None:
-        label = "route 2, REPAIRED: MuJoCo refused the file; compared on the project's repaired text"
-    else:
-        label = (f"route 2, REPAIRED: MuJoCo refused the file; compared on the project's repaired text with a "
-                 f"{sphere * 1e3:g} g sphere on each massless moving link on both sides")
-    return {
-        "label": label,
-        "route": result.route,
-        "refusal": result.refusal,
-        "refusals": refusals,
-        "max_rel_error_A": result.max_rel_error_A,
-        "max_rel_error_bias": result.max_rel_error_bias,
-        "max_rel_error": result.max_rel_error,
-        "max_rel_error_damping": result.max_rel_error_damping,
-        "states": result.states,
-        "seed": seed,
-        "notes": list(result.notes),
-        "wall_time_s": time.perf_counter() - start,
-    }
-
-
-@contextmanager
-def _urdf_file(scene: Scene):
-    """The scene's robot as a URDF file for MuJoCo's own import: the file itself, or a ``.xacro``
-    robot expanded (with the scene's ``xacro_args``) into a temporary file."""
-    if not is_xacro_path(scene.robot):
-        yield Path(scene.robot)
-        return
-    opts = scene.load_options
-    text = expand_xacro(scene.robot, xacro_args=opts.get("xacro_args"), package_dirs=opts.get("package_dirs", ()))
-    with tempfile.TemporaryDirectory(prefix="urdf2links_route2_") as folder:
-        path = Path(folder) / f"{robot_stem(scene.robot)}.urdf"
-        path.write_text(text)
-        yield path
-
-
-def _urdf_dampers(model) -> dict:
-    """``{coordinate: c}``: the URDF damping of the model's one-coordinate joints (what MuJoCo's own
-    URDF import reads as ``dof_damping``)."""
-    return {j["coordinates"][0]: float(j["damping"]) for j in model.info.get("joints", [])
-            if j.get("damping") and j["type"] in ("revolute", "continuous", "prismatic") and len(j["coordinates"]) == 1}
-
-
-def _attempt(how: str, sphere: float | None) -> str:
-    if sphere is not None:
-        return (f"the project's repair (inertia='repair') plus a {sphere * 1e3:g} g sphere on each massless "
-                "moving link, on both sides")
-    return "the file as written" if how != "repair" else "the project's repair written into the text (inertia='repair')"
 
 
 # --------------------------------------------------------------------------- trajectory analysis
@@ -451,6 +275,7 @@ class SceneComparison:
                         "dt": traj.stats["dt"], "nsteps": int(traj.stats["nsteps"]), "nfev": int(traj.stats["nfev"]),
                         "terms": list(traj.stats["terms"])},
             "mujoco": {"integrator": run.integrator, "timestep": float(run.timestep), "nsteps": int(run.nsteps),
+                       "blow_ups": dict(run.blow_ups),
                        "version": mujoco.__version__, "folded_links": list(self.mj.folded_links),
                        "tiny_mass_links": list(self.mj.tiny_mass_links), "notes": list(run.notes)},
             "terms": {"max_rel_error": float(term_max),
@@ -471,13 +296,16 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
                   method: str | None = None, rtol: float | None = None, atol: float | None = None,
                   samples: int | None = None, states: int = 8, seed: int = 0,
                   threshold: float = DIVERGENCE_THRESHOLD, t_end_note: str | None = None,
-                  progress: bool | None = None, log: Callable[[str], None] | None = None) -> SceneComparison:
+                  progress: bool | None = None, log: Callable[[str], None] | None = None,
+                  max_wall: float | None = None) -> SceneComparison:
     """Run ``scene`` (a :class:`~urdf2links.scene.Scene` or a path to its TOML) with the project's
     integrator (the scene's ``[run]`` unless ``method``/``rtol``/``atol`` say otherwise) and with
     MuJoCo (``mujoco_integrator``, ``mujoco_dt``) over ``t_end`` (default the scene's) and compare
     them (module doc). ``samples`` defaults to the scene's, scaled down with a shortened
     ``t_end`` (at least 101). ``t_end_note`` is recorded when the caller capped ``t_end``.
-    ``log(message)`` receives stage messages; ``progress`` the project's progress bar."""
+    ``log(message)`` receives stage messages; ``progress`` the project's progress bar. ``max_wall``
+    (seconds, from the start of the comparison) bounds the project's integration, and MuJoCo's run is
+    not started once it is spent: :class:`~urdf2links.errors.IntegrationError` says so."""
     start = time.perf_counter()
     say = log or (lambda _m: None)
     if isinstance(scene, (str, Path)):
@@ -486,11 +314,11 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
         warnings.simplefilter("ignore")  # audit findings: the scene chose how to load its robot
         model = scene.model()
     T = float(scene.run.t_end if t_end is None else t_end)
+    _check_mujoco_steps(scene, T, mujoco_dt)
     if samples is None:
         s = scene.run.samples
         samples = s if T >= scene.run.t_end else max(101, int(round((s - 1) * T / scene.run.t_end)) + 1)
     plan = compile_plan(scene, model)
-    notes: list[str] = []
 
     say(f"terms at {states} seeded states (route 1" + (", route 2)" if not scene.load_options.get("floating_base")
                                                        else ")"))
@@ -504,8 +332,14 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
         say(warm.describe("urdf2links warm-up"))
     say(f"project: {meth}" + (f" rtol {rtol or scene.run.rtol:g}" if meth not in ("RK4", "midpoint") else "")
         + f", t = 0..{T:g} s")
+    left = None if max_wall is None else max_wall - (time.perf_counter() - start)
+    if left is not None and left <= 0:
+        raise IntegrationError(f"{scene.path or scene.name}: max_wall={max_wall:g} s spent before the project's run "
+                               "(loading and terms)")
     traj = simulate(scene, model=model, t_end=T, method=method, rtol=rtol, atol=atol, samples=samples,
-                    progress=progress)
+                    progress=progress, max_wall=left)
+    if max_wall is not None and time.perf_counter() - start > max_wall:
+        raise IntegrationError(f"{scene.path or scene.name}: max_wall={max_wall:g} s spent before MuJoCo's run")
     say(f"MuJoCo: {mujoco_integrator} dt {mujoco_dt:g}, {int(round(T / mujoco_dt))} steps")
     run = run_mujoco(mj, scene, t_end=T, samples=samples)
     if run.compilation.happened:
@@ -513,26 +347,12 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
 
     t = np.asarray(run.t, float)
     q_o, qd_o, W, EV_o, h_o, resampled = _project_at(traj, plan, t, T)
-    if resampled:
-        notes.append("MuJoCo's sample times differ from the project's: the project's dense output was "
-                     "evaluated at MuJoCo's times")
     error = np.abs(q_o - run.q)
     err_max = error.max(axis=1) if model.n else np.zeros(len(t))
     div = divergence_time(t, err_max, threshold)
     growth = growth_fit(t, err_max, end_time=div) if scene.chaotic else None
     energy, info = _energy_balances(scene, plan, mj, run, traj, EV_o, h_o, W)
-    if traj.stats.get("n_recharts"):
-        notes.append(f"the project re-charted the ZYX angles of {sorted({r['link'] for r in traj.stats['recharts']})} "
-                     f"{traj.stats['n_recharts']} times near phi_y = +-pi/2 (urdf2links.charts); its q are converted "
-                     "back to the loaded model's coordinates, which MuJoCo integrates as hinges through the singularity")
-    notes += [f"scene: {x}" for x in plan.spring_set.notes]
-    notes += [f"limits: {LimitExcursion(**x).text()} (urdf2links' trajectory)" for x in traj.stats["limit_excursions"]]
-    if scene.path is None:
-        notes.insert(0, f"no scene file: the robot's default scene ({scene.description}); `urdf2links inspect "
-                        f"{shown_path(scene.robot)} --scene` shows it, --write-scene FILE.toml writes it")
-    notes += [f"MJCF: {x}" for x in mj.notes] + [f"MuJoCo run: {x}" for x in run.notes]
-    if t_end_note:
-        notes.insert(0, t_end_note)
+    notes = _run_notes(scene, plan, mj, run, traj, t_end_note, resampled=resampled)
     q0, qd0 = scene.initial_state(model)
     info.update({"t_end": T, "t_end_note": t_end_note, "effects": plan.terms, "warm_up": warm,
                  "q0": dict(zip(model.coordinate_names, q0.tolist())),
@@ -541,6 +361,37 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     return SceneComparison(
         scene=scene, model=model, mj=mj, traj=traj, run=run, t=t, q_ours=q_o, q_mujoco=run.q, error=error,
         energy=energy, terms=terms, growth=growth, threshold=threshold, info=info, notes=notes)
+
+
+def _check_mujoco_steps(scene, T: float, mujoco_dt) -> None:
+    """MuJoCo's run is ``T / mujoco_dt`` steps, known in advance: refused before it starts when that is
+    more than :data:`~urdf2links.ranges.MAX_STEPS` (or the timestep is not positive)."""
+    steps = T / mujoco_dt if isinstance(mujoco_dt, (int, float)) and mujoco_dt > 0 else math.inf
+    if not steps <= MAX_STEPS:
+        raise IntegrationError(f"{scene.path or scene.name}: MuJoCo timestep {mujoco_dt!r} over t_end = {T:g} s makes "
+                               f"{steps:.3g} steps, more than the {MAX_STEPS:g} a run may take: give a timestep in "
+                               f"[{T / MAX_STEPS:g}, {T:g}] s")
+
+
+def _run_notes(scene, plan, mj, run, traj, t_end_note, *, resampled: bool) -> list[str]:
+    """What the report says about the two runs besides figures: the cap on t_end, the default scene,
+    resampling, re-charting, spring notes, limit excursions, the MJCF's and MuJoCo run's notes."""
+    notes = []
+    if t_end_note:
+        notes.append(t_end_note)
+    if scene.path is None:
+        notes.append(f"no scene file: the robot's default scene ({scene.description}); `urdf2links inspect "
+                     f"{shown_path(scene.robot)} --scene` shows it, --write-scene FILE.toml writes it")
+    if resampled:
+        notes.append("MuJoCo's sample times differ from the project's: the project's dense output was "
+                     "evaluated at MuJoCo's times")
+    if traj.stats.get("n_recharts"):
+        notes.append(f"the project re-charted the ZYX angles of {sorted({r['link'] for r in traj.stats['recharts']})} "
+                     f"{traj.stats['n_recharts']} times near phi_y = +-pi/2 (urdf2links.charts); its q are converted "
+                     "back to the loaded model's coordinates, which MuJoCo integrates as hinges through the singularity")
+    notes += [f"scene: {x}" for x in plan.spring_set.notes]
+    notes += [f"limits: {LimitExcursion(**x).text()} (urdf2links' trajectory)" for x in traj.stats["limit_excursions"]]
+    return notes + [f"MJCF: {x}" for x in mj.notes] + [f"MuJoCo run: {x}" for x in run.notes]
 
 
 def _project_at(traj, plan, t, T):

@@ -26,10 +26,20 @@ the whole module. A case one of whose tests failed is marked so in the table.
 from __future__ import annotations
 
 import json
+import os
 import platform
 from pathlib import Path
 
 import pytest
+from hypothesis import settings
+
+# Hypothesis profiles of the fuzz tests (tests/test_fuzz.py): "ci" (the default) is derandomized -- a
+# fixed seed, the same examples on every run -- with a small budget; "slow" is the long run of issue 15
+# (5000 URDF mutants, 1000 scene mutants, 1000 valid trees). Choose with HYPOTHESIS_PROFILE=slow or
+# `pytest --hypothesis-profile slow`. No example database: a failure is replayed from its printed blob.
+settings.register_profile("ci", max_examples=200, derandomize=True, database=None, deadline=None, print_blob=True)
+settings.register_profile("slow", max_examples=5000, database=None, deadline=None, print_blob=True)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
 _FIGURES: dict[str, dict] = {}       # module stem -> {"bounds": {...}, "cases": {case: [...]}}
 _FAILED: set[str] = set()            # node ids of tests that failed
@@ -114,3 +124,18 @@ def pytest_sessionfinish(session, exitstatus):
         if entry["note"]:
             lines += ["", entry["note"]]
         (folder / f"{stem}.md").write_text("\n".join(lines) + "\n")
+
+
+@pytest.fixture(scope="session")
+def dask_client():
+    """A Dask client of a two-worker ``LocalCluster`` (one thread and one process each, as
+    docs/corpus.md recommends), shared by the tests that compare a distributed run with the serial
+    one (the test extra installs the distributed extra)."""
+    import logging
+
+    import dask.distributed as distributed
+
+    logging.getLogger("distributed").setLevel(logging.ERROR)  # the nanny's shutdown chatter
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        with distributed.Client(cluster) as client:
+            yield client

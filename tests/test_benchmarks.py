@@ -12,10 +12,9 @@ from pathlib import Path
 
 import pytest
 
-pytest.importorskip("mujoco")
 
 ROOT = Path(__file__).resolve().parent.parent
-BENCHMARKS = ("eval_cost", "solver_cost", "sweeps", "mujoco_harness", "loop_cost", "batch_cost")
+BENCHMARKS = ("eval_cost", "solver_cost", "sweeps", "mujoco_harness", "corpus_wall", "loop_cost", "batch_cost")
 
 
 @pytest.mark.parametrize("name", BENCHMARKS)
@@ -43,6 +42,8 @@ def test_tables_state_what_the_issue_asks():
     assert "MuJoCo's engine time is" in (bench / "mujoco_harness.md").read_text()
     sweeps = json.loads((bench / "sweeps.json").read_text())
     assert {r["scene"] for r in sweeps["rows"]} == {"double_pendulum_chaos", "ur5_falling"}
+    corpus = json.loads((bench / "corpus_wall.json").read_text())
+    assert corpus["same_figures"] and [r["way"] for r in corpus["rows"]] == ["serial", "jobs 2", "LocalCluster 2"]
     growth = json.loads((bench / "eval_cost.json").read_text())["growth"]
     for key in ("forward_dynamics", "mj_forward"):
         assert len(growth[key]["local"]) >= 5 and len(growth[key]["large_n"]["n"]) >= 3

@@ -72,6 +72,17 @@ def test_random_q0_is_seeded_and_within_limits(arm):
         default_scene(arm, q0="up")
 
 
+def test_random_q0_reads_huge_limits_as_none(tmp_path):
+    """Gazebo-style files write +-1e16 for joints that turn freely (example-robot-data's iris rotors):
+    drawn within them, q0 would be ~1e15 rad, where sin and cos have no digits left. They count as no
+    limit, so q0 falls in [-1, 1] like an unlimited joint's."""
+    f = tmp_path / "rotor.urdf"
+    f.write_text(DAMPED_ARM.replace('lower="-2" upper="2"', 'lower="-1e16" upper="1e16"'))
+    for seed in range(5):
+        q0 = default_scene(f, q0="random", seed=seed).q0
+        assert -1.0 <= q0["elbow"] <= 1.0 and -0.5 <= q0["shoulder"] <= 0.5
+
+
 def test_urdf_dampers_and_friction_note(arm):
     s = default_scene(arm)
     model = load_urdf(arm)

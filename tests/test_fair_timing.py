@@ -47,7 +47,6 @@ def test_warm_up_leaves_nothing_to_compile_in_the_run():
 
 
 def test_summary_states_the_timed_regions():
-    pytest.importorskip("mujoco")
     from urdf2links.compare.trajectory import compare_scene
 
     s = compare_scene(ROBOTS / "ship_crane.toml", t_end=0.05, states=2, progress=False).summary()["wall_time"]
@@ -74,7 +73,6 @@ def test_first_scene_in_a_fresh_environment(tmp_path):
     with the cache it filled: the first run's timed integration is within 2x of the second's (the
     issue's bound; the margin is the machine's jitter: compilation inside the timed region was
     500x). Only that direction is bounded: a first run faster than the second is jitter too."""
-    pytest.importorskip("mujoco")
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba-cache"))
 
     def run():

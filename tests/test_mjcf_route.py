@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-mujoco = pytest.importorskip("mujoco")
+import mujoco  # a declared dependency: a broken MuJoCo fails the suite
 
 from scipy.integrate import solve_ivp  # noqa: E402
 

@@ -12,7 +12,7 @@ import ctypes
 import numpy as np
 import pytest
 
-mujoco = pytest.importorskip("mujoco")
+import mujoco
 
 from urdf2links.compare.mjcf import mjcf_from_scene  # noqa: E402
 from urdf2links.compare.mujoco_inputs import LayoutError, check_offsets, mjdata_offsets  # noqa: E402

@@ -8,8 +8,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import yourdfpy
 
-mujoco = pytest.importorskip("mujoco")
+import mujoco  # a declared dependency: a broken MuJoCo fails the suite
 
 from urdf2links.compare import MujocoRefused, mujoco_data_at, mujoco_from_urdf, mujoco_terms  # noqa: E402
 
@@ -294,12 +295,10 @@ def _ur5_path() -> Path | None:
 UR5 = _ur5_path()
 
 
-@pytest.mark.skipif(UR5 is None, reason="example-robot-data is not installed (pip install "
-                    "example-robot-data): no UR5 URDF to check MuJoCo's joint convention on")
 @pytest.mark.parametrize("fusestatic", [True, False])
 def test_ur5_joint_zero_and_sign_match_urdf_forward_kinematics(fusestatic):
     """MuJoCo hinge qpos = URDF joint angle: zero at the URDF zero pose, sign of the axis."""
-    yourdfpy = pytest.importorskip("yourdfpy")
+    assert UR5 is not None, "example-robot-data (a test dependency) is missing: pip install -e '.[test]'"
     logging.getLogger("yourdfpy").setLevel(logging.CRITICAL)
     robot = yourdfpy.URDF.load(str(UR5), build_scene_graph=True, load_meshes=False)
     mj = mujoco_from_urdf(UR5, fusestatic=fusestatic)

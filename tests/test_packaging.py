@@ -3,6 +3,7 @@ subpackages, no top-level `compare`, and shipped scenes that load from any folde
 
 from __future__ import annotations
 
+import functools
 import shutil
 import subprocess
 import sys
@@ -87,3 +88,101 @@ def test_installed_package_works_from_another_folder(installed, tmp_path):
     out = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, env=env)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "6"
+
+
+# --------------------------------------------------------------------------- declared dependencies
+
+#: import name -> distribution, where importlib.metadata cannot tell (cmeel installs Pinocchio outside
+#: the distribution's top-level listing)
+IMPORT_ALIASES = {"pinocchio": "pin"}
+#: declared but never imported: trimesh loads pycollada itself to read .dae meshes
+USED_WITHOUT_IMPORT = {"pycollada"}
+
+
+def _requirement_names(requirements) -> set[str]:
+    import re
+
+    return {re.split(r"[\s<>=!~;\[(]", r, maxsplit=1)[0].lower().replace("_", "-") for r in requirements}
+
+
+def _declared_dependencies() -> tuple[set[str], dict[str, set[str]]]:
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    extras = {k: _requirement_names(v) for k, v in project.get("optional-dependencies", {}).items()}
+    return _requirement_names(project["dependencies"]), extras
+
+
+def _third_party_imports(folders) -> dict[str, set[str]]:
+    """Top-level third-party module names imported anywhere under ``folders`` -> the files importing them
+    (the project's own packages and the test helpers excluded)."""
+    import ast
+
+    local = {"urdf2links", "compare"} | {p.stem for p in (ROOT / "tests").glob("*.py")}
+    found: dict[str, set[str]] = {}
+    for folder in folders:
+        for path in (ROOT / folder).rglob("*.py"):
+            for node in ast.walk(ast.parse(path.read_text())):
+                if isinstance(node, ast.Import):
+                    names = [a.name for a in node.names]
+                elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+                    names = [node.module]
+                else:
+                    continue
+                for name in names:
+                    top = name.split(".")[0]
+                    if top not in sys.stdlib_module_names and top not in local:
+                        found.setdefault(top, set()).add(str(path.relative_to(ROOT)))
+    return found
+
+
+@functools.cache
+def _packages_distributions() -> dict:
+    import importlib.metadata
+
+    return importlib.metadata.packages_distributions()   # scans every installed distribution: once
+
+
+def _distributions(module: str) -> set[str]:
+    if module in IMPORT_ALIASES:
+        return {IMPORT_ALIASES[module]}
+    return {n.lower().replace("_", "-") for n in _packages_distributions().get(module, [])}
+
+
+def test_every_import_is_a_declared_dependency():
+    """Every third-party module urdf2links/ and compare/ import is a declared dependency, or (xacro) an
+    extra whose absence gives a clear message (tests/test_xacro.py checks that message); what tests/ and
+    benchmarks/ import besides is in the test extra. lxml, imported by the URDF reader, once arrived only
+    through yourdfpy. Every declared dependency is imported somewhere (or listed in USED_WITHOUT_IMPORT)."""
+    runtime, extras = _declared_dependencies()
+    optional = {"xacro": extras["xacro"]}           # imported inside a function, ImportError -> URDFError
+    problems = []
+    used = set()
+    for module, files in sorted(_third_party_imports(["urdf2links", "compare"]).items()):
+        dists = _distributions(module)
+        used |= dists
+        if not dists & runtime and not any(dists & e for e in optional.values()):
+            problems.append(f"{module} (distribution {sorted(dists) or 'unknown'}) imported by {sorted(files)} "
+                            "is not in [project] dependencies")
+    for module, files in sorted(_third_party_imports(["tests", "benchmarks"]).items()):
+        dists = _distributions(module)
+        used |= dists
+        if not dists & (runtime | extras["test"]):
+            problems.append(f"{module} (distribution {sorted(dists) or 'unknown'}) imported by {sorted(files)} "
+                            "is neither a dependency nor in the test extra")
+    unused = runtime - used - USED_WITHOUT_IMPORT
+    assert not problems, "\n".join(problems)
+    assert not unused, f"declared dependencies nothing imports: {sorted(unused)}"
+
+
+def test_the_test_extra_is_installed():
+    """The suite runs with the test extra (README, .ci/run): a missing or broken test dependency fails here
+    by name, instead of letting the tests that need it skip."""
+    import importlib.metadata
+
+    runtime, extras = _declared_dependencies()
+    missing = []
+    for name in sorted(runtime | extras["test"]):
+        try:
+            importlib.metadata.version(name)
+        except importlib.metadata.PackageNotFoundError:
+            missing.append(name)
+    assert not missing, f"not installed: {missing}; pip install -e '.[test]'"

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import yourdfpy
 
 from urdf2links.locations import example_robot_data_dir
 
@@ -417,8 +418,6 @@ def _corpus_root() -> Path | None:
 
 CORPUS = _corpus_root()
 CORPUS_FILES = sorted(CORPUS.rglob("*.urdf")) if CORPUS else []
-CORPUS_RESULTS: dict[str, str] = {}
-
 # Files of example-robot-data 6.0.0 known to be defective, and the error they give.
 KNOWN_BAD = {
     # an empty <robot>, no name: urdfdom (and so Pinocchio) refuses it too
@@ -428,7 +427,6 @@ KNOWN_BAD = {
 
 def _compare_with_yourdfpy(desc, path):
     """Cross-check against yourdfpy's own parse of the same file (an independent reader)."""
-    yourdfpy = pytest.importorskip("yourdfpy")
     logging.getLogger("yourdfpy").setLevel(logging.CRITICAL)
     y = yourdfpy.URDF.load(str(path), build_scene_graph=False, load_meshes=False).robot
     ours = {j.name: j for j in desc.joints}
@@ -466,31 +464,31 @@ def _compare_with_yourdfpy(desc, path):
                 np.testing.assert_allclose(origin_matrix(g.origin), yo, atol=1e-12)
 
 
-@pytest.mark.skipif(CORPUS is None, reason="example-robot-data is not installed "
-                    "(pip install example-robot-data): no real-robot corpus to parse")
 @pytest.mark.parametrize("path", CORPUS_FILES, ids=lambda p: str(p.relative_to(CORPUS)))
 def test_corpus_file_parses_or_raises_urdf_error(path):
+    """Every corpus file parses, and agrees with yourdfpy's reading; the files known to be defective
+    (KNOWN_BAD) raise exactly the error they are known for. A file wrongly refused fails here."""
     rel = path.relative_to(CORPUS).as_posix()
-    try:
-        desc = parse_urdf(path)
-    except URDFError as err:
-        CORPUS_RESULTS[rel] = f"{type(err).__name__}: {err}"
-        print(f"\n{rel}: {type(err).__name__}: {err}")
-        if rel in KNOWN_BAD:
-            cls, words = KNOWN_BAD[rel]
-            assert type(err) is cls and words in str(err)
+    if rel in KNOWN_BAD:
+        cls, words = KNOWN_BAD[rel]
+        with pytest.raises(URDFError) as info:
+            parse_urdf(path)
+        assert type(info.value) is cls and words in str(info.value), info.value
         return
-    CORPUS_RESULTS[rel] = "ok"
-    assert rel not in KNOWN_BAD, f"{rel} was expected to fail and now parses"
+    desc = parse_urdf(path)
     assert desc.root in desc.links and len(desc.joints) == len(desc.links) - 1
     _compare_with_yourdfpy(desc, path)
 
 
-@pytest.mark.skipif(CORPUS is None, reason="example-robot-data is not installed")
-def test_corpus_summary():
-    """Print which corpus files fail and why (run with -s to see it)."""
-    failed = {k: v for k, v in CORPUS_RESULTS.items() if v != "ok"}
-    print(f"\nexample-robot-data: {len(CORPUS_RESULTS) - len(failed)} of {len(CORPUS_RESULTS)} "
-          "URDF files parse; failures:")
-    for k, v in sorted(failed.items()):
-        print(f"  {k}: {v}")
+def test_corpus_is_there_and_refused_files_are_the_known_bad_ones():
+    """The corpus is installed (the test extra) and has the files these tests were written against;
+    the set of files parse_urdf refuses is exactly KNOWN_BAD."""
+    assert CORPUS is not None, "example-robot-data is missing: pip install -e '.[test]' installs it"
+    assert len(CORPUS_FILES) >= 60, f"only {len(CORPUS_FILES)} URDF files under {CORPUS}"
+    refused = {}
+    for path in CORPUS_FILES:
+        try:
+            parse_urdf(path)
+        except URDFError as err:
+            refused[path.relative_to(CORPUS).as_posix()] = f"{type(err).__name__}: {err}"
+    assert set(refused) == set(KNOWN_BAD), refused

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-pytest.importorskip("mujoco")
+import mujoco  # noqa: F401,E402 -- a declared dependency: a broken MuJoCo fails the suite
 
 from urdf2links.compare.baselines import check_baseline, load_baselines  # noqa: E402
 from urdf2links.compare.formatting import json_ready  # noqa: E402

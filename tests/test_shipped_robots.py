@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import yourdfpy
 
 from urdf2links import load_urdf, urdf_link_poses
 
@@ -266,7 +267,6 @@ def test_ur5_like_tool0_matches_numpy_forward_kinematics(q):
 
 @pytest.mark.parametrize("q", [np.zeros(6), UR5_OTHER_Q], ids=["zero", "other"])
 def test_ur5_like_tool0_matches_yourdfpy(q):
-    yourdfpy = pytest.importorskip("yourdfpy")
     robot = yourdfpy.URDF.load(str(UR5), build_scene_graph=True, load_meshes=False)
     model = load(UR5)
     robot.update_cfg(dict(zip(model.coordinate_names, q)))

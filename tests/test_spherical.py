@@ -50,9 +50,8 @@ def test_angles_are_the_zyx_rotation_in_the_joint_frame(robot):
 def test_terms_agree_with_mujoco_route1(robot):
     """MuJoCo integrates the three angles as three hinges (route 1). Tolerance 1e-10 relative: both sides
     evaluate the same rigid-body terms in double precision (measured ~1e-15), as for the shipped scenes."""
-    pytest.importorskip("mujoco")
     from urdf2links.compare.mjcf import mjcf_from_scene
-    from urdf2links.compare.trajectory import route1_terms
+    from urdf2links.compare.scene_terms import route1_terms
 
     scene = scene_from_dict({"robot": {"urdf": str(robot)}, "gravity": {}})
     model = scene.model()

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-pytest.importorskip("mujoco")
+import mujoco  # noqa: F401,E402 -- a declared dependency: a broken MuJoCo fails the suite
 
 from urdf2links.compare.tradeoff import MUJOCO_DTS, ROUNDING_BAND, _rounding_floor, crossover, run_study
 from urdf2links.compare.tradeoff_report import write_study  # noqa: E402

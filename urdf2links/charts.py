@@ -76,6 +76,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .integrators import AngleGuard, integrate
+from .loops import wall_message
 from .model import Model
 from .rotations import matrix_to_xyz_angles, xyz_angles_to_matrix
 from .tree import LinkSpec, build_tree
@@ -324,16 +325,16 @@ class ChartedRun:
 
 def integrate_charted(original: Model, make_plan, y0, t_span, *, t_eval, method, rtol, atol, dt=None,
                       callback=None, recharting: bool = True, cos_min: float = CHART_COS_MIN,
-                      exclude=(), base_state=lambda t: None) -> ChartedRun:
+                      exclude=(), base_state=lambda t: None, max_steps: int | None = None,
+                      max_wall: float | None = None) -> ChartedRun:
     """Integrate ``y = (q, qd, W)`` (2n + 1,) of ``original`` over ``t_span`` in segments: each runs
     ``make_plan(model).rhs`` until an :class:`AngleGuard` on the floating links' ``phi_y`` fires, then
     the links whose guard fired are re-charted (:func:`rechart`) and the next segment starts from the
     same ``t``. Links not re-charted (``recharting=False``, or a coordinate of theirs in ``exclude``)
     raise :class:`~urdf2links.errors.DynamicsError` at ``|cos phi_y| < SINGULAR_COS_MIN``. ``base_state(t)``: the base for the reported condition
-    numbers. Other arguments as :func:`~urdf2links.integrators.integrate`."""
-    from .errors import DynamicsError
-
-    busy = 0.0
+    numbers. ``max_steps`` and ``max_wall`` bound the whole run (all segments). Other arguments as
+    :func:`~urdf2links.integrators.integrate`."""
+    run_start, busy = time.perf_counter(), 0.0
     t0, t1 = float(t_span[0]), float(t_span[1])
     t_eval = np.asarray(t_eval, float)
     links = floating_links(original)
@@ -350,6 +351,14 @@ def integrate_charted(original: Model, make_plan, y0, t_span, *, t_eval, method,
     success, message = True, "reached t_end"
     t = t0
     while True:
+        # the budgets bound the whole run: a run that re-charts at every step (rates of ~1e6 rad/s) has
+        # segments of one step each, every one inside its own integrate() budget
+        if segments and max_wall is not None and time.perf_counter() - run_start > max_wall:
+            success, message = False, wall_message(max_wall, float(t), nsteps)
+            break
+        if segments and max_steps is not None and nsteps >= max_steps:
+            success, message = False, f"max_steps={max_steps} reached at t={float(t)!r}"
+            break
         if movable and _due(movable, y, cos_min):  # at the start of a segment: switch at once
             start = time.perf_counter()
             chart, y = _switch(original, chart, movable, t, y, cos_min, recharts, base_state)
@@ -357,8 +366,10 @@ def integrate_charted(original: Model, make_plan, y0, t_span, *, t_eval, method,
             continue
         plan = make_plan(chart.model)
         te = t_eval[(t_eval >= t) if not segments else (t_eval > t)]
+        budget = {"max_steps": None if max_steps is None else max(1, max_steps - nsteps),
+                  "max_wall": None if max_wall is None else max(1e-3, max_wall - (time.perf_counter() - run_start))}
         res = integrate(plan.rhs, (t, t1), y, method=method, rtol=rtol, atol=atol, dt=dt, t_eval=te,
-                        dense=True, callback=callback, stop=guard)
+                        dense=True, callback=callback, stop=guard, **budget)
         nfev, nsteps, busy = nfev + res.nfev, nsteps + res.nsteps, busy + res.wall_time
         seg = Segment(chart, plan, t, float(res.sol.t_max), res)
         segments.append(seg)
@@ -371,37 +382,61 @@ def integrate_charted(original: Model, make_plan, y0, t_span, *, t_eval, method,
         t, y = seg.t1, np.array(res.sol(seg.t1))
         stuck = _due(fixed, y, SINGULAR_COS_MIN)
         if stuck:
-            ln = stuck[0]
-            why = ("re-charting is off" if not recharting else
-                   "it is not re-charted because [[torque]] or [[spring]] acts on its angles")
-            raise DynamicsError(
-                f"ZYX angles of link {ln.name!r} of model {original.name!r} reach the singularity of their chart at "
-                f"t={t:.6g}: phi_y = {y[ln.angles[1]]:.6f}, |cos phi_y| = {abs(math.cos(y[ln.angles[1]])):.2e} < "
-                f"{SINGULAR_COS_MIN:g}, condition of the angle block of A "
-                f"{angle_block_condition(chart.model, ln, y[:n], t=t, base=base_state(t)):.2e}; {why}, and past this "
-                f"point q'' would lose most of its digits (recharting passes through: urdf2links.charts)",
-                q=y[:n], coordinates=tuple(original.coordinate_names[i] for i in ln.angles))
+            raise _singular(original, chart, stuck[0], t, y, recharting=recharting, base_state=base_state)
         start = time.perf_counter()
         chart, y = _switch(original, chart, movable, t, y, cos_min, recharts, base_state)
         busy += time.perf_counter() - start
-    # samples in original coordinates, the angles tracked segment by segment
-    anchors, ts, ys, yc, seg_of = [], [], [], [], []
-    y_prev = np.array(y0, float)
-    for k, (seg, (tk, yk)) in enumerate(zip(segments, pieces)):
-        at, ay = [seg.t0], [_convert(seg, links, seg.result.sol(seg.t0), y_prev)]
-        for ti, yi in zip(tk, yk):
-            ay.append(_track(seg, links, at[-1], ay[-1], ti))
-            at.append(ti)
-            ts.append(ti), ys.append(ay[-1]), yc.append(yi), seg_of.append(k)
-        end = _track(seg, links, at[-1], ay[-1], seg.t1)
-        anchors.append((np.array(at), np.array(ay)))
-        y_prev = end
+    ts, ys, yc, seg_of, anchors = _samples_in_original(original, segments, pieces, links, y0, t_eval.size,
+                                                       run_start=run_start, max_wall=max_wall)
     sol = segments[0].result.sol if len(segments) == 1 else ChartedSolution(segments, links, anchors)
     dim = y.size
     return ChartedRun(t=np.array(ts), y=np.array(ys).reshape(-1, dim), y_chart=np.array(yc).reshape(-1, dim),
                       segment_of=np.array(seg_of, dtype=int), segments=segments, recharts=recharts, sol=sol,
                       nfev=nfev, nsteps=nsteps, wall_time=busy, success=success,
                       message=message)
+
+
+def _singular(original: Model, chart, ln, t, y, *, recharting: bool, base_state):
+    """The DynamicsError of a link that reaches ``phi_y = +-pi/2`` and may not be re-charted."""
+    from .errors import DynamicsError
+
+    n = original.n
+    why = ("re-charting is off" if not recharting else
+           "it is not re-charted because [[torque]] or [[spring]] acts on its angles")
+    return DynamicsError(
+        f"ZYX angles of link {ln.name!r} of model {original.name!r} reach the singularity of their chart at "
+        f"t={t:.6g}: phi_y = {y[ln.angles[1]]:.6f}, |cos phi_y| = {abs(math.cos(y[ln.angles[1]])):.2e} < "
+        f"{SINGULAR_COS_MIN:g}, condition of the angle block of A "
+        f"{angle_block_condition(chart.model, ln, y[:n], t=t, base=base_state(t)):.2e}; {why}, and past this "
+        f"point q'' would lose most of its digits (recharting passes through: urdf2links.charts)",
+        q=y[:n], coordinates=tuple(original.coordinate_names[i] for i in ln.angles))
+
+
+def _samples_in_original(original: Model, segments, pieces, links, y0, n_eval: int, *, run_start: float,
+                         max_wall: float | None):
+    """The samples of every segment in the original coordinates, the angles tracked segment by segment:
+    lists of times, states, states in their own chart, segment indices, and each segment's anchors
+    for the dense output. The wall-clock budget bounds this too."""
+    from .errors import IntegrationError
+
+    anchors, ts, ys, yc, seg_of = [], [], [], [], []
+    y_prev = np.array(y0, float)
+    for k, (seg, (tk, yk)) in enumerate(zip(segments, pieces)):
+        at, ay = [seg.t0], [_convert(seg, links, seg.result.sol(seg.t0), y_prev)]
+        for i, (ti, yi) in enumerate(zip(tk, yk)):
+            if i % 1000 == 999 and max_wall is not None and time.perf_counter() - run_start > max_wall:
+                raise IntegrationError(f"model {original.name!r}: max_wall={max_wall:g} s spent while converting the "
+                                       f"samples back to the loaded chart's angles ({len(ts)} of {n_eval} done; "
+                                       f"{len(segments)} charts): fewer samples would do")
+            # the loaded chart's states are the original ones (no per-sample dense evaluation: 1e6 samples took
+            # ~10 minutes through _track)
+            ay.append(np.array(yi, float) if not seg.chart.rotations else _track(seg, links, at[-1], ay[-1], ti))
+            at.append(ti)
+            ts.append(ti), ys.append(ay[-1]), yc.append(yi), seg_of.append(k)
+        end = _track(seg, links, at[-1], ay[-1], seg.t1)
+        anchors.append((np.array(at), np.array(ay)))
+        y_prev = end
+    return ts, ys, yc, seg_of, anchors
 
 
 def _due(links, y, threshold):

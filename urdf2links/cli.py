@@ -1,7 +1,8 @@
 """Command line: ``urdf2links inspect FILE.urdf|FILE.xacro|SCENE.toml``, ``urdf2links simulate
-SCENE.toml|ROBOT.urdf``, ``urdf2links compare SCENE.toml|ROBOT.urdf``, ``urdf2links report`` and
-``urdf2links tradeoff SCENE.toml`` (the MuJoCo comparison and the work-precision study: the handlers
-import the ``compare`` package, and with it MuJoCo, only when they run). A robot file given to
+SCENE.toml|ROBOT.urdf``, ``urdf2links sweep SCENE.toml|ROBOT.urdf``, ``urdf2links compare
+SCENE.toml|ROBOT.urdf``, ``urdf2links report [--corpus DIR ...]`` and ``urdf2links tradeoff SCENE.toml``
+(the MuJoCo comparison and the work-precision study: the handlers import the ``compare`` package,
+and with it MuJoCo, only when they run). A robot file given to
 ``simulate`` or ``compare`` runs in its default scene (:func:`urdf2links.scene.default_scene`)."""
 
 from __future__ import annotations
@@ -12,12 +13,12 @@ import warnings
 
 import numpy as np
 
-from .errors import DynamicsError, SceneError, URDFError
+from .errors import DynamicsError, IntegrationError, SceneError, URDFError
 from .limits import LimitExcursion
 from .scene_toml import scene_from_args, write_scene_option, xacro_args_of
 from .transforms import PARAMETERS
 
-__all__ = ["main", "format_tree", "scene_from_args", "xacro_args_of", "write_scene_option"]
+__all__ = ["main", "build_parser", "format_tree", "scene_from_args", "xacro_args_of", "write_scene_option"]
 
 
 def format_tree(model) -> str:
@@ -124,7 +125,7 @@ def _simulate(args) -> int:
         warnings.simplefilter("ignore" if scene.path is None else "default")  # default scene: audit in inspect
         model = scene.model()
     traj = simulate(scene, model=model, t_end=args.t_end, method=args.method, rtol=args.rtol, dt=args.dt,
-                    progress=False if args.quiet else None)
+                    progress=False if args.quiet else None, max_wall=args.max_wall)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     stem = scene.name if scene.path is not None else f"{robot_stem(scene.robot)}_{scene.name}"  # default scene
@@ -169,6 +170,55 @@ def _report(args) -> int:
     return report_command(args)
 
 
+def _sweep(args) -> int:
+    """``urdf2links sweep``: seeded initial states around the scene's, integrated by the compiled batch
+    loop here or split across a Dask cluster (``--scheduler``); an .npz of the trajectories."""
+    from pathlib import Path
+
+    from .batch import simulate_batch, sweep_states
+    from .scene import robot_stem
+
+    scene = scene_from_args(args)
+    write_scene_option(args, scene)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore" if scene.path is None else "default")
+        model = scene.model()
+    try:
+        q0, qd0 = sweep_states(scene, model, args.count, seed=args.seed, spread=args.spread)
+    except ValueError as exc:
+        raise SceneError(f"urdf2links sweep: {exc}") from None
+    client = None
+    if args.scheduler:
+        from .distributed import connect
+
+        try:
+            client = connect(args.scheduler)
+        except (ImportError, OSError) as exc:
+            print(f"urdf2links sweep: error: {exc}", file=sys.stderr)
+            return 2
+    try:
+        res = simulate_batch(scene, q0, qd0, t_end=args.t_end, samples=args.samples, method=args.method,
+                             rtol=args.rtol, model=model, client=client, chunks=args.chunks)
+    finally:
+        if client is not None:
+            client.close()
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    stem = scene.name if scene.path is not None else f"{robot_stem(scene.robot)}_{scene.name}"
+    npz = out / f"{stem}_sweep.npz"
+    np.savez_compressed(npz, t=res.t, q=res.q, qd=res.qd, work=res.work, nfev=res.nfev, status=res.status, q0=q0,
+                        qd0=qd0, coordinate_names=np.array(res.coordinate_names))
+    where = f"on {len(res.chunks)} chunks at {args.scheduler}" if client is not None else "on this machine"
+    print(f"{scene.name}: {model.name}, {args.count} initial states (seed {args.seed}, spread {args.spread:g}), "
+          f"t = 0..{res.t[-1]:g} s, {res.method}, {where}: {int(np.sum(res.status == 1))} reached the end, "
+          f"{res.wall_time:.2f} s wall, {int(res.nfev.sum())} evaluations")
+    spread = res.q[:, -1, :].std(axis=0) if len(res.q) > 1 else np.zeros(model.n)
+    print(f"  final spread of q (std over the sweep): largest {float(spread.max(initial=0.0)):.3g} "
+          f"({model.coordinate_names[int(np.argmax(spread))] if model.n else '-'})")
+    print(f"  wrote {npz}")
+    return 0 if np.all(res.status == 1) else 1
+
+
 def _tradeoff(args) -> int:
     from urdf2links.compare.commands import tradeoff_command
 
@@ -185,6 +235,24 @@ def _add_mujoco_options(p) -> None:
                    "baselines file's factor, 10)")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     _add_animation_option(p)
+    _add_max_wall(p)
+
+
+def _max_wall(text: str) -> float:
+    """``--max-wall SECONDS``: a positive number of seconds."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--max-wall {text!r}: not a number of seconds") from None
+    if not (value > 0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"--max-wall {text!r}: must be a finite number of seconds > 0")
+    return value
+
+
+def _add_max_wall(p) -> None:
+    p.add_argument("--max-wall", type=_max_wall, metavar="SECONDS", help="wall-clock budget of the project's "
+                   "integration (per scene): past it the run ends with an IntegrationError (exit 2) instead of "
+                   "running on (default: none; step-size underflow and 1e7 steps end a run anyway)")
 
 
 def _add_animation_option(p) -> None:
@@ -208,9 +276,8 @@ def _add_robot_options(p, *, inspect: bool = False) -> None:
                        "FILE.toml, to edit and run by name")
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="urdf2links", description=__doc__.splitlines()[0])
-    sub = parser.add_subparsers(dest="command", required=True)
+def _inspect_parser(sub) -> None:
+    """The ``inspect`` command's options."""
     p = sub.add_parser("inspect", help="print a URDF's tree of links, joints, inertia audit and import notes")
     p.add_argument("file", help="a .urdf or .xacro file (or a scene .toml: its plan)")
     p.add_argument("--floating-base", "--floating", action="store_true", help="six coordinates for the root link")
@@ -222,6 +289,10 @@ def main(argv=None) -> int:
     p.add_argument("--t-end", type=float, help="default scene's run length in s (default 1)")
     _add_robot_options(p, inspect=True)
     p.set_defaults(func=_inspect)
+
+
+def _simulate_parser(sub) -> None:
+    """The ``simulate`` command's options."""
     p = sub.add_parser("simulate", help="simulate a scene (TOML), or a robot in its default scene, and save the "
                                         "trajectory")
     p.add_argument("scene", help="a scene .toml file, or a robot (.urdf, .xacro) run in its default scene: gravity, "
@@ -238,7 +309,12 @@ def main(argv=None) -> int:
     p.add_argument("--animate", action="store_true", help="also write <out>/<scene>.html: the robot moving, with "
                    "play/pause and a time slider (self-contained, works offline)")
     _add_animation_option(p)
+    _add_max_wall(p)
     p.set_defaults(func=_simulate)
+
+
+def _compare_parser(sub) -> None:
+    """The ``compare`` command's options."""
     p = sub.add_parser("compare", help="run a scene with urdf2links and MuJoCo and write the comparison report",
                        description="Run a scene with urdf2links and with MuJoCo (route 1: the project's tree as MJCF, "
                                    "base motion prescribed) from the same initial state; compare the terms at identical "
@@ -255,11 +331,35 @@ def main(argv=None) -> int:
     p.add_argument("--check", metavar="BASELINE.json", help="exit 1, naming the figure, when a discrepancy grew "
                    "past its baseline (wall times are not checked)")
     p.set_defaults(func=_compare)
-    p = sub.add_parser("report", help="compare every shipped scene with MuJoCo; reports and an index page",
+
+
+def _report_parser(sub) -> None:
+    """The ``report`` command's options."""
+    p = sub.add_parser("report", help="compare every shipped scene (or every robot of a corpus) with MuJoCo; "
+                                      "reports and an index page",
                        description="Run `compare` on every shipped scene (robots/*.toml, or the scenes given) and "
-                                   "write reports/<robot>/<scene>/ and reports/index.html. Progress on stderr.")
+                                   "write reports/<robot>/<scene>/ and reports/index.html. With --corpus: every robot "
+                                   "file found there in its default scene (gravity, fixed base, seeded random q0, 0.5 "
+                                   "s), in parallel processes (--jobs) or on a Dask cluster (--scheduler); writes "
+                                   "index.html, corpus.json, corpus.md and a page per robot into reports/corpus/. "
+                                   "Progress on stderr.")
     p.add_argument("scenes", nargs="*", help="scene files (default: robots/*.toml)")
-    p.add_argument("--out", default="reports", help="folder of the reports and index.html (default reports)")
+    p.add_argument("--out", help="folder of the reports and index.html (default reports; with --corpus "
+                   "reports/corpus)")
+    p.add_argument("--corpus", nargs="+", metavar="DIR|FILE|GLOB", help="every .urdf and .xacro under these folders "
+                   "(and these files, and the files these patterns match): one row each, its default scene run for 0.5 s "
+                   "(--t-end); 'example-robot-data': the installed example-robot-data robots")
+    p.add_argument("--jobs", type=int, help="--corpus: run the robots in N processes on this machine (default: "
+                   "every core; 1: one after the other here)")
+    p.add_argument("--scheduler", metavar="ADDRESS", help="--corpus: run the robots on the Dask cluster whose "
+                   "scheduler is at ADDRESS (tcp://host:8786; `dask scheduler` prints it); needs "
+                   "pip install 'urdf2links[distributed]'")
+    p.add_argument("--seed", type=int, default=0, help="--corpus: seed of each robot's random q0 and of the "
+                   "terms' states (default 0)")
+    p.add_argument("--package-dir", action="append", default=[], help="--corpus: folder searched for package:// "
+                   "meshes and $(find pkg)")
+    p.add_argument("--no-thumbnails", action="store_true", help="--corpus: no picture of each robot in the index "
+                   "(saves the few seconds a robot its meshes take)")
     _add_mujoco_options(p)
     p.add_argument("--cap", type=float, default=0.0, help="cap (s) on t_end of scenes with time-dependent inputs "
                    "(moving base, torques, loads); 0: none (default)")
@@ -269,6 +369,35 @@ def main(argv=None) -> int:
                    help="accept this run's figures: add them to <out>/baselines.json (or FILE), replacing a run of "
                         "the same t_end and MuJoCo setting")
     p.set_defaults(func=_report)
+
+
+def _sweep_parser(sub) -> None:
+    """The ``sweep`` command's options."""
+    p = sub.add_parser("sweep", help="integrate many initial states of a scene at once (compiled, in parallel; on a "
+                                     "Dask cluster with --scheduler)",
+                       description="Draw COUNT initial states around a scene's (each coordinate of q0 moved by a seeded "
+                                   "uniform draw in [-spread, spread]), integrate them with the compiled batch loop "
+                                   "(DOP853 or RK45, one trajectory per thread), on this machine or split across the "
+                                   "workers of a Dask cluster (same results), and save them as an .npz.")
+    p.add_argument("scene", help="a scene .toml file, or a robot (.urdf, .xacro) in its default scene")
+    _add_robot_options(p)
+    p.add_argument("--count", type=int, default=100, help="number of initial states (default 100)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the states' draw (and of --q0 random; default 0)")
+    p.add_argument("--spread", type=float, default=0.1, help="half-width of the uniform draw around q0, rad or m "
+                   "(default 0.1)")
+    p.add_argument("--t-end", type=float, help="override [run] t_end (s)")
+    p.add_argument("--samples", type=int, help="sample times on [0, t_end] (default: the scene's)")
+    p.add_argument("--method", choices=("DOP853", "RK45"), help="default DOP853 (or the scene's, if one of these)")
+    p.add_argument("--rtol", type=float)
+    p.add_argument("--scheduler", metavar="ADDRESS", help="split the states across the Dask cluster whose scheduler "
+                   "is at ADDRESS (pip install 'urdf2links[distributed]')")
+    p.add_argument("--chunks", type=int, help="with --scheduler: number of chunks (default: one per worker)")
+    p.add_argument("--out", default="out", help="folder of the .npz (default: out)")
+    p.set_defaults(func=_sweep)
+
+
+def _tradeoff_parser(sub) -> None:
+    """The ``tradeoff`` command's options."""
     p = sub.add_parser("tradeoff", help="work-precision study of a scene: error against wall time, both engines",
                        description="Run a scene with every method of urdf2links over a ladder of tolerances or steps "
                                    "and with MuJoCo's Euler, implicitfast and RK4 over a ladder of timesteps, against a "
@@ -289,10 +418,23 @@ def main(argv=None) -> int:
     p.add_argument("--mujoco-integrators", help="comma-separated MuJoCo integrators (default Euler,implicitfast,RK4)")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     p.set_defaults(func=_tradeoff)
-    args = parser.parse_args(argv)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The ``urdf2links`` command line: one sub-command per handler above."""
+    parser = argparse.ArgumentParser(prog="urdf2links", description="URDF robots as trees of links of the trace "
+                                     "method, simulated, and compared with MuJoCo.")
+    sub = parser.add_subparsers(dest="command", required=True)
+    for add in (_inspect_parser, _simulate_parser, _compare_parser, _report_parser, _sweep_parser, _tradeoff_parser):
+        add(sub)
+    return parser
+
+
+def main(argv=None) -> int:
+    args = build_parser().parse_args(argv)
     try:
         return args.func(args)
-    except (URDFError, SceneError, DynamicsError) as err:
+    except (URDFError, SceneError, DynamicsError, IntegrationError) as err:
         print(f"urdf2links {args.command}: error: {err}", file=sys.stderr)
         return 2
 

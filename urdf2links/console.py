@@ -6,7 +6,7 @@ import sys
 import time
 from pathlib import Path
 
-__all__ = ["Progress", "err", "shown_path"]
+__all__ = ["Progress", "TaskBar", "err", "shown_path"]
 
 
 def err(message: str) -> None:
@@ -49,5 +49,43 @@ class Progress:
     def close(self):
         if self.enabled:
             self(self.t_end)
+            self.stream.write("\n")
+            self.stream.flush()
+
+
+class TaskBar:
+    """Progress of a set of tasks on stderr: one line per finished task (:meth:`line`), printed above
+    an overall bar ``[####    ] k/total`` that is redrawn after each line. The lines are printed
+    whenever ``enabled``; the bar only when the stream is a terminal (a log keeps the lines alone)."""
+
+    def __init__(self, total: int, *, label: str = "", enabled: bool = True, stream=None):
+        self.stream = stream or sys.stderr
+        self.enabled = bool(enabled)
+        self.bar = self.enabled and self.stream.isatty()
+        self.total, self.label, self.done = int(total), label, 0
+        self.start = time.perf_counter()
+        self._draw()
+
+    def _draw(self) -> None:
+        if not self.bar:
+            return
+        frac = self.done / self.total if self.total else 1.0
+        self.stream.write(f"\r{self.label} [{'#' * int(30 * frac):<30}] {self.done}/{self.total}  "
+                          f"{time.perf_counter() - self.start:.0f} s")
+        self.stream.flush()
+
+    def line(self, text: str, *, advance: bool = True) -> None:
+        """Print ``text`` on its own line (above the bar) and, with ``advance``, count one task done."""
+        if advance:
+            self.done += 1
+        if not self.enabled:
+            return
+        if self.bar:
+            self.stream.write("\r\033[K")
+        self.stream.write(text + "\n")
+        self._draw()
+
+    def close(self) -> None:
+        if self.bar:
             self.stream.write("\n")
             self.stream.flush()

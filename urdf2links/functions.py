@@ -36,11 +36,14 @@ import numpy as np
 from scipy.interpolate import CubicSpline, make_interp_spline
 
 from .errors import SceneError
+from .ranges import MAX_TABLE_SAMPLES, out_of_range
 
 __all__ = ["SceneValueError", "TimeFunction", "Constant", "Sines", "Table", "VectorFunction",
            "parse_function", "vector_function"]
 
 TABLE_KINDS = ("cubic", "quintic")
+#: Smallest spacing of a table's times (s): closer samples make the spline's derivatives overflow.
+MIN_TABLE_SPACING = 1e-6
 _MIN_SAMPLES = {"cubic": 2, "quintic": 6}
 
 
@@ -48,10 +51,14 @@ class SceneValueError(SceneError):
     """A scene (TOML) value cannot be turned into what it describes; the message says where."""
 
 
-def _finite(x, name: str) -> float:
-    """``x`` as a float; ValueError naming ``name`` unless it is a finite real number (not a bool)."""
+def _finite(x, name: str, quantity: str | None = None) -> float:
+    """``x`` as a float; ValueError naming ``name`` unless it is a finite real number (not a bool),
+    within the physical range of ``quantity`` when given (:data:`urdf2links.ranges.RANGES`)."""
     if isinstance(x, bool) or not isinstance(x, numbers.Real) or not math.isfinite(x):
         raise ValueError(f"{name} must be a finite number, got {x!r}")
+    problem = out_of_range(float(x), quantity) if quantity else None
+    if problem:
+        raise ValueError(f"{name}: {problem}")
     return float(x)
 
 
@@ -91,7 +98,7 @@ class Constant(TimeFunction):
     value: float
 
     def __post_init__(self):
-        object.__setattr__(self, "value", _finite(self.value, "value"))
+        object.__setattr__(self, "value", _finite(self.value, "value", "value"))
 
     def _evaluate(self, t, order):
         return np.full(t.shape, self.value if order == 0 else 0.0)
@@ -112,8 +119,8 @@ class Sines(TimeFunction):
     rate: float = 0.0
 
     def __post_init__(self):
-        object.__setattr__(self, "offset", _finite(self.offset, "offset"))
-        object.__setattr__(self, "rate", _finite(self.rate, "rate"))
+        object.__setattr__(self, "offset", _finite(self.offset, "offset", "value"))
+        object.__setattr__(self, "rate", _finite(self.rate, "rate", "value"))
         if isinstance(self.terms, (str, bytes)) or not hasattr(self.terms, "__iter__"):
             raise ValueError(f"terms must be a list of [amplitude, frequency_hz, phase_rad], got {self.terms!r}")
         terms = []
@@ -121,9 +128,9 @@ class Sines(TimeFunction):
             if isinstance(term, (str, bytes)) or not hasattr(term, "__len__") or len(term) not in (2, 3):
                 raise ValueError(f"terms[{k}] must be [amplitude, frequency_hz] or "
                                  f"[amplitude, frequency_hz, phase_rad], got {term!r}")
-            a = _finite(term[0], f"terms[{k}] amplitude")
-            f = _finite(term[1], f"terms[{k}] frequency_hz")
-            p = _finite(term[2], f"terms[{k}] phase_rad") if len(term) == 3 else 0.0
+            a = _finite(term[0], f"terms[{k}] amplitude", "value")
+            f = _finite(term[1], f"terms[{k}] frequency_hz", "frequency")
+            p = _finite(term[2], f"terms[{k}] phase_rad", "value") if len(term) == 3 else 0.0
             if f < 0:
                 raise ValueError(f"terms[{k}] frequency_hz must be >= 0, got {f!r}")
             terms.append((a, f, p))
@@ -173,7 +180,10 @@ class Table(TimeFunction):
             seq = getattr(self, name)
             if isinstance(seq, (str, bytes)) or not hasattr(seq, "__len__"):
                 raise ValueError(f"{name} must be a list of numbers, got {seq!r}")
-            seqs[name] = tuple(_finite(x, f"{name}[{i}]") for i, x in enumerate(seq))
+            if len(seq) > MAX_TABLE_SAMPLES:
+                raise ValueError(f"{name}: {len(seq)} samples, more than the {MAX_TABLE_SAMPLES} a table may hold")
+            seqs[name] = tuple(_finite(x, f"{name}[{i}]", "time" if name == "times" else "value")
+                               for i, x in enumerate(seq))
         t, v = seqs["times"], seqs["values"]
         if len(t) != len(v):
             raise ValueError(f"times and values must have the same length, got {len(t)} times and {len(v)} values")
@@ -184,6 +194,9 @@ class Table(TimeFunction):
             if not t[i] > t[i - 1]:
                 raise ValueError(f"times must be strictly increasing, got times[{i - 1}]={t[i - 1]!r} "
                                  f"then times[{i}]={t[i]!r}")
+            if t[i] - t[i - 1] < MIN_TABLE_SPACING:
+                raise ValueError(f"times[{i - 1}]={t[i - 1]!r} and times[{i}]={t[i]!r} are closer than "
+                                 f"{MIN_TABLE_SPACING:g} s: the spline's derivatives would overflow")
         object.__setattr__(self, "times", t)
         object.__setattr__(self, "values", v)
         ta, va = np.array(t), np.array(v)

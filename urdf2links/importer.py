@@ -262,7 +262,11 @@ class _Importer:
             H_tree[t] = H_tree[t] + X @ self.H_link[name] @ X.T
         specs = [LinkSpec(s.name, s.parent, s.params, s.coordinates, 0.5 * (H + H.T))
                  for s, H in zip(specs, H_tree)]
-        return build_tree(specs)
+        try:
+            return build_tree(specs)
+        except ValueError as err:   # a tree the description's checks let through: say which file
+            raise URDFValueError(f"{self.desc.source}: the tree of links cannot be built: {err}; check the "
+                                 "file's <inertial> and <origin> values") from err
 
     def _coupling(self, tree):
         if self.mimic == "independent":

@@ -50,6 +50,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from dataclasses import dataclass
 from typing import Any, Callable
 
@@ -60,6 +61,7 @@ from . import loops
 from .dense import DenseOutput
 from .errors import IntegrationError
 from .loops import AngleGuard
+from .ranges import MAX_STEPS, RTOL_FLOOR
 from .scene_kernels import CompiledScene
 
 __all__ = ["METHODS", "IntegrationError", "IntegrationResult", "DenseOutput", "AngleGuard", "integrate"]
@@ -115,7 +117,7 @@ class _Counted:
         return np.array(self.fun(t, y), dtype=float)
 
 
-def _validate(rhs, t_span, y0, method, rtol, atol, dt, t_eval, callback, max_steps, jac):
+def _validate(rhs, t_span, y0, method, rtol, atol, dt, t_eval, callback, max_steps, jac, max_wall=None):
     if not isinstance(method, str) or method not in METHODS:
         raise ValueError(f"unknown method={method!r}; expected one of {', '.join(METHODS)}")
     if not callable(rhs):
@@ -135,6 +137,13 @@ def _validate(rhs, t_span, y0, method, rtol, atol, dt, t_eval, callback, max_ste
         raise ValueError(f"y0 must be finite, got {y0!r}")
     if not (isinstance(rtol, (int, float, np.floating)) and math.isfinite(rtol) and rtol > 0):
         raise ValueError(f"rtol must be a finite number > 0, got {rtol!r}")
+    if rtol < RTOL_FLOOR:   # as scipy's solvers do: float64 cannot deliver less
+        warnings.warn(f"rtol={rtol!r} is below what float64 can deliver; raised to {RTOL_FLOOR:.3g} (100 eps)",
+                      RuntimeWarning, stacklevel=3)
+        rtol = RTOL_FLOOR
+    if max_wall is not None and not (isinstance(max_wall, (int, float, np.floating)) and not isinstance(
+            max_wall, bool) and max_wall > 0 and not math.isnan(max_wall)):
+        raise ValueError(f"max_wall must be a number of seconds > 0 or None, got {max_wall!r}")
     a = np.asarray(atol, dtype=float)
     if a.shape not in ((), y.shape) or not np.all(np.isfinite(a)) or np.any(a < 0):
         raise ValueError(f"atol must be finite, >= 0, a scalar or of shape {y.shape}, got {atol!r}")
@@ -142,6 +151,10 @@ def _validate(rhs, t_span, y0, method, rtol, atol, dt, t_eval, callback, max_ste
         if not (isinstance(dt, (int, float, np.floating)) and math.isfinite(dt) and dt > 0):
             raise ValueError(f"dt must be a finite number > 0, got dt={dt!r}")
         dt = float(dt)
+        if method in _FIXED and (t1 - t0) / dt > MAX_STEPS:
+            raise IntegrationError(f"{method}: dt={dt!r} over t_span={t_span!r} makes {(t1 - t0) / dt:.3g} steps, "
+                                   f"more than the {MAX_STEPS:g} a run may take (urdf2links.ranges.MAX_STEPS): "
+                                   "take a longer step or a shorter span")
     elif method in _FIXED:
         raise ValueError(f"method {method!r} is fixed-step and requires dt > 0, got dt=None")
     if t_eval is not None:
@@ -158,13 +171,13 @@ def _validate(rhs, t_span, y0, method, rtol, atol, dt, t_eval, callback, max_ste
     if jac is not None and method not in _USES_JAC:
         raise ValueError(f"jac is used only by {', '.join(_USES_JAC)}; got jac={jac!r} "
                          f"with method={method!r}")
-    return t0, t1, y, a if a.ndim else float(a), dt, t_eval
+    return t0, t1, y, a if a.ndim else float(a), dt, t_eval, float(rtol)
 
 
 def integrate(rhs: Callable, t_span, y0, *, method: str = "DOP853", rtol: float = 1e-9,
               atol=1e-12, dt: float | None = None, t_eval=None, dense: bool = False,
               callback: Callable | None = None, max_steps: int | None = None,
-              jac=None, stop: Callable | None = None) -> IntegrationResult:
+              jac=None, stop: Callable | None = None, max_wall: float | None = None) -> IntegrationResult:
     """Integrate ``y' = rhs(t, y)`` over ``t_span = (t0, t_end)`` from ``y0`` (dim,).
 
     ``method`` one of :data:`METHODS`; ``rtol``/``atol`` the adaptive methods' tolerances
@@ -176,14 +189,18 @@ def integrate(rhs: Callable, t_span, y0, *, method: str = "DOP853", rtol: float 
     ``jac`` (callable ``jac(t, y)`` or constant matrix) for Radau, BDF, LSODA and midpoint;
     ``stop(t, y) -> bool`` is asked after each accepted step (after ``callback``): True ends the
     integration there with ``success=True`` and ``stopped=True`` (an :class:`AngleGuard` is such a
-    test).
+    test); ``max_wall`` (seconds) ends it with ``success=False`` once that much wall time has passed
+    (checked after each step, or each chunk of steps of a compiled loop). An ``rtol`` below 100 eps
+    is raised to it with a RuntimeWarning (scipy's solvers do the same); a fixed step that would take
+    more than :data:`~urdf2links.ranges.MAX_STEPS` steps raises :class:`IntegrationError`.
     """
-    t0, t1, y0, atol, dt, t_eval = _validate(rhs, t_span, y0, method, rtol, atol, dt, t_eval,
-                                             callback, max_steps, jac)
+    t0, t1, y0, atol, dt, t_eval, rtol = _validate(rhs, t_span, y0, method, rtol, atol, dt, t_eval,
+                                                   callback, max_steps, jac, max_wall)
     if stop is not None and not callable(stop):
         raise TypeError(f"stop must be callable stop(t, y) -> bool or None, got {stop!r}")
     need_dense = dense or t_eval is not None
     start = time.perf_counter()
+    wall = None if max_wall is None else (start + float(max_wall), float(max_wall))
     fun = _Counted(rhs)
     f0 = fun(t0, y0)
     if f0.shape != y0.shape:
@@ -195,11 +212,11 @@ def integrate(rhs: Callable, t_span, y0, *, method: str = "DOP853", rtol: float 
     if method in _FIXED or (compiled and method in loops.TABLEAUX):
         out = loops.run(method, rhs if compiled else fun.fun, f0, t0, t1, y0, rtol=float(rtol), atol=atol, dt=dt,
                         grid=_grid(t0, t1, dt) if method in _FIXED else None, callback=callback,
-                        max_steps=max_steps, need_dense=need_dense, stop=stop, jac=jac)
+                        max_steps=max_steps, need_dense=need_dense, stop=stop, jac=jac, wall=wall)
         nfev = fun.n + out.nfev
     else:
         out = _run_scipy(_SCIPY[method], fun, t0, t1, y0, rtol, atol, dt, jac, callback, stop, max_steps,
-                         need_dense)
+                         need_dense, wall)
         nfev = fun.n
     wall = time.perf_counter() - start    # the integration; sampling at t_eval is not timed
     ts, ys = out.t, out.y
@@ -213,7 +230,8 @@ def integrate(rhs: Callable, t_span, y0, *, method: str = "DOP853", rtol: float 
                              success=out.success, message=out.message, stopped=out.stopped)
 
 
-def _run_scipy(cls, fun, t0, t1, y0, rtol, atol, dt, jac, callback, stop, max_steps, need_dense) -> loops.Outcome:
+def _run_scipy(cls, fun, t0, t1, y0, rtol, atol, dt, jac, callback, stop, max_steps, need_dense,
+               wall=None) -> loops.Outcome:
     """scipy's solver ``cls`` stepped one accepted step at a time (callback, stop, counters)."""
     kw = {"rtol": rtol, "atol": atol}
     if dt is not None:
@@ -245,6 +263,9 @@ def _run_scipy(cls, fun, t0, t1, y0, rtol, atol, dt, jac, callback, stop, max_st
             break
         if max_steps is not None and len(ts) > max_steps and solver.status == "running":
             success, message = False, f"max_steps={max_steps} reached at t={float(solver.t)!r}"
+            break
+        if wall is not None and solver.status == "running" and time.perf_counter() > wall[0]:
+            success, message = False, loops.wall_message(wall[1], float(solver.t), len(ts) - 1)
             break
     ts, ys = np.array(ts), np.array(ys)
     sol = DenseOutput(ts, ode=OdeSolution(ts, interps)) if need_dense and interps else None

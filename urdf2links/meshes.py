@@ -3,7 +3,8 @@
 
 Used by :mod:`urdf2links.inertia` (inertia of a mesh, one concatenated :class:`trimesh.Trimesh`)
 and :mod:`urdf2links.visuals` (the visible geometry: the file's parts with their own colours).
-``.dae`` files are read through pycollada (a core dependency).
+``.dae`` files are read through pycollada (a core dependency). Only regular files with a mesh suffix
+are opened (:func:`urdf2links.mesh_paths.check_mesh_file`).
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ import numpy as np
 
 from .description import Geometry
 from .errors import MeshError, URDFValueError
+from .mesh_paths import check_mesh_file, unresolved_mesh_problem
 
 __all__ = ["load_mesh", "load_mesh_parts"]
 
@@ -28,11 +30,9 @@ def _read(geometry: Geometry, *, force_mesh: bool):
 
     name = _name(geometry)
     if geometry.path is None:
-        raise MeshError(f"mesh {name!r} could not be resolved to a file")
-    path = Path(geometry.path)
-    if not path.is_file():
-        raise MeshError(f"mesh {name!r}: file {str(path)!r} does not exist")
-    try:
+        raise MeshError(f"mesh {name!r}: {unresolved_mesh_problem(geometry.filename or '')}")
+    path = check_mesh_file(geometry.path, name=name)   # a regular file with a mesh suffix, or MeshError: never
+    try:                                               # a device, a FIFO or a directory (urdf2links.mesh_paths)
         loaded = trimesh.load(str(path), force="mesh") if force_mesh else trimesh.load(str(path))
     except Exception as exc:  # trimesh raises many types for bad files
         raise MeshError(f"mesh {name!r}: cannot read {str(path)!r}: {type(exc).__name__}: {exc}") from exc

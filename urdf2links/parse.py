@@ -47,6 +47,7 @@ from .description import (
 from .errors import URDFError, URDFStructureError, URDFValueError
 from .inventory import inventory_notes, joint_value_notes
 from .mesh_paths import require_mesh, resolve_mesh_path
+from .ranges import out_of_range
 from .rotations import matrix_to_rpy
 from .urdf_source import read_source
 from .xacro_input import is_xacro_path
@@ -108,7 +109,10 @@ class _Reader:
                       f"add {attr}=\"...\"")
         return value.strip()
 
-    def floats(self, el, attr: str, n: int, what: str, default=None, *, allow_one=False) -> np.ndarray:
+    def floats(self, el, attr: str, n: int, what: str, default=None, *, allow_one=False,
+               quantity: str | None = None) -> np.ndarray:
+        """``n`` finite numbers (``default`` when the attribute is absent; required if None), each
+        within the physical range of ``quantity`` (:data:`urdf2links.ranges.RANGES`) when given."""
         raw = el.get(attr) if el is not None else None
         if raw is None:
             if default is None:
@@ -136,22 +140,36 @@ class _Reader:
             if not math.isfinite(v):
                 self.fail(el, where, f"the value {v} is not finite",
                           "replace NaN/inf by a finite number")
+            problem = out_of_range(v, quantity) if quantity else None
+            if problem:
+                self.fail(el, where, problem, "check the units and the number (docs/importing.md, "
+                          "\"Physical ranges\")")
         return np.array(values, dtype=float)
 
-    def scalar(self, el, attr: str, what: str, default=None) -> float:
+    def scalar(self, el, attr: str, what: str, default=None, *, quantity: str | None = None) -> float:
         """One finite number; ``default`` when the attribute is absent (required if None)."""
-        return float(self.floats(el, attr, 1, what, None if default is None else (default,))[0])
+        return float(self.floats(el, attr, 1, what, None if default is None else (default,), quantity=quantity)[0])
 
-    def optional(self, el, attr: str, what: str) -> float | None:
+    def optional(self, el, attr: str, what: str, *, quantity: str | None = None) -> float | None:
         """One finite number, or None when ``el`` or the attribute is absent."""
-        return None if el is None or el.get(attr) is None else self.scalar(el, attr, what)
+        return None if el is None or el.get(attr) is None else self.scalar(el, attr, what, quantity=quantity)
+
+    def direction(self, el, attr: str, n: int, what: str, default) -> np.ndarray:
+        """``n`` numbers within +-1e6 whose norm is not below 1e-12 (a direction to normalize), or all
+        zeros (the caller says whether a zero vector is allowed)."""
+        v = self.floats(el, attr, n, what, default, quantity="multiplier")
+        norm = math.hypot(*v)
+        if v.any() and not (math.isfinite(norm) and norm >= 1e-12):
+            self.fail(el, f"{what} {attr}=\"{el.get(attr)}\"", f"the vector's length {norm:g} cannot be "
+                      "normalized", "give a direction of length about 1")
+        return v
 
     def origin(self, parent, what: str) -> Origin:
         el = _child(parent, "origin")
         if el is None:
             return Origin()
         what = f"{what} <origin>"
-        xyz = self.floats(el, "xyz", 3, what, (0.0, 0.0, 0.0))
+        xyz = self.floats(el, "xyz", 3, what, (0.0, 0.0, 0.0), quantity="length")
         rpy = self.floats(el, "rpy", 3, what, (0.0, 0.0, 0.0))
         if el.get("quat_xyzw") is not None:
             rpy = self._quaternion(el, what, rpy)
@@ -165,8 +183,8 @@ class _Reader:
             return rpy
         if el.get("rpy") is not None:
             self.fail(el, what, "both rpy and quat_xyzw are given", "give one of them")
-        x, y, z, w = self.floats(el, "quat_xyzw", 4, what)
-        norm = math.sqrt(x * x + y * y + z * z + w * w)
+        x, y, z, w = self.direction(el, "quat_xyzw", 4, what, None)
+        norm = math.hypot(x, y, z, w)
         if norm == 0.0:
             self.fail(el, f"{what} quat_xyzw", "the quaternion is zero", "give a unit quaternion x y z w")
         x, y, z, w = x / norm, y / norm, z / norm, w / norm
@@ -185,7 +203,7 @@ def _inertial(r: _Reader, el, what: str) -> Inertial:
     if mass_el is None:
         r.fail(el, what, "there is no <mass> element", "add <mass value=\"...\"/> (kg) or remove "
                "the <inertial> to make the link massless")
-    mass = r.scalar(mass_el, "value", f"{what} <mass>")
+    mass = r.scalar(mass_el, "value", f"{what} <mass>", quantity="mass")
     if mass < 0:
         r.tolerate(mass_el, f"{what} <mass value=\"{mass_el.get('value')}\">", "the mass is negative",
                    "kept as written (urdfdom reads it); the inertia audit reports it, inertia='repair' fixes it",
@@ -194,7 +212,7 @@ def _inertial(r: _Reader, el, what: str) -> Inertial:
     if inertia_el is None:
         r.fail(el, what, "there is no <inertia> element",
                "add <inertia ixx=... ixy=... ixz=... iyy=... iyz=... izz=.../>")
-    v = {a: r.scalar(inertia_el, a, f"{what} <inertia>") for a in _INERTIA_ATTRS}
+    v = {a: r.scalar(inertia_el, a, f"{what} <inertia>", quantity="inertia") for a in _INERTIA_ATTRS}
     inertia = np.array([[v["ixx"], v["ixy"], v["ixz"]],
                         [v["ixy"], v["iyy"], v["iyz"]],
                         [v["ixz"], v["iyz"], v["izz"]]], dtype=float)
@@ -235,16 +253,16 @@ def _geometry_strict(r: _Reader, el, what: str, directory, package_dirs) -> Geom
         return value
 
     if kind == "box":
-        size = r.floats(shape, "size", 3, what)
+        size = r.floats(shape, "size", 3, what, quantity="length")
         positive(size.min(), "size")
         return Geometry(kind, origin, size=size)
     if kind == "cylinder":
-        return Geometry(kind, origin, radius=positive(r.scalar(shape, "radius", what), "radius"),
-                        length=positive(r.scalar(shape, "length", what), "length"))
+        return Geometry(kind, origin, radius=positive(r.scalar(shape, "radius", what, quantity="length"), "radius"),
+                        length=positive(r.scalar(shape, "length", what, quantity="length"), "length"))
     if kind == "sphere":
-        return Geometry(kind, origin, radius=positive(r.scalar(shape, "radius", what), "radius"))
+        return Geometry(kind, origin, radius=positive(r.scalar(shape, "radius", what, quantity="length"), "radius"))
     filename = r.text(shape, "filename", what)
-    scale = r.floats(shape, "scale", 3, what, (1.0, 1.0, 1.0), allow_one=True)
+    scale = r.floats(shape, "scale", 3, what, (1.0, 1.0, 1.0), allow_one=True, quantity="scale")
     path = resolve_mesh_path(filename, directory=directory, package_dirs=package_dirs)
     return Geometry(kind, origin, filename=filename, path=path, scale=scale)
 
@@ -293,12 +311,12 @@ def _axis(r: _Reader, el, what: str, jtype: str) -> np.ndarray:
                "the axis zero)")
     if jtype not in AXIS_JOINT_TYPES and not r.strict and axis_el is not None:
         try:
-            return r.floats(axis_el, "xyz", 3, f"{what} <axis>", (1.0, 0.0, 0.0))
+            return r.direction(axis_el, "xyz", 3, f"{what} <axis>", (1.0, 0.0, 0.0))
         except URDFValueError as err:
             r.note(axis_el, f"{what} <axis>", f"{err.problem}: ignored, a {jtype} joint has "
                    "no axis (urdfdom does not read it)")
             return np.array([1.0, 0.0, 0.0])
-    axis = r.floats(axis_el, "xyz", 3, f"{what} <axis>", (1.0, 0.0, 0.0))
+    axis = r.direction(axis_el, "xyz", 3, f"{what} <axis>", (1.0, 0.0, 0.0))
     if jtype in AXIS_JOINT_TYPES and not np.any(axis):
         r.fail(axis_el, f"{what} <axis xyz=\"{axis_el.get('xyz')}\">",
                f"a {jtype} joint needs a nonzero axis", "give a direction such as \"0 0 1\"")
@@ -310,7 +328,7 @@ def _limits(r: _Reader, el, what: str, jtype: str) -> dict:
     limit_el, dyn_el = _child(el, "limit"), _child(el, "dynamics")
     lw, dw = f"{what} <limit>", f"{what} <dynamics>"
     out = {f"limit_{a}": r.optional(limit_el, a, lw) for a in ("lower", "upper", "effort", "velocity")}
-    out.update({a: r.optional(dyn_el, a, dw) for a in ("damping", "friction")})
+    out.update({a: r.optional(dyn_el, a, dw, quantity="damping") for a in ("damping", "friction")})
     if limit_el is None and jtype in ("revolute", "prismatic"):
         r.note(el, what, f"a {jtype} joint without <limit>: its range is unbounded (urdfdom refuses the file)")
     lo, hi = out["limit_lower"], out["limit_upper"]
@@ -345,8 +363,8 @@ def _joint(r: _Reader, el) -> JointDescription:
     if mimic_el is not None:
         mw = f"{what} <mimic>"
         mimic = Mimic(joint=r.text(mimic_el, "joint", mw).strip(),
-                      multiplier=r.scalar(mimic_el, "multiplier", mw, default=1.0),
-                      offset=r.scalar(mimic_el, "offset", mw, default=0.0))
+                      multiplier=r.scalar(mimic_el, "multiplier", mw, default=1.0, quantity="multiplier"),
+                      offset=r.scalar(mimic_el, "offset", mw, default=0.0, quantity="state"))
     return JointDescription(name=name, type=jtype, parent=ends["parent"], child=ends["child"],
                             origin=r.origin(el, what), axis=axis, mimic=mimic, **_limits(r, el, what, jtype))
 

@@ -51,6 +51,7 @@ not computed, see :mod:`urdf2links.plan`)::
 from __future__ import annotations
 
 import difflib
+import math
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -61,6 +62,7 @@ from .errors import SceneError
 from .functions import Constant, SceneValueError, TimeFunction, VectorFunction, parse_function, vector_function
 from .integrators import METHODS
 from .locations import example_robot_data_dir, shipped_robots_dir
+from .ranges import MAX_SAMPLES, MAX_STEPS, RANGES, RTOL_FLOOR
 from .transforms import PARAMETERS, BaseState
 
 __all__ = ["Scene", "AppliedLoad", "Spring", "SpringSet", "RunSettings", "load_scene", "shipped_robots_dir",
@@ -256,19 +258,41 @@ class _Reader:
             if k not in allowed:
                 self.fail(f"{key}.{k}" if key else k, f"unknown key{_hint(k, allowed)}; valid keys are {list(allowed)}")
 
-    def number(self, value, key, *, positive=False, nonnegative=False):
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
-            self.fail(key, f"must be a finite number, got {value!r}")
-        if positive and value <= 0:
-            self.fail(key, f"must be positive, got {value!r}")
-        if nonnegative and value < 0:
-            self.fail(key, f"must not be negative, got {value!r}")
+    def number(self, value, key, *, positive=False, nonnegative=False, quantity: str | None = None,
+               low: float | None = None, high: float | None = None):
+        """A finite number (not a bool), checked where it is read: ``positive``/``nonnegative``, within
+        the physical range of ``quantity`` (:data:`urdf2links.ranges.RANGES`) and within ``[low, high]``;
+        the SceneError names the key, the value and the valid range."""
+        bound = RANGES[quantity][0] if quantity else math.inf
+        lo = 0.0 if (positive or nonnegative) else -bound
+        lo = lo if low is None else max(lo, low)
+        hi = bound if high is None else min(bound, high)
+        unit = f" {RANGES[quantity][1]}" if quantity and RANGES[quantity][1] else ""
+        valid = (f"{'(' if positive and low is None else '['}{lo:g}, {hi:g}]{unit}")
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            self.fail(key, f"must be a finite number in {valid}, got {value!r}")
+        if lo == 0 and (value < 0 or (positive and value == 0)):
+            self.fail(key, f"must {'be positive' if positive else 'not be negative'}, got {value!r}: valid range {valid}")
+        if value < lo or value > hi:
+            self.fail(key, f"{value!r} is outside the valid range {valid}")
         return float(value)
 
-    def vector(self, value, key):
+    def vector(self, value, key, *, quantity: str | None = None):
         if not isinstance(value, list) or len(value) != 3:
             self.fail(key, f"must be a list of 3 numbers, got {value!r}")
-        return np.array([self.number(v, f"{key}[{i}]") for i, v in enumerate(value)])
+        return np.array([self.number(v, f"{key}[{i}]", quantity=quantity) for i, v in enumerate(value)])
+
+    def items(self, data, kind: str) -> list:
+        """The ``[[kind]]`` blocks of ``data`` (an array of tables)."""
+        items = data.get(kind, [])
+        if not isinstance(items, list):
+            self.fail(f"[[{kind}]]", f"must be an array of tables ([[{kind}]] blocks), got {items!r}")
+        return items
+
+    def strings(self, value, key) -> tuple:
+        if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+            self.fail(key, f"must be a list of strings, got {value!r}")
+        return tuple(value)
 
     def choice(self, value, key, choices):
         if value not in choices:
@@ -288,13 +312,18 @@ class _Reader:
             raise SceneError(str(err)) from None
 
 
+#: A joint limit this large (rad or m) stands for "none": files written for Gazebo put +-1e16 on
+#: joints that turn freely (example-robot-data's iris rotors); drawing q0 there would start at 1e15 rad.
+NO_LIMIT = 1e6
+
+
 def _random_q0(model, rng) -> dict:
     """A seeded initial configuration: each joint coordinate uniform within its URDF limits when both
-    are finite (and lower < upper), else uniform in [-1, 1] (rad or m); a floating root's position
-    stays at the origin."""
+    are finite, below :data:`NO_LIMIT` in magnitude and lower < upper, else uniform in [-1, 1] (rad or
+    m); a floating root's position stays at the origin."""
     limits = {j["coordinates"][0]: (j["lower"], j["upper"]) for j in model.info.get("joints", [])
               if len(j["coordinates"]) == 1 and j["lower"] is not None and j["upper"] is not None
-              and j["lower"] < j["upper"]}
+              and j["lower"] < j["upper"] and max(abs(j["lower"]), abs(j["upper"])) < NO_LIMIT}
     root = {c["name"] for c in model.info.get("coordinates", []) if c.get("joint") is None and c["slot"] in "xyz"}
     q0 = {}
     for name in model.coordinate_names:
@@ -321,7 +350,7 @@ def default_scene(robot, *, floating: bool = False, q0: str = "zero", seed: int 
     where = f"default scene of {robot}"
     r = _Reader(where)
     r.choice(q0, "q0", Q0_CHOICES)
-    t_end = r.number(t_end, "t_end", positive=True)
+    t_end = r.number(t_end, "t_end", positive=True, quantity="time")
     options = {"floating_base": bool(floating), "inertia": inertia, "mimic": mimic, "strict": bool(strict)}
     if package_dirs:
         options["package_dirs"] = tuple(Path(p) for p in package_dirs)
@@ -341,7 +370,7 @@ def default_scene(robot, *, floating: bool = False, q0: str = "zero", seed: int 
                  description=f"default scene: gravity, {base}, q0 {q0}" + (f" (seed {seed})" if q0 == "random" else "")
                              + ", URDF damping, at rest",
                  gravity=np.array([0.0, 0.0, -9.81]), q0=q_init, urdf_damping=True,
-                 run=RunSettings(t_end=t_end, samples=max(101, int(round(500 * t_end)) + 1)))
+                 run=RunSettings(t_end=t_end, samples=min(MAX_SAMPLES, max(101, int(round(500 * t_end)) + 1))))
 
 
 def load_scene(path) -> Scene:
@@ -406,7 +435,8 @@ def _robot_options(r: _Reader, robot_t: dict, directory) -> dict:
     if "mimic" in robot_t:
         options["mimic"] = r.choice(robot_t["mimic"], "robot.mimic", ("independent", "coupled"))
     if "package_dirs" in robot_t:
-        options["package_dirs"] = tuple((directory or Path.cwd()) / p for p in robot_t["package_dirs"])
+        dirs = r.strings(robot_t["package_dirs"], "robot.package_dirs")
+        options["package_dirs"] = tuple((directory or Path.cwd()) / p for p in dirs)
     if "strict" in robot_t:
         if not isinstance(robot_t["strict"], bool):
             r.fail("robot.strict", f"must be true or false, got {robot_t['strict']!r}")
@@ -424,9 +454,9 @@ def _gravity(r: _Reader, data: dict):
         return None
     g = data["gravity"]
     r.keys(g, ("magnitude", "direction"), "gravity")
-    mag = r.number(g.get("magnitude", 9.81), "gravity.magnitude", nonnegative=True)
-    d = r.vector(g.get("direction", [0, 0, -1]), "gravity.direction")
-    if np.linalg.norm(d) == 0:
+    mag = r.number(g.get("magnitude", 9.81), "gravity.magnitude", nonnegative=True, quantity="acceleration")
+    d = r.vector(g.get("direction", [0, 0, -1]), "gravity.direction", quantity="scale")
+    if np.linalg.norm(d) < 1e-9:
         r.fail("gravity.direction", "must not be the zero vector")
     return mag * d / np.linalg.norm(d)
 
@@ -444,10 +474,7 @@ def _loads(r: _Reader, data: dict) -> tuple:
     """``[[force]]`` and ``[[moment]]`` blocks as :class:`AppliedLoad`."""
     loads = []
     for kind in ("force", "moment"):
-        items = data.get(kind, [])
-        if not isinstance(items, list):
-            r.fail(f"[[{kind}]]", "must be an array of tables ([[force]] blocks)")
-        for i, item in enumerate(items):
+        for i, item in enumerate(r.items(data, kind)):
             key = f"{kind}[{i}]"
             allowed = ("link", "point", "frame", "value") if kind == "force" else ("link", "frame", "value")
             r.keys(item, allowed, key)
@@ -459,14 +486,14 @@ def _loads(r: _Reader, data: dict) -> tuple:
                 kind=kind, link=item["link"],
                 frame=r.choice(item.get("frame", "link"), f"{key}.frame", ("link", "world")),
                 value=r.vector_function(item["value"], f"{key}.value"),
-                point=r.vector(item["point"], f"{key}.point") if "point" in item else np.zeros(3)))
+                point=r.vector(item["point"], f"{key}.point", quantity="length") if "point" in item else np.zeros(3)))
     return tuple(loads)
 
 
 def _torques(r: _Reader, data: dict) -> tuple:
     """``[[torque]]`` blocks: ``(coordinate, function of time)``."""
     torques = []
-    for i, item in enumerate(data.get("torque", [])):
+    for i, item in enumerate(r.items(data, "torque")):
         r.keys(item, ("coordinate", "value"), f"torque[{i}]")
         if not isinstance(item.get("coordinate"), str) or "value" not in item:
             r.fail(f"torque[{i}]", "needs coordinate = 'name' and value = a function of time")
@@ -477,15 +504,17 @@ def _torques(r: _Reader, data: dict) -> tuple:
 def _springs(r: _Reader, data: dict) -> tuple:
     """``[[spring]]`` blocks as :class:`Spring` (stiffness, rest, damping)."""
     springs = []
-    for i, item in enumerate(data.get("spring", [])):
+    for i, item in enumerate(r.items(data, "spring")):
         key = f"spring[{i}]"
         r.keys(item, ("coordinate", "stiffness", "rest", "damping"), key)
         if not isinstance(item.get("coordinate"), str):
             r.fail(f"{key}.coordinate", "must name a coordinate")
         springs.append(Spring(item["coordinate"],
-                              r.number(item.get("stiffness", 0.0), f"{key}.stiffness", nonnegative=True),
-                              r.number(item.get("rest", 0.0), f"{key}.rest"),
-                              r.number(item.get("damping", 0.0), f"{key}.damping", nonnegative=True)))
+                              r.number(item.get("stiffness", 0.0), f"{key}.stiffness", nonnegative=True,
+                                       quantity="damping"),
+                              r.number(item.get("rest", 0.0), f"{key}.rest", quantity="state"),
+                              r.number(item.get("damping", 0.0), f"{key}.damping", nonnegative=True,
+                                       quantity="damping")))
     return tuple(springs)
 
 
@@ -496,9 +525,9 @@ def _initial(r: _Reader, data: dict) -> tuple[dict, dict]:
         r.keys(data["initial"], ("q", "qd"), "initial")
         for target, key in ((q0, "q"), (qd0, "qd")):
             table = data["initial"].get(key, {})
-            r.keys(table, tuple(table), f"initial.{key}")
+            r.keys(table, tuple(table) if isinstance(table, dict) else (), f"initial.{key}")
             for coord, v in table.items():
-                target[coord] = r.number(v, f"initial.{key}.{coord}")
+                target[coord] = r.number(v, f"initial.{key}.{coord}", quantity="state")
     return q0, qd0
 
 
@@ -509,19 +538,43 @@ def _run(r: _Reader, data: dict) -> RunSettings:
         return run
     t = data["run"]
     r.keys(t, _RUN, "run")
-    run = RunSettings(
-        t_end=r.number(t.get("t_end", run.t_end), "run.t_end", positive=True),
-        method=r.choice(t.get("method", run.method), "run.method", METHODS),
-        rtol=r.number(t.get("rtol", run.rtol), "run.rtol", positive=True),
-        atol=r.number(t.get("atol", run.atol), "run.atol", positive=True),
-        dt=r.number(t["dt"], "run.dt", positive=True) if "dt" in t else None,
-        samples=int(r.number(t.get("samples", run.samples), "run.samples", positive=True)),
-        recharting=t.get("recharting", True))
+    samples = t.get("samples", run.samples)
+    if isinstance(samples, float) and samples.is_integer():
+        samples = int(samples)
+    if not isinstance(samples, int) or isinstance(samples, bool):
+        r.fail("run.samples", f"must be a whole number in [1, {MAX_SAMPLES}], got {samples!r}")
+    run = RunSettings(t_end=t.get("t_end", run.t_end), method=r.choice(t.get("method", run.method), "run.method", METHODS),
+                      rtol=t.get("rtol", run.rtol), atol=t.get("atol", run.atol), dt=t.get("dt"), samples=samples,
+                      recharting=t.get("recharting", True))
+    return check_run(run, r.where, prefix="run.")
+
+
+def check_run(run: RunSettings, where: str, *, prefix: str = "run.") -> RunSettings:
+    """``run`` with every setting checked where it is given (a scene's ``[run]``, or the overrides of
+    :func:`urdf2links.simulate.simulate`): a SceneError names ``where``, the key, the value and its
+    valid range. ``t_end`` in (0, 1e6] s; ``rtol`` in [100 eps, 1) (float64 delivers no more);
+    ``atol`` in (0, 1e3]; ``dt`` in (0, 1e6] s with at most :data:`~urdf2links.ranges.MAX_STEPS`
+    steps; ``samples`` in [1, :data:`~urdf2links.ranges.MAX_SAMPLES`]."""
+    r = _Reader(where)
+    t_end = r.number(run.t_end, f"{prefix}t_end", positive=True, quantity="time")
+    rtol = r.number(run.rtol, f"{prefix}rtol", low=RTOL_FLOOR, high=0.999)
+    atol = r.number(run.atol, f"{prefix}atol", positive=True, high=1e3)
+    dt = None
+    if run.dt is not None:
+        dt = r.number(run.dt, f"{prefix}dt", positive=True, quantity="time")
+        if t_end / dt > MAX_STEPS:
+            r.fail(f"{prefix}dt", f"{run.dt!r} makes {t_end / dt:.3g} steps over t_end = {t_end:g} s, more than the "
+                                  f"{MAX_STEPS:g} a run may take: valid range [{t_end / MAX_STEPS:g}, 1e+06] s")
+    samples = run.samples
+    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or not 1 <= samples <= MAX_SAMPLES:
+        r.fail(f"{prefix}samples", f"must be a whole number in [1, {MAX_SAMPLES}], got {samples!r}")
     if not isinstance(run.recharting, bool):
-        r.fail("run.recharting", f"must be true or false, got {run.recharting!r}")
-    if run.method in ("RK4", "midpoint") and run.dt is None:
-        r.fail("run.dt", f"method {run.method!r} takes a fixed step: give dt (seconds)")
-    return run
+        r.fail(f"{prefix}recharting", f"must be true or false, got {run.recharting!r}")
+    method = r.choice(run.method, f"{prefix}method", METHODS)
+    if method in ("RK4", "midpoint") and dt is None:
+        r.fail(f"{prefix}dt", f"method {method!r} takes a fixed step: give dt (seconds)")
+    return RunSettings(t_end=t_end, method=method, rtol=rtol, atol=atol, dt=dt, samples=int(samples),
+                       recharting=run.recharting)
 
 
 def _record(r: _Reader, data: dict) -> tuple:
@@ -529,7 +582,7 @@ def _record(r: _Reader, data: dict) -> tuple:
     if "record" not in data:
         return ()
     r.keys(data["record"], ("link_poses",), "record")
-    return tuple(data["record"].get("link_poses", ()))
+    return r.strings(data["record"].get("link_poses", []), "record.link_poses")
 
 
 def _robot_path(r: _Reader, t: dict, directory) -> Path:

@@ -23,10 +23,12 @@ import numpy as np
 
 from .charts import integrate_charted, link_poses
 from .console import Progress
+from .errors import IntegrationError
 from .limits import limit_excursions
 from .model import Model
 from .plan import compile_plan
-from .scene import RunSettings, Scene
+from .ranges import MAX_STEPS
+from .scene import RunSettings, Scene, check_run
 
 __all__ = ["Trajectory", "simulate", "Progress", "warm_up", "record_compilation", "Compilation", "TIMED_REGION"]
 
@@ -94,7 +96,8 @@ class Trajectory:
 
 def simulate(scene_or_model, *, t_end: float | None = None, method: str | None = None, rtol: float | None = None,
              atol: float | None = None, dt: float | None = None, samples: int | None = None, q0=None, qd0=None,
-             progress: bool | None = None, model: Model | None = None, recharting: bool | None = None) -> Trajectory:
+             progress: bool | None = None, model: Model | None = None, recharting: bool | None = None,
+             max_wall: float | None = None, max_steps: int = MAX_STEPS) -> Trajectory:
     """Integrate a scene (a :class:`~urdf2links.scene.Scene`, a path to a scene file) or a bare
     :class:`~urdf2links.model.Model` (gravity as the model says, nothing else acting).
 
@@ -107,27 +110,20 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
     on): the run is then integrated in segments, ``q``/``qd`` are reported in the loaded model's
     coordinates, the re-charted links' poses are recorded, and ``stats['recharts']`` lists the
     switches. Without re-charting, reaching the singularity raises a DynamicsError.
-    """
-    from .scene import load_scene
 
-    started = time.perf_counter()
-    if isinstance(scene_or_model, (str, Path)):
-        scene_or_model = load_scene(scene_or_model)
-    if isinstance(scene_or_model, Model):
-        model = scene_or_model
-        scene = Scene(name=model.name or "model", path=None, robot=Path(model.source or "."), load_options={},
-                      gravity=np.asarray(model.gravity_vector))
-    elif isinstance(scene_or_model, Scene):
-        scene = scene_or_model
-        if model is None:
-            model = scene.model()
-    else:
-        raise TypeError(f"simulate takes a Scene, a scene file path or a Model; got {type(scene_or_model).__name__}")
+    A run that cannot finish raises :class:`~urdf2links.errors.IntegrationError` saying why: the step
+    size fell below the spacing of floating-point numbers, more than ``max_steps`` accepted steps
+    (default :data:`~urdf2links.ranges.MAX_STEPS`), more than ``max_wall`` seconds of wall time
+    (default: no budget; ``--max-wall`` on the command line), a non-finite state. Overrides are checked
+    like a scene's ``[run]`` (:func:`~urdf2links.scene.check_run`: SceneError naming the value and its range).
+    """
+    scene, model = _scene_and_model(scene_or_model, model)
     run = scene.run
-    run = RunSettings(t_end=run.t_end if t_end is None else float(t_end), method=method or run.method,
-                      rtol=run.rtol if rtol is None else rtol, atol=run.atol if atol is None else atol,
-                      dt=run.dt if dt is None else dt, samples=run.samples if samples is None else int(samples),
-                      recharting=run.recharting if recharting is None else bool(recharting))
+    run = check_run(RunSettings(t_end=run.t_end if t_end is None else t_end, method=method or run.method,
+                                rtol=run.rtol if rtol is None else rtol, atol=run.atol if atol is None else atol,
+                                dt=run.dt if dt is None else dt, samples=run.samples if samples is None else samples,
+                                recharting=run.recharting if recharting is None else bool(recharting)),
+                    f"{scene.path or scene.name}: simulate()", prefix="")
     plan = compile_plan(scene, model)
     q, qd = scene.initial_state(model)
     if q0 is not None:
@@ -137,6 +133,7 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
     n = model.n
     y0 = np.r_[q, qd, 0.0]
     t_eval = np.linspace(0.0, run.t_end, max(run.samples, 2))
+    started = time.perf_counter()
     bar = Progress(run.t_end, label=f"{scene.name} {run.method}", enabled=progress)
     # torques and springs act on coordinates: their links keep their chart
     exclude = {c for c, _ in scene.torques} | {sp.coordinate for sp in plan.spring_set.springs}
@@ -144,26 +141,20 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
         res = integrate_charted(model, lambda m: plan if m is model else compile_plan(scene, m), y0,
                                 (0.0, run.t_end), t_eval=t_eval, method=run.method, rtol=run.rtol, atol=run.atol,
                                 dt=run.dt if run.method in ("RK4", "midpoint") else None, callback=bar,
-                                recharting=run.recharting, exclude=exclude, base_state=plan.base_state)
+                                recharting=run.recharting, exclude=exclude, base_state=plan.base_state,
+                                max_steps=max_steps, max_wall=max_wall)
     finally:
         bar.close()
+    if not res.success:
+        raise IntegrationError(f"{scene.path or scene.name}: {run.method} (rtol {run.rtol:g}"
+                               + (f", dt {run.dt:g}" if run.dt and run.method in ("RK4", "midpoint") else "")
+                               + f") could not finish the run to t_end = {run.t_end:g} s: {res.message}"
+                               + (f" (max_wall {max_wall:g} s for the whole run)" if max_wall is not None else ""))
     t = res.t
     qs, qds, W = res.y[:, :n], res.y[:, n:2 * n], res.y[:, 2 * n]
-    # energies and poses in the chart that computed each sample (regular there)
-    plans = [res.segments[k].plan for k in res.segment_of]
-    qc, qdc = res.y_chart[:, :n], res.y_chart[:, n:2 * n]
-    E, V, h = np.empty(len(t)), np.empty(len(t)), np.empty(len(t))
-    segment_of = np.asarray(res.segment_of)
-    for k, segment in enumerate(res.segments):   # compiled: E, V (E37), springs, h (E39)
-        idx = np.nonzero(segment_of == k)[0]
-        if idx.size:
-            E[idx], V[idx], h[idx] = segment.plan.rhs.energies(t[idx], qc[idx], qdc[idx])
+    E, V, h = _energies(res, n)
     recorded = list(dict.fromkeys([*scene.link_poses, *(r["link"] for r in res.recharts)]))
-    poses = {link: np.empty((len(t), 4, 4)) for link in recorded}
-    for i, (p, ti, a) in enumerate(zip(plans, t, qc)):
-        P = link_poses(p.model, recorded, a, t=ti, base=p.base_state(ti))
-        for link in recorded:
-            poses[link][i] = P[link]
+    poses = _record_poses(res, n, recorded, started=started, max_wall=max_wall, where=scene.path or scene.name)
     stats = {"method": run.method, "rtol": run.rtol, "atol": run.atol, "dt": run.dt, "nfev": res.nfev,
              "nsteps": res.nsteps, "wall_time": res.wall_time, "terms": plan.terms, "success": res.success,
              "message": res.message, "recharting": run.recharting, "n_recharts": len(res.recharts),
@@ -174,6 +165,50 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
                       energy={"kinetic": E, "potential": V, "work": W, "function": h, "error": h - h[0] - W},
                       poses=poses, stats=stats, scene=scene.name, robot=model.name, sol=res.sol,
                       charts=res if res.recharts else None)
+
+
+def _scene_and_model(scene_or_model, model: Model | None) -> tuple[Scene, Model]:
+    """The scene to run (a bare Model runs in a scene of gravity alone) and its model."""
+    from .scene import load_scene
+
+    if isinstance(scene_or_model, (str, Path)):
+        scene_or_model = load_scene(scene_or_model)
+    if isinstance(scene_or_model, Model):
+        model = scene_or_model
+        return Scene(name=model.name or "model", path=None, robot=Path(model.source or "."), load_options={},
+                     gravity=np.asarray(model.gravity_vector)), model
+    if isinstance(scene_or_model, Scene):
+        return scene_or_model, scene_or_model.model() if model is None else model
+    raise TypeError(f"simulate takes a Scene, a scene file path or a Model; got {type(scene_or_model).__name__}")
+
+
+def _energies(res, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(S,) kinetic and potential energies (E37) and the function h (E39) at the samples, each in the
+    chart that computed it (regular there), compiled."""
+    t, qc, qdc = res.t, res.y_chart[:, :n], res.y_chart[:, n:2 * n]
+    E, V, h = np.empty(len(t)), np.empty(len(t)), np.empty(len(t))
+    segment_of = np.asarray(res.segment_of)
+    for k, segment in enumerate(res.segments):
+        idx = np.nonzero(segment_of == k)[0]
+        if idx.size:
+            E[idx], V[idx], h[idx] = segment.plan.rhs.energies(t[idx], qc[idx], qdc[idx])
+    return E, V, h
+
+
+def _record_poses(res, n: int, recorded: list[str], *, started: float, max_wall: float | None, where) -> dict:
+    """(S, 4, 4) world poses of the ``recorded`` links at the samples, each from the chart that
+    computed the sample; the wall-clock budget bounds this too."""
+    qc = res.y_chart[:, :n]
+    poses = {link: np.empty((len(res.t), 4, 4)) for link in recorded}
+    for i, (k, ti, a) in enumerate(zip(res.segment_of, res.t, qc)):
+        if recorded and max_wall is not None and i % 1000 == 0 and time.perf_counter() - started > max_wall:
+            raise IntegrationError(f"{where}: max_wall={max_wall:g} s spent while recording the poses "
+                                   f"of {', '.join(recorded)} at sample {i} of {len(res.t)} (fewer samples would do)")
+        p = res.segments[k].plan
+        P = link_poses(p.model, recorded, a, t=ti, base=p.base_state(ti))
+        for link in recorded:
+            poses[link][i] = P[link]
+    return poses
 
 
 @dataclass

@@ -27,6 +27,8 @@ __all__ = ["read_source", "Source", "XACRO_NAMESPACE"]
 XACRO_NAMESPACE = "http://www.ros.org/wiki/xacro"
 #: ``<?xml version="..."`` at the start of a document (after an optional BOM and blanks).
 _DECLARATION = re.compile(rb'^(\xef\xbb\xbf)?(\s*<\?xml\s+version\s*=\s*)(["\'])([^"\']*)\3')
+#: an entity declaration in a DOCTYPE's internal subset (UTF-8 or ASCII-compatible text)
+_ENTITY = re.compile(rb"<!DOCTYPE[^\[>]*\[[^\]]*?<!ENTITY", re.DOTALL)
 
 
 @dataclass
@@ -92,6 +94,19 @@ def _declaration(data: bytes, label: str, strict: bool, notes: list[str]) -> byt
     return data[:m.start(4)] + b"1.0" + data[m.end(4):]
 
 
+def _entities(data: bytes, label: str) -> None:
+    """Entity declarations (``<!DOCTYPE robot [<!ENTITY ...>]>``) are refused before parsing: a URDF has
+    no use for them, urdfdom's XML reader (tinyxml2) does not expand them, and they are how entity bombs
+    and external entities get in. (The parser would refuse a bomb and never fetch an external entity;
+    this says so before anything is expanded.)"""
+    m = _ENTITY.search(data)
+    if m is not None:
+        line = data[:m.start()].count(b"\n") + 1
+        raise URDFSyntaxError(f"{label}, line {line}: the document declares XML entities (<!ENTITY ...>); a URDF "
+                              "does not use them and they are not read (entity expansion and external entities "
+                              "are refused): write the values out")
+
+
 def _leftover_xacro(root, label: str) -> None:
     """A URDF (not a .xacro) that still holds ``xacro:`` elements is an error naming them."""
     found = []
@@ -113,6 +128,7 @@ def read_source(source, *, strict: bool = False, xacro_args=None, package_dirs=(
     """The ``<robot>`` element of ``source`` (a path, URDF text, or a ``.xacro`` path)."""
     data, label, directory, stem, notes = _bytes_of(source, xacro_args=xacro_args, package_dirs=package_dirs)
     data = _declaration(data, label, strict, notes)
+    _entities(data, label)
     utf8 = label == "<string>" or is_xacro_path(source)
     parser = etree.XMLParser(remove_comments=True, resolve_entities=False, no_network=True,
                              **({"encoding": "utf-8"} if utf8 else {}))

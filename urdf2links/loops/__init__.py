@@ -6,9 +6,9 @@ results; compiled around a compiled scene, interpreted around a Python callable)
 """
 
 from .common import AngleGuard, evaluate
-from .driver import CHUNK, Outcome, run
+from .driver import CHUNK, Outcome, run, wall_message
 from .erk import TABLEAUX, Tableau, erk_chunk, initial_step
 from .fixed import MAX_HALVINGS, NEWTON_MAXITER, midpoint_chunk, rk4_chunk
 
-__all__ = ["AngleGuard", "evaluate", "run", "Outcome", "CHUNK", "Tableau", "TABLEAUX", "erk_chunk", "initial_step",
+__all__ = ["AngleGuard", "evaluate", "run", "wall_message", "Outcome", "CHUNK", "Tableau", "TABLEAUX", "erk_chunk", "initial_step",
            "rk4_chunk", "midpoint_chunk", "NEWTON_MAXITER", "MAX_HALVINGS"]

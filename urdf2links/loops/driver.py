@@ -11,6 +11,7 @@ right-hand side failed (non-finite, or A not positive definite), -3 Newton faile
 
 from __future__ import annotations
 
+import time
 import types
 from collections import namedtuple
 
@@ -24,7 +25,7 @@ from .common import AngleGuard
 from .erk import TABLEAUX, erk_chunk, initial_step
 from .fixed import MAX_HALVINGS
 
-__all__ = ["Outcome", "run", "CHUNK"]
+__all__ = ["Outcome", "run", "CHUNK", "wall_message"]
 
 CHUNK = 2000              # steps per call of a compiled loop between two returns to Python
 
@@ -68,15 +69,23 @@ Outcome = namedtuple("Outcome", ["t", "y", "sol", "nfev", "njev", "nrejected", "
 ``success``, ``message`` and whether the stop test ended the run."""
 
 
-class _Driver:
-    """One run's shared bookkeeping: counters, budget, the guard, the callback and a Python stop."""
+def wall_message(max_wall: float, t: float, steps: int) -> str:
+    """The message of a run ended by its wall-clock budget."""
+    return (f"max_wall={max_wall:.3g} s of wall time reached at t={t!r} after {steps} steps (the run did not finish "
+            "within its wall-clock budget)")
 
-    def __init__(self, rhs, d, *, callback, max_steps, stop, chunk):
+
+class _Driver:
+    """One run's shared bookkeeping: counters, budget, the guard, the callback and a Python stop.
+    ``wall`` is None or ``(deadline, max_wall)`` (``time.perf_counter()`` seconds), asked after each chunk."""
+
+    def __init__(self, rhs, d, *, callback, max_steps, stop, chunk, wall=None):
         self.compiled = isinstance(rhs, CompiledScene)
         self.cnt = np.zeros(4, np.int64)
         self.counters = (self.cnt, np.zeros(d + 1))
         self.budget = np.inf if max_steps is None else int(max_steps)
         self.callback, self.stop, self.chunk = callback, stop, chunk
+        self.wall, self.out_of_time = wall, False
         self.stopped = False
         self.guard = (np.zeros(0, np.int64), np.zeros(0))
         if self.compiled and isinstance(stop, AngleGuard):     # tested inside the compiled loop
@@ -91,6 +100,9 @@ class _Driver:
             self.callback(float(t), y)
         if status == 0 and self.stop is not None and self.cnt[1] > 0 and self.stop(t, y):
             self.stopped = True
+            return True
+        if status == 0 and self.wall is not None and time.perf_counter() > self.wall[0]:
+            self.out_of_time = True
             return True
         return status != 0 or self.cnt[1] >= self.budget
 
@@ -166,16 +178,17 @@ def _drive_midpoint(drv, loops, args, f0, t0, y0, rtol, atol, grid, need_dense, 
 
 
 def run(method, rhs, f0, t0, t1, y0, *, rtol, atol, dt, grid, callback=None, max_steps=None,
-        need_dense=False, stop=None, jac=None) -> Outcome:
+        need_dense=False, stop=None, jac=None, wall=None) -> Outcome:
     """Integrate with one of the loops: compiled when ``rhs`` is a
     :class:`~urdf2links.scene_kernels.CompiledScene` (and ``stop`` None or an angle guard),
     interpreted otherwise (then ``callback`` and ``stop`` are asked after every step, ``jac`` is
-    the midpoint's Jacobian: callable, constant matrix or None for finite differences).
+    the midpoint's Jacobian: callable, constant matrix or None for finite differences; ``wall`` None
+    or ``(deadline, max_wall)``: past the deadline the run ends unsuccessfully, saying so).
     ``f0 = rhs(t0, y0)``; ``atol`` (d,); ``grid`` the fixed-step methods' step times. RK45 and
     DOP853 run compiled only."""
     d = y0.size
     atol = np.ascontiguousarray(np.broadcast_to(np.asarray(atol, float), (d,)))
-    drv = _Driver(rhs, d, callback=callback, max_steps=max_steps, stop=stop, chunk=CHUNK)
+    drv = _Driver(rhs, d, callback=callback, max_steps=max_steps, stop=stop, chunk=CHUNK, wall=wall)
     compiled = drv.compiled and jac is None and drv.stop is None
     if compiled:
         loops, args = vars(fixed), rhs.args
@@ -212,6 +225,8 @@ def _outcome(method, rhs, drv, status, ts, ys, sol, njev, dt, max_steps) -> Outc
     if status == -1:
         success, message = False, (f"{method} failed at t={float(ts[-1])!r}: Required step size is less than "
                                    "spacing between numbers.")
+    elif status == 0 and not stopped and drv.out_of_time:
+        success, message = False, wall_message(drv.wall[1], float(ts[-1]), int(cnt[1]))
     elif status == 0 and not stopped and cnt[1] >= drv.budget:
         success, message = False, f"max_steps={max_steps} reached at t={float(ts[-1])!r}"
     elif stopped:
