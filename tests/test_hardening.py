@@ -20,6 +20,7 @@ from urdf2links.description import Geometry, Origin
 from urdf2links.errors import IntegrationError, MeshError, SceneError, URDFSyntaxError, URDFValueError
 from urdf2links.inertia import geometry_inertia
 from urdf2links.integrators import integrate
+from urdf2links.plan import compile_plan
 from urdf2links.mesh_paths import require_mesh, resolve_mesh_path
 from urdf2links.ranges import MAX_SAMPLES, MAX_STEPS, RANGES, RTOL_FLOOR
 from urdf2links.scene import load_scene, scene_from_dict
@@ -192,8 +193,11 @@ def write(tmp_path, body: str) -> Path:
     ("[gravity]\nmagnitude = nan\n", "gravity.magnitude", "must be a finite number in [0, 10000] m/s^2, got nan"),
     ("[gravity]\nmagnitude = 1e308\n", "gravity.magnitude", "1e+308 is outside the valid range [0, 10000] m/s^2"),
     ("[gravity]\ndirection = [1e308, 1e308, 0]\n", "gravity.direction[0]", "outside the valid range"),
-    ("[run]\nt_end = -1.0\n", "run.t_end", "must be positive, got -1.0: valid range (0, 1e+06] s"),
-    ("[run]\nt_end = inf\n", "run.t_end", "must be a finite number in (0, 1e+06] s, got inf"),
+    ("[run]\nt_end = -1.0\n", "run.t_end", "-1.0 is outside the valid range [1e-09, 1e+06] s"),
+    ("[run]\nt_end = inf\n", "run.t_end", "must be a finite number in [1e-09, 1e+06] s, got inf"),
+    # found by the slow fuzz profile: a subnormal t_end gave sample times out of order
+    ("[run]\nt_end = 1e-320\n", "run.t_end", "1e-320 is outside the valid range [1e-09, 1e+06] s"),
+    ("[run]\natol = 1e-320\n", "run.atol", "1e-320 is outside the valid range [1e-30, 1000]"),   # slow fuzz profile
     ("[run]\nrtol = 1e-20\n", "run.rtol", "1e-20 is outside the valid range [2.22045e-14, 0.999]"),
     ("[run]\nsamples = 10000000000\n", "run.samples", f"must be a whole number in [1, {MAX_SAMPLES}]"),
     ("[run]\nsamples = 2.5\n", "run.samples", "must be a whole number"),
@@ -233,6 +237,18 @@ def test_rtol_below_what_float64_delivers_is_raised_to_the_floor_with_a_note():
     with pytest.warns(RuntimeWarning, match=r"rtol=1e-18 is below what float64 can deliver; raised to 2\.22e-14"):
         res = integrate(lambda t, y: -y, (0.0, 1.0), [1.0], method="RK45", rtol=1e-18)
     assert res.rtol == RTOL_FLOOR and res.success
+
+
+@pytest.mark.parametrize("atol", [0.0, 1e-320, [1e-12, 0.0, 1e-12, 1e-12, 1e-12]])
+def test_an_atol_that_leaves_a_component_without_a_scale_is_refused(atol):
+    """Found by the slow fuzz profile (``atol = 1e-320`` in a scene): the compiled controller divided by zero
+    on the work W, which starts at 0. integrate() refuses such an atol by name; scenes have the same floor."""
+    scene = load_scene(ROBOTS / "double_pendulum_chaos.toml")
+    model = scene.model()
+    plan = compile_plan(scene, model)
+    q, qd = scene.initial_state(model)
+    with pytest.raises(ValueError, match=r"atol must be finite, >= 1e-30, a scalar or of shape \(5,\), got"):
+        integrate(plan.rhs, (0.0, 1.0), np.r_[q, qd, 0.0], method="DOP853", atol=atol)
 
 
 def test_a_fixed_step_run_of_too_many_steps_is_refused_before_it_starts():

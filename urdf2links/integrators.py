@@ -61,7 +61,7 @@ from . import loops
 from .dense import DenseOutput
 from .errors import IntegrationError
 from .loops import AngleGuard
-from .ranges import MAX_STEPS, RTOL_FLOOR
+from .ranges import MAX_STEPS, MIN_ATOL, RTOL_FLOOR
 from .scene_kernels import CompiledScene
 
 __all__ = ["METHODS", "IntegrationError", "IntegrationResult", "DenseOutput", "AngleGuard", "integrate"]
@@ -145,8 +145,9 @@ def _validate(rhs, t_span, y0, method, rtol, atol, dt, t_eval, callback, max_ste
             max_wall, bool) and max_wall > 0 and not math.isnan(max_wall)):
         raise ValueError(f"max_wall must be a number of seconds > 0 or None, got {max_wall!r}")
     a = np.asarray(atol, dtype=float)
-    if a.shape not in ((), y.shape) or not np.all(np.isfinite(a)) or np.any(a < 0):
-        raise ValueError(f"atol must be finite, >= 0, a scalar or of shape {y.shape}, got {atol!r}")
+    if a.shape not in ((), y.shape) or not np.all(np.isfinite(a)) or np.any(a < MIN_ATOL):
+        # atol = 0 leaves a state component that starts at 0 (the work W always does) without a scale
+        raise ValueError(f"atol must be finite, >= {MIN_ATOL:g}, a scalar or of shape {y.shape}, got {atol!r}")
     if dt is not None:
         if not (isinstance(dt, (int, float, np.floating)) and math.isfinite(dt) and dt > 0):
             raise ValueError(f"dt must be a finite number > 0, got dt={dt!r}")

@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["RANGES", "out_of_range", "MAX_SAMPLES", "MAX_STEPS", "MAX_TABLE_SAMPLES", "RTOL_FLOOR"]
+__all__ = ["RANGES", "out_of_range", "MIN_T_END", "MIN_ATOL", "MAX_SAMPLES", "MAX_STEPS", "MAX_TABLE_SAMPLES", "RTOL_FLOOR"]
 
 #: quantity -> (largest absolute value, unit) (module doc).
 RANGES: dict[str, tuple[float, str]] = {
@@ -52,6 +52,14 @@ RANGES: dict[str, tuple[float, str]] = {
     "time": (1e6, "s"),
 }
 
+#: Shortest run (s): a nanosecond is below any step a robot simulation takes, and far above the
+#: subnormal numbers where ``t_end / (samples - 1)`` loses its digits (the slow fuzz profile drew
+#: ``t_end = 1e-320``: its sample times came out unsorted).
+MIN_T_END = 1e-9
+#: Smallest ``atol``: far below the resolution of any quantity a robot has (float64 resolves 1e-22 at
+#: 1e-6) and far above the subnormals whose squares vanish in the error norm (the slow fuzz profile drew
+#: ``atol = 1e-320``: the step-size controller divided by zero).
+MIN_ATOL = 1e-30
 #: Most samples a run may ask for (``[run] samples``): 1e6 samples of 40 coordinates are ~650 MB.
 MAX_SAMPLES = 1_000_000
 #: Most points of a ``{times, values}`` table.

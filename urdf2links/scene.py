@@ -62,7 +62,7 @@ from .errors import SceneError
 from .functions import Constant, SceneValueError, TimeFunction, VectorFunction, parse_function, vector_function
 from .integrators import METHODS
 from .locations import example_robot_data_dir, shipped_robots_dir
-from .ranges import MAX_SAMPLES, MAX_STEPS, RANGES, RTOL_FLOOR
+from .ranges import MAX_SAMPLES, MAX_STEPS, MIN_ATOL, MIN_T_END, RANGES, RTOL_FLOOR
 from .transforms import PARAMETERS, BaseState
 
 __all__ = ["Scene", "AppliedLoad", "Spring", "SpringSet", "RunSettings", "load_scene", "shipped_robots_dir",
@@ -552,13 +552,13 @@ def _run(r: _Reader, data: dict) -> RunSettings:
 def check_run(run: RunSettings, where: str, *, prefix: str = "run.") -> RunSettings:
     """``run`` with every setting checked where it is given (a scene's ``[run]``, or the overrides of
     :func:`urdf2links.simulate.simulate`): a SceneError names ``where``, the key, the value and its
-    valid range. ``t_end`` in (0, 1e6] s; ``rtol`` in [100 eps, 1) (float64 delivers no more);
-    ``atol`` in (0, 1e3]; ``dt`` in (0, 1e6] s with at most :data:`~urdf2links.ranges.MAX_STEPS`
+    valid range. ``t_end`` in [1e-9, 1e6] s (:data:`~urdf2links.ranges.MIN_T_END`); ``rtol`` in [100 eps, 1) (float64 delivers no more);
+    ``atol`` in [1e-30, 1e3] (:data:`~urdf2links.ranges.MIN_ATOL`); ``dt`` in (0, 1e6] s with at most :data:`~urdf2links.ranges.MAX_STEPS`
     steps; ``samples`` in [1, :data:`~urdf2links.ranges.MAX_SAMPLES`]."""
     r = _Reader(where)
-    t_end = r.number(run.t_end, f"{prefix}t_end", positive=True, quantity="time")
+    t_end = r.number(run.t_end, f"{prefix}t_end", positive=True, quantity="time", low=MIN_T_END)
     rtol = r.number(run.rtol, f"{prefix}rtol", low=RTOL_FLOOR, high=0.999)
-    atol = r.number(run.atol, f"{prefix}atol", positive=True, high=1e3)
+    atol = r.number(run.atol, f"{prefix}atol", positive=True, low=MIN_ATOL, high=1e3)
     dt = None
     if run.dt is not None:
         dt = r.number(run.dt, f"{prefix}dt", positive=True, quantity="time")
