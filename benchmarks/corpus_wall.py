@@ -112,7 +112,7 @@ def render(data: dict):
         "compared exactly, wall times and the worker's name aside). Run: the worker processes' start and warm-up "
         "(kernels loaded from numba's cache, MuJoCo, matplotlib) and every robot; a Dask cluster's own start is the "
         "column beside it. A run is never shorter than its slowest robot."])
-    fig = figure(7.0, 2.6)
+    fig = figure(8.2, 2.6)
     ax = fig.subplots()
     ways = [r["way"] for r in data["rows"]]
     runs = [r["run"]["median"] for r in data["rows"]]
@@ -122,7 +122,7 @@ def render(data: dict):
     ax.axvline(max(r["slowest_s"] for r in data["rows"]), color="C3", ls="--", lw=1, label="slowest robot")
     ax.invert_yaxis()
     ax.set_xlabel(f"wall time (s), {data['robots']} robots")
-    ax.legend(loc="lower right", fontsize=8)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
     ax.grid(alpha=0.3, axis="x")
     return md, fig
 
