@@ -49,7 +49,7 @@ NEEDS_CORPUS = {"panda_coupled", "talos_full_coupled"}
 @pytest.fixture(scope="module", params=list(MODELS))
 def model(request):
     if request.param in NEEDS_CORPUS and corpus.ROOT is None:
-        pytest.skip(corpus.SKIP_REASON)
+        pytest.fail(corpus.MISSING)         # a test dependency: missing means a broken install, not a skip
     m = MODELS[request.param]()
     assert ("coupled" in request.param) == (m.coupling is not None), "a coupled model must have coupled coordinates"
     return m
