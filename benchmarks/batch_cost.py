@@ -23,18 +23,16 @@ divided by dt: ~1e-11 relative). Threads: 1 and ``numba.get_num_threads()`` at s
 from __future__ import annotations
 
 import time
-import warnings
 
 import mujoco
 import numba
 import numpy as np
 from mujoco import rollout as mj_rollout
 
-import urdf2links
-from benchmarking import fmt_spread, markdown_table, rounds, run_benchmark, spread
+from benchmarking import fmt_spread, load_models, markdown_table, rounds, run_benchmark, spread
 from eval_cost import chain
 from urdf2links.compare.mjcf import mjcf_from_model
-from urdf2links.locations import example_robot_data_dir, shipped_robots_dir
+from urdf2links.locations import example_robot_data_dir
 
 DT = 1e-4
 REAL = ("ur_description/urdf/ur5_robot.urdf", "talos_data/robots/talos_reduced.urdf",
@@ -42,15 +40,9 @@ REAL = ("ur_description/urdf/ur5_robot.urdf", "talos_data/robots/talos_reduced.u
 
 
 def models() -> list:
-    out = []
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        out.append(urdf2links.load_urdf(shipped_robots_dir() / "double_pendulum.urdf"))
-        root = example_robot_data_dir()
-        if root is not None:
-            out += [urdf2links.load_urdf(root / rel, inertia="repair") for rel in REAL]
-        else:
-            out.append(urdf2links.load_urdf(shipped_robots_dir() / "ur5_like.urdf"))
+    # without example-robot-data, the shipped UR5-like arm stands in for its robots
+    spare = () if example_robot_data_dir() is not None else ("ur5_like.urdf",)
+    out = load_models(("double_pendulum.urdf", *spare), REAL)
     return out + [chain(64)]
 
 

@@ -24,7 +24,8 @@ from typing import Callable
 ROOT = Path(__file__).resolve().parent.parent
 REPORTS = ROOT / "reports" / "benchmarks"
 
-__all__ = ["ROOT", "REPORTS", "run_benchmark", "rounds", "spread", "fmt_spread", "markdown_table", "machine"]
+__all__ = ["ROOT", "REPORTS", "run_benchmark", "rounds", "spread", "fmt_spread", "markdown_table", "machine",
+           "load_models"]
 
 
 def rounds(variants: dict[str, Callable[[], float | None]], n: int, *, log=None) -> dict[str, list[float]]:
@@ -59,6 +60,23 @@ def markdown_table(header: list[str], rows: list[list]) -> str:
     lines += ["| " + " | ".join(str(c) for c in row) + " |" for row in rows]
     return "\n".join(lines)
 
+
+def load_models(shipped=(), real=()) -> list:
+    """The shipped robots named in ``shipped`` (file names under robots/), then the example-robot-data
+    robots at the paths ``real`` (with ``inertia="repair"``; none when the corpus is not installed),
+    loaded with the importer's audit warnings silenced."""
+    import warnings
+
+    import urdf2links
+    from urdf2links.locations import example_robot_data_dir, shipped_robots_dir
+
+    root = example_robot_data_dir()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        out = [urdf2links.load_urdf(shipped_robots_dir() / name) for name in shipped]
+        if root is not None:
+            out += [urdf2links.load_urdf(root / rel, inertia="repair") for rel in real]
+    return out
 
 def machine() -> dict:
     from urdf2links.compare.formatting import machine_info

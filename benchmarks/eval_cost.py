@@ -18,16 +18,13 @@ the large-n end** (the :data:`LARGE_N` largest chains). Usage::
 from __future__ import annotations
 
 import time
-import warnings
 
 import mujoco
 import numpy as np
 
-import urdf2links
-from benchmarking import fmt_spread, markdown_table, rounds, run_benchmark, spread
+from benchmarking import fmt_spread, load_models, markdown_table, rounds, run_benchmark, spread
 from urdf2links import LinkSpec, Model, build_tree
 from urdf2links.compare.mjcf import mjcf_from_model
-from urdf2links.locations import example_robot_data_dir, shipped_robots_dir
 
 CHAIN_SIZES = (2, 4, 8, 16, 24, 32, 48, 64, 96, 128)
 #: The fit over the large-n end uses this many of the largest chains.
@@ -152,13 +149,7 @@ def plot(rows, slopes):
 
 
 def measure_all(args, log) -> dict:
-    models = [chain(n) for n in CHAIN_SIZES]
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        models.append(urdf2links.load_urdf(shipped_robots_dir() / "ur5_like.urdf"))
-        root = example_robot_data_dir()
-        if root is not None:
-            models += [urdf2links.load_urdf(root / rel, inertia="repair") for rel in REAL]
+    models = [chain(n) for n in CHAIN_SIZES] + load_models(("ur5_like.urdf",), REAL)
     rows = []
     for model in models:
         rows.append(measure(model, args.reps, args.rounds))

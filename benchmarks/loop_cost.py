@@ -25,19 +25,16 @@ against ``mj_forward``) see ``benchmarks/eval_cost.py``. Chains (spatial pendulu
 from __future__ import annotations
 
 import time
-import warnings
 from pathlib import Path
 
 import mujoco
 import numpy as np
 
-import urdf2links
-from benchmarking import fmt_spread, markdown_table, rounds, run_benchmark, spread
+from benchmarking import fmt_spread, load_models, markdown_table, rounds, run_benchmark, spread
 from eval_cost import REAL, chain
 from solver_cost import eval_loop
 from urdf2links.compare.mjcf import mjcf_from_model
 from urdf2links.integrators import integrate
-from urdf2links.locations import example_robot_data_dir, shipped_robots_dir
 from urdf2links.plan import compile_plan
 from urdf2links.scene import Scene
 
@@ -49,14 +46,7 @@ VARIANTS = ("rhs", "rk4", "mj_step")
 def models() -> list:
     """The shipped double pendulum and UR5-like arm, example-robot-data's UR5, Panda, Talos (reduced)
     and G1 (29 dof) when installed, and the chains."""
-    out = []
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        for name in ("double_pendulum.urdf", "ur5_like.urdf"):
-            out.append(urdf2links.load_urdf(shipped_robots_dir() / name))
-        root = example_robot_data_dir()
-        if root is not None:
-            out += [urdf2links.load_urdf(root / rel, inertia="repair") for rel in REAL]
+    out = load_models(("double_pendulum.urdf", "ur5_like.urdf"), REAL)
     return out + [chain(n) for n in CHAINS]
 
 
