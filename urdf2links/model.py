@@ -285,7 +285,7 @@ class Model:
         state = base_state_at(base, t)
         L = self.tree.n_links
         R, o = np.empty((L, 3, 3)), np.empty((L, 3))
-        MK.poses_one(self.compiled.TI, self.compiled.TF, q, self.base18(base, t), state is not None, self._Ck,
+        MK.poses_one(self.compiled.TI, self.compiled.TF, q, self.base18(state, t), state is not None, self._Ck,
                      self._dk, self._C is not None, R, o)
         T = np.zeros((L, 4, 4))
         T[:, :3, :3], T[:, :3, 3], T[:, 3, 3] = R, o, 1.0
