@@ -33,7 +33,7 @@ from . import model_kernels as MK
 from .errors import DynamicsError
 from .loads import Wrench
 from .rows import NO_LOADS, base_rows, kernel_array, load_rows, state_rows
-from .transforms import base_state_at, resolve_base
+from .transforms import resolve_base
 from .tree import LinkTree
 from .tree_arrays import flat_tree
 
@@ -154,15 +154,6 @@ class Model:
             out.append((self.tree.link_index(w.link), w.force, w.moment, w.point, w.frame))
         return out
 
-    @staticmethod
-    def base18(base, t) -> np.ndarray:
-        """(18,) pose, rate and acceleration of {A} (zeros for a fixed base)."""
-        state = base_state_at(base, t)
-        if state is None:
-            return np.zeros(18)
-        return np.concatenate([np.asarray(state.pose, float), np.asarray(state.rate, float),
-                               np.asarray(state.accel, float)])
-
     def _rows(self, named):
         return state_rows(self.n, self._names, named)
 
@@ -282,11 +273,11 @@ class Model:
     def link_poses(self, q, *, t: float = 0.0, base=None) -> np.ndarray:
         """(L, 4, 4): the {0}-pose ``T^(p)`` of every link (E4)."""
         q = kernel_array(self.vector(q, "q"))
-        state = base_state_at(base, t)
+        BASE, has_base = self._common(base, t, 1, False)
         L = self.tree.n_links
         R, o = np.empty((L, 3, 3)), np.empty((L, 3))
-        MK.poses_one(self.compiled.TI, self.compiled.TF, q, self.base18(state, t), state is not None, self._Ck,
-                     self._dk, self._C is not None, R, o)
+        MK.poses_one(self.compiled.TI, self.compiled.TF, q, BASE[0], has_base, self._Ck, self._dk,
+                     self._C is not None, R, o)
         T = np.zeros((L, 4, 4))
         T[:, :3, :3], T[:, :3, 3], T[:, 3, 3] = R, o, 1.0
         return T
