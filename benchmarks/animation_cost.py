@@ -24,13 +24,13 @@ import time
 import warnings
 from pathlib import Path
 
-from urdf2links.animation import read_animation_data
+from urdf2links.view.animation import read_animation_data
 from urdf2links.compare.commands import report_t_end, shipped_scenes
-from urdf2links.compare.report import write_report
-from urdf2links.compare.report_motion import comparison_animation
-from urdf2links.compare.trajectory import compare_scene
+from urdf2links.compare.reports.report import write_report
+from urdf2links.compare.reports.motion import comparison_animation
+from urdf2links.compare.agreement.trajectory import compare_scene
 from urdf2links.locations import example_robot_data_dir
-from urdf2links.scene import load_scene
+from urdf2links.scenes.scene import load_scene
 
 REAL = {"ur5": "ur_description/urdf/ur5_robot.urdf", "panda": "panda_description/urdf/panda.urdf",
         "talos": "talos_data/robots/talos_reduced.urdf", "g1": "g1_description/urdf/g1_29dof_rev_1_0.urdf"}

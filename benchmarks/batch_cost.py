@@ -31,7 +31,7 @@ from mujoco import rollout as mj_rollout
 
 from benchmarking import fmt_spread, load_models, markdown_table, rounds, run_benchmark, spread
 from eval_cost import chain
-from urdf2links.compare.mjcf import mjcf_from_model
+from urdf2links.compare.mujoco_side.mjcf import mjcf_from_model
 from urdf2links.locations import example_robot_data_dir
 
 DT = 1e-4

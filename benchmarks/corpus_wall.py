@@ -2,7 +2,7 @@
 processes (``--jobs 2``), a two-worker Dask ``LocalCluster`` (one thread each); and whether the three
 gave the same figures (they must: only where a robot runs changes).
 
-Each way runs :func:`urdf2links.compare.corpus_runner.run_corpus` over the same robots with the
+Each way runs :func:`urdf2links.compare.corpus.runner.run_corpus` over the same robots with the
 command's defaults (default scene, 0.5 s, seed 0, light pages and thumbnails), then writes the same
 report (timed apart: the one collecting process writes it in every way). Figures, each the median
 (min-max) of ``--rounds`` interleaved rounds: the run (start of the worker processes, their
@@ -20,9 +20,9 @@ import tempfile
 import time
 
 from benchmarking import fmt_spread, markdown_table, run_benchmark, spread
-from urdf2links.compare.corpus import RUN_DEPENDENT_KEYS, CorpusSettings, find_robots
-from urdf2links.compare.corpus_report import write_corpus
-from urdf2links.compare.corpus_runner import run_corpus
+from urdf2links.compare.corpus.rows import RUN_DEPENDENT_KEYS, CorpusSettings, find_robots
+from urdf2links.compare.corpus.report import write_corpus
+from urdf2links.compare.corpus.runner import run_corpus
 
 WAYS = ("serial", "jobs 2", "LocalCluster 2")
 

@@ -24,7 +24,7 @@ import numpy as np
 
 from benchmarking import fmt_spread, load_models, markdown_table, rounds, run_benchmark, spread
 from urdf2links import LinkSpec, Model, build_tree
-from urdf2links.compare.mjcf import mjcf_from_model
+from urdf2links.compare.mujoco_side.mjcf import mjcf_from_model
 
 CHAIN_SIZES = (2, 4, 8, 16, 24, 32, 48, 64, 96, 128)
 #: The fit over the large-n end uses this many of the largest chains.

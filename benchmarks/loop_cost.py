@@ -3,14 +3,14 @@ Euler step in MuJoCo's own C loop, same model (route 1), gravity only, one proce
 
 Timed regions, per model (interleaved rounds; each figure the median (min-max) over the rounds):
 
-* ``rhs``: a numba loop of ``K`` calls of :func:`urdf2links.scene_kernels.scene_rhs` (the function
+* ``rhs``: a numba loop of ``K`` calls of :func:`urdf2links.scenes.scene_kernels.scene_rhs` (the function
   the compiled integrators call: ``y' = (q', q'', P)`` of ``y = (q, q', W)``, gravity only, fixed
   base, no springs or dampers) at one state, divided by ``K``; no Python inside the region.
-* ``rk4``: :func:`urdf2links.integrators.integrate` with the compiled RK4 loop, ``dt`` 1e-4 s, for
+* ``rk4``: :func:`urdf2links.integration.integrators.integrate` with the compiled RK4 loop, ``dt`` 1e-4 s, for
   ``K / 4`` steps: its ``wall_time`` (the loop: stages, storage of every step) divided by the number
   of evaluations (4 per step, + 1).
 * ``mj_step``: ``mujoco.mj_step(m, d, nstep=K)`` on the route-1 model
-  (:func:`urdf2links.compare.mjcf.mjcf_from_model`: contacts, limits, equality and friction loss
+  (:func:`urdf2links.compare.mujoco_side.mjcf.mjcf_from_model`: contacts, limits, equality and friction loss
   disabled), Euler, ``dt`` 1e-4 s, energy flag off, no control callback, from the same ``q`` at
   rest, divided by ``K``: one forward dynamics plus the integration, in MuJoCo's C loop.
 
@@ -33,10 +33,10 @@ import numpy as np
 from benchmarking import fmt_spread, load_models, markdown_table, rounds, run_benchmark, spread
 from eval_cost import REAL, chain
 from solver_cost import eval_loop
-from urdf2links.compare.mjcf import mjcf_from_model
-from urdf2links.integrators import integrate
-from urdf2links.plan import compile_plan
-from urdf2links.scene import Scene
+from urdf2links.compare.mujoco_side.mjcf import mjcf_from_model
+from urdf2links.integration.integrators import integrate
+from urdf2links.scenes.plan import compile_plan
+from urdf2links.scenes.scene import Scene
 
 CHAINS = (8, 16, 32, 64)
 DT = 1e-4

@@ -5,13 +5,13 @@ same number of steps:
 
 * ``plain``: ``mujoco.mj_step(m, d, nstep=K)`` on a fresh ``MjData`` of the route-1 model, the
   energy flag off and no control callback: MuJoCo by itself, without the scene's inputs;
-* ``engine``: :func:`urdf2links.compare.mujoco_run.run_mujoco` as ``urdf2links compare`` runs it
+* ``engine``: :func:`urdf2links.compare.mujoco_side.mujoco_run.run_mujoco` as ``urdf2links compare`` runs it
   (``mj_step(nstep)`` from sample to sample, the energy flag off, the scene's inputs from the
   compiled control callback): its ``wall_time`` (MuJoCo's engine) and ``harness_time`` (the whole
   call: set-up, sample copies, energy pass);
 * ``before``: the harness as it was: a Python ``for`` loop of one ``mj_step`` per call, the energy
   flag on, ``mj_forward`` + copies + energies at each sample inside the timed loop, and the scene's
-  inputs from the Python control callback (:class:`~urdf2links.compare.mujoco_run.PythonInputs`) at
+  inputs from the Python control callback (:class:`~urdf2links.compare.mujoco_side.mujoco_run.PythonInputs`) at
   every RK4 stage. Scenes with inputs run it ``--before-rounds`` times only (tens of seconds each).
 
 The issue's criterion: ``engine`` within 2x of ``plain`` for ``urdf2links compare
@@ -29,11 +29,11 @@ import mujoco
 import numpy as np
 
 from benchmarking import fmt_spread, markdown_table, rounds, run_benchmark, spread
-from urdf2links.compare.mjcf import mjcf_from_scene
-from urdf2links.compare.mujoco_run import PythonInputs, robot_energy, run_mujoco
+from urdf2links.compare.mujoco_side.mjcf import mjcf_from_scene
+from urdf2links.compare.mujoco_side.mujoco_run import PythonInputs, robot_energy, run_mujoco
 from urdf2links.locations import shipped_robots_dir
-from urdf2links.plan import compile_plan
-from urdf2links.scene import load_scene
+from urdf2links.scenes.plan import compile_plan
+from urdf2links.scenes.scene import load_scene
 
 #: (scene, integrator, dt): the Done-when scene first, then a driven arm, then two scenes without inputs.
 CASES = (("ship_crane", "RK4", 1e-4), ("spring_arm_torques", "RK4", 1e-4), ("ur5_falling", "RK4", 1e-4),

@@ -4,10 +4,10 @@ what a sweep saves. Same process, interleaved rounds, median (min-max).
 For each scene: the compiled loop (DOP853, RK4, midpoint), the same methods with Python loops
 (scipy's OdeSolver / the Python RK4 and midpoint) on the same compiled right-hand side, and the
 cost of one evaluation inside a compiled loop; "loop overhead" is wall / (nfev x evaluation cost).
-Wall times are :func:`urdf2links.integrators.integrate`'s (the integration, no samples).
+Wall times are :func:`urdf2links.integration.integrators.integrate`'s (the integration, no samples).
 
-Then a sweep of ``B`` initial states: :func:`urdf2links.batch.simulate_batch` (numba threads)
-against ``B`` calls of :func:`~urdf2links.integrators.integrate` one after the other, both returning
+Then a sweep of ``B`` initial states: :func:`urdf2links.integration.batch.simulate_batch` (numba threads)
+against ``B`` calls of :func:`~urdf2links.integration.integrators.integrate` one after the other, both returning
 the same outputs: the states ``(q, qd, W)`` at the same sample times (the batch lands its steps on
 them, a single run reads them from its dense output). Each side is the whole call (the batch's
 plan compilation and allocations; the single runs' Python per call). Usage::
@@ -24,12 +24,12 @@ import numpy as np
 from numba import njit
 
 from benchmarking import fmt_spread, markdown_table, rounds, run_benchmark, spread
-from urdf2links.batch import simulate_batch
-from urdf2links.integrators import integrate
+from urdf2links.integration.batch import simulate_batch
+from urdf2links.integration.integrators import integrate
 from urdf2links.locations import shipped_robots_dir
-from urdf2links.plan import compile_plan
-from urdf2links.scene import load_scene
-from urdf2links.scene_kernels import scene_rhs
+from urdf2links.scenes.plan import compile_plan
+from urdf2links.scenes.scene import load_scene
+from urdf2links.scenes.scene_kernels import scene_rhs
 
 SCENES = ("double_pendulum_chaos", "ur5_falling", "spring_arm_torques", "ship_crane")
 SWEEP_SCENES = ("double_pendulum_chaos", "ur5_falling")

@@ -5,7 +5,7 @@ For the double pendulum and the UR5-like arm: ``B`` initial states (the scene's,
 sample times from both engines, on the same number of threads, in one process and interleaved
 rounds:
 
-* urdf2links: :func:`urdf2links.batch.simulate_batch` (DOP853 at the scene's tolerances, one
+* urdf2links: :func:`urdf2links.integration.batch.simulate_batch` (DOP853 at the scene's tolerances, one
   trajectory per numba thread, steps landing on the sample times); its ``wall_time``;
 * MuJoCo, ``rollout per sample``: ``mujoco.rollout.Rollout(nthread).rollout`` from one sample to the
   next (``nstep`` = steps per sample interval), RK4 at dt 1e-4 s as ``urdf2links compare`` runs it;
@@ -30,11 +30,11 @@ import numpy as np
 from mujoco import rollout as mj_rollout
 
 from benchmarking import fmt_spread, markdown_table, rounds, run_benchmark, spread
-from urdf2links.batch import simulate_batch
-from urdf2links.compare.mjcf import mjcf_from_scene
+from urdf2links.integration.batch import simulate_batch
+from urdf2links.compare.mujoco_side.mjcf import mjcf_from_scene
 from urdf2links.locations import shipped_robots_dir
-from urdf2links.scene import load_scene
-from urdf2links.simulate import simulate
+from urdf2links.scenes.scene import load_scene
+from urdf2links.integration.simulate import simulate
 
 SCENES = ("double_pendulum_chaos", "ur5_falling")
 T_END = 2.0

@@ -8,7 +8,7 @@ declared in :mod:`urdf2links.cli`, which imports this module only when one of th
 
 ``urdf2links report``: every shipped scene (``robots/*.toml``) and ``reports/index.html``.
 Every scene runs its whole ``t_end`` (MuJoCo's inputs come from a compiled control callback,
-:mod:`urdf2links.compare.mujoco_inputs`); ``--cap`` seconds caps the scenes with time-dependent
+:mod:`urdf2links.compare.mujoco_side.mujoco_inputs`); ``--cap`` seconds caps the scenes with time-dependent
 inputs (a moving base, joint torques, loads; default :data:`REPORT_CAP_S`, 0: none) and the
 report says so. ``--t-end`` sets every scene's ``t_end`` instead. With ``<out>/baselines.json`` present (or ``--check FILE``) every scene is
 checked against it (exit 1 on a failure); ``--write-baselines [FILE]`` adds this run's figures
@@ -22,18 +22,18 @@ import sys
 import time
 from pathlib import Path
 
-from urdf2links.scene_toml import scene_from_args, write_scene_option
+from urdf2links.scenes.scene_toml import scene_from_args, write_scene_option
 from urdf2links.console import err, shown_path
-from urdf2links.integrators import METHODS
+from urdf2links.integration.integrators import METHODS
 from urdf2links.locations import shipped_robots_dir
-from urdf2links.scene import load_scene
+from urdf2links.scenes.scene import load_scene
 
-from .baselines import check_baseline, load_baselines, write_baselines
+from .reports.baselines import check_baseline, load_baselines, write_baselines
 from .formatting import json_ready
-from .report import write_index, write_report
-from .trajectory import compare_scene
-from .tradeoff import STAGES, run_study
-from .tradeoff_report import write_study
+from .reports.report import write_index, write_report
+from .agreement.trajectory import compare_scene
+from .tradeoff.study import STAGES, run_study
+from .tradeoff.report import write_study
 
 __all__ = ["compare_command", "report_command", "tradeoff_command", "shipped_scenes", "report_t_end", "REPORT_CAP_S"]
 
@@ -143,7 +143,7 @@ def compare_command(args) -> int:
 
 def report_command(args) -> int:
     if getattr(args, "corpus", None):
-        from .corpus_command import corpus_command
+        from .corpus.command import corpus_command
 
         return corpus_command(args)
     out = Path(args.out or "reports")

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from urdf2links import LinkSpec, Model, build_tree
-from urdf2links.transforms import PARAMETERS
+from urdf2links.dynamics.transforms import PARAMETERS
 
 
 def rod_H(mass, com, Ixx=0.0, Iyy=0.0, Izz=0.0, *, roll=0.0):

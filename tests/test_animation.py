@@ -1,4 +1,4 @@
-"""The animation of a run (urdf2links.animation, visuals, svgplot, thumbnail) and ``simulate --animate``.
+"""The animation of a run (urdf2links.view.animation, visuals, svgplot, thumbnail) and ``simulate --animate``.
 
 Structural: the page holds the frames (at most 30 per simulated second), the links, every run's
 poses (decoded and compared with the model's own link poses), the shapes the URDF describes, the
@@ -22,13 +22,14 @@ import pytest
 import corpus
 from pages import assert_offline, poses_4x4
 from urdf2links import load_urdf, urdf_link_poses
-from urdf2links.animation import (DEFAULT_FPS, Motion, Panel, frame_indices, read_animation_data, render_animation,
-                                  trajectory_page, viewer_script)
-from urdf2links.parse import parse_urdf
-from urdf2links.scene import load_scene
-from urdf2links.simulate import simulate
-from urdf2links.thumbnail import render_thumbnail
-from urdf2links.visuals import decimate, robot_shapes, tessellate
+from urdf2links.view.animation import (
+    DEFAULT_FPS, Motion, Panel, frame_indices, read_animation_data, render_animation, trajectory_page, viewer_script,
+)
+from urdf2links.parsers.urdf import parse_urdf
+from urdf2links.scenes.scene import load_scene
+from urdf2links.integration.simulate import simulate
+from urdf2links.view.thumbnail import render_thumbnail
+from urdf2links.view.visuals import decimate, robot_shapes, tessellate
 
 ROOT = Path(__file__).resolve().parent.parent
 ROBOTS = ROOT / "robots"
@@ -170,7 +171,7 @@ def test_moving_base_moves(crane_run):
 
 
 def test_svg_panels_are_drawn_without_scripts():
-    from urdf2links.svgplot import panel_svg
+    from urdf2links.view.svgplot import panel_svg
 
     t = np.linspace(0, 5, 5001)
     svg = panel_svg(Panel("error", t, {"e": np.r_[0.0, 1e-12 * np.exp(t[1:])]}, log=True,

@@ -1,4 +1,4 @@
-"""Sweeps (urdf2links.batch.simulate_batch) against one-at-a-time simulate(): the gravity-only UR5 scene, and
+"""Sweeps (urdf2links.integration.batch.simulate_batch) against one-at-a-time simulate(): the gravity-only UR5 scene, and
 scenes where every effect acts (moving base, forces, torques, springs and dampers), each on its own."""
 
 from __future__ import annotations
@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from urdf2links.batch import simulate_batch
+from urdf2links.integration.batch import simulate_batch
 from urdf2links.locations import shipped_robots_dir
-from urdf2links.scene import load_scene
-from urdf2links.simulate import simulate
+from urdf2links.scenes.scene import load_scene
+from urdf2links.integration.simulate import simulate
 
 
 @pytest.mark.parametrize("method", ["DOP853", "RK45"])
@@ -50,7 +50,7 @@ def test_batch_matches_single_runs_with_every_effect(effect):
     work W of the non-potential forces too (1e-6 J). The effect really acts: the work differs from the
     gravity-only scene's zero by more than 1e-2 J in at least one run (the spring is potential: its
     damper works)."""
-    from urdf2links.scene import scene_from_dict
+    from urdf2links.scenes.scene import scene_from_dict
 
     scene = scene_from_dict({"robot": {"shipped": "double_pendulum"}, "gravity": {}, **DRIVEN[effect]},
                             name=f"double_pendulum_{effect}")
@@ -77,7 +77,7 @@ def test_batch_rejects_bad_shapes():
 
 
 def test_split_rows_and_sweep_states():
-    from urdf2links.batch import split_rows, sweep_states
+    from urdf2links.integration.batch import split_rows, sweep_states
 
     assert split_rows(10, 3) == [(0, 3), (3, 7), (7, 10)]
     assert split_rows(2, 5) == [(0, 1), (1, 2)]              # never an empty chunk
@@ -94,7 +94,7 @@ def test_split_rows_and_sweep_states():
 def test_sweep_on_a_dask_cluster_is_the_one_machine_sweep(dask_client):
     """Split into three chunks over two workers, put back in order: every trajectory is integrated on
     its own by the same compiled loop, so the result is the one machine's bit for bit."""
-    from urdf2links.batch import sweep_states
+    from urdf2links.integration.batch import sweep_states
 
     scene = load_scene(shipped_robots_dir() / "double_pendulum_chaos.toml")
     model = scene.model()

@@ -2,7 +2,7 @@
 against the per-state calls, to the last bit; shapes and errors that name the offending row; the
 batched q'' against MuJoCo's mj_forward on the route-1 model.
 
-A batch runs the same compiled row function as a single state (``urdf2links.model_kernels``), so
+A batch runs the same compiled row function as a single state (``urdf2links.dynamics.model_kernels``), so
 every row must equal the single call exactly (``np.array_equal``): any difference means the batch
 evaluates something else (another base, another coupling, a scratch shared between threads).
 """
@@ -214,7 +214,7 @@ def test_batch_against_mujoco_mj_forward(name):
     relative (tests/test_mjcf_route.py), and each solve is backward stable, so q'' agrees to
     ~ n eps cond(A) relative. Bound: 1e3 eps cond(A) |q''| (a wrong term is O(|q''|))."""
     mujoco = pytest.importorskip("mujoco")
-    from urdf2links.compare.mjcf import mjcf_from_model
+    from urdf2links.compare.mujoco_side.mjcf import mjcf_from_model
 
     model = _shipped(name)
     Q, QD, TAU = _states(model, 6)
@@ -236,7 +236,7 @@ def test_read_only_and_strided_inputs_compile_nothing_new():
     """A read-only or strided array is another numba type: the model hands the kernels a writable
     C-contiguous copy, so such inputs (rows of a memory map, frozen arrays) reuse the compiled code
     (a fresh environment's second run once recompiled ``poses_one`` for them)."""
-    from urdf2links.simulate import record_compilation
+    from urdf2links.integration.simulate import record_compilation
 
     model = _shipped("ur5_like.urdf")
     Q, QD, TAU = _states(model, 7)

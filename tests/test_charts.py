@@ -1,4 +1,4 @@
-"""Re-charting floating links through phi_y = +-pi/2 (urdf2links.charts): the switch changes nothing
+"""Re-charting floating links through phi_y = +-pi/2 (urdf2links.integration.charts): the switch changes nothing
 physical, the shipped tumbling box keeps its momenta through the passages and agrees with an
 independent rigid-body integration, and without re-charting the run stops with a clear error."""
 
@@ -12,14 +12,14 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from urdf2links.charts import Chart, angle_block_condition, floating_links, rechart, to_original
+from urdf2links.integration.charts import Chart, angle_block_condition, floating_links, rechart, to_original
 from urdf2links.errors import DynamicsError, SceneError
-from urdf2links.model import Model
-from urdf2links.rotations import xyz_angles_to_matrix
-from urdf2links.scene import load_scene
-from urdf2links.oracles.recursive import RecursivePlan
-from urdf2links.simulate import simulate
-from urdf2links.tree import LinkSpec, build_tree
+from urdf2links.dynamics.model import Model
+from urdf2links.dynamics.rotations import xyz_angles_to_matrix
+from urdf2links.scenes.scene import load_scene
+from urdf2links.dynamics.oracles.recursive import RecursivePlan
+from urdf2links.integration.simulate import simulate
+from urdf2links.dynamics.tree import LinkSpec, build_tree
 
 ROBOTS = Path(__file__).resolve().parent.parent / "robots"
 GIMBAL = ROBOTS / "free_body_gimbal.toml"
@@ -191,7 +191,7 @@ def test_work_carries_over_the_switches(tmp_path):
 
 def test_torques_on_angles_keep_the_chart_and_recharting_is_a_scene_key(tmp_path):
     scene = load_scene(GIMBAL)
-    from urdf2links.functions import Constant
+    from urdf2links.scenes.functions import Constant
     sc = replace(scene, torques=(("body.phi_x", Constant(0.0)),), run=replace(scene.run, t_end=0.6))
     with pytest.raises(DynamicsError, match="not re-charted because"):
         simulate(replace(sc, qd0={**scene.qd0, "body.phi_x": 1e-4}), progress=False)

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from urdf2links import BaseState, DynamicsError, LinkSpec, Model, Wrench, build_tree
-from urdf2links.oracles.recursive import RecursivePlan
-from urdf2links.transforms import base_transforms, elementary, link_transform
+from urdf2links.dynamics.oracles.recursive import RecursivePlan
+from urdf2links.dynamics.transforms import base_transforms, elementary, link_transform
 
 from builders import (DOUBLE, FREE_BODY, PENDULUM, PRISMATIC_REVOLUTE, double_pendulum, free_body,
                       pendulum, prismatic_revolute, random_tree, rod_H)

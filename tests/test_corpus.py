@@ -23,12 +23,13 @@ import pytest
 
 
 from corpus import ROOT as CORPUS_ROOT, needs_corpus  # noqa: E402
-from urdf2links.compare.baselines import load_baselines, write_baselines  # noqa: E402
-from urdf2links.compare.corpus import (ROW_KEYS, RUN_DEPENDENT_KEYS, STATUSES, TERMS_TOLERANCE,  # noqa: E402
-                                       CorpusSettings, evaluate_robot, find_robots)
-from urdf2links.compare.corpus_command import regressions  # noqa: E402
-from urdf2links.compare.corpus_report import worst_first, write_corpus  # noqa: E402
-from urdf2links.compare.corpus_runner import run_corpus  # noqa: E402
+from urdf2links.compare.reports.baselines import load_baselines, write_baselines  # noqa: E402
+from urdf2links.compare.corpus.rows import (
+    ROW_KEYS, RUN_DEPENDENT_KEYS, STATUSES, TERMS_TOLERANCE, CorpusSettings, evaluate_robot, find_robots,
+)
+from urdf2links.compare.corpus.command import regressions  # noqa: E402
+from urdf2links.compare.corpus.report import worst_first, write_corpus  # noqa: E402
+from urdf2links.compare.corpus.runner import run_corpus  # noqa: E402
 from urdf2links.console import TaskBar  # noqa: E402
 from urdf2links.locations import shipped_robots_dir  # noqa: E402
 
@@ -134,7 +135,7 @@ def test_rows_say_what_happened(serial):
 def test_a_robot_that_fails_does_not_stop_the_others(monkeypatch, tmp_path, capsys):
     """A fault of ours (here injected into the comparison of one robot) is a failed row naming the
     stage and the exception; the other robots are compared; the command exits 1 naming the robot."""
-    import urdf2links.compare.trajectory as trajectory
+    import urdf2links.compare.agreement.trajectory as trajectory
     from urdf2links.cli import main
 
     real = trajectory.compare_scene
@@ -259,14 +260,14 @@ def test_task_bar_prints_lines_without_a_terminal():
 
 
 def test_urdf2links_imports_neither_dask_nor_mujoco():
-    code = ("import sys, urdf2links, urdf2links.batch, urdf2links.distributed, urdf2links.cli; "
+    code = ("import sys, urdf2links, urdf2links.integration.batch, urdf2links.integration.distributed, urdf2links.cli; "
             "bad = {'dask', 'distributed', 'mujoco'} & set(sys.modules); assert not bad, bad")
     subprocess.run([sys.executable, "-c", code], check=True)
 
 
 @needs_corpus
 def test_thumbnail_beside_each_robot(tmp_path):
-    """Each compared robot's picture (urdf2links.thumbnail) is in its folder, on its page and in the
+    """Each compared robot's picture (urdf2links.view.thumbnail) is in its folder, on its page and in the
     index, linked to the page."""
     robot = find_robots([CORPUS_ROOT / PENDULUM])[0]
     res = evaluate_robot(robot, CorpusSettings(t_end=0.05, states=1))

@@ -12,10 +12,10 @@ import pytest
 
 from urdf2links import load_urdf
 from urdf2links.errors import SceneError
-from urdf2links.limits import limit_excursions
-from urdf2links.scene import default_scene, load_scene
-from urdf2links.scene_toml import scene_or_robot, scene_toml, write_scene
-from urdf2links.simulate import simulate
+from urdf2links.scenes.limits import limit_excursions
+from urdf2links.scenes.scene import default_scene, load_scene
+from urdf2links.scenes.scene_toml import scene_or_robot, scene_toml, write_scene
+from urdf2links.integration.simulate import simulate
 
 DAMPED_ARM = """<?xml version="1.0"?>
 <robot name="damped_arm">
@@ -102,7 +102,7 @@ def test_scene_toml_round_trip(arm, tmp_path):
     np.testing.assert_array_equal(back.gravity, s.gravity)
     assert back.load_options == {**s.load_options}
     with pytest.raises(SceneError, match="functions of time"):
-        scene_toml(load_scene(__import__("urdf2links.scene", fromlist=["x"]).shipped_robots_dir() / "ship_crane.toml"))
+        scene_toml(load_scene(__import__("urdf2links.scenes.scene", fromlist=["x"]).shipped_robots_dir() / "ship_crane.toml"))
 
 
 def test_limit_excursions_say_when_which_and_how_far(arm):
@@ -157,7 +157,7 @@ def test_compare_damped_urdf_without_scene(arm, tmp_path):
 
 def test_route2_damping_check_can_fail(arm):
     """The damper comparison of route 2 is MuJoCo's own reading of the file: a wrong value shows."""
-    from urdf2links.compare.terms import compare_terms_urdf
+    from urdf2links.compare.agreement.terms import compare_terms_urdf
 
     model = load_urdf(arm)
     good = compare_terms_urdf(arm, model, dampers={"shoulder": 0.8, "elbow": 0.3, "slide": 2.0})

@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 from numba import njit
 
-from urdf2links.simulate import record_compilation, simulate, warm_up
+from urdf2links.integration.simulate import record_compilation, simulate, warm_up
 
 ROOT = Path(__file__).resolve().parent.parent
 ROBOTS = ROOT / "robots"
@@ -47,7 +47,7 @@ def test_warm_up_leaves_nothing_to_compile_in_the_run():
 
 
 def test_summary_states_the_timed_regions():
-    from urdf2links.compare.trajectory import compare_scene
+    from urdf2links.compare.agreement.trajectory import compare_scene
 
     s = compare_scene(ROBOTS / "ship_crane.toml", t_end=0.05, states=2, progress=False).summary()["wall_time"]
     assert set(s["regions"]) == {"project_s", "mujoco_s", "project_run_s", "mujoco_harness_s", "project_warmup_s",
@@ -61,7 +61,7 @@ def test_summary_states_the_timed_regions():
 _FIRST_SCENE = """
 import json
 from urdf2links.compare.commands import shipped_scenes
-from urdf2links.compare.trajectory import compare_scene
+from urdf2links.compare.agreement.trajectory import compare_scene
 s = compare_scene(shipped_scenes()[0], states=2, progress=False).summary()
 print(json.dumps({"scene": s["key"], **{k: s["wall_time"][k] for k in ("project_s", "project_compiled", "project_warmup_s")}}))
 """

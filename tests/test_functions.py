@@ -1,4 +1,4 @@
-"""Tests of urdf2links.functions: prescribed functions of time and their TOML specs."""
+"""Tests of urdf2links.scenes.functions: prescribed functions of time and their TOML specs."""
 
 from __future__ import annotations
 
@@ -8,15 +8,8 @@ import tomllib
 import numpy as np
 import pytest
 
-from urdf2links.functions import (
-    Constant,
-    SceneValueError,
-    Sines,
-    Table,
-    TimeFunction,
-    VectorFunction,
-    parse_function,
-    vector_function,
+from urdf2links.scenes.functions import (
+    Constant, SceneValueError, Sines, Table, TimeFunction, VectorFunction, parse_function, vector_function,
 )
 
 WHERE = "scene.toml: [base] heave"

@@ -5,7 +5,7 @@ Property-based tests (hypothesis) on the inputs of tests/fuzz_inputs.py:
 - random valid trees (URDF text from a strategy) load, and their terms agree with the literal oracle
   (``method="literal"``, the trace formulas term by term): ``A``, ``e``, ``G`` to 1e-9 of the largest
   entry (the two forms sum the same terms in another order: rounding, ~1e-15; a wrong term is O(1));
-- mutated URDF text ends in a :class:`~urdf2links.model.Model` whose terms are finite at finite states
+- mutated URDF text ends in a :class:`~urdf2links.dynamics.model.Model` whose terms are finite at finite states
   (``q`` in [-3, 3] and at +-1e3, ``qd`` normal), or in a :class:`~urdf2links.errors.URDFError`; a
   forward-dynamics call may also raise :class:`~urdf2links.errors.DynamicsError` (A not positive
   definite), never return a NaN;
@@ -38,8 +38,8 @@ from hypothesis import strategies as st
 from fuzz_inputs import known_bad_urdf, mutated_scene, mutated_urdf, robot_text, write_mesh_folder
 from urdf2links import load_urdf
 from urdf2links.errors import DynamicsError, IntegrationError, SceneError, URDFError
-from urdf2links.scene import load_scene
-from urdf2links.simulate import simulate
+from urdf2links.scenes.scene import load_scene
+from urdf2links.integration.simulate import simulate
 
 OWN_ERRORS = (URDFError, SceneError, DynamicsError, IntegrationError)
 URDF_LIMIT_S = 30.0          # per URDF example: a load takes < 1 s; 30 s is a hang

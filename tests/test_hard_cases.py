@@ -20,10 +20,10 @@ import pytest
 from corpus import needs_corpus, path as corpus_path
 from hard_robots import GENERATED, HARD
 from urdf2links import DynamicsError, InertiaError, load_urdf, load_urdf_string
-from urdf2links.integrators import IntegrationError
-from urdf2links.plan import compile_plan
-from urdf2links.scene import load_scene
-from urdf2links.simulate import simulate
+from urdf2links.integration.integrators import IntegrationError
+from urdf2links.scenes.plan import compile_plan
+from urdf2links.scenes.scene import load_scene
+from urdf2links.integration.simulate import simulate
 
 EPS = np.finfo(float).eps
 
@@ -128,8 +128,8 @@ def test_extreme_mass_ratios_lose_no_accuracy_in_accelerations(robot, record_fig
     <= 9e-12; a solve that lost the digits cond(A) allows would be off by ~eps cond(A) ~ 1e-8 on the
     light coordinates).
     """
-    from urdf2links.compare.mjcf import mjcf_from_model
-    from urdf2links.compare.mujoco_run import mujoco_accelerations
+    from urdf2links.compare.mujoco_side.mjcf import mjcf_from_model
+    from urdf2links.compare.mujoco_side.mujoco_run import mujoco_accelerations
 
     model = load_urdf(HARD / f"{robot}.urdf", inertia="strict")
     mj = mjcf_from_model(model, gravity=model.gravity_vector)

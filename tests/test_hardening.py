@@ -16,15 +16,15 @@ import numpy as np
 import pytest
 
 from urdf2links import load_urdf, load_urdf_string
-from urdf2links.description import Geometry, Origin
+from urdf2links.parsers.description import Geometry, Origin
 from urdf2links.errors import IntegrationError, MeshError, SceneError, URDFSyntaxError, URDFValueError
-from urdf2links.inertia import geometry_inertia
-from urdf2links.integrators import integrate
-from urdf2links.plan import compile_plan
-from urdf2links.mesh_paths import require_mesh, resolve_mesh_path
+from urdf2links.parsers.geometry_inertia import geometry_inertia
+from urdf2links.integration.integrators import integrate
+from urdf2links.scenes.plan import compile_plan
+from urdf2links.parsers.mesh_paths import require_mesh, resolve_mesh_path
 from urdf2links.ranges import MAX_SAMPLES, MAX_STEPS, RANGES, RTOL_FLOOR
-from urdf2links.scene import load_scene, scene_from_dict
-from urdf2links.simulate import simulate
+from urdf2links.scenes.scene import load_scene, scene_from_dict
+from urdf2links.integration.simulate import simulate
 
 ROOT = Path(__file__).resolve().parent.parent
 ROBOTS = ROOT / "robots"
@@ -300,7 +300,7 @@ def test_cli_max_wall_ends_simulate_with_a_clean_error(tmp_path):
 def test_a_mujoco_run_of_too_many_steps_is_refused_before_it_starts(mujoco_dt):
     """compare: MuJoCo's run is t_end / timestep steps, known in advance: beyond the step limit (or with a
     timestep that is not positive) it is refused with an IntegrationError before anything runs."""
-    from urdf2links.compare.trajectory import compare_scene
+    from urdf2links.compare.agreement.trajectory import compare_scene
 
     with pytest.raises(IntegrationError, match=r"MuJoCo timestep .* more than the 1e\+07 a run may take"):
         compare_scene(ROBOTS / "double_pendulum_chaos.toml", t_end=1.0, mujoco_dt=mujoco_dt, progress=False)

@@ -13,7 +13,7 @@ import yourdfpy
 import builders
 import corpus
 from urdf2links import DynamicsError, InertiaError, Model, URDFError
-from urdf2links.importer import load_urdf, load_urdf_string, urdf_link_poses
+from urdf2links.parsers.importer import load_urdf, load_urdf_string, urdf_link_poses
 
 ROBOTS = Path(__file__).resolve().parent.parent / "robots"
 

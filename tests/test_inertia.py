@@ -1,4 +1,4 @@
-"""Tests of urdf2links.inertia: pseudo-inertia H, audit, repair, geometry inertia."""
+"""Tests of urdf2links.dynamics.inertia: pseudo-inertia H, audit, repair, geometry inertia."""
 
 from __future__ import annotations
 
@@ -9,22 +9,14 @@ import numpy as np
 import pytest
 import trimesh
 
-from urdf2links.description import Geometry, Origin
+from urdf2links.parsers.description import Geometry, Origin
 from urdf2links.errors import InertiaError, MeshError, URDFValueError
-from urdf2links.inertia import (
-    Finding,
-    GeometryInertia,
-    audit_pseudo_inertia,
-    axis_inertia,
-    combined_geometry_inertia,
-    geometry_inertia,
-    inertial_from_pseudo,
-    nearest_consistent,
-    principal_moments,
-    pseudo_inertia,
-    transform_pseudo_inertia,
+from urdf2links.dynamics.inertia import (
+    Finding, audit_pseudo_inertia, axis_inertia, inertial_from_pseudo, nearest_consistent, principal_moments,
+    pseudo_inertia, transform_pseudo_inertia,
 )
-from urdf2links.rotations import homogeneous, rpy_to_matrix
+from urdf2links.parsers.geometry_inertia import GeometryInertia, combined_geometry_inertia, geometry_inertia
+from urdf2links.dynamics.rotations import homogeneous, rpy_to_matrix
 
 # ------------------------------------------------------------------ independent references
 

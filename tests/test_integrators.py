@@ -1,4 +1,4 @@
-"""Tests of urdf2links.integrators: accuracy against closed forms, convergence orders,
+"""Tests of urdf2links.integration.integrators: accuracy against closed forms, convergence orders,
 invariants of the implicit midpoint rule, stiffness, counters, dense output, errors."""
 
 from __future__ import annotations
@@ -9,13 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from urdf2links.integrators import (
-    METHODS,
-    DenseOutput,
-    IntegrationError,
-    IntegrationResult,
-    integrate,
-)
+from urdf2links.integration.integrators import METHODS, DenseOutput, IntegrationError, IntegrationResult, integrate
 
 ADAPTIVE = ("RK45", "DOP853", "Radau", "BDF", "LSODA")
 FIXED = ("RK4", "midpoint")
@@ -374,7 +368,7 @@ def test_stop_ends_the_run_at_the_first_step_past_the_guard(method):
     """y' = 1 from 0: AngleGuard(cos_min=0.5) fires on the first accepted step with y > arccos(0.5);
     the step sizes bound how far past it the run may go (dt 0.01; adaptive steps on y' = 1 are
     capped by dt as max step)."""
-    from urdf2links.integrators import AngleGuard
+    from urdf2links.integration.integrators import AngleGuard
 
     res = integrate(lambda t, y: np.array([1.0]), (0.0, 3.0), [0.0], method=method, dt=0.01,
                     stop=AngleGuard([0], 0.5))

@@ -1,4 +1,4 @@
-"""The compiled recursive form (urdf2links.kernels) against the numpy recursive form and the
+"""The compiled recursive form (urdf2links.dynamics.kernels) against the numpy recursive form and the
 literal trace form (docs/equations.md §5), on random trees (branching, all six slot types, massless frames,
 moving base) and on real robots; forward dynamics against a dense solve; base power against the
 numpy form.
@@ -16,11 +16,11 @@ from builders import random_tree
 import corpus
 from corpus import NAMED, needs_corpus
 from urdf2links import BaseState, load_urdf
-from urdf2links import kernels as K
-from urdf2links.factor import cholesky, cholesky_solve
-from urdf2links.tree_arrays import W_SIZE, flat_tree
-from urdf2links.oracles.recursive import RecursivePlan
-from urdf2links.transforms import base_transforms
+from urdf2links.dynamics import kernels as K
+from urdf2links.dynamics.factor import cholesky, cholesky_solve
+from urdf2links.dynamics.tree_arrays import W_SIZE, flat_tree
+from urdf2links.dynamics.oracles.recursive import RecursivePlan
+from urdf2links.dynamics.transforms import base_transforms
 
 TOL = 1e-12
 

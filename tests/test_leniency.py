@@ -12,8 +12,8 @@ import pytest
 
 from urdf2links import load_urdf
 from urdf2links.errors import URDFError, URDFStructureError, URDFSyntaxError, URDFValueError
-from urdf2links.parse import parse_urdf
-from urdf2links.rotations import rpy_to_matrix
+from urdf2links.parsers.urdf import parse_urdf
+from urdf2links.dynamics.rotations import rpy_to_matrix
 
 INERTIAL = ('<inertial><mass value="1"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/>'
             '</inertial>')

@@ -1,4 +1,4 @@
-"""Route 1 of the MuJoCo comparison: the project's own tree as MJCF (urdf2links.compare.mjcf, urdf2links.compare.mujoco_run)."""
+"""Route 1 of the MuJoCo comparison: the project's own tree as MJCF (urdf2links.compare.mujoco_side.mjcf, urdf2links.compare.mujoco_side.mujoco_run)."""
 
 from __future__ import annotations
 
@@ -15,10 +15,10 @@ from scipy.integrate import solve_ivp  # noqa: E402
 
 import urdf2links  # noqa: E402
 from builders import random_H, random_tree  # noqa: E402
-from urdf2links.compare.mjcf import mjcf_from_model  # noqa: E402
-from urdf2links.compare.mujoco_run import mujoco_accelerations, run_mujoco  # noqa: E402
+from urdf2links.compare.mujoco_side.mjcf import mjcf_from_model  # noqa: E402
+from urdf2links.compare.mujoco_side.mujoco_run import mujoco_accelerations, run_mujoco  # noqa: E402
 from urdf2links import BaseState, LinkSpec, Model, Wrench, build_tree  # noqa: E402
-from urdf2links.transforms import base_transforms  # noqa: E402
+from urdf2links.dynamics.transforms import base_transforms  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 ROBOTS = ROOT / "robots"
@@ -72,7 +72,7 @@ def random_base(rng):
 
 
 def test_mujoco_multi_joint_semantics():
-    """What urdf2links.compare.mjcf relies on: a body's joints apply in order, each axis in the body frame as
+    """What urdf2links.compare.mujoco_side.mjcf relies on: a body's joints apply in order, each axis in the body frame as
     moved by the joints before it (F <- F Rot(axis_j, q_j)), slides along the axis as rotated by
     the hinges before them, hinges about their anchor ``pos``."""
     xml = """<mujoco><compiler angle="radian" inertiafromgeom="false"/><worldbody>
@@ -167,7 +167,7 @@ def test_physics_switched_off():
     assert m.ngeom == 0 and np.allclose(m.opt.gravity, 0)
     assert m.opt.integrator == mujoco.mjtIntegrator.mjINT_RK4 and m.opt.timestep == 1e-4
     assert np.isclose(m.body_mass.sum(), mj.source.tree.mass.sum())
-    from urdf2links.scene import Spring
+    from urdf2links.scenes.scene import Spring
 
     sp = mjcf_from_model(mj.source, springs=[Spring("elbow", 3.0, 0.2, 0.5)])
     flags = int(sp.model.opt.disableflags)
@@ -230,7 +230,7 @@ def test_accelerations_with_prescribed_base(model):
 def test_torques_loads_springs_match_forward_dynamics():
     """Joint torques, springs and dampers, forces at points and moments (link and world axes),
     one on a folded massless link (deck crane's sway_gimbal), with and without a moving base."""
-    from urdf2links.scene import Spring
+    from urdf2links.scenes.scene import Spring
 
     model = load("deck_crane.urdf")
     springs = [Spring("luff", 5e3, 0.3, 200.0), Spring("sway_y", 0.0, 0.0, 50.0)]
@@ -316,10 +316,10 @@ def test_heaving_base_trajectory():
 def test_scene_run_matches_plan():
     """A scene with torque, spring/damper, a force at a point and base motion: run_mujoco(scene)
     against the project's own plan of the same scene."""
-    import urdf2links.plan as plan_mod
-    from urdf2links.oracles.python_plan import PythonPlan
-    from urdf2links.compare.mjcf import mjcf_from_scene
-    from urdf2links.scene import scene_from_dict
+    import urdf2links.scenes.plan as plan_mod
+    from urdf2links.scenes.python_plan import PythonPlan
+    from urdf2links.compare.mujoco_side.mjcf import mjcf_from_scene
+    from urdf2links.scenes.scene import scene_from_dict
 
     scene = scene_from_dict({
         "robot": {"urdf": str(ROBOTS / "double_pendulum.urdf")},
@@ -364,6 +364,6 @@ def test_callback_removed_on_error_and_samples_off_grid():
 
 
 def test_urdf2links_does_not_import_mujoco():
-    code = ("import sys, urdf2links, urdf2links.model, urdf2links.scene, urdf2links.transforms; "
+    code = ("import sys, urdf2links, urdf2links.dynamics.model, urdf2links.scenes.scene, urdf2links.dynamics.transforms; "
             "assert 'mujoco' not in sys.modules, 'urdf2links imported mujoco'")
     subprocess.run([sys.executable, "-c", code], check=True, cwd=ROOT)

@@ -1,4 +1,4 @@
-"""Tests of urdf2links.parse: validation errors, a round trip, mesh paths, the real corpus."""
+"""Tests of urdf2links.parsers.urdf: validation errors, a round trip, mesh paths, the real corpus."""
 
 from __future__ import annotations
 
@@ -11,14 +11,8 @@ import yourdfpy
 
 from urdf2links.locations import example_robot_data_dir
 
-from urdf2links.errors import (
-    MeshError,
-    URDFError,
-    URDFStructureError,
-    URDFSyntaxError,
-    URDFValueError,
-)
-from urdf2links.parse import parse_urdf, require_mesh, resolve_mesh_path
+from urdf2links.errors import MeshError, URDFError, URDFStructureError, URDFSyntaxError, URDFValueError
+from urdf2links.parsers.urdf import parse_urdf, require_mesh, resolve_mesh_path
 
 # --------------------------------------------------------------------------- helpers
 

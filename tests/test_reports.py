@@ -1,4 +1,4 @@
-"""The MuJoCo cross-validation reports: urdf2links.compare.trajectory, urdf2links.compare.report, `urdf2links compare`.
+"""The MuJoCo cross-validation reports: urdf2links.compare.agreement.trajectory, urdf2links.compare.reports.report, `urdf2links compare`.
 
 Short runs (1 s) of the double pendulum and the ship crane, MuJoCo RK4 dt 1e-4 against the
 project's DOP853 rtol 1e-10; the committed baselines (reports/baselines.json) must accept them.
@@ -17,10 +17,10 @@ import pytest
 
 import mujoco  # noqa: F401,E402 -- a declared dependency: a broken MuJoCo fails the suite
 
-from urdf2links.compare.baselines import check_baseline, load_baselines  # noqa: E402
+from urdf2links.compare.reports.baselines import check_baseline, load_baselines  # noqa: E402
 from urdf2links.compare.formatting import json_ready  # noqa: E402
-from urdf2links.compare.report import write_index, write_report  # noqa: E402
-from urdf2links.compare.trajectory import compare_scene, divergence_time, growth_fit  # noqa: E402
+from urdf2links.compare.reports.report import write_index, write_report  # noqa: E402
+from urdf2links.compare.agreement.trajectory import compare_scene, divergence_time, growth_fit  # noqa: E402
 from pages import assert_offline, poses_4x4  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -120,7 +120,7 @@ def test_report_animates_both_engines(which, request, tmp_path):
     """The report's Motion section: urdf2links solid and MuJoCo as a ghost, each drawn from its own q
     at the frame times (at most 30 per simulated second), the difference plotted beside them."""
     from urdf2links import urdf_link_poses
-    from urdf2links.animation import read_animation_data
+    from urdf2links.view.animation import read_animation_data
 
     c, s = request.getfixturevalue(which)
     page = write_report(c, tmp_path / "r")["html"].read_text()
@@ -166,7 +166,7 @@ def test_growth_fit_and_divergence_time():
 
 def test_committed_baselines_cover_every_shipped_scene():
     from urdf2links.compare.commands import report_t_end
-    from urdf2links.scene import load_scene
+    from urdf2links.scenes.scene import load_scene
 
     scenes = load_baselines(BASELINES)["scenes"]
     for toml in ROBOTS.glob("*.toml"):
@@ -178,7 +178,7 @@ def test_committed_baselines_cover_every_shipped_scene():
 
 
 def test_baseline_run_selection_and_merge(pendulum, tmp_path):
-    from urdf2links.compare.baselines import select_run, write_baselines
+    from urdf2links.compare.reports.baselines import select_run, write_baselines
 
     s = pendulum[1]  # a 1 s run
     path = tmp_path / "b.json"
@@ -265,7 +265,7 @@ def test_cli_does_not_import_mujoco_until_needed():
 
 def test_report_caps_driven_scenes():
     from urdf2links.compare.commands import report_t_end
-    from urdf2links.scene import load_scene
+    from urdf2links.scenes.scene import load_scene
 
     crane = load_scene(ROBOTS / "ship_crane.toml")
     T, note = report_t_end(crane, t_end=None, cap=5.0)
@@ -298,7 +298,7 @@ def test_real_robot_reports(name, tmp_path):
     page_path = tmp_path / "report" / "report.html"
     assert 10_000 < page_path.stat().st_size < 5_000_000  # the budget: 5 MB with the animation and its meshes
     assert json.loads((tmp_path / "report" / "summary.json").read_text())["terms"]["max_rel_error"] < 1e-9
-    from urdf2links.animation import read_animation_data
+    from urdf2links.view.animation import read_animation_data
 
     page = page_path.read_text()
     assert_offline(page)

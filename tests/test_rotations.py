@@ -1,4 +1,4 @@
-"""Tests of urdf2links.rotations: URDF rpy <-> ZYX angles (docs/equations.md (E6), (E7)), axis alignment."""
+"""Tests of urdf2links.dynamics.rotations: URDF rpy <-> ZYX angles (docs/equations.md (E6), (E7)), axis alignment."""
 
 from __future__ import annotations
 
@@ -9,15 +9,8 @@ import numpy as np
 import pytest
 
 from urdf2links.errors import URDFValueError
-from urdf2links.rotations import (
-    axis_alignment,
-    homogeneous,
-    matrix_to_xyz_angles,
-    rot_x,
-    rot_y,
-    rot_z,
-    rpy_to_matrix,
-    rpy_to_xyz_angles,
+from urdf2links.dynamics.rotations import (
+    axis_alignment, homogeneous, matrix_to_xyz_angles, rot_x, rot_y, rot_z, rpy_to_matrix, rpy_to_xyz_angles,
     xyz_angles_to_matrix,
 )
 

@@ -11,13 +11,14 @@ import numpy as np
 import pytest
 from scipy.special import ellipk
 
-from urdf2links.oracles import python_plan as python_plan_module, recursive
-from urdf2links.oracles.python_plan import PythonPlan
+from urdf2links.scenes import python_plan as python_plan_module
+from urdf2links.dynamics.oracles import recursive
+from urdf2links.scenes.python_plan import PythonPlan
 from urdf2links.locations import shipped_robots_dir
 from urdf2links.errors import SceneError
-from urdf2links.plan import compile_plan
-from urdf2links.scene import load_scene
-from urdf2links.simulate import simulate
+from urdf2links.scenes.plan import compile_plan
+from urdf2links.scenes.scene import load_scene
+from urdf2links.integration.simulate import simulate
 
 ROBOTS = Path(__file__).resolve().parent.parent / "robots"
 
@@ -90,7 +91,7 @@ def test_unnamed_effects_cost_nothing(tmp_path, monkeypatch):
     plan = compile_plan(scene, scene.model())
     assert plan.terms == ("A", "e")
     # the compiled twin has the same terms switched off: no base factors, no gravity, no wrench
-    from urdf2links.scene_arrays import scene_view
+    from urdf2links.scenes.scene_arrays import scene_view
     sc = scene_view(plan.rhs.SI, plan.rhs.SF)
     assert (sc.has_base, sc.has_g, sc.load_link.size, sc.torque_idx.size, sc.spring_idx.size) == (0, 0, 0, 0, 0)
     PythonPlan(plan).rhs(0.1, np.r_[0.3, 0.2, 0.1, -0.1, 0.0])     # the Python twin runs under the forbids
@@ -136,7 +137,7 @@ def test_named_effects_are_computed(tmp_path, monkeypatch):
     y = np.r_[0.3, 0.2, 0.1, -0.1, 0.0]
     out = PythonPlan(plan).rhs(0.1, y)
     assert counts["G"] == 1 and counts["Q"] >= 1
-    from urdf2links.scene_arrays import scene_view
+    from urdf2links.scenes.scene_arrays import scene_view
     sc = scene_view(plan.rhs.SI, plan.rhs.SF)
     assert (sc.has_base, sc.has_g, sc.load_link.size, sc.torque_idx.size, sc.spring_idx.size,
             sc.damper_idx.size) == (1, 1, 1, 1, 1, 1)
@@ -266,7 +267,7 @@ def test_shipped_scenes_run_and_balance_energy(scene_file):
 def test_progress_bar_draws_only_when_enabled():
     import io
 
-    from urdf2links.simulate import Progress
+    from urdf2links.integration.simulate import Progress
     stream = io.StringIO()
     bar = Progress(2.0, label="run", enabled=True, stream=stream)
     bar(1.0)

@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 from urdf2links import load_urdf, urdf_link_poses
-from urdf2links.charts import floating_links
-from urdf2links.rotations import rpy_to_matrix, xyz_angles_to_matrix
-from urdf2links.scene import scene_from_dict
-from urdf2links.simulate import simulate
+from urdf2links.integration.charts import floating_links
+from urdf2links.dynamics.rotations import rpy_to_matrix, xyz_angles_to_matrix
+from urdf2links.scenes.scene import scene_from_dict
+from urdf2links.integration.simulate import simulate
 
 ORIGIN_RPY = (0.3, -0.2, 0.1)
 URDF = f"""<robot name="ball_arm">
@@ -50,8 +50,8 @@ def test_angles_are_the_zyx_rotation_in_the_joint_frame(robot):
 def test_terms_agree_with_mujoco_route1(robot):
     """MuJoCo integrates the three angles as three hinges (route 1). Tolerance 1e-10 relative: both sides
     evaluate the same rigid-body terms in double precision (measured ~1e-15), as for the shipped scenes."""
-    from urdf2links.compare.mjcf import mjcf_from_scene
-    from urdf2links.compare.scene_terms import route1_terms
+    from urdf2links.compare.mujoco_side.mjcf import mjcf_from_scene
+    from urdf2links.compare.agreement.scene_terms import route1_terms
 
     scene = scene_from_dict({"robot": {"urdf": str(robot)}, "gravity": {}})
     model = scene.model()

@@ -2,7 +2,7 @@
 
 Every shipped robot and every URDF of example-robot-data: relative agreement below 1e-9 on the
 original file when MuJoCo accepts it, on the project's repaired text when MuJoCo refuses it
-(``urdf2links.compare.terms``). The assert messages and the ``route`` user property name the route used.
+(``urdf2links.compare.agreement.terms``). The assert messages and the ``route`` user property name the route used.
 """
 
 from __future__ import annotations
@@ -20,8 +20,9 @@ import mujoco  # a declared dependency: a broken MuJoCo fails the suite
 
 import corpus  # noqa: E402
 from urdf2links.compare import MujocoRefused, mujoco_from_urdf, mujoco_terms  # noqa: E402
-from urdf2links.compare.terms import (ROUTE_ORIGINAL, ROUTE_REPAIRED, compare_terms_urdf,  # noqa: E402
-                           massless_moving_links, repaired_urdf_text)
+from urdf2links.compare.agreement.terms import (
+    ROUTE_ORIGINAL, ROUTE_REPAIRED, compare_terms_urdf, massless_moving_links, repaired_urdf_text,
+)
 from urdf2links import InertiaError, Model, URDFError, load_urdf  # noqa: E402
 
 TOL = 1e-9

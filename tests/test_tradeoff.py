@@ -1,4 +1,4 @@
-"""The work-precision study (urdf2links.compare.tradeoff, `urdf2links tradeoff`).
+"""The work-precision study (urdf2links.compare.tradeoff.study, `urdf2links tradeoff`).
 
 One short study of the double pendulum (t_end 0.5 s, the --quick ladders, one timing round) is shared
 by the module: reference and check, convergence orders of RK4 (both engines) and Euler, monotone
@@ -18,9 +18,9 @@ import pytest
 
 import mujoco  # noqa: F401,E402 -- a declared dependency: a broken MuJoCo fails the suite
 
-from urdf2links.compare.tradeoff import MUJOCO_DTS, ROUNDING_BAND, _rounding_floor, crossover, run_study
-from urdf2links.compare.tradeoff_report import write_study  # noqa: E402
-from urdf2links.compare.tradeoff_report import BEGIN, END, insert_section, render_section  # noqa: E402
+from urdf2links.compare.tradeoff.study import MUJOCO_DTS, ROUNDING_BAND, _rounding_floor, crossover, run_study
+from urdf2links.compare.tradeoff.report import write_study  # noqa: E402
+from urdf2links.compare.tradeoff.report import BEGIN, END, insert_section, render_section  # noqa: E402
 from urdf2links.cli import main  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -241,8 +241,8 @@ def test_insert_section_without_footer(tmp_path):
 
 
 def test_report_includes_the_section_when_the_scene_has_a_study(tmp_path):
-    from urdf2links.compare.report import write_report
-    from urdf2links.compare.trajectory import compare_scene
+    from urdf2links.compare.reports.report import write_report
+    from urdf2links.compare.agreement.trajectory import compare_scene
 
     data = run_study(SCENE, t_end=0.2, quick=True, methods=("RK4",), mujoco_integrators=("RK4",))
     write_study(data, tmp_path)
@@ -276,5 +276,5 @@ def test_cli_errors_name_the_argument(argv, named, tmp_path, capsys):
 
 
 def test_urdf2links_cli_does_not_import_mujoco():
-    code = "import sys, urdf2links.cli; sys.exit('mujoco' in sys.modules or 'urdf2links.compare.tradeoff' in sys.modules)"
+    code = "import sys, urdf2links.cli; sys.exit('mujoco' in sys.modules or 'urdf2links.compare.tradeoff.study' in sys.modules)"
     assert subprocess.run([sys.executable, "-c", code], cwd=ROOT).returncode == 0

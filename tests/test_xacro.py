@@ -73,7 +73,7 @@ def test_include_by_package_url(workspace):
 
 
 def test_package_meshes_of_an_expanded_xacro_resolve(workspace):
-    from urdf2links.parse import parse_urdf
+    from urdf2links.parsers.urdf import parse_urdf
 
     desc = parse_urdf(workspace / "urdf" / "arm.urdf.xacro")
     mesh = desc.links["upper"].visuals[0]

@@ -4,19 +4,13 @@ This package never imports MuJoCo; the comparison lives in the ``compare`` packa
 """
 
 from .errors import (
-    DynamicsError,
-    InertiaError,
-    MeshError,
-    URDFError,
-    URDFStructureError,
-    URDFSyntaxError,
-    URDFValueError,
+    DynamicsError, InertiaError, MeshError, URDFError, URDFStructureError, URDFSyntaxError, URDFValueError,
 )
-from .importer import AuditRecord, load_urdf, load_urdf_string, urdf_link_poses
-from .loads import Wrench
-from .model import Model
-from .transforms import BaseState, base_transforms
-from .tree import LinkSpec, LinkTree, build_tree, pseudo_inertia_from
+from .parsers.importer import AuditRecord, load_urdf, load_urdf_string, urdf_link_poses
+from .dynamics.loads import Wrench
+from .dynamics.model import Model
+from .dynamics.transforms import BaseState, base_transforms
+from .dynamics.tree import LinkSpec, LinkTree, build_tree, pseudo_inertia_from
 
 __all__ = [
     "load_urdf",

@@ -3,7 +3,7 @@ SCENE.toml|ROBOT.urdf``, ``urdf2links sweep SCENE.toml|ROBOT.urdf``, ``urdf2link
 SCENE.toml|ROBOT.urdf``, ``urdf2links report [--corpus DIR ...]`` and ``urdf2links tradeoff SCENE.toml``
 (the MuJoCo comparison and the work-precision study: the handlers import the ``compare`` package,
 and with it MuJoCo, only when they run). A robot file given to
-``simulate`` or ``compare`` runs in its default scene (:func:`urdf2links.scene.default_scene`)."""
+``simulate`` or ``compare`` runs in its default scene (:func:`urdf2links.scenes.scene.default_scene`)."""
 
 from __future__ import annotations
 
@@ -14,9 +14,9 @@ import warnings
 import numpy as np
 
 from .errors import DynamicsError, IntegrationError, SceneError, URDFError
-from .limits import LimitExcursion
-from .scene_toml import scene_from_args, write_scene_option, xacro_args_of
-from .transforms import PARAMETERS
+from .scenes.limits import LimitExcursion
+from .scenes.scene_toml import scene_from_args, write_scene_option, xacro_args_of
+from .dynamics.transforms import PARAMETERS
 
 __all__ = ["main", "build_parser", "format_tree", "scene_from_args", "xacro_args_of", "write_scene_option"]
 
@@ -77,12 +77,12 @@ def _joint_lines(joints) -> list[str]:
 
 
 def _inspect(args) -> int:
-    from .importer import load_urdf
+    from .parsers.importer import load_urdf
 
     if args.scene:
-        from .plan import compile_plan
-        from .scene import default_scene
-        from .scene_toml import scene_toml
+        from .scenes.plan import compile_plan
+        from .scenes.scene import default_scene
+        from .scenes.scene_toml import scene_toml
 
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -95,8 +95,8 @@ def _inspect(args) -> int:
         print(compile_plan(scene, model).describe())
         return 0
     if str(args.file).endswith(".toml"):
-        from .plan import compile_plan
-        from .scene import load_scene
+        from .scenes.plan import compile_plan
+        from .scenes.scene import load_scene
 
         scene = load_scene(args.file)
         with warnings.catch_warnings():
@@ -116,8 +116,8 @@ def _inspect(args) -> int:
 def _simulate(args) -> int:
     from pathlib import Path
 
-    from .scene import robot_stem
-    from .simulate import simulate
+    from .scenes.scene import robot_stem
+    from .integration.simulate import simulate
 
     scene = scene_from_args(args)
     write_scene_option(args, scene)
@@ -142,14 +142,14 @@ def _simulate(args) -> int:
         print(f"  note: {LimitExcursion(**e).text()}")
     print(f"  wrote {npz} and {csv_path}")
     if args.plot:
-        from .plots import plot_trajectory
+        from .view.plots import plot_trajectory
 
         png = plot_trajectory(traj, out / f"{stem}.png")
         print(f"  plot {png}")
     if args.animate:
-        from .animation import write_trajectory_page
+        from .view.animation import write_trajectory_page
 
-        from .visuals import scene_shapes
+        from .view.visuals import scene_shapes
 
         page = write_trajectory_page(out / f"{stem}.html", traj, model, fps=args.animation_fps or 30.0,
                                      base=scene.base_state if scene.base is not None else None,
@@ -159,13 +159,13 @@ def _simulate(args) -> int:
 
 
 def _compare(args) -> int:
-    from urdf2links.compare.commands import compare_command
+    from .compare.commands import compare_command
 
     return compare_command(args)
 
 
 def _report(args) -> int:
-    from urdf2links.compare.commands import report_command
+    from .compare.commands import report_command
 
     return report_command(args)
 
@@ -175,8 +175,8 @@ def _sweep(args) -> int:
     loop here or split across a Dask cluster (``--scheduler``); an .npz of the trajectories."""
     from pathlib import Path
 
-    from .batch import simulate_batch, sweep_states
-    from .scene import robot_stem
+    from .integration.batch import simulate_batch, sweep_states
+    from .scenes.scene import robot_stem
 
     scene = scene_from_args(args)
     write_scene_option(args, scene)
@@ -189,7 +189,7 @@ def _sweep(args) -> int:
         raise SceneError(f"urdf2links sweep: {exc}") from None
     client = None
     if args.scheduler:
-        from .distributed import connect
+        from .integration.distributed import connect
 
         try:
             client = connect(args.scheduler)
@@ -220,7 +220,7 @@ def _sweep(args) -> int:
 
 
 def _tradeoff(args) -> int:
-    from urdf2links.compare.commands import tradeoff_command
+    from .compare.commands import tradeoff_command
 
     return tradeoff_command(args)
 

@@ -35,7 +35,11 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["RANGES", "out_of_range", "MIN_T_END", "MIN_ATOL", "MAX_SAMPLES", "MAX_STEPS", "MAX_TABLE_SAMPLES", "RTOL_FLOOR"]
+__all__ = ["RANGES", "out_of_range", "MIN_T_END", "MIN_ATOL", "MAX_SAMPLES", "MAX_STEPS", "MAX_TABLE_SAMPLES", "RTOL_FLOOR",
+           "METHODS"]
+
+#: The integration methods a scene or ``integrate()`` may name (:mod:`urdf2links.integration.integrators`).
+METHODS = ("RK45", "DOP853", "Radau", "BDF", "LSODA", "RK4", "midpoint")
 
 #: quantity -> (largest absolute value, unit) (module doc).
 RANGES: dict[str, tuple[float, str]] = {
@@ -64,7 +68,7 @@ MIN_ATOL = 1e-30
 MAX_SAMPLES = 1_000_000
 #: Most points of a ``{times, values}`` table.
 MAX_TABLE_SAMPLES = 100_000
-#: Most accepted integration steps of one run (:func:`urdf2links.simulate.simulate` raises an
+#: Most accepted integration steps of one run (:func:`urdf2links.integration.simulate.simulate` raises an
 #: :class:`~urdf2links.errors.IntegrationError` beyond): 200 000 steps of the 1000 s hard case are 2 %.
 MAX_STEPS = 10_000_000
 #: The smallest ``rtol`` float64 can honour: scipy's solvers raise a smaller one to ``100 eps`` (with

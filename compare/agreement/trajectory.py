@@ -1,0 +1,440 @@
+"""One scene run by both engines and compared: terms, trajectories, energies, base, wall time.
+
+:func:`compare_scene` is the MuJoCo cross-validation of one scene:
+
+1. **Terms at identical states.** At ``states`` seeded random states (``q`` uniform in
+   [-1, 1] rad or m, ``qd`` standard normal; with a moving base also a random base pose
+   (uniform in [-1, 1]) and rate (standard normal), accelerations zero since ``qfrc_bias``
+   holds none), ``A`` against ``mj_fullM`` and ``e + G`` (the scene's gravity) against
+   ``qfrc_bias``, as ``max|ours - MuJoCo| / max|MuJoCo|`` (:mod:`urdf2links.compare.agreement.scene_terms`):
+
+   * route 1: the project's own tree written as MJCF (:mod:`urdf2links.compare.mujoco_side.mjcf`), built for the scene
+     (its gravity, springs, moving base);
+   * route 2: MuJoCo's own URDF import of the robot's file (:func:`urdf2links.compare.agreement.terms.compare_terms_urdf`),
+     only for a fixed-base robot. When MuJoCo refuses the file, its reason is recorded and the
+     comparison is repeated with the project's repair (the repaired inertias written into the
+     text; a 1 g sphere on each massless moving link on BOTH sides when MuJoCo refuses those),
+     labelled as such.
+
+2. **Trajectories.** The project's :func:`urdf2links.integration.simulate.simulate` and MuJoCo
+   (:func:`urdf2links.compare.mujoco_side.mujoco_run.run_mujoco`, route 1, base motion prescribed, the scene's torques
+   and loads) from the same initial state; ``|q_ours - q_MuJoCo|`` per coordinate at MuJoCo's
+   sample times (the project's dense output when the times differ). For every scene the
+   divergence time (first time the largest coordinate error exceeds ``threshold``, default
+   :data:`DIVERGENCE_THRESHOLD`); for a chaotic scene (``scene.chaotic``) also a fitted
+   exponential growth rate (:func:`growth_fit`), reported as chaos, not as failure.
+
+3. **Energy.** ``E + V`` of both engines (MuJoCo's ``mjENBL_ENERGY``) against time, and the drift
+   of each: ``max |h - h(0) - W|`` (``h = E + V`` for a fixed base, ``W`` the work of torques,
+   forces, dampers and the base). With no work terms, MuJoCo's drift is ``max |(E + V) - (E +
+   V)(0)|`` of its own numbers; with work terms the project's ``W`` (integrated along its own
+   trajectory) is used for both, and ``notes`` says so. With a moving base ``h`` is the energy
+   function ``E2 - E0 + V`` (the conserved quantity's generalization), for MuJoCo from its own
+   kinetic energies at ``qd``, ``-qd`` and ``0`` (``h = (E(qd) + E(-qd)) / 2 - 2 E(0) + V``) at its
+   states and the prescribed base.
+
+4. **Base tracking** (moving base): how far MuJoCo's ``base_A`` is from the prescribed pose.
+
+5. **Wall time** of each engine, timed the same way (not checked against baselines): urdf2links'
+   integrator (:data:`urdf2links.integration.simulate.TIMED_REGION`) after a warm-up that compiles, or loads
+   from numba's cache, every compiled function the run calls (:func:`urdf2links.integration.simulate.warm_up`;
+   its time is reported on its own); MuJoCo's ``mj_step(nstep)`` calls
+   (:data:`urdf2links.compare.mujoco_side.mujoco_run.TIMED_REGION`), inputs from the compiled control callback.
+   Both sample at the same times and neither timed region contains the copying or evaluation at
+   the samples; the whole calls are reported beside them (``wall_time.regions`` says what each
+   figure contains).
+
+:meth:`SceneComparison.summary` is the JSON-ready dictionary; the report is written by
+:mod:`urdf2links.compare.reports.report`.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import mujoco
+import numpy as np
+
+from urdf2links.console import shown_path
+from urdf2links.errors import IntegrationError
+from urdf2links.ranges import MAX_STEPS
+from urdf2links.scenes.limits import LimitExcursion
+from urdf2links.scenes.plan import compile_plan
+from urdf2links.scenes.scene import Scene, load_scene, robot_stem
+from urdf2links.integration.simulate import TIMED_REGION as PROJECT_REGION
+from urdf2links.integration.simulate import Trajectory, simulate, warm_up
+
+from ..mujoco_side.mjcf import MjcfModel, mjcf_from_scene
+from ..mujoco_side.mujoco_run import TIMED_REGION as MUJOCO_REGION
+from ..mujoco_side.mujoco_run import MujocoRun, energy_function, run_mujoco
+from .scene_terms import ROUTE1_LABEL, route1_terms, route2_terms
+
+__all__ = [
+    "SceneComparison",
+    "compare_scene",
+    "growth_fit",
+    "divergence_time",
+    "scene_key",
+    "DIVERGENCE_THRESHOLD",
+]
+
+#: Error (rad or m, largest over the coordinates) whose first crossing is the divergence time.
+DIVERGENCE_THRESHOLD = 1e-3
+
+
+def scene_key(scene: Scene) -> str:
+    """``"<robot>/<scene>"``: the URDF file's stem and the scene's name (the baselines' key and the
+    report's folder)."""
+    return f"{robot_stem(scene.robot)}/{scene.name}"
+
+
+# --------------------------------------------------------------------------- trajectory analysis
+
+
+def divergence_time(t, err, threshold: float = DIVERGENCE_THRESHOLD) -> float | None:
+    """First time at which ``err`` (m,) exceeds ``threshold``; None if it never does."""
+    above = np.nonzero(np.asarray(err) > threshold)[0]
+    return float(t[above[0]]) if above.size else None
+
+
+def growth_fit(t, err, *, end_time: float | None = None, rise: float = 10.0, min_samples: int = 10) -> dict | None:
+    """Exponential growth ``err ~ C exp(rate t)`` fitted by least squares to ``log`` of the error's
+    running maximum (its envelope; a difference that oscillates through zero has no log) over
+    the growth phase: from the first time the envelope exceeds ``rise`` times the noise level
+    (the envelope over the first 5 % of the run, the integrators' own error) up to ``end_time``
+    (the divergence time; else the end of the run). None when the error never rises out of the
+    noise or the phase has fewer than ``min_samples`` samples. Returns ``rate`` (1/s),
+    ``e_folding_time`` (s), ``log10_intercept``, ``window`` [t0, t1], ``samples``, ``decades``."""
+    t = np.asarray(t, float)
+    env = np.maximum.accumulate(np.abs(np.asarray(err, float)))
+    if t.size < min_samples or not np.any(env > 0):
+        return None
+    k0 = max(3, int(0.05 * t.size))
+    early = env[:k0]
+    noise = float(early[early > 0].max()) if np.any(early > 0) else float(env[env > 0].min())
+    start = np.nonzero(env > rise * noise)[0]
+    if not start.size:
+        return None
+    i0 = int(start[0])
+    i1 = t.size - 1 if end_time is None else int(np.searchsorted(t, end_time, side="right") - 1)
+    if i1 - i0 + 1 < min_samples:
+        return None
+    tt, yy = t[i0:i1 + 1], np.log(env[i0:i1 + 1])
+    rate, intercept = np.polyfit(tt, yy, 1)
+    return {"rate": float(rate), "e_folding_time": float(1.0 / rate) if rate > 0 else None,
+            "log10_intercept": float(intercept / np.log(10.0)), "window": [float(tt[0]), float(tt[-1])],
+            "samples": int(tt.size), "decades": float((yy[-1] - yy[0]) / np.log(10.0))}
+
+
+# --------------------------------------------------------------------------- the comparison
+
+
+@dataclass(eq=False)
+class SceneComparison:
+    """Everything :func:`compare_scene` measured, with the arrays the report plots.
+
+    ``t`` (m,) MuJoCo's sample times; ``q_ours``/``q_mujoco`` (m, n) there; ``error`` (m, n)
+    ``|q_ours - q_mujoco|``; ``energy``: dict of (m,) arrays ``ours_EV``, ``mujoco_EV``
+    (kinetic + potential), ``ours_balance``, ``mujoco_balance`` (``h - h(0) - W``), ``work``;
+    ``terms``: ``{"route1": ..., "route2": ...}``; ``growth``: :func:`growth_fit` or None;
+    ``info``: settings and notes. :meth:`summary` is the JSON contract.
+    """
+
+    scene: Scene
+    model: object
+    mj: MjcfModel
+    traj: Trajectory
+    run: MujocoRun
+    t: np.ndarray
+    q_ours: np.ndarray
+    q_mujoco: np.ndarray
+    error: np.ndarray
+    energy: dict
+    terms: dict
+    growth: dict | None
+    threshold: float
+    info: dict = field(default_factory=dict)
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def key(self) -> str:
+        return scene_key(self.scene)
+
+    @property
+    def coordinate_names(self) -> tuple[str, ...]:
+        return tuple(self.model.coordinate_names)
+
+    def _trajectory_summary(self) -> dict:
+        sc = self.scene
+        err_max = self.error.max(axis=1) if self.error.size else np.zeros(len(self.t))
+        div = divergence_time(self.t, err_max, self.threshold)
+        by_coord = {c: float(v) for c, v in zip(self.coordinate_names, self.error.max(axis=0))} if self.error.size else {}
+        trajectory = {
+            "max_abs_error": float(err_max.max()) if err_max.size else 0.0,
+            "max_abs_error_by_coordinate": by_coord,
+            "final_abs_error": float(err_max[-1]) if err_max.size else 0.0,
+            "divergence_time": div,
+            "divergence_threshold": self.threshold,
+            "chaotic": bool(sc.chaotic),
+            "growth_rate": None if self.growth is None else self.growth["rate"],
+            "growth": self.growth,
+            "units": "rad for angles, m for translations",
+        }
+        if sc.chaotic:
+            g = self.growth
+            trajectory["verdict"] = (
+                "chaotic scene: the engines' difference grows exponentially"
+                + (f" (rate {g['rate']:.3g} /s, e-folding {g['e_folding_time']:.3g} s, fitted over "
+                   f"t = {g['window'][0]:.3g}..{g['window'][1]:.3g} s)" if g and g.get("e_folding_time") else "")
+                + (f"; they diverge (error > {self.threshold:g}) at t = {div:.4g} s" if div is not None else
+                   f"; no divergence (error > {self.threshold:g}) within the run")
+                + ". This is chaos, not a failure.")
+        else:
+            trajectory["verdict"] = (f"the engines agree to {trajectory['max_abs_error']:.2e} over the run"
+                                     if div is None else
+                                     f"the engines DIVERGE at t = {div:.4g} s (error > {self.threshold:g}) in a "
+                                     "scene that is not marked chaotic")
+        return trajectory
+
+    def _energy_summary(self) -> dict:
+        e = self.energy
+        return {
+            "project_drift": float(np.max(np.abs(e["ours_balance"]))),
+            "mujoco_drift": float(np.max(np.abs(e["mujoco_balance"]))),
+            "scale": float(self.info["energy_scale"]),
+            "project_drift_rel": float(np.max(np.abs(e["ours_balance"])) / self.info["energy_scale"]),
+            "mujoco_drift_rel": float(np.max(np.abs(e["mujoco_balance"])) / self.info["energy_scale"]),
+            "max_engine_difference": float(np.max(np.abs(e["ours_EV"] - e["mujoco_EV"]))),
+            "quantity": self.info["energy_quantity"],
+            "work_terms": bool(self.info["work_terms"]),
+            "units": "J",
+            "note": self.info["energy_note"],
+        }
+
+    def _wall_time_summary(self) -> dict:
+        traj, run, warm = self.traj, self.run, self.info["warm_up"]
+        r1, r2 = self.terms["route1"], self.terms["route2"]
+        return {
+            "project_s": float(traj.stats["wall_time"]), "mujoco_s": float(run.wall_time),
+            "project_run_s": float(traj.stats["run_s"]), "mujoco_harness_s": float(run.harness_time),
+            "project_warmup_s": float(warm.seconds), "project_compiled": list(warm.functions),
+            "mujoco_inputs": run.inputs, "mujoco_callback_calls": int(run.callback_calls),
+            "mujoco_callback_load_s": float(run.compilation.seconds),
+            "mujoco_callback_compiled": list(run.compilation.functions),
+            "terms_s": float(r1.get("wall_time_s", 0.0) + r2.get("wall_time_s", 0.0)),
+            "total_s": float(self.info["total_s"]),
+            "regions": {
+                "project_s": PROJECT_REGION,
+                "mujoco_s": MUJOCO_REGION,
+                "project_run_s": "the whole simulate() call: plan, integration, samples, energies, poses",
+                "mujoco_harness_s": "the whole run_mujoco() call: model copy, control callback set-up (and its "
+                                    "loading or compilation), stepping, sample copies, the energy pass",
+                "project_warmup_s": "the warm-up run before the timed one: numba's compilation of the functions "
+                                    "in project_compiled (none: loaded from numba's disk cache)",
+                "mujoco_callback_load_s": "loading (or compiling: mujoco_callback_compiled) the compiled control "
+                                          "callback, once per process, inside mujoco_harness_s",
+            },
+            "note": "each engine's integration timed the same way (compilation and sampling outside the timed "
+                    "regions; the same sample times); not checked against baselines",
+        }
+
+    def summary(self) -> dict:
+        """The JSON-ready summary. Contract keys (nested): ``terms.max_rel_error``,
+        ``trajectory.max_abs_error``, ``trajectory.divergence_time`` (None if none),
+        ``energy.project_drift``, ``energy.mujoco_drift``, ``wall_time.project_s``,
+        ``wall_time.mujoco_s``, ``mujoco.integrator``, ``mujoco.timestep``, ``route``."""
+        sc, run, traj = self.scene, self.run, self.traj
+        r1, r2 = self.terms["route1"], self.terms["route2"]
+        term_max = max([r["max_rel_error"] for r in (r1, r2) if "max_rel_error" in r])
+        trajectory, energy = self._trajectory_summary(), self._energy_summary()
+        moving = self.mj.moving_base
+        return {
+            "schema": 1,
+            "key": self.key,
+            "robot": robot_stem(sc.robot),
+            "robot_name": self.model.name,
+            "scene": sc.name,
+            "scene_file": shown_path(sc.path) or f"(none: the default scene of {shown_path(sc.robot)})",
+            "description": sc.description,
+            "chaotic": bool(sc.chaotic),
+            "effects": list(self.info["effects"]),
+            "coordinates": list(self.coordinate_names),
+            "route": "route 1 (the project's tree as MJCF)",
+            "route_description": ROUTE1_LABEL + ("; base motion prescribed" if moving else ""),
+            "t_end": float(self.info["t_end"]),
+            "t_end_scene": float(sc.run.t_end),
+            "t_end_note": self.info.get("t_end_note"),
+            "samples": int(len(self.t)),
+            "initial": {"q": self.info["q0"], "qd": self.info["qd0"]},
+            "project": {"method": traj.stats["method"], "rtol": traj.stats["rtol"], "atol": traj.stats["atol"],
+                        "dt": traj.stats["dt"], "nsteps": int(traj.stats["nsteps"]), "nfev": int(traj.stats["nfev"]),
+                        "terms": list(traj.stats["terms"])},
+            "mujoco": {"integrator": run.integrator, "timestep": float(run.timestep), "nsteps": int(run.nsteps),
+                       "blow_ups": dict(run.blow_ups),
+                       "version": mujoco.__version__, "folded_links": list(self.mj.folded_links),
+                       "tiny_mass_links": list(self.mj.tiny_mass_links), "notes": list(run.notes)},
+            "terms": {"max_rel_error": float(term_max),
+                      "max_rel_error_route1": float(r1["max_rel_error"]),
+                      "max_rel_error_route2": r2.get("max_rel_error"),
+                      "route1": r1, "route2": r2},
+            "trajectory": trajectory,
+            "energy": energy,
+            "limit_excursions": list(traj.stats.get("limit_excursions", [])),
+            "base": {"moving": bool(moving),
+                     "tracking_error": float(run.base_tracking_error) if moving else None},
+            "wall_time": self._wall_time_summary(),
+            "notes": list(self.notes),
+        }
+
+
+def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str = "RK4", mujoco_dt: float = 1e-4,
+                  method: str | None = None, rtol: float | None = None, atol: float | None = None,
+                  samples: int | None = None, states: int = 8, seed: int = 0,
+                  threshold: float = DIVERGENCE_THRESHOLD, t_end_note: str | None = None,
+                  progress: bool | None = None, log: Callable[[str], None] | None = None,
+                  max_wall: float | None = None) -> SceneComparison:
+    """Run ``scene`` (a :class:`~urdf2links.scenes.scene.Scene` or a path to its TOML) with the project's
+    integrator (the scene's ``[run]`` unless ``method``/``rtol``/``atol`` say otherwise) and with
+    MuJoCo (``mujoco_integrator``, ``mujoco_dt``) over ``t_end`` (default the scene's) and compare
+    them (module doc). ``samples`` defaults to the scene's, scaled down with a shortened
+    ``t_end`` (at least 101). ``t_end_note`` is recorded when the caller capped ``t_end``.
+    ``log(message)`` receives stage messages; ``progress`` the project's progress bar. ``max_wall``
+    (seconds, from the start of the comparison) bounds the project's integration, and MuJoCo's run is
+    not started once it is spent: :class:`~urdf2links.errors.IntegrationError` says so."""
+    start = time.perf_counter()
+    say = log or (lambda _m: None)
+    if isinstance(scene, (str, Path)):
+        scene = load_scene(scene)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # audit findings: the scene chose how to load its robot
+        model = scene.model()
+    T = float(scene.run.t_end if t_end is None else t_end)
+    _check_mujoco_steps(scene, T, mujoco_dt)
+    if samples is None:
+        s = scene.run.samples
+        samples = s if T >= scene.run.t_end else max(101, int(round((s - 1) * T / scene.run.t_end)) + 1)
+    plan = compile_plan(scene, model)
+
+    say(f"terms at {states} seeded states (route 1" + (", route 2)" if not scene.load_options.get("floating_base")
+                                                       else ")"))
+    mj = mjcf_from_scene(scene, model, timestep=mujoco_dt, integrator=mujoco_integrator)
+    terms = {"route1": route1_terms(mj, model, scene, states=states, seed=seed),
+             "route2": route2_terms(scene, states=states, seed=seed)}
+
+    meth = method or scene.run.method
+    warm = warm_up(scene, model=model, methods=(meth,))
+    if warm.happened:
+        say(warm.describe("urdf2links warm-up"))
+    say(f"project: {meth}" + (f" rtol {rtol or scene.run.rtol:g}" if meth not in ("RK4", "midpoint") else "")
+        + f", t = 0..{T:g} s")
+    left = None if max_wall is None else max_wall - (time.perf_counter() - start)
+    if left is not None and left <= 0:
+        raise IntegrationError(f"{scene.path or scene.name}: max_wall={max_wall:g} s spent before the project's run "
+                               "(loading and terms)")
+    traj = simulate(scene, model=model, t_end=T, method=method, rtol=rtol, atol=atol, samples=samples,
+                    progress=progress, max_wall=left)
+    if max_wall is not None and time.perf_counter() - start > max_wall:
+        raise IntegrationError(f"{scene.path or scene.name}: max_wall={max_wall:g} s spent before MuJoCo's run")
+    say(f"MuJoCo: {mujoco_integrator} dt {mujoco_dt:g}, {int(round(T / mujoco_dt))} steps")
+    run = run_mujoco(mj, scene, t_end=T, samples=samples)
+    if run.compilation.happened:
+        say(run.compilation.describe("MuJoCo's control callback"))
+
+    t = np.asarray(run.t, float)
+    q_o, qd_o, W, EV_o, h_o, resampled = _project_at(traj, plan, t, T)
+    error = np.abs(q_o - run.q)
+    err_max = error.max(axis=1) if model.n else np.zeros(len(t))
+    div = divergence_time(t, err_max, threshold)
+    growth = growth_fit(t, err_max, end_time=div) if scene.chaotic else None
+    energy, info = _energy_balances(scene, plan, mj, run, traj, EV_o, h_o, W)
+    notes = _run_notes(scene, plan, mj, run, traj, t_end_note, resampled=resampled)
+    q0, qd0 = scene.initial_state(model)
+    info.update({"t_end": T, "t_end_note": t_end_note, "effects": plan.terms, "warm_up": warm,
+                 "q0": dict(zip(model.coordinate_names, q0.tolist())),
+                 "qd0": dict(zip(model.coordinate_names, qd0.tolist())),
+                 "total_s": time.perf_counter() - start})
+    return SceneComparison(
+        scene=scene, model=model, mj=mj, traj=traj, run=run, t=t, q_ours=q_o, q_mujoco=run.q, error=error,
+        energy=energy, terms=terms, growth=growth, threshold=threshold, info=info, notes=notes)
+
+
+def _check_mujoco_steps(scene, T: float, mujoco_dt) -> None:
+    """MuJoCo's run is ``T / mujoco_dt`` steps, known in advance: refused before it starts when that is
+    more than :data:`~urdf2links.ranges.MAX_STEPS` (or the timestep is not positive)."""
+    steps = T / mujoco_dt if isinstance(mujoco_dt, (int, float)) and mujoco_dt > 0 else math.inf
+    if not steps <= MAX_STEPS:
+        raise IntegrationError(f"{scene.path or scene.name}: MuJoCo timestep {mujoco_dt!r} over t_end = {T:g} s makes "
+                               f"{steps:.3g} steps, more than the {MAX_STEPS:g} a run may take: give a timestep in "
+                               f"[{T / MAX_STEPS:g}, {T:g}] s")
+
+
+def _run_notes(scene, plan, mj, run, traj, t_end_note, *, resampled: bool) -> list[str]:
+    """What the report says about the two runs besides figures: the cap on t_end, the default scene,
+    resampling, re-charting, spring notes, limit excursions, the MJCF's and MuJoCo run's notes."""
+    notes = []
+    if t_end_note:
+        notes.append(t_end_note)
+    if scene.path is None:
+        notes.append(f"no scene file: the robot's default scene ({scene.description}); `urdf2links inspect "
+                     f"{shown_path(scene.robot)} --scene` shows it, --write-scene FILE.toml writes it")
+    if resampled:
+        notes.append("MuJoCo's sample times differ from the project's: the project's dense output was "
+                     "evaluated at MuJoCo's times")
+    if traj.stats.get("n_recharts"):
+        notes.append(f"the project re-charted the ZYX angles of {sorted({r['link'] for r in traj.stats['recharts']})} "
+                     f"{traj.stats['n_recharts']} times near phi_y = +-pi/2 (urdf2links.integration.charts); its q are converted "
+                     "back to the loaded model's coordinates, which MuJoCo integrates as hinges through the singularity")
+    notes += [f"scene: {x}" for x in plan.spring_set.notes]
+    notes += [f"limits: {LimitExcursion(**x).text()} (urdf2links' trajectory)" for x in traj.stats["limit_excursions"]]
+    return notes + [f"MJCF: {x}" for x in mj.notes] + [f"MuJoCo run: {x}" for x in run.notes]
+
+
+def _project_at(traj, plan, t, T):
+    """The project's ``q``, ``qd``, work ``W``, ``E + V`` and ``h`` at MuJoCo's sample times ``t``: its
+    own samples when the times agree, else its dense output (then the last value is True)."""
+    n = plan.n
+    if traj.t.shape == t.shape and np.max(np.abs(traj.t - t)) <= 1e-12 * max(1.0, T):
+        EV = traj.energy["kinetic"] + traj.energy["potential"]
+        return traj.q, traj.qd, traj.energy["work"], EV, traj.energy["function"], False
+    if traj.sol is None:
+        raise RuntimeError("the project's run has no dense output to sample at MuJoCo's times")
+    Y = traj.sol(np.clip(t, traj.t[0], traj.t[-1]))
+    q, qd, W = Y[:, :n], Y[:, n:2 * n], Y[:, 2 * n]
+    E, V, h = plan.energies(t, q, qd)
+    return q, qd, W, E + V, h, True
+
+
+def _energy_balances(scene, plan, mj, run, traj, EV_o, h_o, W) -> tuple[dict, dict]:
+    """Both engines' balances ``h - h(0) - W`` (MuJoCo's without ``W`` when no work acts), the
+    energy arrays for the report, and what the summary says about them."""
+    work_terms = any(term in plan.terms for term in ("Q", "tau", "damper", "base"))
+    EV_m = run.total_energy
+    if scene.base is not None:
+        h_m = energy_function(mj, run, plan)
+        quantity, sym = "h = E2 - E0 + V (energy function; moving base)", "h"
+    else:
+        h_m = EV_m
+        quantity, sym = "E + V", "(E + V)"
+    bal_o = h_o - h_o[0] - W
+    if work_terms:
+        bal_m = h_m - h_m[0] - W
+        what = [w for w, on in (("forces/moments", "Q" in plan.terms), ("joint torques", "tau" in plan.terms),
+                                ("dampers", "damper" in plan.terms), ("the moving base", "base" in plan.terms)) if on]
+        note = (f"work terms present ({', '.join(what)}): both drifts use the project's work W "
+                f"(integrated along the project's trajectory): max |{sym} - {sym}(0) - W|")
+        if scene.base is not None:
+            note += "; MuJoCo's h from its own kinetic energies at qd, -qd and 0 at its states and the prescribed base"
+    else:
+        bal_m = h_m - h_m[0]
+        note = "no work terms: MuJoCo's drift is max |(E + V) - (E + V)(0)| of its own energies"
+    scale = max(float(np.abs(traj.energy["kinetic"]).max()),
+                float(np.abs(traj.energy["potential"] - traj.energy["potential"][0]).max()),
+                float(np.abs(traj.energy["work"]).max()), 1e-300)
+    energy = {"ours_EV": EV_o, "mujoco_EV": EV_m, "ours_h": h_o, "mujoco_h": h_m, "ours_balance": bal_o,
+              "mujoco_balance": bal_m, "work": W}
+    return energy, {"energy_scale": scale, "energy_quantity": quantity, "energy_note": note, "work_terms": work_terms}

@@ -1,0 +1,449 @@
+"""The recursive form compiled (numba): docs/equations.md (E26)-(E38), over the tree in world-frame twists.
+
+The recursive form writes every coordinate's derivative as one world twist,
+``T_i^(p) = W_i T^(p)`` with ``W_i = [[w_i^, v_i], [0, 0]]``; the unit twist is kept here as the
+6-vector ``s_i = (w_i, v_i)``. With the {0}-frame pseudo-inertia of a link,
+``Hw = T H T^T = [[S, c], [c^T, m]]`` (``S = int r r^T dm``, ``c = int r dm``), and
+``W r~ = w x r + v`` for a point ``r~ = (r, 1)``, the traces of the trace form (E19)-(E23) become integrals of
+point velocities, which only need ``m``, ``c`` and ``J = tr(S) 1 - S`` (the inertia about {0}, E29):
+
+- (E31) ``a_il = tr(W_i Hc W_l^T) = int (w_i x r + v_i).(w_l x r + v_l) dm = v_l.p_i + w_l.h_i``,
+  with the composite's momentum of the unit motion ``p_i = w_i x c + m v_i``,
+  ``h_i = J w_i + c x v_i``; only ancestor pairs are visited, and ``A`` is stored packed by them.
+- (E34) ``e_i + g_i = int (W_i r~).(a_0(r) - g) dm = v_i.f + w_i.n`` over the subtree of
+  ``link(i)``, with ``(f, n)`` the inertial wrench (E35)
+  ``f = alpha x c + m (a - g) + omega x (omega x c + m v)``,
+  ``n = J alpha + c x (a - g) + omega x (J omega) + c x (omega x v)``. Gravity is the uniform
+  acceleration ``-g`` added to the base's (E33), which gives exactly the G of (E22).
+- (E36) ``Q_i = v_i.f_ext + w_i.n_ext`` over the subtree (moments about {0}).
+
+Twists propagate from root to leaves (E33): a factor ``E_k(q_i)`` adds ``s_i q_i'`` to the twist and
+``s_i q_i'' + (V x s_i) q_i'`` to the spatial acceleration; a constant factor changes only the pose;
+a rotation factor turns two columns of the pose (a 2x2 rotation), a translation moves the origin
+along one column. The base {A} is the same chain of six factors with prescribed values. One
+kinematics pass serves ``A`` and ``e + G``: :func:`dynamics` forms each link's ``(m, c, J)`` in {0}
+once, for its wrench and for the subtree sums. Cost: O(n) for the passes, O(sum of depths) for
+``A``; its factorization (:mod:`urdf2links.dynamics.factor`) has no fill-in outside ancestor pairs.
+
+All functions index the flat arrays of :mod:`urdf2links.dynamics.tree_arrays` (``TI``, ``TF``, and the scratch
+``W``, one per thread) at header offsets; nothing allocates. The numpy form
+(:mod:`urdf2links.dynamics.oracles.recursive`) and the literal form (:mod:`urdf2links.dynamics.oracles.literal`) are the
+oracles the tests check these against.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .tree_arrays import (
+    AC, BASE_ACC, BASE_MOM, BASE_S, BASE_TWIST, CC, CJ, CM, CONSTANT, F_LINK, F_SEG, FI, FX, I_ANCIDX, I_ANCPTR,
+    I_COORDLINK, I_PARENT, I_RUNPTR, I_RUNS, I_SEGCOORD, I_SEGPTR, I_SEGSLOT, KF, KL, KS, O_, W_A, W_B, W_BASE,
+    W_COORD, W_LINK, W_Q, WV, nn,
+)
+
+__all__ = ["kinematics", "dynamics", "energies", "add_wrench", "clear_wrenches", "base_power", "poses"]
+
+
+# -- root to leaves ---------------------------------------------------------------------------------
+# The running frame is kept in registers as tuples: R (9, row-major), o (3), V = (omega, v) (6),
+# Acc = (alpha, a) (6); a link's record is read once from its parent and written once.
+@njit(cache=True, inline="always")
+def _turn(k, c, sn, R):
+    """``R Rot_k``: a rotation about the local axis ``k`` turns two columns ``a, b`` of R by
+    ``(c, sn)`` (``a, b`` = 1, 2 about x; 2, 0 about y; 0, 1 about z): a 2x2 rotation (E48)."""
+    R00, R01, R02, R10, R11, R12, R20, R21, R22 = R
+    if k == 0:
+        return (R00, c * R01 + sn * R02, -sn * R01 + c * R02, R10, c * R11 + sn * R12, -sn * R11 + c * R12,
+                R20, c * R21 + sn * R22, -sn * R21 + c * R22)
+    if k == 1:
+        return (-sn * R02 + c * R00, R01, c * R02 + sn * R00, -sn * R12 + c * R10, R11, c * R12 + sn * R10,
+                -sn * R22 + c * R20, R21, c * R22 + sn * R20)
+    return (c * R00 + sn * R01, -sn * R00 + c * R01, R02, c * R10 + sn * R11, -sn * R10 + c * R11, R12,
+            c * R20 + sn * R21, -sn * R20 + c * R21, R22)
+
+
+@njit(cache=True, inline="always")
+def _slot(slot, x, R, o):
+    """``E_slot(x)`` applied to the pose ``(R, o)`` (E48); returns the new pose and the factor's unit twist
+    ``s = (w, v)`` (E27): a translation moves o along column ``slot`` (``s = (0, R e)``), a rotation
+    turns R (``s = (R e, o x R e)``)."""
+    if slot < 3:
+        e0, e1, e2 = R[slot], R[3 + slot], R[6 + slot]
+        return R, (o[0] + e0 * x, o[1] + e1 * x, o[2] + e2 * x), (0.0, 0.0, 0.0, e0, e1, e2)
+    k = slot - 3
+    R = _turn(k, np.cos(x), np.sin(x), R)
+    w0, w1, w2 = R[k], R[3 + k], R[6 + k]
+    o0, o1, o2 = o
+    return R, o, (w0, w1, w2, o1 * w2 - o2 * w1, o2 * w0 - o0 * w2, o0 * w1 - o1 * w0)
+
+
+@njit(cache=True, inline="always")
+def _rates(s, xd, xdd, V, Acc):
+    """The twist ``V + s xd`` and the acceleration ``Acc + s xdd + (V x s) xd`` (E33), with
+    ``V x s = (omega x w, omega x v_s + v x w)``."""
+    s0, s1, s2, s3, s4, s5 = s
+    om0, om1, om2, v0, v1, v2 = V
+    Acc = (Acc[0] + (om1 * s2 - om2 * s1) * xd + s0 * xdd,
+           Acc[1] + (om2 * s0 - om0 * s2) * xd + s1 * xdd,
+           Acc[2] + (om0 * s1 - om1 * s0) * xd + s2 * xdd,
+           Acc[3] + (om1 * s5 - om2 * s4 + v1 * s2 - v2 * s1) * xd + s3 * xdd,
+           Acc[4] + (om2 * s3 - om0 * s5 + v2 * s0 - v0 * s2) * xd + s4 * xdd,
+           Acc[5] + (om0 * s4 - om1 * s3 + v0 * s1 - v1 * s0) * xd + s5 * xdd)
+    V = (om0 + s0 * xd, om1 + s1 * xd, om2 + s2 * xd, v0 + s3 * xd, v1 + s4 * xd, v2 + s5 * xd)
+    return V, Acc
+
+
+@njit(cache=True, inline="always")
+def _constant(TF, f, R, o):
+    """``T <- T C`` for the constant transform ``C`` at ``TF[f:]`` (R, p); twist and acceleration unchanged."""
+    f = nn(f)
+    C00, C01, C02, C10, C11, C12 = TF[f + 1], TF[f + 2], TF[f + 3], TF[f + 4], TF[f + 5], TF[f + 6]
+    C20, C21, C22, p0, p1, p2 = TF[f + 7], TF[f + 8], TF[f + 9], TF[f + 10], TF[f + 11], TF[f + 12]
+    R00, R01, R02, R10, R11, R12, R20, R21, R22 = R
+    o = (o[0] + R00 * p0 + R01 * p1 + R02 * p2, o[1] + R10 * p0 + R11 * p1 + R12 * p2,
+         o[2] + R20 * p0 + R21 * p1 + R22 * p2)
+    R = (R00 * C00 + R01 * C10 + R02 * C20, R00 * C01 + R01 * C11 + R02 * C21, R00 * C02 + R01 * C12 + R02 * C22,
+         R10 * C00 + R11 * C10 + R12 * C20, R10 * C01 + R11 * C11 + R12 * C21, R10 * C02 + R11 * C12 + R12 * C22,
+         R20 * C00 + R21 * C10 + R22 * C20, R20 * C01 + R21 * C11 + R22 * C21, R20 * C02 + R21 * C12 + R22 * C22)
+    return R, o
+
+
+@njit(cache=True, inline="always")
+def _store(W, d, R, o, V, Acc):
+    d = nn(d)
+    for j in range(9):
+        W[d + j] = R[j]
+    for j in range(3):
+        W[d + O_ + j] = o[j]
+    for j in range(6):
+        W[d + WV + j] = V[j]
+        W[d + AC + j] = Acc[j]
+
+
+@njit(cache=True)
+def _base_frame(W, wb, B, ib, has_base, gx, gy, gz):
+    """The frame every root link starts from, into the base record: {A} from its six factors
+    (``B[ib:ib + 18]``: pose, rate, acceleration) or the identity; its twist and acceleration are
+    recorded, then ``a -= g``."""
+    R = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
+    o = (0.0, 0.0, 0.0)
+    V = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    Acc = V
+    if has_base:
+        for k in range(6):
+            x, xd, xdd = B[ib + k], B[ib + 6 + k], B[ib + 12 + k]
+            if x != 0.0 or xd != 0.0 or xdd != 0.0:
+                R, o, s = _slot(k, x, R, o)
+                V, Acc = _rates(s, xd, xdd, V, Acc)
+    _store(W, wb, R, o, V, Acc)
+    for j in range(12):
+        W[wb + BASE_TWIST + j] = W[wb + WV + j]
+    W[wb + AC + 3] -= gx
+    W[wb + AC + 4] -= gy
+    W[wb + AC + 5] -= gz
+
+
+@njit(cache=True)
+def kinematics(TI, TF, W, q, iq, qd, iqd, moving, B, ib, has_base, gx, gy, gz):
+    """Root to leaves (E33): pose ``R, o``, twist ``(omega, v)`` and spatial acceleration at
+    ``q'' = 0`` of every link into its record; unit twists ``s`` of every coordinate. The tree's
+    coordinates are ``q[iq:iq + n]`` and, when ``moving``, its rates ``qd[iqd:iqd + n]`` (else zero);
+    ``B[ib:ib + 18]`` the pose, rate and acceleration of {A} when ``has_base``; gravity ``g`` enters
+    as the uniform acceleration ``-g`` (zeros: no gravity)."""
+    L, n = TI[0], nn(TI[1])
+    par, sp, ss, sc = nn(TI[I_PARENT]), nn(TI[I_SEGPTR]), nn(TI[I_SEGSLOT]), nn(TI[I_SEGCOORD])
+    fs, wl, wc, wb = nn(TI[F_SEG]), nn(TI[W_LINK]), nn(TI[W_COORD]), nn(TI[W_BASE])
+    iq, iqd, ib = nn(iq), nn(iqd), nn(ib)
+    _base_frame(W, wb, B, ib, has_base, gx, gy, gz)
+    for p in range(L):
+        s = TI[par + p]
+        a = wb if s < 0 else wl + KL * nn(s)
+        R = (W[a], W[a + 1], W[a + 2], W[a + 3], W[a + 4], W[a + 5], W[a + 6], W[a + 7], W[a + 8])
+        o = (W[a + O_], W[a + O_ + 1], W[a + O_ + 2])
+        V = (W[a + WV], W[a + WV + 1], W[a + WV + 2], W[a + WV + 3], W[a + WV + 4], W[a + WV + 5])
+        Acc = (W[a + AC], W[a + AC + 1], W[a + AC + 2], W[a + AC + 3], W[a + AC + 4], W[a + AC + 5])
+        s0 = nn(TI[sp + p])
+        for u in range(TI[sp + p + 1] - s0):
+            seg = s0 + u
+            slot = TI[ss + seg]
+            f = fs + KS * seg
+            if slot == CONSTANT:
+                R, o = _constant(TF, f, R, o)
+            else:
+                i = nn(TI[sc + seg])
+                R, o, sv = _slot(slot, TF[f] + q[iq + i], R, o)
+                for j in range(6):          # s by components: W[wc + j n + i]
+                    W[wc + j * n + i] = sv[j]
+                xd = qd[iqd + i] if moving else 0.0
+                if xd != 0.0:
+                    V, Acc = _rates(sv, xd, 0.0, V, Acc)
+        _store(W, wl + KL * p, R, o, V, Acc)
+
+
+@njit(cache=True)
+def poses(TI, W, R, o):
+    """Copy every link's rotation into ``R`` (L, 3, 3) and origin into ``o`` (L, 3) after :func:`kinematics`."""
+    wl = nn(TI[W_LINK])
+    for p in range(TI[0]):
+        d = wl + KL * p
+        for r in range(3):
+            o[p, r] = W[d + O_ + r]
+            for c in range(3):
+                R[p, r, c] = W[d + 3 * r + c]
+
+
+# -- one link's mass in {0} -------------------------------------------------------------------------
+@njit(cache=True, inline="always")
+def _body(TI, TF, W, p, d):
+    """m, the first moment c (3,) and J = tr(S) 1 - S (6,) about {0} of link ``p`` alone into the
+    record's CM, CC, CJ slots (E28, E29): ``c = R m r_C + m o``,
+    ``J = R J_l R^T + 2 (u.o) 1 - (u o^T + o u^T)`` with ``u = R m r_C + m o / 2``. Returns m."""
+    fl = nn(TI[F_LINK]) + KF * nn(p)
+    d = nn(d)
+    m = TF[fl]
+    mx, my, mz = TF[fl + 1], TF[fl + 2], TF[fl + 3]
+    Jxx, Jyy, Jzz, Jxy, Jxz, Jyz = TF[fl + 4], TF[fl + 5], TF[fl + 6], TF[fl + 7], TF[fl + 8], TF[fl + 9]
+    if m == 0.0 and mx == 0.0 and my == 0.0 and mz == 0.0 and Jxx == 0.0 and Jyy == 0.0 and Jzz == 0.0 \
+            and Jxy == 0.0 and Jxz == 0.0 and Jyz == 0.0:
+        for j in range(10):
+            W[d + CM + j] = 0.0
+        return 0.0
+    R00, R01, R02 = W[d], W[d + 1], W[d + 2]
+    R10, R11, R12 = W[d + 3], W[d + 4], W[d + 5]
+    R20, R21, R22 = W[d + 6], W[d + 7], W[d + 8]
+    o0, o1, o2 = W[d + O_], W[d + O_ + 1], W[d + O_ + 2]
+    l0 = R00 * mx + R01 * my + R02 * mz
+    l1 = R10 * mx + R11 * my + R12 * mz
+    l2 = R20 * mx + R21 * my + R22 * mz
+    # X = R J_l, then the upper triangle of X R^T
+    X00 = R00 * Jxx + R01 * Jxy + R02 * Jxz
+    X01 = R00 * Jxy + R01 * Jyy + R02 * Jyz
+    X02 = R00 * Jxz + R01 * Jyz + R02 * Jzz
+    X10 = R10 * Jxx + R11 * Jxy + R12 * Jxz
+    X11 = R10 * Jxy + R11 * Jyy + R12 * Jyz
+    X12 = R10 * Jxz + R11 * Jyz + R12 * Jzz
+    X20 = R20 * Jxx + R21 * Jxy + R22 * Jxz
+    X21 = R20 * Jxy + R21 * Jyy + R22 * Jyz
+    X22 = R20 * Jxz + R21 * Jyz + R22 * Jzz
+    u0 = l0 + 0.5 * m * o0
+    u1 = l1 + 0.5 * m * o1
+    u2 = l2 + 0.5 * m * o2
+    W[d + CM] = m
+    W[d + CC] = l0 + m * o0
+    W[d + CC + 1] = l1 + m * o1
+    W[d + CC + 2] = l2 + m * o2
+    W[d + CJ] = X00 * R00 + X01 * R01 + X02 * R02 + 2.0 * (u1 * o1 + u2 * o2)
+    W[d + CJ + 1] = X10 * R10 + X11 * R11 + X12 * R12 + 2.0 * (u0 * o0 + u2 * o2)
+    W[d + CJ + 2] = X20 * R20 + X21 * R21 + X22 * R22 + 2.0 * (u0 * o0 + u1 * o1)
+    W[d + CJ + 3] = X00 * R10 + X01 * R11 + X02 * R12 - (u0 * o1 + u1 * o0)
+    W[d + CJ + 4] = X00 * R20 + X01 * R21 + X02 * R22 - (u0 * o2 + u2 * o0)
+    W[d + CJ + 5] = X10 * R20 + X11 * R21 + X12 * R22 - (u1 * o2 + u2 * o1)
+    return m
+
+
+@njit(cache=True, inline="always")
+def _link_wrench(W, d, wb, momentum):
+    """The inertial wrench (f, n) (E35) of the link whose (m, c, J) are in its record; with
+    ``momentum`` its momentum ``(omega x c + m v, J omega + c x v)`` is added to the base record."""
+    d, wb = nn(d), nn(wb)
+    m = W[d + CM]
+    c0, c1, c2 = W[d + CC], W[d + CC + 1], W[d + CC + 2]
+    Jxx, Jyy, Jzz = W[d + CJ], W[d + CJ + 1], W[d + CJ + 2]
+    Jxy, Jxz, Jyz = W[d + CJ + 3], W[d + CJ + 4], W[d + CJ + 5]
+    om0, om1, om2 = W[d + WV], W[d + WV + 1], W[d + WV + 2]
+    v0, v1, v2 = W[d + WV + 3], W[d + WV + 4], W[d + WV + 5]
+    al0, al1, al2 = W[d + AC], W[d + AC + 1], W[d + AC + 2]
+    a0, a1, a2 = W[d + AC + 3], W[d + AC + 4], W[d + AC + 5]
+    Jo0 = Jxx * om0 + Jxy * om1 + Jxz * om2
+    Jo1 = Jxy * om0 + Jyy * om1 + Jyz * om2
+    Jo2 = Jxz * om0 + Jyz * om1 + Jzz * om2
+    Ja0 = Jxx * al0 + Jxy * al1 + Jxz * al2
+    Ja1 = Jxy * al0 + Jyy * al1 + Jyz * al2
+    Ja2 = Jxz * al0 + Jyz * al1 + Jzz * al2
+    # u = omega x c + m v (momentum), f = alpha x c + m a + omega x u
+    u0 = om1 * c2 - om2 * c1 + m * v0
+    u1 = om2 * c0 - om0 * c2 + m * v1
+    u2 = om0 * c1 - om1 * c0 + m * v2
+    W[d + FI] = al1 * c2 - al2 * c1 + m * a0 + om1 * u2 - om2 * u1
+    W[d + FI + 1] = al2 * c0 - al0 * c2 + m * a1 + om2 * u0 - om0 * u2
+    W[d + FI + 2] = al0 * c1 - al1 * c0 + m * a2 + om0 * u1 - om1 * u0
+    # n = J alpha + c x (a + omega x v) + omega x (J omega)
+    x0 = om1 * v2 - om2 * v1 + a0
+    x1 = om2 * v0 - om0 * v2 + a1
+    x2 = om0 * v1 - om1 * v0 + a2
+    W[d + FI + 3] = Ja0 + c1 * x2 - c2 * x1 + om1 * Jo2 - om2 * Jo1
+    W[d + FI + 4] = Ja1 + c2 * x0 - c0 * x2 + om2 * Jo0 - om0 * Jo2
+    W[d + FI + 5] = Ja2 + c0 * x1 - c1 * x0 + om0 * Jo1 - om1 * Jo0
+    if momentum:
+        e = wb + BASE_MOM
+        W[e] += u0
+        W[e + 1] += u1
+        W[e + 2] += u2
+        W[e + 3] += Jo0 + c1 * v2 - c2 * v1
+        W[e + 4] += Jo1 + c2 * v0 - c0 * v2
+        W[e + 5] += Jo2 + c0 * v1 - c1 * v0
+
+
+# -- leaves to root ---------------------------------------------------------------------------------
+@njit(cache=True)
+def _subtree_sums(TI, W, loads):
+    """(E30): every link's (m, c, J), inertial wrench and (with ``loads``) external wrench summed over its subtree."""
+    wl = nn(TI[W_LINK])
+    par = nn(TI[I_PARENT])
+    for p in range(TI[0] - 1, 0, -1):
+        s = TI[par + p]
+        if s >= 0:
+            d = wl + KL * p
+            e = wl + KL * nn(s)
+            for j in range(CM, FX):     # m, c, J, f, n
+                W[e + j] += W[d + j]
+            if loads:
+                for j in range(FX, FX + 6):
+                    W[e + j] += W[d + j]
+
+
+@njit(cache=True)
+def dynamics(TI, TF, W, want_A, loads, momentum):
+    """Leaves to root after :func:`kinematics` (and, with ``loads``, the external wrenches of
+    :func:`add_wrench`): ``b = -(e + G)`` (E34), ``Q`` (E36) with ``loads``, and with ``want_A`` the
+    mass matrix (E31) packed by ancestor pairs (row ``i``: ``A[i, anc_idx[j]]`` at ``W[W_A + j]``,
+    ``j`` in ``anc_ptr[i]:anc_ptr[i + 1]``). With ``momentum`` the links' total momentum goes to the
+    base record (for :func:`base_power`)."""
+    L, n = TI[0], nn(TI[1])
+    wl, wc, wb = nn(TI[W_LINK]), nn(TI[W_COORD]), nn(TI[W_BASE])
+    if momentum:
+        for j in range(6):
+            W[wb + BASE_MOM + j] = 0.0
+    for p in range(L):
+        d = wl + KL * p
+        _body(TI, TF, W, p, d)
+        _link_wrench(W, d, wb, momentum)
+    _subtree_sums(TI, W, loads)
+    cl, ap, ai = nn(TI[I_COORDLINK]), nn(TI[I_ANCPTR]), nn(TI[I_ANCIDX])
+    rp, rs = nn(TI[I_RUNPTR]), nn(TI[I_RUNS])
+    wa, wbv, wq = nn(TI[W_A]), nn(TI[W_B]), nn(TI[W_Q])
+    for i in range(n):
+        d = wl + KL * nn(TI[cl + i])
+        si = wc + i
+        w0, w1, w2 = W[si], W[si + n], W[si + 2 * n]
+        v0, v1, v2 = W[si + 3 * n], W[si + 4 * n], W[si + 5 * n]
+        # wrench (f, n) . twist (w, v) = v . f + w . n
+        f = d + FI
+        W[wbv + i] = -(v0 * W[f] + v1 * W[f + 1] + v2 * W[f + 2] + w0 * W[f + 3] + w1 * W[f + 4] + w2 * W[f + 5])
+        if loads:
+            f = d + FX
+            W[wq + i] = v0 * W[f] + v1 * W[f + 1] + v2 * W[f + 2] + w0 * W[f + 3] + w1 * W[f + 4] + w2 * W[f + 5]
+        if not want_A:
+            continue
+        m = W[d + CM]
+        c0, c1, c2 = W[d + CC], W[d + CC + 1], W[d + CC + 2]
+        Jxx, Jyy, Jzz = W[d + CJ], W[d + CJ + 1], W[d + CJ + 2]
+        Jxy, Jxz, Jyz = W[d + CJ + 3], W[d + CJ + 4], W[d + CJ + 5]
+        p0 = w1 * c2 - w2 * c1 + m * v0
+        p1 = w2 * c0 - w0 * c2 + m * v1
+        p2 = w0 * c1 - w1 * c0 + m * v2
+        h0 = Jxx * w0 + Jxy * w1 + Jxz * w2 + c1 * v2 - c2 * v1
+        h1 = Jxy * w0 + Jyy * w1 + Jyz * w2 + c2 * v0 - c0 * v2
+        h2 = Jxz * w0 + Jyz * w1 + Jzz * w2 + c0 * v1 - c1 * v0
+        j0 = nn(TI[ap + i])
+        m = TI[ap + i + 1] - j0
+        if TI[rp + i + 1] - TI[rp + i] == 1:       # the row is one run of coordinates c0, c0 + 1, ...
+            c0 = wc + nn(TI[rs + 2 * nn(TI[rp + i])])
+            for u in range(m):
+                sl = c0 + u
+                W[wa + j0 + u] = (W[sl + 3 * n] * p0 + W[sl + 4 * n] * p1 + W[sl + 5 * n] * p2
+                                  + W[sl] * h0 + W[sl + n] * h1 + W[sl + 2 * n] * h2)
+        else:
+            for u in range(m):
+                sl = wc + nn(TI[ai + j0 + u])
+                W[wa + j0 + u] = (W[sl + 3 * n] * p0 + W[sl + 4 * n] * p1 + W[sl + 5 * n] * p2
+                                  + W[sl] * h0 + W[sl + n] * h1 + W[sl + 2 * n] * h2)
+
+
+# -- applied wrenches, energies, base power -----------------------------------------------------------
+@njit(cache=True)
+def clear_wrenches(TI, W):
+    wl = nn(TI[W_LINK])
+    for p in range(TI[0]):
+        for j in range(6):
+            W[wl + KL * p + FX + j] = 0.0
+
+
+@njit(cache=True)
+def add_wrench(TI, W, p, F0, F1, F2, M0, M1, M2, r0, r1, r2, local):
+    """Add a force ``F`` and a moment ``M`` acting at the point ``r`` (link frame) of link ``p`` to
+    its external wrench as ``(F, M + r_N x F)`` about {0} (E36); ``local``: F and M in the link's axes."""
+    d = nn(TI[W_LINK]) + KL * nn(p)
+    R00, R01, R02 = W[d], W[d + 1], W[d + 2]
+    R10, R11, R12 = W[d + 3], W[d + 4], W[d + 5]
+    R20, R21, R22 = W[d + 6], W[d + 7], W[d + 8]
+    x0 = R00 * r0 + R01 * r1 + R02 * r2 + W[d + O_]
+    x1 = R10 * r0 + R11 * r1 + R12 * r2 + W[d + O_ + 1]
+    x2 = R20 * r0 + R21 * r1 + R22 * r2 + W[d + O_ + 2]
+    if local:
+        F0, F1, F2 = R00 * F0 + R01 * F1 + R02 * F2, R10 * F0 + R11 * F1 + R12 * F2, R20 * F0 + R21 * F1 + R22 * F2
+        M0, M1, M2 = R00 * M0 + R01 * M1 + R02 * M2, R10 * M0 + R11 * M1 + R12 * M2, R20 * M0 + R21 * M1 + R22 * M2
+    e = d + FX
+    W[e] += F0
+    W[e + 1] += F1
+    W[e + 2] += F2
+    W[e + 3] += M0 + x1 * F2 - x2 * F1
+    W[e + 4] += M1 + x2 * F0 - x0 * F2
+    W[e + 5] += M2 + x0 * F1 - x1 * F0
+
+
+@njit(cache=True)
+def energies(TI, TF, W, gx, gy, gz):
+    """``(E, V)`` after :func:`kinematics` (E37): ``E = 0.5 sum (m v.v + 2 v.(omega x c) + omega.J omega)``,
+    ``V = -g . sum c``."""
+    wl = nn(TI[W_LINK])
+    E = 0.0
+    V = 0.0
+    for p in range(TI[0]):
+        d = wl + KL * p
+        m = _body(TI, TF, W, p, d)
+        c0, c1, c2 = W[d + CC], W[d + CC + 1], W[d + CC + 2]
+        Jxx, Jyy, Jzz = W[d + CJ], W[d + CJ + 1], W[d + CJ + 2]
+        Jxy, Jxz, Jyz = W[d + CJ + 3], W[d + CJ + 4], W[d + CJ + 5]
+        om0, om1, om2 = W[d + WV], W[d + WV + 1], W[d + WV + 2]
+        v0, v1, v2 = W[d + WV + 3], W[d + WV + 4], W[d + WV + 5]
+        wJw = (om0 * (Jxx * om0 + Jxy * om1 + Jxz * om2) + om1 * (Jxy * om0 + Jyy * om1 + Jyz * om2)
+               + om2 * (Jxz * om0 + Jyz * om1 + Jzz * om2))
+        x0 = om1 * c2 - om2 * c1
+        x1 = om2 * c0 - om0 * c2
+        x2 = om0 * c1 - om1 * c0
+        E += 0.5 * (m * (v0 * v0 + v1 * v1 + v2 * v2) + 2.0 * (v0 * x0 + v1 * x1 + v2 * x2) + wJw)
+        V -= gx * c0 + gy * c1 + gz * c2
+    return E, V
+
+
+@njit(cache=True)
+def base_power(TI, W, gx, gy, gz):
+    """``(dE/dt, dV/dt)`` at fixed ``(q, q')`` due to the base motion alone (E41), after
+    :func:`dynamics` with ``momentum``: with the base's twist ``(omega_B, v_B)``, its acceleration
+    ``(alpha_B, a_B)`` and the links' total momentum ``(P, H)`` about {0},
+    ``dE/dt = tr(dW_B sum Hw Xi^T) = a_B.P + alpha_B.H`` (the second trace of E41 vanishes: a skew
+    matrix against a symmetric one) and ``dV/dt = -g . (omega_B x sum c + (sum m) v_B)``."""
+    wb = nn(TI[W_BASE])
+    wl = nn(TI[W_LINK])
+    par = nn(TI[I_PARENT])
+    dE = 0.0
+    for j in range(6):
+        dE += W[wb + BASE_ACC + j] * W[wb + BASE_MOM + (j + 3) % 6]
+    mt = 0.0
+    ct0 = 0.0
+    ct1 = 0.0
+    ct2 = 0.0
+    for p in range(TI[0]):      # the roots' subtree sums cover every link
+        if TI[par + p] < 0:
+            d = wl + KL * p
+            mt += W[d + CM]
+            ct0 += W[d + CC]
+            ct1 += W[d + CC + 1]
+            ct2 += W[d + CC + 2]
+    e = wb + BASE_TWIST
+    w0, w1, w2, v0, v1, v2 = W[e], W[e + 1], W[e + 2], W[e + 3], W[e + 4], W[e + 5]
+    dV = -(gx * (w1 * ct2 - w2 * ct1 + mt * v0) + gy * (w2 * ct0 - w0 * ct2 + mt * v1)
+           + gz * (w0 * ct1 - w1 * ct0 + mt * v2))
+    return dE, dV

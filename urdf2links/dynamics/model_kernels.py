@@ -1,0 +1,292 @@
+"""The compiled calls behind :class:`~urdf2links.dynamics.model.Model`: one state, or a batch of states in parallel.
+
+Each quantity has one row function (``fd_row``, ``terms_row``, ``energy_row``) that evaluates one
+state into its outputs with a given scratch; the single-state entries (``*_one``) and the batched
+entries (``*_batch``, numba ``prange`` over chunks of rows, one scratch per chunk, threads from
+``NUMBA_NUM_THREADS`` / ``numba.set_num_threads``) call the same row function, so a batch gives the
+per-state results to the last bit. ``fd_plain`` is the hot single-state path of
+``Model.forward_dynamics`` (fixed base, no loads, no coupling): few arguments, since every array
+argument costs the dispatcher a fraction of a microsecond; :func:`fd_plain_frozen` is that
+dispatcher with its two signatures compiled and compilation switched off, so that an argument of
+another type raises TypeError (the model then converts it) instead of compiling a new variant.
+
+Arguments shared by the row functions: ``TI``, ``TF`` the tree (:mod:`urdf2links.dynamics.tree_arrays`);
+``W`` its scratch and ``X`` the coupling scratch (:func:`coupled_size`); ``base`` (18,) pose, rate
+and acceleration of {A} when ``has_base``; ``gx, gy, gz`` gravity; ``loads`` (k, 11) wrenches
+``(link, F (3), M (3), point (3), local)``; ``C`` (n_tree, n), ``d`` (n_tree,) coupled coordinates
+``q_tree = C q + d`` when ``coupled`` (docs/equations.md (E42)).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import get_num_threads, njit, prange, types
+
+from .factor import cholesky, cholesky_solve, ltdl, ltdl_solve, unpack
+from .kernels import add_wrench, clear_wrenches, dynamics, energies, kinematics, poses
+from .tree_arrays import I_ANCIDX, I_ANCPTR, W_A, W_B, W_Q, W_SIZE, nn
+
+__all__ = ["coupled_size", "fd_plain_frozen", "fd_one", "fd_batch", "terms_one", "terms_batch", "energy_one",
+           "energy_batch", "poses_one", "chunks", "MASS", "BIAS", "FORCES"]
+
+MASS, BIAS, FORCES = 0, 1, 2        # what terms_row returns: A, -b (e, or G), Q
+
+
+@njit(cache=True)
+def coupled_size(n_tree, n):
+    """Scratch of a coupled row: ``q_tree``, ``q'_tree`` (n_tree,), ``A``, its factor (n, n), ``rhs`` (n,)."""
+    return 2 * n_tree + 2 * n * n + n
+
+
+# -- one state ----------------------------------------------------------------------------------------
+@njit(cache=True)
+def _state(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, C, d, coupled):
+    """:func:`~urdf2links.dynamics.kernels.kinematics` at the model state ``(q, qd)`` (rates zero unless ``moving``)."""
+    if not coupled:
+        kinematics(TI, TF, W, q, 0, qd, 0, moving, base, 0, has_base, gx, gy, gz)
+        return
+    nt, n = C.shape
+    for a in range(nt):
+        s1 = d[a]
+        s2 = 0.0
+        for j in range(n):
+            s1 += C[a, j] * q[j]
+            if moving:
+                s2 += C[a, j] * qd[j]
+        X[a] = s1
+        X[nt + a] = s2
+    kinematics(TI, TF, W, X, 0, X, nt, moving, base, 0, has_base, gx, gy, gz)
+
+
+@njit(cache=True)
+def _terms(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, loads, C, d, coupled, want_A):
+    _state(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, C, d, coupled)
+    nl = loads.shape[0]
+    if nl > 0:
+        clear_wrenches(TI, W)
+        for k in range(nl):
+            add_wrench(TI, W, int(loads[k, 0]), loads[k, 1], loads[k, 2], loads[k, 3], loads[k, 4], loads[k, 5],
+                       loads[k, 6], loads[k, 7], loads[k, 8], loads[k, 9], loads[k, 10] != 0.0)
+    dynamics(TI, TF, W, want_A, nl > 0, False)
+
+
+@njit(cache=True)
+def reduce_vector(C, v, iv, out, io, sign):
+    """``out[io + i] = sign sum_a C[a, i] v[iv + a]`` (E42)."""
+    nt, n = C.shape
+    for i in range(n):
+        s = 0.0
+        for a in range(nt):
+            s += C[a, i] * v[iv + a]
+        out[io + i] = sign * s
+
+
+@njit(cache=True)
+def reduce_mass(TI, W, C, A):
+    """``A = C^T A_tree C`` (n, n) from the packed tree matrix (E42); the lower triangle is summed,
+    the upper one mirrors it."""
+    nt, n = C.shape
+    ap, ai, wa = TI[I_ANCPTR], TI[I_ANCIDX], TI[W_A]
+    for i in range(n):
+        for k in range(n):
+            A[i, k] = 0.0
+    for a in range(nt):
+        for j in range(TI[ap + a], TI[ap + a + 1]):
+            l = TI[ai + j]
+            v = W[wa + j]
+            for i in range(n):
+                x = C[a, i] * v
+                y = C[l, i] * v
+                if x == 0.0 and y == 0.0:
+                    continue
+                for k in range(i + 1):
+                    A[i, k] += x * C[l, k]
+                    if l != a:
+                        A[i, k] += y * C[a, k]
+    for i in range(n):
+        for k in range(i):
+            A[k, i] = A[i, k]
+
+
+@njit(cache=True)
+def fd_row(TI, TF, W, X, q, qd, tau, has_tau, base, has_base, gx, gy, gz, loads, C, d, coupled, out):
+    """q'' (E24) into ``out`` (n,): ``A q'' = Q + tau - e - G``. Returns -1, or the failing pivot."""
+    _terms(TI, TF, W, X, q, qd, True, base, has_base, gx, gy, gz, loads, C, d, coupled, True)
+    nl = loads.shape[0]
+    wb, wq = nn(TI[W_B]), nn(TI[W_Q])
+    if not coupled:
+        for i in range(out.size):
+            v = W[wb + i]
+            if nl > 0:
+                v += W[wq + i]
+            if has_tau:
+                v += tau[i]
+            out[i] = v
+        pivot = ltdl(TI, W)
+        if pivot < 0:
+            ltdl_solve(TI, W, out, 0)
+        return pivot
+    nt, n = C.shape
+    if nl > 0:
+        for a in range(nt):
+            W[wb + a] += W[wq + a]
+    reduce_vector(C, W, wb, out, 0, 1.0)
+    if has_tau:
+        for i in range(n):
+            out[i] += tau[i]
+    A = X[2 * nt:2 * nt + n * n].reshape((n, n))
+    reduce_mass(TI, W, C, A)
+    o = 2 * nt + n * n
+    pivot = cholesky(X, 2 * nt, n, X, o)
+    if pivot < 0:
+        cholesky_solve(X, o, n, out, 0)
+    return pivot
+
+
+@njit(cache=True)
+def terms_row(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, loads, C, d, coupled, what, A, v):
+    """``what``: MASS the mass matrix into ``A`` (n, n); BIAS ``-b = e + G`` into ``v`` (n,) (with
+    ``g = 0``: e; at rest with gravity: G); FORCES ``Q`` of ``loads`` into ``v``."""
+    _terms(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, loads, C, d, coupled, what == MASS)
+    if what == MASS:
+        if coupled:
+            reduce_mass(TI, W, C, A)
+        else:
+            unpack(TI, W, A)
+        return
+    k = TI[W_B] if what == BIAS else TI[W_Q]
+    sign = -1.0 if what == BIAS else 1.0
+    if coupled:
+        reduce_vector(C, W, k, v, 0, sign)
+    else:
+        for i in range(v.size):
+            v[i] = sign * W[k + i]
+
+
+@njit(cache=True)
+def energy_row(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, C, d, coupled):
+    """``(E, V)`` (E37) at one state."""
+    _state(TI, TF, W, X, q, qd, moving, base, has_base, 0.0, 0.0, 0.0, C, d, coupled)
+    return energies(TI, TF, W, gx, gy, gz)
+
+
+# -- single-state entries -----------------------------------------------------------------------------
+@njit(cache=True)
+def fd_plain(TI, TF, g, q, qd, tau, out):
+    """:func:`fd_row` for a fixed base, no loads, no coupling, tau None or (n,); -2 when a size is wrong."""
+    n = TI[1]
+    if q.size != n or qd.size != n or out.size != n:
+        return -2
+    if tau is not None:
+        if tau.size != n:
+            return -2
+    W = np.empty(TI[W_SIZE])
+    kinematics(TI, TF, W, q, 0, qd, 0, True, g, 0, False, g[0], g[1], g[2])
+    dynamics(TI, TF, W, True, False, False)
+    wb = nn(TI[W_B])
+    for i in range(n):
+        v = W[wb + i]
+        if tau is not None:
+            v += tau[i]
+        out[i] = v
+    pivot = ltdl(TI, W)
+    if pivot < 0:
+        ltdl_solve(TI, W, out, 0)
+    return pivot
+
+
+_F1 = types.Array(types.float64, 1, "C")
+_I1 = types.Array(types.int64, 1, "C")
+_PLAIN_SIGS = [types.int64(_I1, _F1, _F1, _F1, _F1, types.none, _F1),
+               types.int64(_I1, _F1, _F1, _F1, _F1, _F1, _F1)]
+
+
+_FROZEN: list = []
+
+
+def fd_plain_frozen():
+    """:func:`fd_plain` compiled (or loaded from the cache) for float64 C-contiguous vectors, tau None
+    or a vector, with further compilation switched off: other argument types raise TypeError."""
+    if not _FROZEN:
+        for sig in _PLAIN_SIGS:
+            fd_plain.compile(sig)
+        fd_plain.disable_compile()
+        _FROZEN.append(fd_plain)
+    return fd_plain
+
+
+@njit(cache=True)
+def fd_one(TI, TF, q, qd, tau, has_tau, base, has_base, gx, gy, gz, loads, C, d, coupled, out):
+    X = np.empty(coupled_size(C.shape[0], C.shape[1]) if coupled else 0)
+    return fd_row(TI, TF, np.empty(TI[W_SIZE]), X, q, qd, tau, has_tau, base, has_base, gx, gy, gz, loads, C, d,
+                  coupled, out)
+
+
+@njit(cache=True)
+def terms_one(TI, TF, q, qd, moving, base, has_base, gx, gy, gz, loads, C, d, coupled, what, A, v):
+    X = np.empty(coupled_size(C.shape[0], C.shape[1]) if coupled else 0)
+    terms_row(TI, TF, np.empty(TI[W_SIZE]), X, q, qd, moving, base, has_base, gx, gy, gz, loads, C, d, coupled,
+              what, A, v)
+
+
+@njit(cache=True)
+def energy_one(TI, TF, q, qd, moving, base, has_base, gx, gy, gz, C, d, coupled):
+    X = np.empty(coupled_size(C.shape[0], C.shape[1]) if coupled else 0)
+    return energy_row(TI, TF, np.empty(TI[W_SIZE]), X, q, qd, moving, base, has_base, gx, gy, gz, C, d, coupled)
+
+
+@njit(cache=True)
+def poses_one(TI, TF, q, base, has_base, C, d, coupled, R, o):
+    """The {0}-pose of every link: rotations ``R`` (L, 3, 3) and origins ``o`` (L, 3)."""
+    W = np.empty(TI[W_SIZE])
+    X = np.empty(coupled_size(C.shape[0], C.shape[1]) if coupled else 0)
+    _state(TI, TF, W, X, q, q, False, base, has_base, 0.0, 0.0, 0.0, C, d, coupled)
+    poses(TI, W, R, o)
+
+
+# -- batches: chunks of rows in parallel ------------------------------------------------------------
+def chunks(B: int) -> int:
+    """Number of chunks of a batch of ``B`` rows: a few per thread (each chunk has its own scratch),
+    for numba's thread count now. Computed here, not in the compiled code: a compiled function that
+    asks numba for the thread count cannot be cached."""
+    return max(1, min(B, 4 * get_num_threads()))
+
+
+@njit(cache=True, parallel=True)
+def fd_batch(TI, TF, Q, QD, TAU, has_tau, BASE, has_base, gx, gy, gz, loads, C, d, coupled, OUT, status, nc):
+    """:func:`fd_row` for every row ``b`` of ``Q``, ``QD``, ``TAU`` (B, n) and ``BASE`` (B or 1, 18)
+    into ``OUT[b]``; ``status[b]`` the failing pivot or -1; rows in ``nc`` chunks (:func:`chunks`)."""
+    B = Q.shape[0]
+    Ws = np.empty((nc, TI[W_SIZE]))
+    Xs = np.empty((nc, coupled_size(C.shape[0], C.shape[1]) if coupled else 0))
+    nb = BASE.shape[0]
+    for c in prange(nc):
+        for b in range(c * B // nc, (c + 1) * B // nc):
+            status[b] = fd_row(TI, TF, Ws[c], Xs[c], Q[b], QD[b], TAU[b if has_tau else 0], has_tau,
+                               BASE[b if nb > 1 else 0], has_base, gx, gy, gz, loads, C, d, coupled, OUT[b])
+
+
+@njit(cache=True, parallel=True)
+def terms_batch(TI, TF, Q, QD, moving, BASE, has_base, gx, gy, gz, loads, C, d, coupled, what, A, V, nc):
+    """:func:`terms_row` for every row: ``A[b]`` (n, n) for MASS, else ``V[b]`` (n,)."""
+    B = Q.shape[0]
+    Ws = np.empty((nc, TI[W_SIZE]))
+    Xs = np.empty((nc, coupled_size(C.shape[0], C.shape[1]) if coupled else 0))
+    nb = BASE.shape[0]
+    for c in prange(nc):
+        for b in range(c * B // nc, (c + 1) * B // nc):
+            terms_row(TI, TF, Ws[c], Xs[c], Q[b], QD[b if moving else 0], moving, BASE[b if nb > 1 else 0], has_base,
+                      gx, gy, gz, loads, C, d, coupled, what, A[b if what == MASS else 0], V[0 if what == MASS else b])
+
+
+@njit(cache=True, parallel=True)
+def energy_batch(TI, TF, Q, QD, moving, BASE, has_base, gx, gy, gz, C, d, coupled, E, V, nc):
+    """:func:`energy_row` for every row into ``E[b]``, ``V[b]``."""
+    B = Q.shape[0]
+    Ws = np.empty((nc, TI[W_SIZE]))
+    Xs = np.empty((nc, coupled_size(C.shape[0], C.shape[1]) if coupled else 0))
+    nb = BASE.shape[0]
+    for c in prange(nc):
+        for b in range(c * B // nc, (c + 1) * B // nc):
+            E[b], V[b] = energy_row(TI, TF, Ws[c], Xs[c], Q[b], QD[b if moving else 0], moving,
+                                    BASE[b if nb > 1 else 0], has_base, gx, gy, gz, C, d, coupled)

@@ -1,0 +1,234 @@
+"""Drivers of the integration loops: storage, chunks, progress, results; compiled or interpreted.
+
+:func:`run` integrates with a compiled loop when the right-hand side is a
+:class:`~urdf2links.scenes.scene_kernels.CompiledScene`, else with the same loop interpreted
+(:func:`_interpreted`) around any Python callable. Loops run in chunks: they return after
+``chunk`` steps (or when their storage is full) so that the driver shows progress, grows the
+storage and asks a Python ``stop``, then resume from the state they left. Status codes: 0 running,
+1 reached ``t_end``, 2 stopped by the angle guard, 3 storage full, -1 step size too small, -2 the
+right-hand side failed (non-finite, or A not positive definite), -3 Newton failed.
+"""
+
+from __future__ import annotations
+
+import time
+import types
+from collections import namedtuple
+
+import numpy as np
+
+from ..dense import DenseOutput, midpoint_dense
+from ...errors import IntegrationError
+from ...scenes.scene_kernels import CompiledScene
+from . import fixed
+from .common import AngleGuard
+from .erk import TABLEAUX, erk_chunk, initial_step
+from .fixed import MAX_HALVINGS
+
+__all__ = ["Outcome", "run", "CHUNK", "wall_message"]
+
+CHUNK = 2000              # steps per call of a compiled loop between two returns to Python
+
+
+# -- the interpreter's copy -------------------------------------------------------------------------
+def _python_evaluate(t, y, out, args, counters):
+    """:func:`evaluate` for a Python right-hand side ``args[0](t, y)``."""
+    cnt, fail = counters
+    cnt[0] += 1
+    out[:] = args[0](t, y)
+    if np.all(np.isfinite(out)):
+        return True
+    fail[0] = t
+    fail[1:] = y
+    return False
+
+
+def _python_jacobian(t, y, f, J, args, counters):
+    """The user's ``jac(t, y)`` (``args[1]``) in place of finite differences."""
+    J[:, :] = args[1](t, y)
+    return bool(np.all(np.isfinite(J)))
+
+
+def _interpreted(*, user_jac: bool) -> dict:
+    """The fixed-step loops as plain Python functions: each compiled function's source (its
+    ``py_func``) rebound to one namespace in which ``evaluate`` calls a Python right-hand side
+    (``args = (rhs, jac)``). The same code as the compiled loops, so the two cannot drift."""
+    ns = dict(vars(fixed))
+    for fn in (fixed.rk4_chunk, fixed.midpoint_chunk, fixed._newton, fixed._jacobian):
+        py = fn.py_func
+        ns[py.__name__] = types.FunctionType(py.__code__, ns, py.__name__, py.__defaults__, py.__closure__)
+    ns["evaluate"] = _python_evaluate
+    if user_jac:
+        ns["_jacobian"] = _python_jacobian
+    return ns
+
+
+# -- drivers (Python): chunks, storage, progress, results -------------------------------------------
+Outcome = namedtuple("Outcome", ["t", "y", "sol", "nfev", "njev", "nrejected", "success", "message", "stopped"])
+"""What :func:`run` returns: steps ``t`` (m,), ``y`` (m, d), the dense output or None, counters,
+``success``, ``message`` and whether the stop test ended the run."""
+
+
+def wall_message(max_wall: float, t: float, steps: int) -> str:
+    """The message of a run ended by its wall-clock budget."""
+    return (f"max_wall={max_wall:.3g} s of wall time reached at t={t!r} after {steps} steps (the run did not finish "
+            "within its wall-clock budget)")
+
+
+class _Driver:
+    """One run's shared bookkeeping: counters, budget, the guard, the callback and a Python stop.
+    ``wall`` is None or ``(deadline, max_wall)`` (``time.perf_counter()`` seconds), asked after each chunk."""
+
+    def __init__(self, rhs, d, *, callback, max_steps, stop, chunk, wall=None):
+        self.compiled = isinstance(rhs, CompiledScene)
+        self.cnt = np.zeros(4, np.int64)
+        self.counters = (self.cnt, np.zeros(d + 1))
+        self.budget = np.inf if max_steps is None else int(max_steps)
+        self.callback, self.stop, self.chunk = callback, stop, chunk
+        self.wall, self.out_of_time = wall, False
+        self.stopped = False
+        self.guard = (np.zeros(0, np.int64), np.zeros(0))
+        if self.compiled and isinstance(stop, AngleGuard):     # tested inside the compiled loop
+            self.guard, self.stop = (stop.indices, stop.thresholds), None
+
+    def size(self) -> int:
+        return int(min(self.chunk, self.budget - self.cnt[1]))
+
+    def after_chunk(self, status, t, y) -> bool:
+        """Callback and Python stop test after a chunk; True when the run ends here."""
+        if self.callback is not None:
+            self.callback(float(t), y)
+        if status == 0 and self.stop is not None and self.cnt[1] > 0 and self.stop(t, y):
+            self.stopped = True
+            return True
+        if status == 0 and self.wall is not None and time.perf_counter() > self.wall[0]:
+            self.out_of_time = True
+            return True
+        return status != 0 or self.cnt[1] >= self.budget
+
+
+def _grow(arrays, extra):
+    return tuple(np.concatenate([a, np.empty((extra,) + a.shape[1:])]) for a in arrays)
+
+
+def _drive_erk(drv, tab, args, f0, t0, t1, y0, rtol, atol, dt, need_dense):
+    d = y0.size
+    max_step = np.inf if dt is None else float(dt)
+    h_abs = initial_step(t0, y0, f0, t1, max_step, tab.order, rtol, atol, args, drv.counters)
+    cap = 256
+    ts, ys, dens = np.empty(cap), np.empty((cap, d)), np.empty((cap if need_dense else 0, tab.n_dense, d))
+    ts[0], ys[0] = t0, y0
+    st = np.array([t0, h_abs, 1.0])
+    state = (st, y0.copy(), f0.copy(), np.zeros((16, d)))
+    ctl = (float(t1), rtol, atol, max_step, need_dense)
+    while True:
+        status = erk_chunk(tab, ctl, state, (ts, ys, dens), drv.guard, drv.counters, drv.size(), args)
+        if drv.after_chunk(status, st[0], state[1]):
+            break
+        if int(st[2]) >= ts.size:
+            ts, ys = _grow((ts, ys), ts.size)
+            if need_dense:
+                (dens,) = _grow((dens,), dens.shape[0])
+    m = int(st[2])
+    sol = DenseOutput(ts[:m], ys[:m], poly=("DOP853" if tab.dop else "RK45", dens[:m])) if need_dense and m > 1 else None
+    return status, ts[:m], ys[:m], sol, 0
+
+
+def _drive_rk4(drv, loops, args, f0, y0, grid, need_dense):
+    m, d = grid.size, y0.size
+    ys, fs = np.empty((m, d)), np.empty((m, d))
+    ys[0], fs[0] = y0, f0
+    st = np.zeros(1)
+    while True:
+        status = loops["rk4_chunk"](grid, (st, ys, fs), drv.guard, drv.counters, drv.size(), args)
+        i = int(st[0])
+        if drv.after_chunk(status, grid[i], ys[i]):
+            break
+    m = int(st[0]) + 1
+    ts, ys, fs = grid[:m].copy(), ys[:m], fs[:m]
+    return status, ts, ys, (DenseOutput(ts, ys, fs) if need_dense else None), 0
+
+
+def _drive_midpoint(drv, loops, args, f0, t0, y0, rtol, atol, grid, need_dense, jac, evaluate_end):
+    d = y0.size
+    cap = grid.size + 16
+    ts, ys, ks = np.empty(cap), np.empty((cap, d)), np.empty((cap, d))
+    ts[0], ys[0], ks[0] = t0, y0, f0
+    const = jac is not None and not callable(jac)
+    J = np.array(jac, dtype=float) if const else np.zeros((d, d))
+    if J.shape != (d, d):
+        raise ValueError(f"jac must be callable or of shape {(d, d)}, got shape {J.shape}")
+    st = np.array([0.0, 0.0, t0, 0.0 if const else 1.0, float(const), 0.0, 0.0, 0.0, 0.0, float(const), 0.0])
+    state = (st, np.zeros(3), np.zeros((3, d)), J, np.zeros((d, d)))
+    while True:
+        status = loops["midpoint_chunk"](grid, (rtol, atol), state, (ts, ys, ks), drv.guard, drv.counters,
+                                         drv.size(), args)
+        if status == 3:
+            ts, ys, ks = _grow((ts, ys, ks), max(16, ts.size // 2))
+            continue
+        if drv.after_chunk(status, st[2], ys[int(st[1])]):
+            break
+    n = int(st[1])
+    if status == -3:
+        raise IntegrationError(f"implicit midpoint: Newton iteration did not converge at t={float(st[2])!r} (step {n + 1}, h={float(st[10])!r} "
+                               f"after {MAX_HALVINGS} halvings of dt={float(grid[1] - grid[0])!r}; rtol={rtol!r})")
+    ts, ys, ks = ts[:n + 1], ys[:n + 1], ks[:n]
+    sol = midpoint_dense(ts, ys, ks, f0, evaluate_end(ts[n], ys[n])) if need_dense else None
+    return status, ts, ys, sol, int(st[8])
+
+
+def run(method, rhs, f0, t0, t1, y0, *, rtol, atol, dt, grid, callback=None, max_steps=None,
+        need_dense=False, stop=None, jac=None, wall=None) -> Outcome:
+    """Integrate with one of the loops: compiled when ``rhs`` is a
+    :class:`~urdf2links.scenes.scene_kernels.CompiledScene` (and ``stop`` None or an angle guard),
+    interpreted otherwise (then ``callback`` and ``stop`` are asked after every step, ``jac`` is
+    the midpoint's Jacobian: callable, constant matrix or None for finite differences; ``wall`` None
+    or ``(deadline, max_wall)``: past the deadline the run ends unsuccessfully, saying so).
+    ``f0 = rhs(t0, y0)``; ``atol`` (d,); ``grid`` the fixed-step methods' step times. RK45 and
+    DOP853 run compiled only."""
+    d = y0.size
+    atol = np.ascontiguousarray(np.broadcast_to(np.asarray(atol, float), (d,)))
+    drv = _Driver(rhs, d, callback=callback, max_steps=max_steps, stop=stop, chunk=CHUNK, wall=wall)
+    compiled = drv.compiled and jac is None and drv.stop is None
+    if compiled:
+        loops, args = vars(fixed), rhs.args
+    else:
+        drv.chunk = 1
+        loops, args = _interpreted(user_jac=callable(jac)), (rhs, jac)
+
+    def slope_at_end(t, y):
+        drv.cnt[0] += 1
+        return rhs(t, y)
+
+    if method in TABLEAUX:
+        if not compiled:
+            raise ValueError(f"{method} runs compiled only (scipy's {method} serves Python right-hand sides)")
+        status, ts, ys, sol, njev = _drive_erk(drv, TABLEAUX[method], args, f0, t0, t1, y0, rtol, atol, dt,
+                                               need_dense)
+    elif method == "RK4":
+        status, ts, ys, sol, njev = _drive_rk4(drv, loops, args, f0, y0, grid, need_dense)
+    else:
+        status, ts, ys, sol, njev = _drive_midpoint(drv, loops, args, f0, t0, y0, rtol, atol, grid, need_dense,
+                                                    jac, slope_at_end)
+    return _outcome(method, rhs, drv, status, ts, ys, sol, njev, dt, max_steps)
+
+
+def _outcome(method, rhs, drv, status, ts, ys, sol, njev, dt, max_steps) -> Outcome:
+    cnt, fail = drv.counters
+    if status == -2:
+        if drv.compiled:
+            rhs.check(float(fail[0]), fail[1:])      # raises the model's named error if there is one
+        raise IntegrationError(f"{method}: non-finite state or right-hand side at t={float(fail[0])!r}"
+                               + (f" (dt={dt!r})" if dt else ""))
+    stopped = status == 2 or drv.stopped
+    success, message = True, "reached t_end"
+    if status == -1:
+        success, message = False, (f"{method} failed at t={float(ts[-1])!r}: Required step size is less than "
+                                   "spacing between numbers.")
+    elif status == 0 and not stopped and drv.out_of_time:
+        success, message = False, wall_message(drv.wall[1], float(ts[-1]), int(cnt[1]))
+    elif status == 0 and not stopped and cnt[1] >= drv.budget:
+        success, message = False, f"max_steps={max_steps} reached at t={float(ts[-1])!r}"
+    elif stopped:
+        message = f"stopped by stop(t, y) at t={float(ts[-1])!r}"
+    return Outcome(ts, ys, sol, int(cnt[0]), njev, int(cnt[2]), success, message, stopped)

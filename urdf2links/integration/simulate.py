@@ -1,0 +1,270 @@
+"""Simulation: a scene (or a bare model) integrated in time, with its own energy bookkeeping.
+
+``simulate(scene_or_model, ...) -> Trajectory``. The right-hand side is the compiled
+:class:`~urdf2links.scenes.plan.Plan` (only the scene's terms); the integrator is any of
+:data:`urdf2links.integration.integrators.METHODS`. The trajectory records coordinates, velocities, energies,
+the work of non-potential forces, and the power-balance error ``h - h(0) - W`` at every sample.
+
+Timing: ``stats["wall_time"]`` is the integration only (:data:`TIMED_REGION`);
+``stats["run_s"]`` the whole call. numba compiles the kernels and loops at their first call in a
+process (or loads them from its disk cache); :func:`warm_up` makes that happen before a timed
+run and :func:`record_compilation` says whether anything was compiled and how long it took.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .charts import integrate_charted, link_poses
+from ..console import Progress
+from ..errors import IntegrationError
+from ..scenes.limits import limit_excursions
+from ..dynamics.model import Model
+from ..scenes.plan import compile_plan
+from ..ranges import MAX_STEPS
+from ..scenes.scene import RunSettings, Scene, check_run
+
+__all__ = ["Trajectory", "simulate", "Progress", "warm_up", "record_compilation", "Compilation", "TIMED_REGION"]
+
+#: What ``Trajectory.stats["wall_time"]`` contains.
+TIMED_REGION = ("urdf2links' integrator: the integration loop from the first evaluation of the compiled right-hand "
+                "side to the last step, with the dense output's coefficients the samples are read from (re-charting "
+                "switches included); not the plan's compilation, the evaluation at the samples, the energies, the "
+                "poses, nor numba's compilation (warmed up before)")
+
+
+@dataclass(frozen=True, eq=False)
+class Trajectory:
+    """Result of :func:`simulate`.
+
+    ``t`` (m,), ``q`` and ``qd`` (m, n) with columns ``coordinate_names``; ``energy`` dict of (m,)
+    arrays: ``kinetic`` E, ``potential`` V (gravity and springs), ``work`` W (non-potential forces
+    and base), ``function`` h (E + V for a fixed base), ``error`` ``h - h(0) - W``;
+    ``poses`` dict link -> (m, 4, 4); ``stats`` (method, rtol, atol, dt, nfev, nsteps, ``wall_time`` the
+    integration (:data:`TIMED_REGION`), ``run_s`` the whole :func:`simulate` call,
+    ``limit_excursions``: :class:`~urdf2links.scenes.limits.LimitExcursion` dicts, ``spring_notes``);
+    ``sol`` the integrator's dense interpolant ``t -> (q, qd, W)`` or None; ``charts`` the
+    :class:`~urdf2links.integration.charts.ChartedRun` (segments, states in each chart) when floating links were
+    re-charted, else None.
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    coordinate_names: tuple[str, ...]
+    energy: dict
+    poses: dict = field(default_factory=dict)
+    stats: dict = field(default_factory=dict)
+    scene: str = ""
+    robot: str = ""
+    sol: object = None
+    charts: object = None
+
+    @property
+    def energy_error(self) -> float:
+        """max |h - h(0) - W| over the run, relative to the energy scale max(|E|, |V - V(0)|, |W|)."""
+        e = self.energy
+        scale = max(np.abs(e["kinetic"]).max(), np.abs(e["potential"] - e["potential"][0]).max(),
+                    np.abs(e["work"]).max(), 1e-300)
+        return float(np.abs(e["error"]).max() / scale)
+
+    def save_npz(self, path) -> Path:
+        path = Path(path)
+        arrays = {"t": self.t, "q": self.q, "qd": self.qd, "coordinate_names": np.array(self.coordinate_names)}
+        arrays.update({f"energy_{k}": v for k, v in self.energy.items()})
+        arrays.update({f"pose_{k}": v for k, v in self.poses.items()})
+        np.savez_compressed(path, **arrays, stats=np.array(repr(self.stats)))
+        return path
+
+    def save_csv(self, path) -> Path:
+        path = Path(path)
+        with path.open("w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(["t", *self.coordinate_names, *(f"d_{c}" for c in self.coordinate_names),
+                        *(f"energy_{k}" for k in self.energy)])
+            for i in range(len(self.t)):
+                w.writerow([repr(float(self.t[i])), *map(repr, self.q[i].tolist()), *map(repr, self.qd[i].tolist()),
+                            *(repr(float(v[i])) for v in self.energy.values())])
+        return path
+
+
+def simulate(scene_or_model, *, t_end: float | None = None, method: str | None = None, rtol: float | None = None,
+             atol: float | None = None, dt: float | None = None, samples: int | None = None, q0=None, qd0=None,
+             progress: bool | None = None, model: Model | None = None, recharting: bool | None = None,
+             max_wall: float | None = None, max_steps: int = MAX_STEPS) -> Trajectory:
+    """Integrate a scene (a :class:`~urdf2links.scenes.scene.Scene`, a path to a scene file) or a bare
+    :class:`~urdf2links.dynamics.model.Model` (gravity as the model says, nothing else acting).
+
+    Keyword arguments override the scene's ``[run]`` and ``[initial]``; ``model`` reuses an already
+    loaded model of the scene's robot; ``progress`` forces the progress bar on or off (default: on
+    for a terminal).
+
+    Floating links (three angle coordinates) are re-charted when they approach ``phi_y = +-pi/2``
+    (:mod:`urdf2links.integration.charts`; ``recharting`` overrides the scene's ``[run] recharting``, default
+    on): the run is then integrated in segments, ``q``/``qd`` are reported in the loaded model's
+    coordinates, the re-charted links' poses are recorded, and ``stats['recharts']`` lists the
+    switches. Without re-charting, reaching the singularity raises a DynamicsError.
+
+    A run that cannot finish raises :class:`~urdf2links.errors.IntegrationError` saying why: the step
+    size fell below the spacing of floating-point numbers, more than ``max_steps`` accepted steps
+    (default :data:`~urdf2links.ranges.MAX_STEPS`), more than ``max_wall`` seconds of wall time
+    (default: no budget; ``--max-wall`` on the command line), a non-finite state. Overrides are checked
+    like a scene's ``[run]`` (:func:`~urdf2links.scenes.scene.check_run`: SceneError naming the value and its range).
+    """
+    scene, model = _scene_and_model(scene_or_model, model)
+    run = scene.run
+    run = check_run(RunSettings(t_end=run.t_end if t_end is None else t_end, method=method or run.method,
+                                rtol=run.rtol if rtol is None else rtol, atol=run.atol if atol is None else atol,
+                                dt=run.dt if dt is None else dt, samples=run.samples if samples is None else samples,
+                                recharting=run.recharting if recharting is None else bool(recharting)),
+                    f"{scene.path or scene.name}: simulate()", prefix="")
+    plan = compile_plan(scene, model)
+    q, qd = scene.initial_state(model)
+    if q0 is not None:
+        q = model.vector(q0, "q0").copy()
+    if qd0 is not None:
+        qd = model.vector(qd0, "qd0").copy()
+    n = model.n
+    y0 = np.r_[q, qd, 0.0]
+    t_eval = np.linspace(0.0, run.t_end, max(run.samples, 2))
+    started = time.perf_counter()
+    bar = Progress(run.t_end, label=f"{scene.name} {run.method}", enabled=progress)
+    # torques and springs act on coordinates: their links keep their chart
+    exclude = {c for c, _ in scene.torques} | {sp.coordinate for sp in plan.spring_set.springs}
+    try:
+        res = integrate_charted(model, lambda m: plan if m is model else compile_plan(scene, m), y0,
+                                (0.0, run.t_end), t_eval=t_eval, method=run.method, rtol=run.rtol, atol=run.atol,
+                                dt=run.dt if run.method in ("RK4", "midpoint") else None, callback=bar,
+                                recharting=run.recharting, exclude=exclude, base_state=plan.base_state,
+                                max_steps=max_steps, max_wall=max_wall)
+    finally:
+        bar.close()
+    if not res.success:
+        raise IntegrationError(f"{scene.path or scene.name}: {run.method} (rtol {run.rtol:g}"
+                               + (f", dt {run.dt:g}" if run.dt and run.method in ("RK4", "midpoint") else "")
+                               + f") could not finish the run to t_end = {run.t_end:g} s: {res.message}"
+                               + (f" (max_wall {max_wall:g} s for the whole run)" if max_wall is not None else ""))
+    t = res.t
+    qs, qds, W = res.y[:, :n], res.y[:, n:2 * n], res.y[:, 2 * n]
+    E, V, h = _energies(res, n)
+    recorded = list(dict.fromkeys([*scene.link_poses, *(r["link"] for r in res.recharts)]))
+    poses = _record_poses(res, n, recorded, started=started, max_wall=max_wall, where=scene.path or scene.name)
+    stats = {"method": run.method, "rtol": run.rtol, "atol": run.atol, "dt": run.dt, "nfev": res.nfev,
+             "nsteps": res.nsteps, "wall_time": res.wall_time, "terms": plan.terms, "success": res.success,
+             "message": res.message, "recharting": run.recharting, "n_recharts": len(res.recharts),
+             "recharts": res.recharts, "segments": len(res.segments),
+             "limit_excursions": [e.as_dict() for e in limit_excursions(model, t, qs)],
+             "spring_notes": list(plan.spring_set.notes), "run_s": time.perf_counter() - started}
+    return Trajectory(t=t, q=qs, qd=qds, coordinate_names=model.coordinate_names,
+                      energy={"kinetic": E, "potential": V, "work": W, "function": h, "error": h - h[0] - W},
+                      poses=poses, stats=stats, scene=scene.name, robot=model.name, sol=res.sol,
+                      charts=res if res.recharts else None)
+
+
+def _scene_and_model(scene_or_model, model: Model | None) -> tuple[Scene, Model]:
+    """The scene to run (a bare Model runs in a scene of gravity alone) and its model."""
+    from ..scenes.scene import load_scene
+
+    if isinstance(scene_or_model, (str, Path)):
+        scene_or_model = load_scene(scene_or_model)
+    if isinstance(scene_or_model, Model):
+        model = scene_or_model
+        return Scene(name=model.name or "model", path=None, robot=Path(model.source or "."), load_options={},
+                     gravity=np.asarray(model.gravity_vector)), model
+    if isinstance(scene_or_model, Scene):
+        return scene_or_model, scene_or_model.model() if model is None else model
+    raise TypeError(f"simulate takes a Scene, a scene file path or a Model; got {type(scene_or_model).__name__}")
+
+
+def _energies(res, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(S,) kinetic and potential energies (E37) and the function h (E39) at the samples, each in the
+    chart that computed it (regular there), compiled."""
+    t, qc, qdc = res.t, res.y_chart[:, :n], res.y_chart[:, n:2 * n]
+    E, V, h = np.empty(len(t)), np.empty(len(t)), np.empty(len(t))
+    segment_of = np.asarray(res.segment_of)
+    for k, segment in enumerate(res.segments):
+        idx = np.nonzero(segment_of == k)[0]
+        if idx.size:
+            E[idx], V[idx], h[idx] = segment.plan.rhs.energies(t[idx], qc[idx], qdc[idx])
+    return E, V, h
+
+
+def _record_poses(res, n: int, recorded: list[str], *, started: float, max_wall: float | None, where) -> dict:
+    """(S, 4, 4) world poses of the ``recorded`` links at the samples, each from the chart that
+    computed the sample; the wall-clock budget bounds this too."""
+    qc = res.y_chart[:, :n]
+    poses = {link: np.empty((len(res.t), 4, 4)) for link in recorded}
+    for i, (k, ti, a) in enumerate(zip(res.segment_of, res.t, qc)):
+        if recorded and max_wall is not None and i % 1000 == 0 and time.perf_counter() - started > max_wall:
+            raise IntegrationError(f"{where}: max_wall={max_wall:g} s spent while recording the poses "
+                                   f"of {', '.join(recorded)} at sample {i} of {len(res.t)} (fewer samples would do)")
+        p = res.segments[k].plan
+        P = link_poses(p.model, recorded, a, t=ti, base=p.base_state(ti))
+        for link in recorded:
+            poses[link][i] = P[link]
+    return poses
+
+
+@dataclass
+class Compilation:
+    """What :func:`record_compilation` saw: ``seconds`` the block's duration, ``functions`` the
+    numba functions compiled in it (not loaded from the disk cache)."""
+
+    seconds: float = 0.0
+    functions: list = field(default_factory=list)
+
+    @property
+    def happened(self) -> bool:
+        return bool(self.functions)
+
+    def describe(self, what: str) -> str:
+        return (f"{what}: numba compiled {len(self.functions)} function(s) in {self.seconds:.1f} s (once; cached on disk "
+                "for the next runs; not in the timed runs)")
+
+
+@contextlib.contextmanager
+def record_compilation():
+    """Context yielding a :class:`Compilation`, filled on exit: the block's seconds and the numba
+    functions it compiled (numba's ``numba:compile`` events; a function loaded from the cache
+    raises none)."""
+    from numba.core import event
+
+    out = Compilation()
+    start = time.perf_counter()
+    with event.install_recorder("numba:compile") as rec:
+        yield out
+    out.seconds = time.perf_counter() - start
+    names = []
+    for _, ev in rec.buffer:
+        if ev.is_start:
+            fn = getattr(ev.data.get("dispatcher"), "py_func", None)
+            names.append(getattr(fn, "__qualname__", str(fn)))
+    out.functions.extend(sorted(set(names)))
+
+
+def warm_up(scene, *, model: Model | None = None, methods=("DOP853",), t_end: float | None = None) -> Compilation:
+    """Run ``scene`` once with each of ``methods`` over a few steps, so that every compiled function
+    a run of it calls is compiled (or loaded from numba's cache) here and not inside a timed run.
+    ``t_end`` defaults to the shorter of the scene's and 0.01 s. Returns the
+    :class:`Compilation` of the whole warm-up. A method that fails here is left to fail (and be
+    reported) in the real run."""
+    from ..scenes.scene import load_scene
+
+    if isinstance(scene, (str, Path)):
+        scene = load_scene(scene)
+    model = model if model is not None else scene.model()
+    T = min(scene.run.t_end, 0.01) if t_end is None else float(t_end)
+    with record_compilation() as rec:
+        for m in methods:
+            kw = {"dt": T / 4} if m in ("RK4", "midpoint") else {"rtol": 1e-6, "atol": 1e-8}
+            try:
+                simulate(scene, model=model, t_end=T, samples=3, progress=False, method=m, **kw)
+            except Exception:  # noqa: BLE001 -- a method that fails here fails (and is reported) in the run
+                pass
+    return rec

@@ -1,0 +1,10 @@
+"""Scenes: a scene TOML (or a robot's default scene) -> the plan of the terms it calls for -> a compiled right-hand side.
+
+May import the base modules, :mod:`urdf2links.dynamics` and :mod:`urdf2links.parsers`; never integration, view
+or compare.
+"""
+
+from .plan import Plan, compile_plan
+from .scene import Scene, default_scene, load_scene
+
+__all__ = ["Scene", "load_scene", "default_scene", "Plan", "compile_plan"]

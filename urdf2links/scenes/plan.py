@@ -1,0 +1,136 @@
+"""A scene compiled for the solver: which terms exist, decided once, and the compiled right-hand side.
+
+``compile_plan(scene, model)`` decides which terms the scene calls for; the right-hand side
+(:class:`~urdf2links.scenes.scene_kernels.CompiledScene`, ``plan.rhs``) then computes exactly those, with
+flags that switch the others off:
+
+==============  ==================================================  ==============================
+term            computed by                                         present when
+==============  ==================================================  ==============================
+A, e            :func:`urdf2links.dynamics.kernels.dynamics`                 always (the kinetic energy)
+base            the base factors of :func:`~urdf2links.dynamics.kernels.kinematics`  ``[base]`` is given
+G               gravity as a base acceleration (kinematics)         ``[gravity]`` is given
+Q               :func:`urdf2links.dynamics.kernels.add_wrench`               ``[[force]]`` or ``[[moment]]``
+tau             joint torques ``[[torque]]``                        ``[[torque]]``
+spring          ``-k (q - rest)`` (a potential)                     a ``[[spring]]`` with k > 0
+damper          ``-c qd`` (dissipation D)                           a ``[[spring]]`` with c > 0, or URDF
+                                                                    damping with ``[dampers] from_urdf``
+==============  ==================================================  ==============================
+
+The state integrated is ``y = (q, qd, W)``: ``W`` is the work done on the system by everything
+that is not a potential (Q, tau, dampers, and the moving base through ``-dL/dt``), so that
+``h(t) - h(0) - W(t)`` (``h`` the energy function, ``E + V`` for a fixed base) measures the
+integration's own energy error (the power balance, docs/equations.md (E40)). The same right-hand side
+in numpy, the oracle the tests compare it with, is :class:`urdf2links.scenes.python_plan.PythonPlan`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .scene_kernels import CompiledScene
+from ..dynamics.transforms import BaseState
+
+__all__ = ["Plan", "compile_plan"]
+
+
+class Plan:
+    """The compiled scene. ``terms`` lists what is computed; :meth:`describe` says it in words."""
+
+    def __init__(self, scene, model):
+        self.scene = scene
+        self.model = model
+        tree = model.tree
+        names = model.coordinate_names
+        self.n = model.n
+        self.base = scene.base
+        self.gravity_vector = None if scene.gravity is None else np.asarray(scene.gravity, float)
+        frame_of = model.info.get("frame_of") or {nm: (nm, np.eye(4).tolist()) for nm in tree.link_names}
+        self.loads = []
+        for load in scene.loads:
+            tname, X = frame_of[load.link]
+            X = np.asarray(X)
+            self.loads.append((tree.link_index(tname), X, load))
+        self.torque_index = np.array([names.index(c) for c, _ in scene.torques], dtype=int)
+        self.torque_funcs = [f for _, f in scene.torques]
+        self.spring_set = scene.springs_for(model)
+        """The scene's springs and dampers on this model (URDF damping included when asked) and notes."""
+        springs = [s for s in self.spring_set.springs if s.stiffness > 0]
+        dampers = [s for s in self.spring_set.springs if s.damping > 0]
+        self.spring_index = np.array([names.index(s.coordinate) for s in springs], dtype=int)
+        self.stiffness = np.array([s.stiffness for s in springs])
+        self.rest = np.array([s.rest for s in springs])
+        self.damper_index = np.array([names.index(s.coordinate) for s in dampers], dtype=int)
+        self.damping = np.array([s.damping for s in dampers])
+        self.terms = tuple(t for t, on in (
+            ("A", True), ("e", True), ("base", self.base is not None), ("G", self.gravity_vector is not None),
+            ("Q", bool(self.loads)), ("tau", len(self.torque_funcs) > 0), ("spring", len(springs) > 0),
+            ("damper", len(dampers) > 0)) if on)
+        self.rhs = CompiledScene(self)
+        """``y' = (qd, q'', P)`` for ``y = (q, qd, W)`` (2n + 1,): the compiled right-hand side
+        (:mod:`urdf2links.scenes.scene_kernels`)."""
+
+    # -- the scene's inputs at a time --------------------------------------------------------------
+    def base_state(self, t) -> BaseState | None:
+        """Pose, rate and acceleration of {A} at ``t`` (:meth:`Scene.base_state`); None for a fixed base."""
+        return self.scene.base_state(t)
+
+    def torques(self, t) -> np.ndarray:
+        """Joint torques tau (n,) at ``t`` (zeros where none acts)."""
+        tau = np.zeros(self.n)
+        if self.torque_funcs:
+            np.add.at(tau, self.torque_index, [g(t) for g in self.torque_funcs])
+        return tau
+
+    def wrenches(self, t) -> list:
+        """The loads at ``t`` as ``(tree link index, force (3,), moment (3,), point (3,), frame)``, in
+        the tree link's axes where ``frame`` is ``"link"``."""
+        out = []
+        for link, X, load in self.loads:
+            v = np.asarray(load.value(t), float)
+            if load.frame == "link":
+                v = X[:3, :3] @ v  # URDF link axes -> tree link axes
+            point = X[:3, :3] @ load.point + X[:3, 3]
+            if load.kind == "force":
+                out.append((link, v, np.zeros(3), point, load.frame))
+            else:
+                out.append((link, np.zeros(3), v, point, load.frame))
+        return out
+
+    def energies(self, t, q, qd):
+        """``(E, V, h)`` at times ``t`` (m,) and states ``q``, ``qd`` (m, n): kinetic energy, potential
+        energy (gravity and springs) and the energy function, compiled."""
+        return self.rhs.energies(t, q, qd)
+
+    # -- words -----------------------------------------------------------------------------------
+    def describe(self) -> str:
+        s, m = self.scene, self.model
+        lines = [f"scene {s.name!r}: robot {m.name!r} ({m.n} coordinates, {m.tree.n_links} links)",
+                 f"terms computed: {', '.join(self.terms)}"]
+        skipped = [t for t in ("base", "G", "Q", "tau", "spring", "damper") if t not in self.terms]
+        lines.append(f"not computed (the scene does not call for them): {', '.join(skipped) or 'nothing'}")
+        all_coords = ", ".join(m.coordinate_names)
+        lines.append(f"  A, e: all coordinates ({all_coords})")
+        if s.base is not None:
+            lines.append("  base {A}: " + "; ".join(f"{p}: {f.describe()}" for p, f in
+                                                   zip(("x", "y", "z", "phi_x", "phi_y", "phi_z"), s.base)))
+        if self.gravity_vector is not None:
+            lines.append(f"  G: gravity {self.gravity_vector.tolist()} m/s^2, all coordinates")
+        for link, X, load in self.loads:
+            lines.append(f"  Q: {load.kind} on {load.link!r} ({load.frame} axes): {load.value.describe()}"
+                         f"; touches the coordinates that move {load.link!r}")
+        for (c, f) in s.torques:
+            lines.append(f"  tau: {c}: {f.describe()}")
+        for sp in self.spring_set.springs:
+            lines.append(f"  spring/damper on {sp.coordinate}: k = {sp.stiffness:g}, rest = {sp.rest:g}, c = {sp.damping:g}")
+        lines += [f"  note: {n}" for n in self.spring_set.notes]
+        r = s.run
+        lines.append(f"run: t_end {r.t_end:g} s, method {r.method}, rtol {r.rtol:g}, atol {r.atol:g}"
+                     + (f", dt {r.dt:g}" if r.dt else "") + f", {r.samples} samples")
+        return "\n".join(lines)
+
+
+def compile_plan(scene, model) -> Plan:
+    """Compile ``scene`` for ``model`` (names checked)."""
+    scene.check_names(model)
+    return Plan(scene, model)

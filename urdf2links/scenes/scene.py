@@ -1,0 +1,615 @@
+"""Scenes: a TOML file that names a robot, the effects that act on it, its initial state and the run.
+
+Schema (every table optional except ``[robot]``; an effect that is not named does not act and is
+not computed, see :mod:`urdf2links.scenes.plan`)::
+
+    description = "what the scene shows"
+    chaotic = false                         # the comparison reports a divergence time, not an error
+
+    [robot]
+    urdf = "double_pendulum.urdf"           # path relative to this file (.urdf or .xacro); or
+    # shipped = "double_pendulum"           # a robot of robots/; or
+    # example_robot_data = "ur_description/urdf/ur5_robot.urdf"
+    floating_base = false
+    inertia = "audit"                       # audit | strict | repair
+    mimic = "independent"                   # independent | coupled
+    strict = false                          # refuse what the default reading tolerates (notes)
+    xacro_args = { prefix = "left_" }       # arguments of a .xacro robot (name:=value)
+
+    [gravity]                               # absent: no gravity
+    magnitude = 9.81                        # m/s^2
+    direction = [0, 0, -1]
+
+    [base]                                  # prescribed motion of {A}: x, y, z [m], phi_x, phi_y, phi_z [rad]
+    z = { sines = [[0.8, 0.1, 0.0]] }       # each a function of time (urdf2links.scenes.functions)
+
+    [[force]]                               # (E23): a force on a link
+    link = "lower"; point = [0, 0, -1.0]    # application point in the link's (URDF) frame [m]
+    frame = "world"                         # axes of the vector: link | world
+    value = [0, 0, { sines = [[2.0, 0.5]] }]   # N, three functions of time
+
+    [[moment]]                              # (E23): link, frame, value [N m]
+    [[torque]]                              # coordinate = "shoulder"; value = function [N m or N]
+    [[spring]]                              # coordinate, stiffness [N m/rad], rest [rad], damping [N m s/rad]
+
+    [dampers]
+    from_urdf = true                        # each joint's <dynamics damping> as a damper (a [[spring]]'s
+                                            # own damping on the same coordinate takes precedence)
+
+    [initial]
+    q = { shoulder = 1.2 }                  # by coordinate name; unnamed coordinates start at 0
+    qd = {}
+
+    [run]
+    t_end = 10.0; method = "DOP853"; rtol = 1e-10; atol = 1e-12; dt = 1e-3; samples = 1001
+    recharting = true                       # floating links pass phi_y = +-pi/2 (urdf2links.integration.charts)
+
+    [record]
+    link_poses = ["lower"]                  # {0}-poses of these links at every sample
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import SceneError
+from .functions import Constant, SceneValueError, TimeFunction, VectorFunction, parse_function, vector_function
+from ..locations import example_robot_data_dir, shipped_robots_dir
+from ..ranges import METHODS, MAX_SAMPLES, MAX_STEPS, MIN_ATOL, MIN_T_END, RANGES, RTOL_FLOOR
+from ..dynamics.transforms import PARAMETERS, BaseState
+
+__all__ = ["Scene", "AppliedLoad", "Spring", "SpringSet", "RunSettings", "load_scene", "shipped_robots_dir",
+           "robot_stem", "default_scene", "DEFAULT_SCENE_NAME", "Q0_CHOICES"]
+
+#: Name of the scene :func:`default_scene` makes (reports go to ``reports/<robot>/default/``).
+DEFAULT_SCENE_NAME = "default"
+Q0_CHOICES = ("zero", "random")
+
+_TOP = ("description", "chaotic", "robot", "gravity", "base", "force", "moment", "torque", "spring",
+        "dampers", "initial", "run", "record")
+_ROBOT = ("urdf", "shipped", "example_robot_data", "floating_base", "inertia", "mimic", "package_dirs", "strict",
+          "xacro_args")
+#: Joint types whose URDF damping becomes a damper on their one coordinate.
+_DAMPED_TYPES = ("revolute", "continuous", "prismatic")
+
+
+def robot_stem(path) -> str:
+    """The robot file's name without ``.xacro`` and ``.urdf`` (``robot.urdf.xacro`` -> ``robot``): the
+    ``<robot>`` part of a report's key."""
+    name = Path(path).name
+    for suffix in (".xacro", ".urdf"):
+        name = name.removesuffix(suffix)
+    return name
+_RUN = ("t_end", "method", "rtol", "atol", "dt", "samples", "recharting")
+
+
+@dataclass(frozen=True)
+class AppliedLoad:
+    """A force (``kind="force"``, at ``point`` (3,) in the link frame) or moment on URDF link ``link``;
+    ``value`` gives its three components in ``frame`` axes (``"link"`` or ``"world"``) at time t."""
+
+    kind: str
+    link: str
+    frame: str
+    value: VectorFunction
+    point: np.ndarray = field(default_factory=lambda: np.zeros(3))
+
+
+@dataclass(frozen=True)
+class Spring:
+    """Joint spring and damper on ``coordinate``: force ``-stiffness (q - rest) - damping qd``,
+    i.e. V += 0.5 k (q - rest)^2 and the dissipation function D = 0.5 c qd^2 of docs/equations.md (E16)."""
+
+    coordinate: str
+    stiffness: float = 0.0
+    rest: float = 0.0
+    damping: float = 0.0
+
+
+@dataclass(frozen=True)
+class SpringSet:
+    """The springs and dampers that act in a scene on a model (:meth:`Scene.springs_for`): the
+    scene's ``[[spring]]`` blocks merged with the URDF's damping when ``[dampers] from_urdf``;
+    ``notes`` says what was added, overridden or left out, and that Coulomb friction is not modelled."""
+
+    springs: tuple[Spring, ...]
+    notes: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class RunSettings:
+    t_end: float = 5.0
+    method: str = "DOP853"
+    rtol: float = 1e-10
+    atol: float = 1e-12
+    dt: float | None = None
+    samples: int = 501
+    recharting: bool = True
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A parsed, validated scene. ``base`` is None or six functions (x, y, z, phi_x, phi_y, phi_z)."""
+
+    name: str
+    path: Path | None
+    robot: Path
+    load_options: dict
+    description: str = ""
+    chaotic: bool = False
+    gravity: np.ndarray | None = None
+    base: tuple[TimeFunction, ...] | None = None
+    loads: tuple[AppliedLoad, ...] = ()
+    torques: tuple[tuple[str, TimeFunction], ...] = ()
+    springs: tuple[Spring, ...] = ()
+    q0: dict = field(default_factory=dict)
+    qd0: dict = field(default_factory=dict)
+    run: RunSettings = RunSettings()
+    link_poses: tuple[str, ...] = ()
+    urdf_damping: bool = False
+
+    def model(self):
+        """Load the scene's robot with its options (a :class:`~urdf2links.dynamics.model.Model`)."""
+        from ..parsers.importer import load_urdf
+
+        model = load_urdf(self.robot, **self.load_options)
+        self.check_names(model)
+        return model
+
+    def check_names(self, model) -> None:
+        """Every link and coordinate the scene names exists in ``model`` (SceneError otherwise)."""
+        where = self.path or "<scene>"
+        links = set(model.info.get("frame_of", {}) or model.link_names)
+        for load in self.loads:
+            if load.link not in links:
+                raise SceneError(f"{where}: [[{load.kind}]] link = {load.link!r} is not a link of robot "
+                                 f"{model.name!r}{_hint(load.link, links)}; links are {sorted(links)}")
+        for link in self.link_poses:
+            if link not in links:
+                raise SceneError(f"{where}: [record] link_poses names {link!r}, not a link of {model.name!r}"
+                                 f"{_hint(link, links)}")
+        names = model.coordinate_names
+        for what, coord in ([("torque", c) for c, _ in self.torques] + [("spring", s.coordinate) for s in self.springs]
+                            + [("initial.q", c) for c in self.q0] + [("initial.qd", c) for c in self.qd0]):
+            if coord not in names:
+                raise SceneError(f"{where}: [{what}] coordinate {coord!r} is not a coordinate of robot {model.name!r}"
+                                 f"{_hint(coord, names)}; coordinates are {list(names)}")
+
+    def base_state(self, t) -> BaseState | None:
+        """Pose, rate and acceleration of {A} at ``t`` from ``[base]``; None for a fixed base."""
+        if self.base is None:
+            return None
+        f = self.base
+        return BaseState(np.array([g(t) for g in f]), np.array([g.derivative(t) for g in f]),
+                         np.array([g.second_derivative(t) for g in f]))
+
+    def springs_for(self, model) -> SpringSet:
+        """The springs and dampers acting on ``model``: ``[[spring]]`` blocks, plus with ``[dampers]
+        from_urdf = true`` a damper ``c = <dynamics damping>`` on the coordinate of every revolute,
+        continuous or prismatic joint (the URDF joint position), unless a ``[[spring]]`` gives that
+        coordinate a damping of its own. Damping of floating, planar or spherical joints, of coupled
+        mimic followers and negative damping are left out, with a note."""
+        joints = model.info.get("joints", [])
+        friction = [j["name"] for j in joints if j.get("friction")]
+        notes = [f"URDF <dynamics friction> (Coulomb friction) is not modelled, on either engine: joints "
+                 f"{', '.join(friction)}"] if friction else []
+        if not self.urdf_damping:
+            damped = [j["name"] for j in joints if j.get("damping")]
+            if damped:
+                notes.append(f"URDF <dynamics damping> not applied (the scene does not ask: [dampers] from_urdf = "
+                             f"true): joints {', '.join(damped)}")
+            return SpringSet(self.springs, tuple(notes))
+        own = {s.coordinate: s for s in self.springs}
+        added, skipped = {}, []
+        for j in joints:
+            c = j.get("damping")
+            if not c:
+                continue
+            coord = j["coordinates"][0] if len(j["coordinates"]) == 1 else None
+            if j["type"] not in _DAMPED_TYPES:
+                skipped.append(f"{j['name']} ({j['type']} joint: no single joint axis to damp)")
+            elif coord is None or coord not in model.coordinate_names:
+                skipped.append(f"{j['name']} (coupled to the joint it mimics)")
+            elif c < 0:
+                skipped.append(f"{j['name']} (negative damping {c:g})")
+            elif own.get(coord) is not None and own[coord].damping > 0:
+                skipped.append(f"{j['name']} (the scene's [[spring]] damping {own[coord].damping:g} is used instead)")
+            else:
+                added[coord] = c
+        springs = [Spring(s.coordinate, s.stiffness, s.rest, added.get(s.coordinate, s.damping)) for s in self.springs]
+        springs += [Spring(coord, damping=c) for coord, c in added.items() if coord not in own]
+        if added:
+            notes.append("URDF <dynamics damping> applied as dampers ([dampers] from_urdf = true): "
+                         + ", ".join(f"{coord} {c:g}" for coord, c in added.items()))
+        if skipped:
+            notes.append(f"URDF <dynamics damping> not applied: {'; '.join(skipped)}")
+        return SpringSet(tuple(springs), tuple(notes))
+
+    def initial_state(self, model) -> tuple[np.ndarray, np.ndarray]:
+        names = model.coordinate_names
+        q = np.array([float(self.q0.get(n, 0.0)) for n in names])
+        qd = np.array([float(self.qd0.get(n, 0.0)) for n in names])
+        return q, qd
+
+
+def _hint(name, choices) -> str:
+    close = difflib.get_close_matches(str(name), [str(c) for c in choices], n=1)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+class _Reader:
+    def __init__(self, where: str):
+        self.where = where
+
+    def fail(self, key: str, problem: str):
+        raise SceneError(f"{self.where}: {key}: {problem}")
+
+    def keys(self, table, allowed, key):
+        if not isinstance(table, dict):
+            self.fail(key, f"must be a table, got {type(table).__name__} {table!r}")
+        for k in table:
+            if k not in allowed:
+                self.fail(f"{key}.{k}" if key else k, f"unknown key{_hint(k, allowed)}; valid keys are {list(allowed)}")
+
+    def number(self, value, key, *, positive=False, nonnegative=False, quantity: str | None = None,
+               low: float | None = None, high: float | None = None):
+        """A finite number (not a bool), checked where it is read: ``positive``/``nonnegative``, within
+        the physical range of ``quantity`` (:data:`urdf2links.ranges.RANGES`) and within ``[low, high]``;
+        the SceneError names the key, the value and the valid range."""
+        bound = RANGES[quantity][0] if quantity else math.inf
+        lo = 0.0 if (positive or nonnegative) else -bound
+        lo = lo if low is None else max(lo, low)
+        hi = bound if high is None else min(bound, high)
+        unit = f" {RANGES[quantity][1]}" if quantity and RANGES[quantity][1] else ""
+        valid = (f"{'(' if positive and low is None else '['}{lo:g}, {hi:g}]{unit}")
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            self.fail(key, f"must be a finite number in {valid}, got {value!r}")
+        if lo == 0 and (value < 0 or (positive and value == 0)):
+            self.fail(key, f"must {'be positive' if positive else 'not be negative'}, got {value!r}: valid range {valid}")
+        if value < lo or value > hi:
+            self.fail(key, f"{value!r} is outside the valid range {valid}")
+        return float(value)
+
+    def vector(self, value, key, *, quantity: str | None = None):
+        if not isinstance(value, list) or len(value) != 3:
+            self.fail(key, f"must be a list of 3 numbers, got {value!r}")
+        return np.array([self.number(v, f"{key}[{i}]", quantity=quantity) for i, v in enumerate(value)])
+
+    def items(self, data, kind: str) -> list:
+        """The ``[[kind]]`` blocks of ``data`` (an array of tables)."""
+        items = data.get(kind, [])
+        if not isinstance(items, list):
+            self.fail(f"[[{kind}]]", f"must be an array of tables ([[{kind}]] blocks), got {items!r}")
+        return items
+
+    def strings(self, value, key) -> tuple:
+        if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+            self.fail(key, f"must be a list of strings, got {value!r}")
+        return tuple(value)
+
+    def choice(self, value, key, choices):
+        if value not in choices:
+            self.fail(key, f"{value!r} is not one of {list(choices)}{_hint(value, choices)}")
+        return value
+
+    def function(self, spec, key) -> TimeFunction:
+        try:
+            return parse_function(spec, where=f"{self.where}: {key}")
+        except SceneValueError as err:
+            raise SceneError(str(err)) from None
+
+    def vector_function(self, spec, key) -> VectorFunction:
+        try:
+            return vector_function(spec, where=f"{self.where}: {key}", length=3)
+        except SceneValueError as err:
+            raise SceneError(str(err)) from None
+
+
+#: A joint limit this large (rad or m) stands for "none": files written for Gazebo put +-1e16 on
+#: joints that turn freely (example-robot-data's iris rotors); drawing q0 there would start at 1e15 rad.
+NO_LIMIT = 1e6
+
+
+def _random_q0(model, rng) -> dict:
+    """A seeded initial configuration: each joint coordinate uniform within its URDF limits when both
+    are finite, below :data:`NO_LIMIT` in magnitude and lower < upper, else uniform in [-1, 1] (rad or
+    m); a floating root's position stays at the origin."""
+    limits = {j["coordinates"][0]: (j["lower"], j["upper"]) for j in model.info.get("joints", [])
+              if len(j["coordinates"]) == 1 and j["lower"] is not None and j["upper"] is not None
+              and j["lower"] < j["upper"] and max(abs(j["lower"]), abs(j["upper"])) < NO_LIMIT}
+    root = {c["name"] for c in model.info.get("coordinates", []) if c.get("joint") is None and c["slot"] in "xyz"}
+    q0 = {}
+    for name in model.coordinate_names:
+        lo, hi = limits.get(name, (-1.0, 1.0))
+        value = float(rng.uniform(lo, hi))
+        if name not in root:
+            q0[name] = value
+    return q0
+
+
+def default_scene(robot, *, floating: bool = False, q0: str = "zero", seed: int = 0, t_end: float = 1.0,
+                  xacro_args=None, package_dirs=(), inertia: str = "audit", mimic: str = "independent",
+                  strict: bool = False, model=None) -> Scene:
+    """The scene ``urdf2links simulate|compare ROBOT.urdf`` runs when no scene file is given.
+
+    Gravity (9.81 m/s^2 along -z); a fixed base, or with ``floating`` six coordinates for the root
+    link; the URDF's joint damping as dampers (``[dampers] from_urdf = true``); initial state at rest,
+    ``q0="zero"`` or ``"random"`` (:func:`_random_q0`, seeded by ``seed``); ``t_end`` seconds with the
+    default integrator (``RunSettings``: DOP853, rtol 1e-10), 500 samples a second (at least 101).
+    ``robot`` is a ``.urdf`` or ``.xacro`` path (with ``xacro_args``); ``model`` an already loaded model
+    of it (loaded here otherwise, to know its coordinates and limits). The scene is named
+    :data:`DEFAULT_SCENE_NAME`; :func:`urdf2links.scenes.scene_toml.write_scene` writes it as TOML to edit.
+    """
+    where = f"default scene of {robot}"
+    r = _Reader(where)
+    r.choice(q0, "q0", Q0_CHOICES)
+    t_end = r.number(t_end, "t_end", positive=True, quantity="time")
+    options = {"floating_base": bool(floating), "inertia": inertia, "mimic": mimic, "strict": bool(strict)}
+    if package_dirs:
+        options["package_dirs"] = tuple(Path(p) for p in package_dirs)
+    if xacro_args:
+        options["xacro_args"] = {str(k): str(v) for k, v in xacro_args.items()}
+    if model is None:
+        import warnings
+
+        from ..parsers.importer import load_urdf
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the audit is in model.audit; inspect shows it
+            model = load_urdf(robot, **options)
+    q_init = _random_q0(model, np.random.default_rng(seed)) if q0 == "random" else {}
+    base = "floating base" if floating else "fixed base"
+    return Scene(name=DEFAULT_SCENE_NAME, path=None, robot=Path(robot), load_options=options,
+                 description=f"default scene: gravity, {base}, q0 {q0}" + (f" (seed {seed})" if q0 == "random" else "")
+                             + ", URDF damping, at rest",
+                 gravity=np.array([0.0, 0.0, -9.81]), q0=q_init, urdf_damping=True,
+                 run=RunSettings(t_end=t_end, samples=min(MAX_SAMPLES, max(101, int(round(500 * t_end)) + 1))))
+
+
+def load_scene(path) -> Scene:
+    """Read and validate a scene file (names of links and coordinates are checked by :meth:`Scene.model`)."""
+    path = Path(path)
+    where = str(path)
+    try:
+        data = tomllib.loads(path.read_text())
+    except FileNotFoundError:
+        raise SceneError(f"scene file {where} does not exist") from None
+    except tomllib.TOMLDecodeError as err:
+        raise SceneError(f"{where}: not valid TOML: {err}") from None
+    return scene_from_dict(data, where=where, directory=path.parent, name=path.stem, path=path)
+
+
+def scene_from_dict(data: dict, *, where: str = "<scene>", directory: Path | None = None, name: str = "scene",
+                    path: Path | None = None) -> Scene:
+    """A :class:`Scene` from the parsed TOML ``data``; ``where`` names the file in errors,
+    ``directory`` is where relative robot paths start."""
+    r = _Reader(where)
+    r.keys(data, _TOP, "")
+    if "robot" not in data:
+        r.fail("[robot]", "missing: name the robot with urdf = 'file.urdf', shipped = 'name' or example_robot_data = '...'")
+    robot_t = data["robot"]
+    r.keys(robot_t, _ROBOT, "robot")
+    robot = _robot_path(r, robot_t, directory)
+    options, gravity, base = _robot_options(r, robot_t, directory), _gravity(r, data), _base(r, data)
+    loads, torques, springs = _loads(r, data), _torques(r, data), _springs(r, data)
+    (q0, qd0), run, link_poses = _initial(r, data), _run(r, data), _record(r, data)
+    urdf_damping = _dampers(r, data)
+    description = data.get("description", "")
+    chaotic = data.get("chaotic", False)
+    if not isinstance(description, str):
+        r.fail("description", "must be a string")
+    if not isinstance(chaotic, bool):
+        r.fail("chaotic", f"must be true or false, got {chaotic!r}")
+    return Scene(name=name, path=path, robot=robot, load_options=options, description=description,
+                 chaotic=chaotic, gravity=gravity, base=base, loads=loads, torques=torques, springs=springs,
+                 q0=q0, qd0=qd0, run=run, link_poses=link_poses, urdf_damping=urdf_damping)
+
+
+def _dampers(r: _Reader, data: dict) -> bool:
+    """``[dampers] from_urdf``: whether the URDF's joint damping acts (:meth:`Scene.springs_for`)."""
+    if "dampers" not in data:
+        return False
+    r.keys(data["dampers"], ("from_urdf",), "dampers")
+    value = data["dampers"].get("from_urdf", False)
+    if not isinstance(value, bool):
+        r.fail("dampers.from_urdf", f"must be true or false, got {value!r}")
+    return value
+
+
+def _robot_options(r: _Reader, robot_t: dict, directory) -> dict:
+    """``[robot]``'s loading options for :func:`~urdf2links.parsers.importer.load_urdf`."""
+    options = {}
+    if "floating_base" in robot_t:
+        if not isinstance(robot_t["floating_base"], bool):
+            r.fail("robot.floating_base", f"must be true or false, got {robot_t['floating_base']!r}")
+        options["floating_base"] = robot_t["floating_base"]
+    if "inertia" in robot_t:
+        options["inertia"] = r.choice(robot_t["inertia"], "robot.inertia", ("audit", "strict", "repair"))
+    if "mimic" in robot_t:
+        options["mimic"] = r.choice(robot_t["mimic"], "robot.mimic", ("independent", "coupled"))
+    if "package_dirs" in robot_t:
+        dirs = r.strings(robot_t["package_dirs"], "robot.package_dirs")
+        options["package_dirs"] = tuple((directory or Path.cwd()) / p for p in dirs)
+    if "strict" in robot_t:
+        if not isinstance(robot_t["strict"], bool):
+            r.fail("robot.strict", f"must be true or false, got {robot_t['strict']!r}")
+        options["strict"] = robot_t["strict"]
+    if "xacro_args" in robot_t:
+        args = robot_t["xacro_args"]
+        r.keys(args, tuple(args) if isinstance(args, dict) else (), "robot.xacro_args")
+        options["xacro_args"] = {str(k): str(v) for k, v in args.items()}
+    return options
+
+
+def _gravity(r: _Reader, data: dict):
+    """``[gravity]``: the vector (3,) in m/s^2, or None when the scene names no gravity."""
+    if "gravity" not in data:
+        return None
+    g = data["gravity"]
+    r.keys(g, ("magnitude", "direction"), "gravity")
+    mag = r.number(g.get("magnitude", 9.81), "gravity.magnitude", nonnegative=True, quantity="acceleration")
+    d = r.vector(g.get("direction", [0, 0, -1]), "gravity.direction", quantity="scale")
+    if np.linalg.norm(d) < 1e-9:
+        r.fail("gravity.direction", "must not be the zero vector")
+    return mag * d / np.linalg.norm(d)
+
+
+def _base(r: _Reader, data: dict):
+    """``[base]``: six functions of time (x, y, z, phi_x, phi_y, phi_z of {A}), or None (fixed)."""
+    if "base" not in data:
+        return None
+    r.keys(data["base"], PARAMETERS, "base")
+    return tuple(r.function(data["base"][p], f"base.{p}") if p in data["base"] else Constant(0.0)
+                 for p in PARAMETERS)
+
+
+def _loads(r: _Reader, data: dict) -> tuple:
+    """``[[force]]`` and ``[[moment]]`` blocks as :class:`AppliedLoad`."""
+    loads = []
+    for kind in ("force", "moment"):
+        for i, item in enumerate(r.items(data, kind)):
+            key = f"{kind}[{i}]"
+            allowed = ("link", "point", "frame", "value") if kind == "force" else ("link", "frame", "value")
+            r.keys(item, allowed, key)
+            if not isinstance(item.get("link"), str):
+                r.fail(f"{key}.link", "must name a link")
+            if "value" not in item:
+                r.fail(f"{key}.value", "missing: three functions of time (N or N m)")
+            loads.append(AppliedLoad(
+                kind=kind, link=item["link"],
+                frame=r.choice(item.get("frame", "link"), f"{key}.frame", ("link", "world")),
+                value=r.vector_function(item["value"], f"{key}.value"),
+                point=r.vector(item["point"], f"{key}.point", quantity="length") if "point" in item else np.zeros(3)))
+    return tuple(loads)
+
+
+def _torques(r: _Reader, data: dict) -> tuple:
+    """``[[torque]]`` blocks: ``(coordinate, function of time)``."""
+    torques = []
+    for i, item in enumerate(r.items(data, "torque")):
+        r.keys(item, ("coordinate", "value"), f"torque[{i}]")
+        if not isinstance(item.get("coordinate"), str) or "value" not in item:
+            r.fail(f"torque[{i}]", "needs coordinate = 'name' and value = a function of time")
+        torques.append((item["coordinate"], r.function(item["value"], f"torque[{i}].value")))
+    return tuple(torques)
+
+
+def _springs(r: _Reader, data: dict) -> tuple:
+    """``[[spring]]`` blocks as :class:`Spring` (stiffness, rest, damping)."""
+    springs = []
+    for i, item in enumerate(r.items(data, "spring")):
+        key = f"spring[{i}]"
+        r.keys(item, ("coordinate", "stiffness", "rest", "damping"), key)
+        if not isinstance(item.get("coordinate"), str):
+            r.fail(f"{key}.coordinate", "must name a coordinate")
+        springs.append(Spring(item["coordinate"],
+                              r.number(item.get("stiffness", 0.0), f"{key}.stiffness", nonnegative=True,
+                                       quantity="damping"),
+                              r.number(item.get("rest", 0.0), f"{key}.rest", quantity="state"),
+                              r.number(item.get("damping", 0.0), f"{key}.damping", nonnegative=True,
+                                       quantity="damping")))
+    return tuple(springs)
+
+
+def _initial(r: _Reader, data: dict) -> tuple[dict, dict]:
+    """``[initial]``: ``q`` and ``qd`` by coordinate name (the others start at zero)."""
+    q0, qd0 = {}, {}
+    if "initial" in data:
+        r.keys(data["initial"], ("q", "qd"), "initial")
+        for target, key in ((q0, "q"), (qd0, "qd")):
+            table = data["initial"].get(key, {})
+            r.keys(table, tuple(table) if isinstance(table, dict) else (), f"initial.{key}")
+            for coord, v in table.items():
+                target[coord] = r.number(v, f"initial.{key}.{coord}", quantity="state")
+    return q0, qd0
+
+
+def _run(r: _Reader, data: dict) -> RunSettings:
+    """``[run]``: length, method, tolerances or step, samples, re-charting."""
+    run = RunSettings()
+    if "run" not in data:
+        return run
+    t = data["run"]
+    r.keys(t, _RUN, "run")
+    samples = t.get("samples", run.samples)
+    if isinstance(samples, float) and samples.is_integer():
+        samples = int(samples)
+    if not isinstance(samples, int) or isinstance(samples, bool):
+        r.fail("run.samples", f"must be a whole number in [1, {MAX_SAMPLES}], got {samples!r}")
+    run = RunSettings(t_end=t.get("t_end", run.t_end), method=r.choice(t.get("method", run.method), "run.method", METHODS),
+                      rtol=t.get("rtol", run.rtol), atol=t.get("atol", run.atol), dt=t.get("dt"), samples=samples,
+                      recharting=t.get("recharting", True))
+    return check_run(run, r.where, prefix="run.")
+
+
+def check_run(run: RunSettings, where: str, *, prefix: str = "run.") -> RunSettings:
+    """``run`` with every setting checked where it is given (a scene's ``[run]``, or the overrides of
+    :func:`urdf2links.integration.simulate.simulate`): a SceneError names ``where``, the key, the value and its
+    valid range. ``t_end`` in [1e-9, 1e6] s (:data:`~urdf2links.ranges.MIN_T_END`); ``rtol`` in [100 eps, 1) (float64 delivers no more);
+    ``atol`` in [1e-30, 1e3] (:data:`~urdf2links.ranges.MIN_ATOL`); ``dt`` in (0, 1e6] s with at most :data:`~urdf2links.ranges.MAX_STEPS`
+    steps; ``samples`` in [1, :data:`~urdf2links.ranges.MAX_SAMPLES`]."""
+    r = _Reader(where)
+    t_end = r.number(run.t_end, f"{prefix}t_end", positive=True, quantity="time", low=MIN_T_END)
+    rtol = r.number(run.rtol, f"{prefix}rtol", low=RTOL_FLOOR, high=0.999)
+    atol = r.number(run.atol, f"{prefix}atol", positive=True, low=MIN_ATOL, high=1e3)
+    dt = None
+    if run.dt is not None:
+        dt = r.number(run.dt, f"{prefix}dt", positive=True, quantity="time")
+        if t_end / dt > MAX_STEPS:
+            r.fail(f"{prefix}dt", f"{run.dt!r} makes {t_end / dt:.3g} steps over t_end = {t_end:g} s, more than the "
+                                  f"{MAX_STEPS:g} a run may take: valid range [{t_end / MAX_STEPS:g}, 1e+06] s")
+    samples = run.samples
+    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or not 1 <= samples <= MAX_SAMPLES:
+        r.fail(f"{prefix}samples", f"must be a whole number in [1, {MAX_SAMPLES}], got {samples!r}")
+    if not isinstance(run.recharting, bool):
+        r.fail(f"{prefix}recharting", f"must be true or false, got {run.recharting!r}")
+    method = r.choice(run.method, f"{prefix}method", METHODS)
+    if method in ("RK4", "midpoint") and dt is None:
+        r.fail(f"{prefix}dt", f"method {method!r} takes a fixed step: give dt (seconds)")
+    return RunSettings(t_end=t_end, method=method, rtol=rtol, atol=atol, dt=dt, samples=int(samples),
+                       recharting=run.recharting)
+
+
+def _record(r: _Reader, data: dict) -> tuple:
+    """``[record]``: link poses to keep along the run."""
+    if "record" not in data:
+        return ()
+    r.keys(data["record"], ("link_poses",), "record")
+    return r.strings(data["record"].get("link_poses", []), "record.link_poses")
+
+
+def _robot_path(r: _Reader, t: dict, directory) -> Path:
+    given = [k for k in ("urdf", "shipped", "example_robot_data") if k in t]
+    if len(given) != 1:
+        r.fail("robot", f"name the robot exactly one way: urdf = 'path', shipped = 'name' or "
+                        f"example_robot_data = 'path inside its robots/ folder'; got {given or 'none'}")
+    key = given[0]
+    value = t[key]
+    if not isinstance(value, str):
+        r.fail(f"robot.{key}", f"must be a string, got {value!r}")
+    if key == "urdf":
+        p = Path(value)
+        p = p if p.is_absolute() else (directory or Path.cwd()) / p
+    elif key == "shipped":
+        # the scene's own folder (shipped scenes live next to the robots), then the project's robots/
+        # (checkout or editable install), then ./robots
+        folders = [f for f in (directory, shipped_robots_dir(), Path.cwd() / "robots") if f is not None and f.is_dir()]
+        found = [f / f"{value}.urdf" for f in folders if (f / f"{value}.urdf").is_file()]
+        if not found:
+            names = sorted({x.stem for f in folders for x in f.glob("*.urdf")})
+            r.fail("robot.shipped", f"no shipped robot {value!r}{_hint(value, names)}; shipped robots are {names}")
+        p = found[0]
+    else:
+        root = example_robot_data_dir()
+        if root is None:
+            r.fail("robot.example_robot_data", "the example-robot-data package is not installed (pip install example-robot-data)")
+        p = root / value
+    if not p.is_file():
+        r.fail(f"robot.{key}", f"file {p} does not exist")
+    return p

@@ -1,0 +1,320 @@
+"""A compiled plan's right-hand side in numba, and the energies of its samples.
+
+:func:`scene_rhs` computes ``y' = (q', q'', P)`` of ``y = (q, q', W)`` from the plan's flat arrays
+(:mod:`urdf2links.scenes.scene_arrays`) next to the tree's (:mod:`urdf2links.dynamics.tree_arrays`), without
+Python, so the compiled integration loops (:mod:`urdf2links.integration.loops`) call it directly. It computes
+exactly the terms the plan lists: flags switch off the base (no base factors, no ``-dL/dt``), G (zero
+gravity), Q (no wrench is added), tau, springs and dampers. Without coupled coordinates ``q''`` is
+solved in place by the tree-sparse factorization (:mod:`urdf2links.dynamics.factor`, E47); with them, by a
+dense Cholesky of ``C^T A C`` (E46).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ..dynamics.factor import cholesky, cholesky_solve, ltdl, ltdl_solve
+from ..dynamics.kernels import add_wrench, base_power, clear_wrenches, dynamics, energies, kinematics
+from ..dynamics.model_kernels import reduce_mass, reduce_vector
+from .scene_arrays import (
+    S_BASE_FN, S_C, S_D, S_DAMPER_IDX, S_DAMPING, S_FN_DATA, S_FN_KIND, S_FN_PTR, S_GRAV, S_LOAD_FN, S_LOAD_KIND,
+    S_LOAD_LINK, S_LOAD_LOCAL, S_LOAD_POINT, S_LOAD_X, S_REST, S_SPRING_IDX, S_STIFFNESS, S_TORQUE_FN, S_TORQUE_IDX,
+    compile_scene, scratch_size,
+)
+from ..dynamics.tree_arrays import W_B, W_Q, W_SIZE, nn
+
+__all__ = ["CompiledScene", "scene_rhs", "scene_energies", "fn_eval", "fn_data_eval"]
+
+
+@njit(cache=True)
+def fn_data_eval(kind, data, o, t, order):
+    """``d^order f / dt^order`` at ``t`` of a time function of ``kind`` whose data
+    (:func:`urdf2links.scenes.scene_arrays.function_data`) starts at ``data[o]``."""
+    if kind == 0:
+        if order == 0:
+            out = data[o] + data[o + 1] * t
+        elif order == 1:
+            out = data[o + 1]
+        else:
+            out = 0.0
+        for k in range(int(data[o + 2])):
+            a, w, ph = data[o + 3 + 3 * k], data[o + 4 + 3 * k], data[o + 5 + 3 * k]
+            x = w * t + ph
+            if order == 0:
+                out += a * np.sin(x)
+            elif order == 1:
+                out += a * w * np.cos(x)
+            else:
+                out -= a * w * w * np.sin(x)
+        return out
+    m = int(data[o])
+    k = int(data[o + 1])
+    x = data[o + 2:o + 3 + m]
+    c = o + 3 + m
+    if t < x[0] or t > x[m]:
+        if order > 0:
+            return 0.0
+        t = x[0] if t < x[0] else x[m]
+    i = min(max(np.searchsorted(x, t, side="right") - 1, 0), m - 1)
+    s = t - x[i]
+    out = 0.0
+    for j in range(k + 1):       # c[j, i] (s)^(k - j)
+        pw = k - j
+        if pw < order:
+            continue
+        coef = data[c + j * m + i]
+        for r in range(order):
+            coef *= pw - r
+        out += coef * s ** (pw - order)
+    return out
+
+
+@njit(cache=True)
+def fn_eval(SI, SF, j, t, order):
+    """``d^order f_j / dt^order`` at ``t`` of the scene's time function ``j`` (:func:`fn_data_eval`)."""
+    return fn_data_eval(SI[SI[S_FN_KIND] + j], SF, SI[S_FN_DATA] + SI[SI[S_FN_PTR] + j], t, order)
+
+
+# -- the right-hand side ------------------------------------------------------------------------------
+@njit(cache=True)
+def _tree_state(SI, SF, q, iq, qd, iqd, sign, X):
+    """Coupled coordinates: ``X[0:nt] = C q + d``, ``X[nt:2 nt] = sign C q'`` (E42); ``sign`` -1 or 0
+    gives the rates the energy function h needs."""
+    n, nt = SI[0], SI[1]
+    C, d = SI[S_C], SI[S_D]
+    for a in range(nt):
+        s1 = SF[d + a]
+        s2 = 0.0
+        for j in range(n):
+            s1 += SF[C + a * n + j] * q[iq + j]
+            s2 += SF[C + a * n + j] * qd[iqd + j]
+        X[a] = s1
+        X[nt + a] = sign * s2
+
+
+@njit(cache=True)
+def _base_values(SI, SF, t, X, xb):
+    """``X[xb:xb + 18]``: pose, rate and acceleration of {A} at ``t`` from the base functions."""
+    for j in range(6):
+        fj = SI[SI[S_BASE_FN] + j]
+        X[xb + j] = fn_eval(SI, SF, fj, t, 0)
+        X[xb + 6 + j] = fn_eval(SI, SF, fj, t, 1)
+        X[xb + 12 + j] = fn_eval(SI, SF, fj, t, 2)
+
+
+@njit(cache=True)
+def _apply_loads(SI, SF, I, W, t):
+    """Add every load of the scene at time ``t`` to the links' external wrenches (in the tree's link
+    frames: ``load_X`` maps the URDF link's axes and point into them)."""
+    for li in range(SI[5]):
+        fn = SI[S_LOAD_FN] + 3 * li
+        v0, v1, v2 = fn_eval(SI, SF, SI[fn], t, 0), fn_eval(SI, SF, SI[fn + 1], t, 0), fn_eval(SI, SF, SI[fn + 2], t, 0)
+        X = SI[S_LOAD_X] + 12 * li
+        pt = SI[S_LOAD_POINT] + 3 * li
+        local = SI[SI[S_LOAD_LOCAL] + li] == 1
+        if local:
+            v0, v1, v2 = (SF[X] * v0 + SF[X + 1] * v1 + SF[X + 2] * v2, SF[X + 4] * v0 + SF[X + 5] * v1 + SF[X + 6] * v2,
+                          SF[X + 8] * v0 + SF[X + 9] * v1 + SF[X + 10] * v2)
+        r0 = SF[X] * SF[pt] + SF[X + 1] * SF[pt + 1] + SF[X + 2] * SF[pt + 2] + SF[X + 3]
+        r1 = SF[X + 4] * SF[pt] + SF[X + 5] * SF[pt + 1] + SF[X + 6] * SF[pt + 2] + SF[X + 7]
+        r2 = SF[X + 8] * SF[pt] + SF[X + 9] * SF[pt + 1] + SF[X + 10] * SF[pt + 2] + SF[X + 11]
+        link = SI[SI[S_LOAD_LINK] + li]
+        if SI[SI[S_LOAD_KIND] + li] == 0:
+            add_wrench(I, W, link, v0, v1, v2, 0.0, 0.0, 0.0, r0, r1, r2, local)
+        else:
+            add_wrench(I, W, link, 0.0, 0.0, 0.0, v0, v1, v2, r0, r1, r2, local)
+
+
+@njit(cache=True)
+def _applied(SI, SF, t, y, Q, iQ, f, jf):
+    """``f[jf:jf + n]``: every generalized force the scene applies besides ``-(e + G)``: Q of the
+    loads (``Q[iQ:]``, when there are loads), joint torques, dampers ``-c q'`` and springs
+    ``-k (q - rest)``. Returns the power ``q' . f`` of the non-potential ones (springs excluded)."""
+    n = SI[0]
+    for i in range(n):
+        f[jf + i] = Q[iQ + i] if SI[5] > 0 else 0.0
+    ti, tf = SI[S_TORQUE_IDX], SI[S_TORQUE_FN]
+    for j in range(SI[6]):
+        f[jf + SI[ti + j]] += fn_eval(SI, SF, SI[tf + j], t, 0)
+    di, dc = SI[S_DAMPER_IDX], SI[S_DAMPING]
+    for j in range(SI[8]):
+        i = SI[di + j]
+        f[jf + i] -= SF[dc + j] * y[n + i]
+    P = 0.0
+    for i in range(n):
+        P += y[n + i] * f[jf + i]
+    si, k, rest = SI[S_SPRING_IDX], SI[S_STIFFNESS], SI[S_REST]
+    for j in range(SI[7]):
+        i = SI[si + j]
+        f[jf + i] -= SF[k + j] * (y[i] - SF[rest + j])
+    return P
+
+
+@njit(cache=True)
+def _coupled_solve(SI, SF, I, W, X, t, y, out):
+    """Coupled coordinates: ``A = C^T A_tree C``, ``rhs = C^T (b + Q) + f`` and ``q''`` by a dense
+    Cholesky into ``out[n:2 n]``; returns the pivot (scratch layout: :func:`scratch_size`)."""
+    n, nt = SI[0], SI[1]
+    C = SF[SI[S_C]:SI[S_C] + nt * n].reshape((nt, n))
+    xa = 2 * nt + 18
+    xl = xa + n * n
+    xf = xl + n * n
+    if SI[5] > 0:
+        reduce_vector(C, W, I[W_Q], X, xf + n, 1.0)
+    P = _applied(SI, SF, t, y, X, xf + n, X, xf)
+    reduce_vector(C, W, I[W_B], out, n, 1.0)
+    for i in range(n):
+        out[n + i] += X[xf + i]
+    reduce_mass(I, W, C, X[xa:xl].reshape((n, n)))
+    pivot = cholesky(X, xa, n, X, xl)
+    if pivot < 0:
+        cholesky_solve(X, xl, n, out, n)
+    return pivot, P
+
+
+@njit(cache=True)
+def scene_rhs(t, y, out, I, F, W, SI, SF, X):
+    """``out = (q', q'', P)`` (2n + 1,) at ``(t, y = (q, q', W))``; ``W`` the tree's scratch, ``X``
+    the scene's (:func:`~urdf2links.scenes.scene_arrays.scratch_size`). Returns -1, or the index of the
+    failing pivot (then ``out`` is NaN). ``P`` is the power of the non-potential forces
+    ``q' . (Q + tau - c q')`` minus the explicit rate ``dE/dt - dV/dt`` of a moving base (see
+    :mod:`urdf2links.scenes.plan`)."""
+    n, nt = SI[0], SI[1]
+    has_base, coupled, loads = SI[2] != 0, SI[4] != 0, SI[5] > 0
+    applied = loads or SI[6] > 0 or SI[7] > 0 or SI[8] > 0
+    g = SI[S_GRAV]
+    gx, gy, gz = SF[g], SF[g + 1], SF[g + 2]
+    xb = 2 * nt
+    if has_base:
+        _base_values(SI, SF, t, X, xb)
+    if coupled:
+        _tree_state(SI, SF, y, 0, y, n, 1.0, X)
+        kinematics(I, F, W, X, 0, X, nt, True, X, xb, has_base, gx, gy, gz)
+    else:
+        kinematics(I, F, W, y, 0, y, n, True, X, xb, has_base, gx, gy, gz)
+    if loads:
+        clear_wrenches(I, W)
+        _apply_loads(SI, SF, I, W, t)
+    dynamics(I, F, W, True, loads, has_base)
+    for i in range(n):
+        out[i] = y[n + i]
+    P = 0.0
+    if coupled:
+        pivot, P = _coupled_solve(SI, SF, I, W, X, t, y, out)
+    else:
+        wb = nn(I[W_B])
+        if applied:
+            xf = 2 * nt + 18
+            P = _applied(SI, SF, t, y, W, I[W_Q], X, xf)
+            for i in range(n):
+                out[n + i] = W[wb + i] + X[xf + i]
+        else:
+            for i in range(n):
+                out[n + i] = W[wb + i]
+        pivot = ltdl(I, W)
+        if pivot < 0:
+            ltdl_solve(I, W, out, n)
+    if pivot >= 0:
+        for i in range(out.size):
+            out[i] = np.nan
+        return pivot
+    if has_base:   # the base's twist, acceleration and the links' momentum, recorded by the passes
+        dE, dV = base_power(I, W, gx, gy, gz)
+        P -= dE - dV
+    out[2 * n] = P
+    return -1
+
+
+@njit(cache=True)
+def scene_energies(ts, Q, QD, out, I, F, W, SI, SF, X):
+    """At each sample ``k``: ``out[k] = (E, V, h)``: kinetic energy and potential energy of gravity
+    (docs/equations.md (E37)) plus springs ``0.5 k (q - rest)^2``, and the energy function ``h``
+    (E39) (``E + V`` for a fixed base; ``E2 - E0 + V`` from E at ``q'``, ``-q'`` and 0 for a moving one)."""
+    n, nt = SI[0], SI[1]
+    has_base, coupled = SI[2] != 0, SI[4] != 0
+    g = SI[S_GRAV]
+    gx, gy, gz = SF[g], SF[g + 1], SF[g + 2]
+    xb = 2 * nt
+    si, k, rest = SI[S_SPRING_IDX], SI[S_STIFFNESS], SI[S_REST]
+    for s in range(ts.size):
+        if has_base:
+            _base_values(SI, SF, ts[s], X, xb)
+        E0 = E1 = E2 = V = 0.0
+        for pass_ in range(3 if has_base else 1):
+            sign = 1.0 if pass_ == 0 else (-1.0 if pass_ == 1 else 0.0)
+            if coupled:
+                _tree_state(SI, SF, Q[s], 0, QD[s], 0, sign, X)
+            else:
+                for i in range(n):
+                    X[i] = Q[s, i]
+                    X[nt + i] = sign * QD[s, i]
+            kinematics(I, F, W, X, 0, X, nt, True, X, xb, has_base, 0.0, 0.0, 0.0)
+            E, V = energies(I, F, W, gx, gy, gz)
+            if pass_ == 0:
+                E0 = E
+            elif pass_ == 1:
+                E1 = E
+            else:
+                E2 = E
+        for j in range(SI[7]):
+            x = Q[s, SI[si + j]] - SF[rest + j]
+            V += 0.5 * SF[k + j] * x * x
+        out[s, 0] = E0
+        out[s, 1] = V
+        out[s, 2] = (0.5 * (E0 + E1) - 2.0 * E2 + V) if has_base else E0 + V
+
+
+class CompiledScene:
+    """The compiled right-hand side of a plan: callable ``(t, y) -> (2n + 1,)``, and ``args`` for the
+    compiled integration loops (:mod:`urdf2links.integration.loops`). A failing pivot raises the model's named
+    :class:`~urdf2links.errors.DynamicsError`."""
+
+    def __init__(self, plan):
+        self.plan = plan
+        model = plan.model
+        self.SI, self.SF = compile_scene(plan)
+        self.I, self.F = model.compiled              # the tree flattened once, by the model
+        self.W = np.zeros(int(self.I[W_SIZE]))
+        self.X = np.zeros(scratch_size(model.n, model.tree.n))
+        self.dim = 2 * model.n + 1
+
+    @property
+    def args(self):
+        return (self.I, self.F, self.W, self.SI, self.SF, self.X)
+
+    def fresh_args(self):
+        """Arguments with their own scratch (for another thread)."""
+        return (self.I, self.F, np.zeros_like(self.W), self.SI, self.SF, np.zeros_like(self.X))
+
+    def __call__(self, t, y):
+        y = np.asarray(y, dtype=float)
+        out = np.empty(self.dim)
+        pivot = scene_rhs(float(t), y, out, *self.args)
+        if pivot >= 0:
+            self.failure(t, y)
+        return out
+
+    def energies(self, t, Q, QD):
+        """``(E, V, h)``, each (m,), at sample times ``t`` (m,) and states ``Q``, ``QD`` (m, n)."""
+        t = np.ascontiguousarray(t, dtype=float)
+        out = np.empty((t.size, 3))
+        scene_energies(t, np.ascontiguousarray(Q, dtype=float), np.ascontiguousarray(QD, dtype=float), out,
+                       *self.args)
+        return out[:, 0], out[:, 1], out[:, 2]
+
+    def check(self, t, y):
+        """At a state where the compiled right-hand side failed: raise the model's named
+        :class:`~urdf2links.errors.DynamicsError` when A is not positive definite there."""
+        y = np.asarray(y, float)
+        if not np.all(np.isfinite(y)):
+            return
+        if scene_rhs(float(t), y, np.empty(self.dim), *self.fresh_args()) >= 0:
+            model = self.plan.model
+            q = y[:model.n]
+            raise model.not_positive_definite(model.mass_matrix(q, t=t, base=self.plan.base_state(t)), q)
+
+    def failure(self, t, y):
+        """Raise the model's error at a state where the compiled solve failed."""
+        self.check(t, y)
+        raise FloatingPointError(f"compiled right-hand side failed at t={t!r} (y={y!r})")

@@ -1,0 +1,142 @@
+"""Scenes as TOML text, and a scene from a file that is either a scene or a robot.
+
+:func:`scene_toml` writes a :class:`~urdf2links.scenes.scene.Scene` in the schema :func:`~urdf2links.scenes.scene.load_scene`
+reads -- robot, gravity, springs, ``[dampers]``, initial state, run, recorded poses -- so that
+``urdf2links simulate ROBOT.urdf --write-scene FILE.toml`` hands the user the default scene to edit
+(it reads back to the same scene). Time functions (a moving base, loads, torques) have no TOML
+writer: such a scene is refused by name. :func:`scene_or_robot` is what the CLI runs: a ``.toml``
+file is loaded as a scene, anything else is a robot run in its :func:`~urdf2links.scenes.scene.default_scene`.
+
+Public API: :func:`scene_toml`, :func:`write_scene`, :func:`scene_or_robot`.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import fields
+from pathlib import Path
+
+from ..errors import SceneError, URDFError
+from .scene import RunSettings, Scene, default_scene, load_scene
+from ..parsers.xacro_input import parse_xacro_arg
+
+__all__ = ["scene_toml", "write_scene", "scene_or_robot", "scene_from_args", "write_scene_option", "xacro_args_of"]
+
+
+def _value(v) -> str:
+    """A TOML scalar, list or inline table (JSON's spelling is TOML's for these)."""
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, float):
+        return repr(v)
+    if isinstance(v, dict):
+        return "{ " + ", ".join(f"{_key(k)} = {_value(x)}" for k, x in v.items()) + " }" if v else "{}"
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_value(x) for x in v) + "]"
+    if isinstance(v, int):
+        return str(v)
+    return json.dumps(str(v))
+
+
+def _key(k: str) -> str:
+    return k if k.replace("_", "").replace("-", "").isalnum() else json.dumps(k)
+
+
+def _robot_lines(scene: Scene, folder: Path | None) -> list[str]:
+    robot = Path(scene.robot).resolve()
+    if folder is not None and robot.is_relative_to(folder.resolve()):  # else absolute: no ../../ chains
+        robot = robot.relative_to(folder.resolve())
+    lines = ["[robot]", f"urdf = {_value(robot.as_posix())}"]
+    for key, value in scene.load_options.items():
+        if key == "package_dirs":
+            value = [Path(p).resolve().as_posix() for p in value]
+        lines.append(f"{key} = {_value(value)}")
+    return lines
+
+
+def _run_lines(run: RunSettings) -> list[str]:
+    lines = ["[run]"]
+    for f in fields(RunSettings):
+        value = getattr(run, f.name)
+        if value is not None:
+            lines.append(f"{f.name} = {_value(value)}")
+    return lines
+
+
+def scene_toml(scene: Scene, *, folder=None) -> str:
+    """``scene`` as TOML text (robot path relative to ``folder`` when given). SceneError for a scene
+    with time functions (base motion, loads, torques), which this writer does not spell."""
+    functions = [w for w, on in (("[base]", scene.base is not None), ("[[force]]/[[moment]]", bool(scene.loads)),
+                                 ("[[torque]]", bool(scene.torques))) if on]
+    if functions:
+        raise SceneError(f"scene {scene.name!r}: {', '.join(functions)} hold functions of time, which cannot be "
+                         "written back as TOML; copy the scene file instead")
+    folder = None if folder is None else Path(folder)
+    out = ["# urdf2links scene (edit freely; `urdf2links simulate` / `compare` run it)",
+           f"description = {_value(scene.description)}", f"chaotic = {_value(scene.chaotic)}", ""]
+    out += _robot_lines(scene, folder) + [""]
+    if scene.gravity is not None:
+        g = [float(x) for x in scene.gravity]
+        mag = sum(x * x for x in g) ** 0.5
+        out += ["[gravity]", f"magnitude = {_value(mag)}",
+                f"direction = {_value([x / mag for x in g] if mag else [0.0, 0.0, -1.0])}", ""]
+    for s in scene.springs:
+        out += ["[[spring]]", f"coordinate = {_value(s.coordinate)}", f"stiffness = {_value(float(s.stiffness))}",
+                f"rest = {_value(float(s.rest))}", f"damping = {_value(float(s.damping))}", ""]
+    out += ["[dampers]", "# each joint's URDF <dynamics damping> as a damper on its coordinate",
+            f"from_urdf = {_value(scene.urdf_damping)}", ""]
+    out += ["[initial]", f"q = {_value({k: float(v) for k, v in scene.q0.items()})}",
+            f"qd = {_value({k: float(v) for k, v in scene.qd0.items()})}", ""]
+    out += _run_lines(scene.run) + [""]
+    if scene.link_poses:
+        out += ["[record]", f"link_poses = {_value(list(scene.link_poses))}", ""]
+    return "\n".join(out)
+
+
+def write_scene(scene: Scene, path) -> Path:
+    """Write :func:`scene_toml` of ``scene`` to ``path`` (robot path relative to its folder)."""
+    path = Path(path)
+    if path.suffix != ".toml":
+        raise SceneError(f"{path}: a scene file must end in .toml")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(scene_toml(scene, folder=path.parent))
+    return path
+
+
+def scene_or_robot(path, *, floating: bool = False, q0: str = "zero", seed: int = 0, t_end: float | None = None,
+                   xacro_args=None, package_dirs=()) -> Scene:
+    """A scene file (``.toml``), or the default scene of a robot file (``.urdf``, ``.xacro``, ...) with
+    these options (``t_end`` default 1 s). The robot options are refused for a scene file, which
+    says its own robot and initial state."""
+    path = Path(path)
+    if path.suffix == ".toml":
+        given = [o for o, on in (("--floating", floating), ("--q0", q0 != "zero"), ("--xacro-arg", bool(xacro_args)),
+                                 ("--package-dir", bool(package_dirs))) if on]
+        if given:
+            raise SceneError(f"{path}: {', '.join(given)} apply to a robot file run in its default scene; a scene "
+                             "file names its robot and initial state in [robot] and [initial]")
+        return load_scene(path)
+    return default_scene(path, floating=floating, q0=q0, seed=seed, t_end=1.0 if t_end is None else t_end,
+                         xacro_args=xacro_args, package_dirs=package_dirs)
+
+
+# -- command-line options shared by simulate and compare -------------------------------------
+def xacro_args_of(args) -> dict:
+    """``--xacro-arg name:=value`` options as a dict (a URDFError names a malformed one)."""
+    try:
+        return dict(parse_xacro_arg(a) for a in (getattr(args, "xacro_arg", None) or []))
+    except ValueError as err:
+        raise URDFError(f"--xacro-arg: {err}") from None
+
+
+def scene_from_args(args):
+    """The scene a ``simulate``/``compare`` command runs: ``args.scene`` as a scene file, or a robot file in
+    its default scene with ``--floating``, ``--q0``, ``--seed``, ``--t-end``, ``--xacro-arg``, ``--package-dir``."""
+    return scene_or_robot(args.scene, floating=args.floating, q0=args.q0, seed=args.seed, t_end=args.t_end,
+                          xacro_args=xacro_args_of(args), package_dirs=args.package_dir)
+
+
+def write_scene_option(args, scene) -> None:
+    """``--write-scene FILE``: write the scene a command ran as TOML, and say where."""
+    if getattr(args, "write_scene", None):
+        print(f"  scene written to {write_scene(scene, args.write_scene)} (edit it, then run it by name)")
