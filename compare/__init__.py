@@ -4,15 +4,21 @@ Installed as ``urdf2links.compare`` from the repository's top-level ``compare/``
 MuJoCo (``import urdf2links`` does not).
 """
 
+from .agreement.terms import TermsComparison, compare_terms_urdf, massless_moving_links, repaired_urdf_text
+from .agreement.trajectory import DIVERGENCE_THRESHOLD, SceneComparison, compare_scene, growth_fit, scene_key
 from .mujoco_side.mjcf import MjcfModel, mjcf_from_model, mjcf_from_scene
 from .mujoco_side.mujoco_run import MujocoRun, mujoco_accelerations, run_mujoco
 from .mujoco_side.mujoco_urdf import (
-    FREE_DOF_LABELS, MujocoRefused, MujocoURDF, Terms, mujoco_data_at, mujoco_from_urdf, mujoco_terms,
+    FREE_DOF_LABELS,
+    MujocoRefused,
+    MujocoURDF,
+    Terms,
+    mujoco_data_at,
+    mujoco_from_urdf,
+    mujoco_terms,
 )
 from .reports.baselines import CheckResult, check_baseline, load_baselines, write_baselines
 from .reports.report import write_index, write_report
-from .agreement.terms import TermsComparison, compare_terms_urdf, massless_moving_links, repaired_urdf_text
-from .agreement.trajectory import DIVERGENCE_THRESHOLD, SceneComparison, compare_scene, growth_fit, scene_key
 
 __all__ = [
     "MjcfModel",

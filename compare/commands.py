@@ -22,18 +22,18 @@ import sys
 import time
 from pathlib import Path
 
-from urdf2links.scenes.scene_toml import scene_from_args, write_scene_option
 from urdf2links.console import err, shown_path
 from urdf2links.integration.integrators import METHODS
 from urdf2links.locations import shipped_robots_dir
 from urdf2links.scenes.scene import load_scene
+from urdf2links.scenes.scene_toml import scene_from_args, write_scene_option
 
-from .reports.baselines import check_baseline, load_baselines, write_baselines
-from .formatting import json_ready
-from .reports.report import write_index, write_report
 from .agreement.trajectory import compare_scene
-from .tradeoff.study import STAGES, run_study
+from .formatting import json_ready
+from .reports.baselines import check_baseline, load_baselines, write_baselines
+from .reports.report import write_index, write_report
 from .tradeoff.report import write_study
+from .tradeoff.study import STAGES, run_study
 
 __all__ = ["compare_command", "report_command", "tradeoff_command", "shipped_scenes", "report_t_end", "REPORT_CAP_S"]
 

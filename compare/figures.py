@@ -18,18 +18,15 @@ def figure(w, h, *, dpi: int = 90):
 def png_base64(fig) -> str:
     """The figure as base64 PNG, reduced to a 256-colour palette (a third of the size; the plots
     are line art on white)."""
+    from PIL import Image  # a declared dependency: a failure here is a bug, not a reason to fall back
+
     buf = io.BytesIO()
     fig.savefig(buf, format="png", metadata={"Software": None})
-    try:
-        from PIL import Image
-
-        img = Image.open(io.BytesIO(buf.getvalue())).convert("RGB").quantize(colors=256, method=Image.Quantize.MEDIANCUT)
-        small = io.BytesIO()
-        img.save(small, format="PNG", optimize=True)
-        if small.tell() < buf.tell():
-            buf = small
-    except Exception:  # Pillow missing or failing: keep matplotlib's PNG
-        pass
+    img = Image.open(io.BytesIO(buf.getvalue())).convert("RGB").quantize(colors=256, method=Image.Quantize.MEDIANCUT)
+    small = io.BytesIO()
+    img.save(small, format="PNG", optimize=True)
+    if small.tell() < buf.tell():
+        buf = small
     return base64.b64encode(buf.getvalue()).decode("ascii")
 
 

@@ -264,3 +264,52 @@ def test_a_model_without_coordinates():
     assert model.forward_dynamics(np.zeros(0), np.zeros(0)).shape == (0,)
     assert model.forward_dynamics(np.zeros((3, 0)), np.zeros((3, 0))).shape == (3, 0)
     assert model.potential_energy(np.zeros((3, 0))).shape == (3,)
+
+
+def test_every_single_state_call_takes_the_hot_path_with_any_input():
+    """Each call's hot path (model_kernels.frozen: a fixed base, float64 vectors) and its general path
+    give the same bits; inputs of other types (lists, float32, read-only, strided rows) are converted on
+    the general path, compile nothing, and give the same numbers."""
+    from urdf2links.dynamics.loads import Wrench
+    from urdf2links.integration.simulate import record_compilation
+
+    model = _shipped("ur5_like.urdf")
+    Q, QD, _ = _states(model, 2)
+    w = [Wrench(model.link_names[-1], force=[1.0, -2.0, 0.5], moment=[0.1, 0.0, 0.3], point=[0.0, 0.1, 0.0])]
+    calls = {"mass_matrix": lambda q, qd: model.mass_matrix(q), "bias": lambda q, qd: model.bias(q, qd),
+             "gravity": lambda q, qd: model.gravity(q), "generalized_forces": lambda q, qd: model.generalized_forces(q, w),
+             "kinetic_energy": lambda q, qd: model.kinetic_energy(q, qd),
+             "potential_energy": lambda q, qd: model.potential_energy(q),
+             "forward_dynamics": lambda q, qd: model.forward_dynamics(q, qd)}
+    for name, call in calls.items():
+        hot = call(Q[0], QD[0])
+        assert np.array_equal(hot, np.asarray(call(Q, QD))[0]), name          # batch: the general path
+        call([float(x) for x in Q[1]], list(QD[1]))                           # compile whatever lists need
+    strided = np.asfortranarray(Q)[0]            # a row of a Fortran-ordered array: not C-contiguous
+    assert not strided.flags.c_contiguous
+    odd = [([float(x) for x in Q[0]], list(QD[0])), (Q[0].astype(np.float32), QD[0]), (strided, QD[0])]
+    frozen = Q[0].copy()
+    frozen.setflags(write=False)
+    odd.append((frozen, QD[0]))
+    with record_compilation() as rec:
+        for name, call in calls.items():
+            for q, qd in odd:
+                assert np.array_equal(np.asarray(call(q, qd)), np.asarray(call(np.array(q, float), qd))), name
+    assert not rec.happened, rec.functions
+
+
+@pytest.mark.parametrize("method", ["literal", "numpy"])
+def test_forward_dynamics_takes_the_oracle_methods(method):
+    """Every Model call takes ``method=``: forward_dynamics solves the oracle's A q'' = Q + tau - e - G.
+    The oracles agree with the compiled form to rounding (1e-12 relative: the oracle tests' bound)."""
+    from urdf2links.dynamics.loads import Wrench
+
+    model = _shipped("ur5_like.urdf")
+    Q, QD, TAU = _states(model, 1)
+    w = [Wrench(model.link_names[-1], force=[1.0, -2.0, 0.5])]
+    for kw in ({}, {"loads": w}, {"gravity": False}):
+        ref = model.forward_dynamics(Q[0], QD[0], TAU[0], **kw)
+        got = model.forward_dynamics(Q[0], QD[0], TAU[0], method=method, **kw)
+        assert np.max(np.abs(got - ref)) <= 1e-12 * max(1.0, np.max(np.abs(ref)))
+    with pytest.raises(ValueError, match="method must be one of"):
+        model.forward_dynamics(Q[0], QD[0], method="fast")

@@ -3,14 +3,20 @@
 This package never imports MuJoCo; the comparison lives in the ``compare`` package.
 """
 
-from .errors import (
-    DynamicsError, InertiaError, MeshError, URDFError, URDFStructureError, URDFSyntaxError, URDFValueError,
-)
-from .parsers.importer import AuditRecord, load_urdf, load_urdf_string, urdf_link_poses
 from .dynamics.loads import Wrench
 from .dynamics.model import Model
 from .dynamics.transforms import BaseState, base_transforms
 from .dynamics.tree import LinkSpec, LinkTree, build_tree, pseudo_inertia_from
+from .errors import (
+    DynamicsError,
+    InertiaError,
+    MeshError,
+    URDFError,
+    URDFStructureError,
+    URDFSyntaxError,
+    URDFValueError,
+)
+from .parsers.importer import AuditRecord, load_urdf, load_urdf_string, urdf_link_poses
 
 __all__ = [
     "load_urdf",

@@ -13,10 +13,10 @@ import warnings
 
 import numpy as np
 
+from .dynamics.transforms import PARAMETERS
 from .errors import DynamicsError, IntegrationError, SceneError, URDFError
 from .scenes.limits import LimitExcursion
 from .scenes.scene_toml import scene_from_args, write_scene_option, xacro_args_of
-from .dynamics.transforms import PARAMETERS
 
 __all__ = ["main", "build_parser", "format_tree", "scene_from_args", "xacro_args_of", "write_scene_option"]
 
@@ -116,8 +116,8 @@ def _inspect(args) -> int:
 def _simulate(args) -> int:
     from pathlib import Path
 
-    from .scenes.scene import robot_stem
     from .integration.simulate import simulate
+    from .scenes.scene import robot_stem
 
     scene = scene_from_args(args)
     write_scene_option(args, scene)
@@ -148,7 +148,6 @@ def _simulate(args) -> int:
         print(f"  plot {png}")
     if args.animate:
         from .view.animation import write_trajectory_page
-
         from .view.visuals import scene_shapes
 
         page = write_trajectory_page(out / f"{stem}.html", traj, model, fps=args.animation_fps or 30.0,

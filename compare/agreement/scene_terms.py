@@ -23,9 +23,9 @@ from pathlib import Path
 
 import numpy as np
 
-from urdf2links.scenes.scene import Scene, robot_stem
 from urdf2links.dynamics.transforms import BaseState
 from urdf2links.parsers.xacro_input import expand_xacro, is_xacro_path
+from urdf2links.scenes.scene import Scene, robot_stem
 
 from ..mujoco_side.mjcf import MjcfModel
 from ..mujoco_side.mujoco_urdf import MujocoRefused
@@ -103,7 +103,21 @@ def route1_terms(mj: MjcfModel, model, scene: Scene, *, states: int = 8, seed: i
     }
 
 
-def route2_terms(scene: Scene, *, states: int = 8, seed: int = 0) -> dict:
+#: The project's load options route 2 compares with (MuJoCo's URDF import: a fixed base, mimic joints
+#: as independent joints), besides the inertia policy of each attempt.
+_ROUTE2_LOAD = {"floating_base": False, "mimic": "independent", "density": 1000.0}
+
+
+def _reusable(model, opts: dict, inertia: str) -> bool:
+    """The scene's already loaded ``model`` is route 2's own import for the ``inertia`` attempt: the
+    same file, loaded with route 2's options."""
+    if model is None:
+        return False
+    same = {k: opts.get(k, v) for k, v in _ROUTE2_LOAD.items()} == _ROUTE2_LOAD and opts.get("inertia", "audit") == inertia
+    return same and set(opts) <= {"floating_base", "mimic", "density", "inertia", "package_dirs", "strict"}
+
+
+def route2_terms(scene: Scene, *, states: int = 8, seed: int = 0, model=None) -> dict:
     """Route 2: MuJoCo's own URDF import of the scene's robot file against the project's import.
 
     Tried in order until MuJoCo accepts a text: the file as the scene loads it; the project's
@@ -111,13 +125,12 @@ def route2_terms(scene: Scene, *, states: int = 8, seed: int = 0) -> dict:
     :data:`MASSLESS_SPHERE_KG` sphere on each massless moving link on both sides. Every refusal
     is recorded (``refusals``); ``label`` says which route produced the figures. A floating-base
     robot is skipped (``skipped`` says why); so is a file MuJoCo refuses in every form
-    (``error``). Returns a JSON-ready dict."""
+    (``error``). ``model``: the scene's model, taken instead of a second import where route 2 would
+    load the file with the same options. Returns a JSON-ready dict."""
     opts = dict(scene.load_options)
     if opts.get("floating_base"):
         return {"route": None, "label": "route 2: skipped", "skipped":
                 "floating base: route 2 (MuJoCo's URDF import) is compared for fixed-base robots only"}
-    from urdf2links import load_urdf
-
     base_opts = {k: v for k, v in opts.items() if k in ("package_dirs", "strict")}
     inertia = opts.get("inertia", "audit")
     attempts = [(inertia, None)]
@@ -127,15 +140,14 @@ def route2_terms(scene: Scene, *, states: int = 8, seed: int = 0) -> dict:
     refusals: list[dict] = []
     start = time.perf_counter()
     result = None
+    given = None if is_xacro_path(scene.robot) else model     # an expanded xacro is another file: load it
     with _urdf_file(scene) as robot:
         for how, sphere in attempts:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                try:
-                    model = load_urdf(robot, floating_base=False, inertia=how, mimic="independent", **base_opts)
-                except Exception as err:  # strict import refuses: try the next form
-                    refusals.append({"attempt": _attempt(how, sphere), "by": "urdf2links", "reason": str(err)})
-                    continue
+            try:
+                model = given if _reusable(given, opts, how) else _import(robot, how, base_opts)
+            except Exception as err:  # strict import refuses: try the next form
+                refusals.append({"attempt": _attempt(how, sphere), "by": "urdf2links", "reason": str(err)})
+                continue
             model = _with_gravity(model, scene.gravity)
             try:
                 result = compare_terms_urdf(robot, model, states=states, seed=seed, massless_moving=sphere,
@@ -170,6 +182,15 @@ def route2_terms(scene: Scene, *, states: int = 8, seed: int = 0) -> dict:
         "notes": list(result.notes),
         "wall_time_s": time.perf_counter() - start,
     }
+
+
+def _import(robot, inertia: str, base_opts: dict):
+    """The project's import of ``robot`` with route 2's options (:data:`_ROUTE2_LOAD`)."""
+    from urdf2links.parsers.importer import load_urdf
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return load_urdf(robot, floating_base=False, inertia=inertia, mimic="independent", **base_opts)
 
 
 @contextmanager

@@ -62,12 +62,12 @@ import numpy as np
 
 from urdf2links.console import shown_path
 from urdf2links.errors import IntegrationError
+from urdf2links.integration.simulate import TIMED_REGION as PROJECT_REGION
+from urdf2links.integration.simulate import Trajectory, simulate, warm_up
 from urdf2links.ranges import MAX_STEPS
 from urdf2links.scenes.limits import LimitExcursion
 from urdf2links.scenes.plan import compile_plan
 from urdf2links.scenes.scene import Scene, load_scene, robot_stem
-from urdf2links.integration.simulate import TIMED_REGION as PROJECT_REGION
-from urdf2links.integration.simulate import Trajectory, simulate, warm_up
 
 from ..mujoco_side.mjcf import MjcfModel, mjcf_from_scene
 from ..mujoco_side.mujoco_run import TIMED_REGION as MUJOCO_REGION
@@ -297,7 +297,7 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
                   samples: int | None = None, states: int = 8, seed: int = 0,
                   threshold: float = DIVERGENCE_THRESHOLD, t_end_note: str | None = None,
                   progress: bool | None = None, log: Callable[[str], None] | None = None,
-                  max_wall: float | None = None) -> SceneComparison:
+                  max_wall: float | None = None, model=None) -> SceneComparison:
     """Run ``scene`` (a :class:`~urdf2links.scenes.scene.Scene` or a path to its TOML) with the project's
     integrator (the scene's ``[run]`` unless ``method``/``rtol``/``atol`` say otherwise) and with
     MuJoCo (``mujoco_integrator``, ``mujoco_dt``) over ``t_end`` (default the scene's) and compare
@@ -305,29 +305,35 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     ``t_end`` (at least 101). ``t_end_note`` is recorded when the caller capped ``t_end``.
     ``log(message)`` receives stage messages; ``progress`` the project's progress bar. ``max_wall``
     (seconds, from the start of the comparison) bounds the project's integration, and MuJoCo's run is
-    not started once it is spent: :class:`~urdf2links.errors.IntegrationError` says so."""
+    not started once it is spent: :class:`~urdf2links.errors.IntegrationError` says so. ``model``: the
+    scene's robot when the caller has already loaded it (with the scene's options). The scene is
+    loaded once and compiled once (its :class:`~urdf2links.scenes.plan.Plan`); the warm-up, the
+    project's run and MuJoCo's inputs all take that plan."""
     start = time.perf_counter()
     say = log or (lambda _m: None)
     if isinstance(scene, (str, Path)):
         scene = load_scene(scene)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # audit findings: the scene chose how to load its robot
-        model = scene.model()
+    if model is None:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # audit findings: the scene chose how to load its robot
+            model = scene.model()
+    else:
+        scene.check_names(model)
     T = float(scene.run.t_end if t_end is None else t_end)
     _check_mujoco_steps(scene, T, mujoco_dt)
     if samples is None:
         s = scene.run.samples
         samples = s if T >= scene.run.t_end else max(101, int(round((s - 1) * T / scene.run.t_end)) + 1)
-    plan = compile_plan(scene, model)
+    plan = compile_plan(scene, model)     # the compiled run, passed down to every stage below
 
     say(f"terms at {states} seeded states (route 1" + (", route 2)" if not scene.load_options.get("floating_base")
                                                        else ")"))
     mj = mjcf_from_scene(scene, model, timestep=mujoco_dt, integrator=mujoco_integrator)
     terms = {"route1": route1_terms(mj, model, scene, states=states, seed=seed),
-             "route2": route2_terms(scene, states=states, seed=seed)}
+             "route2": route2_terms(scene, states=states, seed=seed, model=model)}
 
     meth = method or scene.run.method
-    warm = warm_up(scene, model=model, methods=(meth,))
+    warm = warm_up(plan, methods=(meth,))
     if warm.happened:
         say(warm.describe("urdf2links warm-up"))
     say(f"project: {meth}" + (f" rtol {rtol or scene.run.rtol:g}" if meth not in ("RK4", "midpoint") else "")
@@ -336,12 +342,12 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     if left is not None and left <= 0:
         raise IntegrationError(f"{scene.path or scene.name}: max_wall={max_wall:g} s spent before the project's run "
                                "(loading and terms)")
-    traj = simulate(scene, model=model, t_end=T, method=method, rtol=rtol, atol=atol, samples=samples,
+    traj = simulate(plan, t_end=T, method=method, rtol=rtol, atol=atol, samples=samples,
                     progress=progress, max_wall=left)
     if max_wall is not None and time.perf_counter() - start > max_wall:
         raise IntegrationError(f"{scene.path or scene.name}: max_wall={max_wall:g} s spent before MuJoCo's run")
     say(f"MuJoCo: {mujoco_integrator} dt {mujoco_dt:g}, {int(round(T / mujoco_dt))} steps")
-    run = run_mujoco(mj, scene, t_end=T, samples=samples)
+    run = run_mujoco(mj, plan, t_end=T, samples=samples)
     if run.compilation.happened:
         say(run.compilation.describe("MuJoCo's control callback"))
 

@@ -18,8 +18,8 @@ from pathlib import Path
 from urdf2links.console import TaskBar, err, shown_path
 
 from ..reports.baselines import load_baselines, write_baselines
-from .rows import CorpusSettings, RobotResult, find_robots
 from .report import write_corpus
+from .rows import CorpusSettings, RobotResult, find_robots
 from .runner import run_corpus
 
 __all__ = ["corpus_command", "regressions", "DEFAULT_CORPUS_OUT", "CORPUS_T_END"]

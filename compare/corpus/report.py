@@ -20,9 +20,9 @@ import math
 import platform
 from pathlib import Path
 
-from .rows import TERMS_TOLERANCE
 from ..figures import figure, save_png
 from ..formatting import fmt, fmt_md
+from .rows import TERMS_TOLERANCE
 
 __all__ = ["write_corpus", "corpus_data", "worst_first", "render_index", "render_markdown_table"]
 

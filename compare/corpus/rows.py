@@ -39,10 +39,10 @@ from pathlib import Path
 from urdf2links.errors import SceneError, URDFError
 from urdf2links.scenes.scene import default_scene
 
-from ..reports.baselines import check_baseline
 from ..formatting import json_ready
 from ..mujoco_side.mjcf import MjcfRefused
 from ..mujoco_side.mujoco_run import instability_note
+from ..reports.baselines import check_baseline
 
 __all__ = ["RobotFile", "CorpusSettings", "RobotResult", "find_robots", "evaluate_robot", "failed_result",
            "robot_thumbnail", "worst_ratio",
@@ -343,7 +343,7 @@ def _compare(robot: RobotFile, model, settings: CorpusSettings, inertia: str, at
                           inertia=inertia, package_dirs=settings.package_dirs)
     at.name = "comparison"
     return compare_scene(scene, mujoco_integrator=settings.mujoco_integrator, mujoco_dt=settings.mujoco_dt,
-                         states=settings.states, seed=settings.seed, progress=False)
+                         states=settings.states, seed=settings.seed, progress=False, model=model)
 
 
 def _repair_reason(exc: BaseException, findings: int) -> str:

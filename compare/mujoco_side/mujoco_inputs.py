@@ -49,9 +49,9 @@ from numba import carray, cfunc, njit, types
 from numba.extending import intrinsic
 
 from urdf2links.dynamics.factor import cholesky, cholesky_solve
+from urdf2links.integration.simulate import Compilation, record_compilation
 from urdf2links.scenes.scene_arrays import scene_view
 from urdf2links.scenes.scene_kernels import fn_data_eval
-from urdf2links.integration.simulate import Compilation, record_compilation
 
 __all__ = ["CompiledInputs", "LayoutError", "mjdata_offsets", "check_offsets", "callback_pointer", "control",
            "HEADER_FIELDS"]

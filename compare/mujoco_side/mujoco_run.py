@@ -62,8 +62,8 @@ import mujoco
 import numpy as np
 
 from urdf2links.dynamics.loads import Wrench
-from urdf2links.integration.simulate import Compilation
 from urdf2links.dynamics.transforms import BaseState
+from urdf2links.integration.simulate import Compilation
 
 from .mjcf import INTEGRATORS, MjcfModel
 from .mujoco_inputs import CompiledInputs
@@ -327,7 +327,8 @@ def run_mujoco(mj: MjcfModel, scene=None, *, q0=None, qd0=None, t_end: float | N
     Parameters
     ----------
     mj : MjcfModel from :func:`urdf2links.compare.mujoco_side.mjcf.mjcf_from_model` (or ``mjcf_from_scene``).
-    scene : optional :class:`urdf2links.scenes.scene.Scene`: supplies the initial state, ``t_end``,
+    scene : optional :class:`urdf2links.scenes.scene.Scene` or its compiled
+        :class:`~urdf2links.scenes.plan.Plan` (then nothing is compiled again): supplies the initial state, ``t_end``,
         ``samples``, the base motion, joint torques and loads (through
         :func:`urdf2links.scenes.plan.compile_plan`) unless given explicitly here. Its gravity and springs
         must be the ones ``mj`` was built with (ValueError otherwise).
@@ -427,11 +428,13 @@ def instability_note(blow_ups: dict, integ: str, dt: float) -> str:
 def _scene_inputs(mj, scene, q0, qd0, t_end, samples, base, torques, loads):
     """The scene's plan, and what the scene supplies where the caller gave nothing: initial state,
     run length, samples, base motion, joint torques and loads (through the scene's plan)."""
-    _check_scene(mj, scene)
-    from urdf2links.scenes.plan import compile_plan
+    from urdf2links.scenes.plan import Plan, compile_plan
 
-    model = mj.source
-    plan = compile_plan(scene, model)
+    plan = scene if isinstance(scene, Plan) else None     # a compiled run passed down is not compiled again
+    scene = plan.scene if plan is not None else scene
+    _check_scene(mj, scene)
+    plan = plan or compile_plan(scene, mj.source)
+    model = plan.model
     sq, sqd = scene.initial_state(model)
     q0 = sq if q0 is None else q0
     qd0 = sqd if qd0 is None else qd0

@@ -22,13 +22,13 @@ import json
 import sys
 from pathlib import Path
 
-from .baselines import CheckResult
-from ..formatting import fmt, fmt_md, fmt_t, json_ready
 from urdf2links.view.animation import DEFAULT_FPS
 
+from ..formatting import fmt, fmt_md, fmt_t, json_ready
+from ..tradeoff.report import insert_section
+from .baselines import CheckResult
 from .motion import motion_section
 from .plots import plot_coordinates, plot_energy, plot_error, plot_overview, plot_terms
-from ..tradeoff.report import insert_section
 
 __all__ = ["write_report", "render_html", "render_markdown", "write_index"]
 

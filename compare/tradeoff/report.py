@@ -26,7 +26,7 @@ from ..figures import figure, png_base64, save_png
 from ..formatting import json_ready
 
 __all__ = ["write_study", "render_markdown", "plot_work_precision", "plot_energy_drift", "render_section",
-           "insert_section", "section_from_dir", "style", "BEGIN", "END"]
+           "insert_section", "style", "BEGIN", "END"]
 
 BEGIN = "<!-- tradeoff:begin -->"
 END = "<!-- tradeoff:end -->"
@@ -211,16 +211,6 @@ def insert_section(report: Path, data: dict) -> bool:
             Path(report).write_text(text[:i] + section + "\n" + text[i:])
             return True
     return False
-
-
-def section_from_dir(out_dir) -> str:
-    """The section for the scene folder ``out_dir`` when it holds a ``tradeoff.json``, else ''."""
-    import json
-
-    p = Path(out_dir) / "tradeoff.json"
-    if not p.is_file():
-        return ""
-    return render_section(json.loads(p.read_text()))
 
 
 def _fmt(x, d=2):

@@ -69,18 +69,18 @@ from typing import Callable
 
 import numpy as np
 
-from urdf2links.integration.charts import floating_links
 from urdf2links.console import shown_path
+from urdf2links.integration.charts import floating_links
 from urdf2links.integration.integrators import METHODS, integrate
+from urdf2links.integration.simulate import simulate, warm_up
 from urdf2links.scenes.plan import compile_plan
 from urdf2links.scenes.scene import load_scene
-from urdf2links.integration.simulate import simulate, warm_up
 
-from .crossover import crossover
+from ..agreement.trajectory import scene_key
 from ..formatting import json_ready, machine_info
 from ..mujoco_side.mjcf import mjcf_from_scene
 from ..mujoco_side.mujoco_run import energy_function, run_mujoco
-from ..agreement.trajectory import scene_key
+from .crossover import crossover
 
 __all__ = ["run_study", "crossover", "STAGES", "MUJOCO_INTEGRATORS", "ADAPTIVE", "FIXED"]
 
@@ -155,7 +155,7 @@ def _project(st: "_Study", cfg: Config):
     """The run for the errors: :func:`simulate` with the study's samples (not timed)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return simulate(st.scene, model=st.model, t_end=st.T, samples=st.S, progress=False, **_options(cfg))
+        return simulate(st.plan, t_end=st.T, samples=st.S, progress=False, **_options(cfg))
 
 
 def _time_project(st: "_Study", cfg: Config) -> float:
@@ -164,7 +164,7 @@ def _time_project(st: "_Study", cfg: Config) -> float:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         if st.charted:
-            return float(simulate(st.scene, model=st.model, t_end=st.T, samples=2, progress=False,
+            return float(simulate(st.plan, t_end=st.T, samples=2, progress=False,
                                   **_options(cfg)).stats["wall_time"])
         res = integrate(st.plan.rhs, (0.0, st.T), st.y0, **_options(cfg))
     if not res.success:
@@ -173,7 +173,7 @@ def _time_project(st: "_Study", cfg: Config) -> float:
 
 
 def _mujoco(st: "_Study", cfg: Config, samples: int):
-    return run_mujoco(st.mj, st.scene, t_end=st.T, timestep=cfg.value, integrator=cfg.method, samples=samples)
+    return run_mujoco(st.mj, st.plan, t_end=st.T, timestep=cfg.value, integrator=cfg.method, samples=samples)
 
 
 def _mujoco_failure(run, T) -> str | None:
@@ -273,7 +273,7 @@ def _warm_up(st: _Study, methods, check, log) -> dict:
     """numba compiles at the first call, which must be neither timed nor used to predict costs:
     one short run of every method here (:func:`urdf2links.integration.simulate.warm_up`; the timing runs call
     the same compiled loops). Returns what was compiled and how long it took."""
-    wu = warm_up(st.scene, model=st.model, methods=tuple(dict.fromkeys(methods + (REFERENCE["method"], check["method"]))),
+    wu = warm_up(st.plan, methods=tuple(dict.fromkeys(methods + (REFERENCE["method"], check["method"]))),
                  t_end=min(st.T, 0.02))
     if wu.happened:
         _say(log, wu.describe("warm-up"))
@@ -283,13 +283,13 @@ def _warm_up(st: _Study, methods, check, log) -> dict:
 def _reference(st: _Study, check, log):
     """The reference run, its check run and the error estimate; the energy scale."""
     _say(log, f"reference: {REFERENCE['method']} rtol {REFERENCE['rtol']:g}, t = 0..{st.T:g} s, {st.S} samples")
-    ref = simulate(st.scene, model=st.model, t_end=st.T, samples=st.S, progress=False, method=REFERENCE["method"],
+    ref = simulate(st.plan, t_end=st.T, samples=st.S, progress=False, method=REFERENCE["method"],
                    rtol=REFERENCE["rtol"], atol=REFERENCE["atol"])
     if not ref.stats["success"]:
         raise RuntimeError(f"the reference run failed: {ref.stats['message']}")
     _say(log, f"  {ref.stats['nsteps']} steps, {ref.stats['nfev']} evaluations, {ref.stats['wall_time']:.2f} s; "
               f"check: {check['method']} rtol {check['rtol']:g}")
-    chk = simulate(st.scene, model=st.model, t_end=st.T, samples=st.S, progress=False, method=check["method"],
+    chk = simulate(st.plan, t_end=st.T, samples=st.S, progress=False, method=check["method"],
                    rtol=check["rtol"], atol=check["atol"])
     est_final, est_max = _qerr(chk.q, ref.q)
     _say(log, f"  check {chk.stats['nfev']} evaluations, {chk.stats['wall_time']:.2f} s: reference error estimate "
@@ -308,7 +308,7 @@ def _costs(st: _Study, mujoco_integrators) -> dict:
     cost = {"project_eval_s": ref.stats["wall_time"] / max(ref.stats["nfev"], 1), "mujoco_step_s": {}}
     for m in mujoco_integrators:
         dt_probe = 1e-3
-        probe = run_mujoco(st.mj, st.scene, t_end=min(st.T, 200 * dt_probe), timestep=dt_probe, integrator=m,
+        probe = run_mujoco(st.mj, st.plan, t_end=min(st.T, 200 * dt_probe), timestep=dt_probe, integrator=m,
                            samples=2)
         cost["mujoco_step_s"][m] = probe.wall_time / max(probe.nsteps, 1)
     return cost

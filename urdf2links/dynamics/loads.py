@@ -28,6 +28,15 @@ class Wrench:
             v = np.asarray(getattr(self, name), dtype=float)
             if v.shape != (3,) or not np.all(np.isfinite(v)):
                 raise ValueError(f"Wrench on link {self.link!r}: {name} must be 3 finite numbers, got {getattr(self, name)!r}")
+            v = v.copy()
+            v.setflags(write=False)         # frozen: the packed row below stays what the arrays say
             object.__setattr__(self, name, v)
         if self.frame not in FRAMES:
             raise ValueError(f"Wrench on link {self.link!r}: frame must be one of {FRAMES}, got {self.frame!r}")
+        row = np.r_[self.force, self.moment, self.point, float(self.frame == "link")]
+        row.setflags(write=False)
+        object.__setattr__(self, "row", row)
+
+    row: np.ndarray = field(init=False, repr=False, compare=False)
+    """``(force (3), moment (3), point (3), local)`` (10,): the wrench as the kernels take it (after
+    the link's index, :func:`urdf2links.dynamics.rows.load_rows`)."""

@@ -29,8 +29,8 @@ from typing import Iterable, Sequence
 import numpy as np
 import scipy.linalg
 
-from . import model_kernels as MK
 from ..errors import DynamicsError
+from . import model_kernels as MK
 from .loads import Wrench
 from .rows import NO_LOADS, base_rows, kernel_array, load_rows, state_rows
 from .transforms import resolve_base
@@ -42,6 +42,7 @@ __all__ = ["Model", "METHODS", "DEFAULT_GRAVITY", "FlatTree"]
 METHODS = ("recursive", "numpy", "literal")
 DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
 _NO_C, _NO_D = np.zeros((0, 0)), np.zeros(0)
+_EMPTY, _EMPTY2 = np.empty(0), np.empty((0, 0))        # the unused output of a hot terms call
 
 FlatTree = namedtuple("FlatTree", ["TI", "TF"])
 """The tree flattened for the kernels (:func:`urdf2links.dynamics.tree_arrays.flat_tree`)."""
@@ -75,7 +76,7 @@ class Model:
         self.compiled = FlatTree(*flat_tree(tree))
         """The tree flattened for the kernels (:class:`FlatTree`)."""
         self._g, self._g0 = g.copy(), np.zeros(3)      # writable: the frozen kernel takes writable arrays
-        self._fd_plain = None
+        self._hot = {}                  # the frozen hot entries this model has called (model_kernels.frozen)
         self._nq = tree.n               # the length of q'' on the hot path (no coupling there)
         self._numpy_plan = None
         if coupling is None:
@@ -216,8 +217,18 @@ class Model:
         return numpy_terms(self._numpy_plan, qt, qdt, **kw)
 
     # -- the public API --------------------------------------------------------------------------
+    # Each call first tries its hot path (a fixed base, no coupling, float64 vectors: one frozen compiled
+    # call, model_kernels.frozen); anything else (batches, a base, coupled coordinates, other types, an
+    # oracle method) goes through the general path, which checks and converts.
+    def _plain(self, base, method):
+        return base is None and self._C is None and method == "recursive"
+
     def mass_matrix(self, q, *, t=0.0, base=None, method: str = "recursive") -> np.ndarray:
         """A (n, n), or (B, n, n) for q (B, n), (E19): ``a_il = sum_p tr(T_i H T_l^T)``."""
+        if self._plain(base, method):
+            A = np.empty((self._nq, self._nq))
+            if self._call("terms_plain", self._g0, q, None, MK.MASS, A, _EMPTY) == 0:
+                return A
         self._check_method(method)
         if method != "recursive":
             self._single(method, q, "mass_matrix")
@@ -226,6 +237,10 @@ class Model:
 
     def bias(self, q, qd, *, t=0.0, base=None, method: str = "recursive") -> np.ndarray:
         """e (n,) or (B, n), (E20): velocity terms and base-motion terms (E15); no gravity."""
+        if self._plain(base, method):
+            v = np.empty(self._nq)
+            if self._call("terms_plain", self._g0, q, qd, MK.BIAS, _EMPTY2, v) == 0:
+                return v
         self._check_method(method)
         if method != "recursive":
             self._single(method, q, "bias")
@@ -234,6 +249,10 @@ class Model:
 
     def gravity(self, q, *, t=0.0, base=None, method: str = "recursive") -> np.ndarray:
         """G (n,) or (B, n), (E22): ``g_i = m g e3^T T_i r_C`` summed over links, for ``self.gravity_vector``."""
+        if self._plain(base, method):
+            v = np.empty(self._nq)
+            if self._call("terms_plain", self._g, q, None, MK.BIAS, _EMPTY2, v) == 0:
+                return v
         self._check_method(method)
         if method != "recursive":
             self._single(method, q, "gravity")
@@ -244,8 +263,13 @@ class Model:
     def generalized_forces(self, q, loads: Iterable[Wrench], *, t=0.0, base=None,
                            method: str = "recursive") -> np.ndarray:
         """Q (n,) or (B, n), (E23): generalized forces of applied forces and moments on links."""
+        loads = loads if isinstance(loads, list) else list(loads)
+        if self._plain(base, method) and loads:
+            v = np.empty(self._nq)
+            LD = load_rows(self.tree, loads)
+            if self._call("forces_plain", q, LD, v) == 0:
+                return v
         self._check_method(method)
-        loads = list(loads)
         if method != "recursive":
             self._single(method, q, "generalized_forces")
             return self.reduce(self._oracle(method, q, None, t, base, self.wrenches(loads))["Q"])
@@ -256,6 +280,10 @@ class Model:
 
     def kinetic_energy(self, q, qd, *, t=0.0, base=None, method: str = "recursive"):
         """E (a float, or (B,)), (E17): ``0.5 sum_p tr(T' H T'^T)``, base motion included."""
+        if self._plain(base, method):
+            out = np.empty(2)
+            if self._call("energy_plain", self._g, q, qd, out) == 0:
+                return float(out[0])
         self._check_method(method)
         if method != "recursive":
             self._single(method, q, "kinetic_energy")
@@ -264,6 +292,10 @@ class Model:
 
     def potential_energy(self, q, *, t=0.0, base=None, method: str = "recursive"):
         """V of gravity (a float, or (B,)), (E21): ``sum_p m_p g z_C`` (for ``self.gravity_vector``)."""
+        if self._plain(base, method):
+            out = np.empty(2)
+            if self._call("energy_plain", self._g, q, None, out) == 0:
+                return float(out[1])
         self._check_method(method)
         if method != "recursive":
             self._single(method, q, "potential_energy")
@@ -283,29 +315,47 @@ class Model:
         return T
 
     def forward_dynamics(self, q, qd, tau=None, *, loads: Iterable[Wrench] = (), t=0.0,
-                         base=None, gravity: bool = True) -> np.ndarray:
+                         base=None, gravity: bool = True, method: str = "recursive") -> np.ndarray:
         """q'' (n,), or (B, n) for a batch, from (E24), ``A q'' = Q - G - e``, by the tree-sparse
         factorization (E47) (dense Cholesky (E46) for coupled coordinates).
 
         ``tau`` (n,) or (B, n) are generalized forces added to Q (joint torques and forces); ``loads``
-        applied wrenches (the same for every row); ``gravity=False`` leaves G out. Raises
+        applied wrenches (the same for every row); ``gravity=False`` leaves G out; ``method`` as for
+        every other call (``"literal"`` or ``"numpy"``: the oracle's terms, solved by Cholesky). Raises
         :class:`~urdf2links.errors.DynamicsError` naming the configuration (and the row of a batch) and
         the coordinates when A is not positive definite.
         """
-        if base is None and not loads and self._C is None:    # the hot path: one compiled call
-            fd = self._fd_plain or self._freeze()
+        if base is None and not loads and self._C is None and method == "recursive":    # the hot path
             out = np.empty(self._nq)
-            try:
-                pivot = fd(self.compiled.TI, self.compiled.TF, self._g if gravity else self._g0, q, qd, tau, out)
-            except TypeError:       # not float64 vectors: converted (or batched) below
-                pivot = -2
+            pivot = self._call("fd_plain", self._g if gravity else self._g0, q, qd, tau, out)
             if pivot == -1:
                 return out
+        if method != "recursive":
+            return self._forward_oracle(method, q, qd, tau, list(loads), t, base, gravity)
         return self._forward_dynamics(q, qd, tau, list(loads), t, base, gravity)
 
-    def _freeze(self):
-        self._fd_plain = MK.fd_plain_frozen()
-        return self._fd_plain
+    def _call(self, name, *args):
+        """The frozen hot entry ``name`` on this model's tree; -2 when the arguments are not float64
+        vectors of the right sizes (the caller then takes the general path)."""
+        fn = self._hot.get(name)
+        if fn is None:
+            fn = self._hot[name] = MK.frozen(name)
+        try:
+            return fn(self.compiled.TI, self.compiled.TF, *args)
+        except TypeError:       # not float64 vectors (or a batch): converted on the general path
+            return -2
+
+    def _forward_oracle(self, method, q, qd, tau, loads, t, base, gravity):
+        """q'' from an oracle's A, e, G, Q (one state)."""
+        self._check_method(method)
+        self._single(method, q, "forward_dynamics")
+        terms = self._oracle(method, q, qd, t, base, self.wrenches(loads))
+        rhs = self.reduce(terms["Q"]) - self.reduce(terms["e"])
+        if gravity:
+            rhs = rhs - self.reduce(terms["G"])
+        if tau is not None:
+            rhs = rhs + self.vector(tau, "tau")
+        return self.solve_mass_matrix(self.reduce(terms["A"]), rhs, q=q)
 
     def _forward_dynamics(self, q, qd, tau, loads, t, base, gravity):
         rows = self._rows([("q", q), ("qd", qd), ("tau", tau)])

@@ -4,11 +4,12 @@ Each quantity has one row function (``fd_row``, ``terms_row``, ``energy_row``) t
 state into its outputs with a given scratch; the single-state entries (``*_one``) and the batched
 entries (``*_batch``, numba ``prange`` over chunks of rows, one scratch per chunk, threads from
 ``NUMBA_NUM_THREADS`` / ``numba.set_num_threads``) call the same row function, so a batch gives the
-per-state results to the last bit. ``fd_plain`` is the hot single-state path of
-``Model.forward_dynamics`` (fixed base, no loads, no coupling): few arguments, since every array
-argument costs the dispatcher a fraction of a microsecond; :func:`fd_plain_frozen` is that
-dispatcher with its two signatures compiled and compilation switched off, so that an argument of
-another type raises TypeError (the model then converts it) instead of compiling a new variant.
+per-state results to the last bit. ``fd_plain``, ``terms_plain``, ``forces_plain`` and ``energy_plain`` are the hot
+single-state paths of :class:`~urdf2links.dynamics.model.Model` (fixed base, no loads, no coupling):
+few arguments, since every array argument costs the dispatcher a fraction of a microsecond;
+:func:`frozen` gives each with its signatures compiled and compilation switched off, so that an
+argument of another type raises TypeError (the model then converts it) instead of compiling a new
+variant. They compute what the row functions compute, operation for operation (the same bits).
 
 Arguments shared by the row functions: ``TI``, ``TF`` the tree (:mod:`urdf2links.dynamics.tree_arrays`);
 ``W`` its scratch and ``X`` the coupling scratch (:func:`coupled_size`); ``base`` (18,) pose, rate
@@ -26,7 +27,8 @@ from .factor import cholesky, cholesky_solve, ltdl, ltdl_solve, unpack
 from .kernels import add_wrench, clear_wrenches, dynamics, energies, kinematics, poses
 from .tree_arrays import I_ANCIDX, I_ANCPTR, W_A, W_B, W_Q, W_SIZE, nn
 
-__all__ = ["coupled_size", "fd_plain_frozen", "fd_one", "fd_batch", "terms_one", "terms_batch", "energy_one",
+__all__ = ["coupled_size", "fd_plain_frozen", "frozen", "terms_plain", "forces_plain", "energy_plain", "fd_one", "fd_batch",
+           "terms_one", "terms_batch", "energy_one",
            "energy_batch", "poses_one", "chunks", "MASS", "BIAS", "FORCES"]
 
 MASS, BIAS, FORCES = 0, 1, 2        # what terms_row returns: A, -b (e, or G), Q
@@ -195,24 +197,108 @@ def fd_plain(TI, TF, g, q, qd, tau, out):
     return pivot
 
 
+@njit(cache=True)
+def terms_plain(TI, TF, g, q, qd, what, A, v):
+    """:func:`terms_row` for a fixed base, no loads, no coupling: MASS into ``A`` (n, n); BIAS ``-b``
+    into ``v`` (n,): ``e`` with ``g`` zero, ``G`` with ``qd`` None (at rest). -2 when a size is wrong, else 0."""
+    n = TI[1]
+    if q.size != n:
+        return -2
+    if what == MASS:
+        if A.shape[0] != n or A.shape[1] != n:
+            return -2
+    elif v.size != n:
+        return -2
+    W = np.empty(TI[W_SIZE])
+    if qd is None:
+        kinematics(TI, TF, W, q, 0, q, 0, False, g, 0, False, g[0], g[1], g[2])
+    else:
+        if qd.size != n:
+            return -2
+        kinematics(TI, TF, W, q, 0, qd, 0, True, g, 0, False, g[0], g[1], g[2])
+    dynamics(TI, TF, W, what == MASS, False, False)
+    if what == MASS:
+        unpack(TI, W, A)
+    else:
+        wb = nn(TI[W_B])
+        for i in range(n):
+            v[i] = -W[wb + i]
+    return 0
+
+
+@njit(cache=True)
+def forces_plain(TI, TF, q, loads, v):
+    """``Q`` (E23) of ``loads`` (k, 11) into ``v`` (n,) for a fixed base and no coupling (:func:`terms_row`
+    with FORCES). -2 when a size is wrong, else 0."""
+    n = TI[1]
+    if q.size != n or v.size != n or loads.shape[1] != 11:
+        return -2
+    W = np.empty(TI[W_SIZE])
+    kinematics(TI, TF, W, q, 0, q, 0, False, q, 0, False, 0.0, 0.0, 0.0)
+    clear_wrenches(TI, W)
+    for k in range(loads.shape[0]):
+        add_wrench(TI, W, int(loads[k, 0]), loads[k, 1], loads[k, 2], loads[k, 3], loads[k, 4], loads[k, 5],
+                   loads[k, 6], loads[k, 7], loads[k, 8], loads[k, 9], loads[k, 10] != 0.0)
+    dynamics(TI, TF, W, False, True, False)
+    wq = nn(TI[W_Q])
+    for i in range(n):
+        v[i] = W[wq + i]
+    return 0
+
+
+@njit(cache=True)
+def energy_plain(TI, TF, g, q, qd, out):
+    """``(E, V)`` (E37) into ``out`` (2,) for a fixed base and no coupling; ``qd`` None: at rest
+    (V only is meaningful). -2 when a size is wrong, else 0."""
+    n = TI[1]
+    if q.size != n or out.size != 2:
+        return -2
+    W = np.empty(TI[W_SIZE])
+    if qd is None:
+        kinematics(TI, TF, W, q, 0, q, 0, False, g, 0, False, 0.0, 0.0, 0.0)
+    else:
+        if qd.size != n:
+            return -2
+        kinematics(TI, TF, W, q, 0, qd, 0, True, g, 0, False, 0.0, 0.0, 0.0)
+    out[0], out[1] = energies(TI, TF, W, g[0], g[1], g[2])
+    return 0
+
+
 _F1 = types.Array(types.float64, 1, "C")
+_F2 = types.Array(types.float64, 2, "C")
 _I1 = types.Array(types.int64, 1, "C")
-_PLAIN_SIGS = [types.int64(_I1, _F1, _F1, _F1, _F1, types.none, _F1),
-               types.int64(_I1, _F1, _F1, _F1, _F1, _F1, _F1)]
+#: The signatures the hot single-state entries are compiled for (vectors: float64, C-contiguous).
+_PLAIN_SIGS = {
+    "fd_plain": [types.int64(_I1, _F1, _F1, _F1, _F1, types.none, _F1),
+                 types.int64(_I1, _F1, _F1, _F1, _F1, _F1, _F1)],
+    "terms_plain": [types.int64(_I1, _F1, _F1, _F1, types.none, types.int64, _F2, _F1),
+                    types.int64(_I1, _F1, _F1, _F1, _F1, types.int64, _F2, _F1)],
+    "forces_plain": [types.int64(_I1, _F1, _F1, _F2, _F1)],
+    "energy_plain": [types.int64(_I1, _F1, _F1, _F1, types.none, _F1),
+                     types.int64(_I1, _F1, _F1, _F1, _F1, _F1)],
+}
+
+_FROZEN: dict = {}
 
 
-_FROZEN: list = []
+def frozen(name: str):
+    """The hot single-state entry ``name`` (``fd_plain``, ``terms_plain``, ``energy_plain``) compiled
+    (or loaded from the cache) for its :data:`_PLAIN_SIGS`, with further compilation switched off:
+    an argument of another type raises TypeError (the caller then converts it) instead of compiling
+    a new variant."""
+    fn = _FROZEN.get(name)
+    if fn is None:
+        fn = globals()[name]
+        for sig in _PLAIN_SIGS[name]:
+            fn.compile(sig)
+        fn.disable_compile()
+        _FROZEN[name] = fn
+    return fn
 
 
 def fd_plain_frozen():
-    """:func:`fd_plain` compiled (or loaded from the cache) for float64 C-contiguous vectors, tau None
-    or a vector, with further compilation switched off: other argument types raise TypeError."""
-    if not _FROZEN:
-        for sig in _PLAIN_SIGS:
-            fd_plain.compile(sig)
-        fd_plain.disable_compile()
-        _FROZEN.append(fd_plain)
-    return fd_plain
+    """:func:`fd_plain`, frozen (:func:`frozen`)."""
+    return frozen("fd_plain")
 
 
 @njit(cache=True)

@@ -92,11 +92,13 @@ def base_rows(base, t, B: int, *, batched: bool, still: bool = False) -> tuple[n
 def load_rows(tree, loads) -> np.ndarray:
     """(k, 11) ``(link index, force (3), moment (3), point (3), local)`` of
     :class:`~urdf2links.dynamics.loads.Wrench` loads, the same for every row."""
-    out = []
-    for w in loads:
+    loads = loads if isinstance(loads, (list, tuple)) else list(loads)
+    if not loads:
+        return NO_LOADS
+    out = np.empty((len(loads), 11))
+    for k, w in enumerate(loads):
         if not isinstance(w, Wrench):
             raise TypeError(f"loads must be Wrench objects, got {type(w).__name__}")
-        out.append(np.r_[tree.link_index(w.link), np.asarray(w.force, float).reshape(3),
-                         np.asarray(w.moment, float).reshape(3), np.asarray(w.point, float).reshape(3),
-                         float(w.frame == "link")])
-    return np.array(out) if out else NO_LOADS
+        out[k, 0] = tree.link_index(w.link)
+        out[k, 1:] = w.row
+    return out

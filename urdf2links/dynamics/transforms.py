@@ -11,6 +11,7 @@ Every elementary matrix is a one-parameter group ``E_k(v) = exp(v * D_k)`` (E2),
 from __future__ import annotations
 
 from dataclasses import dataclass
+
 import numpy as np
 
 __all__ = [

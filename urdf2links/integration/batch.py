@@ -23,9 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit, prange
 
+from ..scenes.plan import as_plan
 from .loops import TABLEAUX, erk_chunk, evaluate, initial_step
-from ..scenes.plan import compile_plan
-from ..scenes.scene import Scene, load_scene
 
 __all__ = ["BatchResult", "simulate_batch", "sweep_states", "split_rows"]
 
@@ -143,15 +142,14 @@ def _on_cluster(client, scene, model, Q0, QD0, chunks, options) -> BatchResult:
 def simulate_batch(scene, q0, qd0=None, *, t_end: float | None = None, samples: int | None = None,
                    method: str | None = None, rtol: float | None = None, atol: float | None = None,
                    model=None, client=None, chunks: int | None = None) -> BatchResult:
-    """Integrate ``B`` initial states of ``scene`` (a Scene or a path): ``q0`` (B, n), ``qd0``
+    """Integrate ``B`` initial states of ``scene`` (a Scene, its compiled
+    :class:`~urdf2links.scenes.plan.Plan`, or a path): ``q0`` (B, n), ``qd0``
     (B, n) (default zeros). ``method`` DOP853 (default) or RK45, with the scene's tolerances
     unless given; ``samples`` equally spaced sample times on ``[0, t_end]``. ``client``: a
     ``dask.distributed.Client`` to split the states across its workers in ``chunks`` chunks
     (default: one per worker); the same result as on one machine (module doc)."""
-    if not isinstance(scene, Scene):
-        scene = load_scene(scene)
-    model = model or scene.model()
-    plan = compile_plan(scene, model)
+    plan = as_plan(scene, model=model)        # compiled once; a Plan passed in is used as it is
+    scene, model = plan.scene, plan.model
     run = scene.run
     method = method or (run.method if run.method in TABLEAUX else "DOP853")
     if method not in TABLEAUX:

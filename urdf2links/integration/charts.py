@@ -75,12 +75,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .integrators import AngleGuard, integrate
-from .loops import wall_message
 from ..dynamics.model import Model
 from ..dynamics.rotations import matrix_to_xyz_angles, xyz_angles_to_matrix
-from ..dynamics.tree import LinkSpec, build_tree
 from ..dynamics.transforms import PARAMETERS
+from ..dynamics.tree import LinkSpec, build_tree
+from .integrators import AngleGuard, integrate
+from .loops import wall_message
 
 __all__ = ["CHART_COS_MIN", "SINGULAR_COS_MIN", "FloatingLink", "Chart", "floating_links",
            "recharted_model", "rate_matrix", "rechart", "angle_block_condition", "ChartedRun",

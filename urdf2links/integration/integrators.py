@@ -57,12 +57,12 @@ from typing import Any, Callable
 import numpy as np
 from scipy.integrate import BDF, DOP853, LSODA, RK45, OdeSolution, Radau
 
-from . import loops
-from .dense import DenseOutput
 from ..errors import IntegrationError
-from .loops import AngleGuard
 from ..ranges import MAX_STEPS, METHODS, MIN_ATOL, RTOL_FLOOR
 from ..scenes.scene_kernels import CompiledScene
+from . import loops
+from .dense import DenseOutput
+from .loops import AngleGuard
 
 __all__ = ["METHODS", "IntegrationError", "IntegrationResult", "DenseOutput", "AngleGuard", "integrate"]
 

@@ -21,14 +21,14 @@ from pathlib import Path
 
 import numpy as np
 
-from .charts import integrate_charted, link_poses
 from ..console import Progress
-from ..errors import IntegrationError
-from ..scenes.limits import limit_excursions
 from ..dynamics.model import Model
-from ..scenes.plan import compile_plan
+from ..errors import IntegrationError
 from ..ranges import MAX_STEPS
+from ..scenes.limits import limit_excursions
+from ..scenes.plan import Plan, as_plan, compile_plan
 from ..scenes.scene import RunSettings, Scene, check_run
+from .charts import integrate_charted, link_poses
 
 __all__ = ["Trajectory", "simulate", "Progress", "warm_up", "record_compilation", "Compilation", "TIMED_REGION"]
 
@@ -98,8 +98,10 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
              atol: float | None = None, dt: float | None = None, samples: int | None = None, q0=None, qd0=None,
              progress: bool | None = None, model: Model | None = None, recharting: bool | None = None,
              max_wall: float | None = None, max_steps: int = MAX_STEPS) -> Trajectory:
-    """Integrate a scene (a :class:`~urdf2links.scenes.scene.Scene`, a path to a scene file) or a bare
-    :class:`~urdf2links.dynamics.model.Model` (gravity as the model says, nothing else acting).
+    """Integrate a scene (a :class:`~urdf2links.scenes.scene.Scene`, its compiled
+    :class:`~urdf2links.scenes.plan.Plan`, a path to a scene file) or a bare
+    :class:`~urdf2links.dynamics.model.Model` (gravity as the model says, nothing else acting). A Plan
+    is run as it is: nothing is loaded or compiled again (:func:`~urdf2links.scenes.plan.as_plan`).
 
     Keyword arguments override the scene's ``[run]`` and ``[initial]``; ``model`` reuses an already
     loaded model of the scene's robot; ``progress`` forces the progress bar on or off (default: on
@@ -117,14 +119,14 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
     (default: no budget; ``--max-wall`` on the command line), a non-finite state. Overrides are checked
     like a scene's ``[run]`` (:func:`~urdf2links.scenes.scene.check_run`: SceneError naming the value and its range).
     """
-    scene, model = _scene_and_model(scene_or_model, model)
+    scene, model, plan = _scene_and_model(scene_or_model, model)
     run = scene.run
     run = check_run(RunSettings(t_end=run.t_end if t_end is None else t_end, method=method or run.method,
                                 rtol=run.rtol if rtol is None else rtol, atol=run.atol if atol is None else atol,
                                 dt=run.dt if dt is None else dt, samples=run.samples if samples is None else samples,
                                 recharting=run.recharting if recharting is None else bool(recharting)),
                     f"{scene.path or scene.name}: simulate()", prefix="")
-    plan = compile_plan(scene, model)
+    plan = plan or compile_plan(scene, model)
     q, qd = scene.initial_state(model)
     if q0 is not None:
         q = model.vector(q0, "q0").copy()
@@ -167,19 +169,25 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
                       charts=res if res.recharts else None)
 
 
-def _scene_and_model(scene_or_model, model: Model | None) -> tuple[Scene, Model]:
-    """The scene to run (a bare Model runs in a scene of gravity alone) and its model."""
+def _scene_and_model(scene_or_model, model: Model | None) -> tuple[Scene, Model, Plan | None]:
+    """The scene to run (a bare Model runs in a scene of gravity alone), its model, and its compiled
+    run when the caller passed one (a :class:`~urdf2links.scenes.plan.Plan`: nothing is loaded or
+    compiled again)."""
     from ..scenes.scene import load_scene
 
+    if isinstance(scene_or_model, Plan):
+        plan = as_plan(scene_or_model, model=model)
+        return plan.scene, plan.model, plan
     if isinstance(scene_or_model, (str, Path)):
         scene_or_model = load_scene(scene_or_model)
     if isinstance(scene_or_model, Model):
         model = scene_or_model
         return Scene(name=model.name or "model", path=None, robot=Path(model.source or "."), load_options={},
-                     gravity=np.asarray(model.gravity_vector)), model
+                     gravity=np.asarray(model.gravity_vector)), model, None
     if isinstance(scene_or_model, Scene):
-        return scene_or_model, scene_or_model.model() if model is None else model
-    raise TypeError(f"simulate takes a Scene, a scene file path or a Model; got {type(scene_or_model).__name__}")
+        return scene_or_model, scene_or_model.model() if model is None else model, None
+    raise TypeError(f"simulate takes a Scene, its Plan, a scene file path or a Model; got "
+                    f"{type(scene_or_model).__name__}")
 
 
 def _energies(res, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -249,22 +257,19 @@ def record_compilation():
 
 
 def warm_up(scene, *, model: Model | None = None, methods=("DOP853",), t_end: float | None = None) -> Compilation:
-    """Run ``scene`` once with each of ``methods`` over a few steps, so that every compiled function
+    """Run ``scene`` (a Scene, its compiled :class:`~urdf2links.scenes.plan.Plan`, or a scene file) once with each of ``methods`` over a few steps, so that every compiled function
     a run of it calls is compiled (or loaded from numba's cache) here and not inside a timed run.
     ``t_end`` defaults to the shorter of the scene's and 0.01 s. Returns the
     :class:`Compilation` of the whole warm-up. A method that fails here is left to fail (and be
     reported) in the real run."""
-    from ..scenes.scene import load_scene
-
-    if isinstance(scene, (str, Path)):
-        scene = load_scene(scene)
-    model = model if model is not None else scene.model()
+    plan = as_plan(scene, model=model)
+    scene = plan.scene
     T = min(scene.run.t_end, 0.01) if t_end is None else float(t_end)
     with record_compilation() as rec:
         for m in methods:
             kw = {"dt": T / 4} if m in ("RK4", "midpoint") else {"rtol": 1e-6, "atol": 1e-8}
             try:
-                simulate(scene, model=model, t_end=T, samples=3, progress=False, method=m, **kw)
+                simulate(plan, t_end=T, samples=3, progress=False, method=m, **kw)
             except Exception:  # noqa: BLE001 -- a method that fails here fails (and is reported) in the run
                 pass
     return rec

@@ -29,17 +29,18 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass, field
+
 import numpy as np
 
-from .description import RobotDescription
-from ..errors import InertiaError, MeshError, URDFError, URDFStructureError, URDFValueError
 from ..dynamics.inertia import audit_pseudo_inertia, inertial_from_pseudo, nearest_consistent, pseudo_inertia
-from .geometry_inertia import combined_geometry_inertia
 from ..dynamics.model import Model
-from .urdf import parse_urdf
 from ..dynamics.rotations import axis_alignment, homogeneous, matrix_to_xyz_angles, rpy_to_matrix
 from ..dynamics.transforms import PARAMETERS
 from ..dynamics.tree import LinkSpec, build_tree
+from ..errors import InertiaError, MeshError, URDFError, URDFStructureError, URDFValueError
+from .description import RobotDescription
+from .geometry_inertia import combined_geometry_inertia
+from .urdf import parse_urdf
 
 __all__ = ["load_urdf", "load_urdf_string", "urdf_link_poses", "AuditRecord", "INERTIA_POLICIES", "MIMIC_POLICIES"]
 

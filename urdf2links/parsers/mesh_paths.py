@@ -18,8 +18,8 @@ import stat
 from pathlib import Path
 from urllib.parse import unquote
 
-from .description import Geometry
 from ..errors import MeshError
+from .description import Geometry
 
 __all__ = ["resolve_mesh_path", "require_mesh", "find_package_dir", "check_mesh_file", "MESH_SUFFIXES",
            "leaves_package", "unresolved_mesh_problem"]

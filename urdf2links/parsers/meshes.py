@@ -13,8 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .description import Geometry
 from ..errors import MeshError, URDFValueError
+from .description import Geometry
 from .mesh_paths import check_mesh_file, unresolved_mesh_problem
 
 __all__ = ["load_mesh", "load_mesh_parts"]

@@ -34,14 +34,21 @@ import math
 import numpy as np
 from lxml import etree
 
-from .description import (
-    JOINT_TYPES, Geometry, Inertial, JointDescription, LinkDescription, Mimic, Origin, RobotDescription,
-)
+from ..dynamics.rotations import matrix_to_rpy
 from ..errors import URDFError, URDFStructureError, URDFValueError
+from ..ranges import out_of_range
+from .description import (
+    JOINT_TYPES,
+    Geometry,
+    Inertial,
+    JointDescription,
+    LinkDescription,
+    Mimic,
+    Origin,
+    RobotDescription,
+)
 from .inventory import inventory_notes, joint_value_notes
 from .mesh_paths import require_mesh, resolve_mesh_path
-from ..ranges import out_of_range
-from ..dynamics.rotations import matrix_to_rpy
 from .source import read_source
 from .xacro_input import is_xacro_path
 

@@ -28,10 +28,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .scene_kernels import CompiledScene
 from ..dynamics.transforms import BaseState
+from .scene_kernels import CompiledScene
 
-__all__ = ["Plan", "compile_plan"]
+__all__ = ["Plan", "compile_plan", "as_plan"]
 
 
 class Plan:
@@ -134,3 +134,19 @@ def compile_plan(scene, model) -> Plan:
     """Compile ``scene`` for ``model`` (names checked)."""
     scene.check_names(model)
     return Plan(scene, model)
+
+
+def as_plan(source, *, model=None) -> Plan:
+    """The compiled run of ``source``, made once and passed down to every stage that runs it (the
+    warm-up, ``simulate``, MuJoCo's inputs): a :class:`Plan` is returned as it is; a
+    :class:`~urdf2links.scenes.scene.Scene` or a scene file is loaded, its robot loaded (or ``model``
+    taken) and compiled."""
+    if isinstance(source, Plan):
+        if model is not None and model is not source.model:
+            raise ValueError("as_plan: a Plan brings its own model; model= must be None or that model")
+        return source
+    from .scene import Scene, load_scene
+
+    scene = source if isinstance(source, Scene) else load_scene(source)
+    return compile_plan(scene, scene.model() if model is None else model)
+

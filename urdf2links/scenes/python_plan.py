@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..dynamics.transforms import base_transforms
 from ..dynamics.oracles.recursive import RecursivePlan
+from ..dynamics.transforms import base_transforms
 
 __all__ = ["PythonPlan"]
 

@@ -58,11 +58,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import SceneError
-from .functions import Constant, SceneValueError, TimeFunction, VectorFunction, parse_function, vector_function
-from ..locations import example_robot_data_dir, shipped_robots_dir
-from ..ranges import METHODS, MAX_SAMPLES, MAX_STEPS, MIN_ATOL, MIN_T_END, RANGES, RTOL_FLOOR
 from ..dynamics.transforms import PARAMETERS, BaseState
+from ..errors import SceneError
+from ..locations import example_robot_data_dir, shipped_robots_dir
+from ..ranges import MAX_SAMPLES, MAX_STEPS, METHODS, MIN_ATOL, MIN_T_END, RANGES, RTOL_FLOOR
+from .functions import Constant, SceneValueError, TimeFunction, VectorFunction, parse_function, vector_function
 
 __all__ = ["Scene", "AppliedLoad", "Spring", "SpringSet", "RunSettings", "load_scene", "shipped_robots_dir",
            "robot_stem", "default_scene", "DEFAULT_SCENE_NAME", "Q0_CHOICES"]

@@ -17,12 +17,31 @@ from numba import njit
 from ..dynamics.factor import cholesky, cholesky_solve, ltdl, ltdl_solve
 from ..dynamics.kernels import add_wrench, base_power, clear_wrenches, dynamics, energies, kinematics
 from ..dynamics.model_kernels import reduce_mass, reduce_vector
-from .scene_arrays import (
-    S_BASE_FN, S_C, S_D, S_DAMPER_IDX, S_DAMPING, S_FN_DATA, S_FN_KIND, S_FN_PTR, S_GRAV, S_LOAD_FN, S_LOAD_KIND,
-    S_LOAD_LINK, S_LOAD_LOCAL, S_LOAD_POINT, S_LOAD_X, S_REST, S_SPRING_IDX, S_STIFFNESS, S_TORQUE_FN, S_TORQUE_IDX,
-    compile_scene, scratch_size,
-)
 from ..dynamics.tree_arrays import W_B, W_Q, W_SIZE, nn
+from .scene_arrays import (
+    S_BASE_FN,
+    S_C,
+    S_D,
+    S_DAMPER_IDX,
+    S_DAMPING,
+    S_FN_DATA,
+    S_FN_KIND,
+    S_FN_PTR,
+    S_GRAV,
+    S_LOAD_FN,
+    S_LOAD_KIND,
+    S_LOAD_LINK,
+    S_LOAD_LOCAL,
+    S_LOAD_POINT,
+    S_LOAD_X,
+    S_REST,
+    S_SPRING_IDX,
+    S_STIFFNESS,
+    S_TORQUE_FN,
+    S_TORQUE_IDX,
+    compile_scene,
+    scratch_size,
+)
 
 __all__ = ["CompiledScene", "scene_rhs", "scene_energies", "fn_eval", "fn_data_eval"]
 

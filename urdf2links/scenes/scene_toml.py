@@ -17,8 +17,8 @@ from dataclasses import fields
 from pathlib import Path
 
 from ..errors import SceneError, URDFError
-from .scene import RunSettings, Scene, default_scene, load_scene
 from ..parsers.xacro_input import parse_xacro_arg
+from .scene import RunSettings, Scene, default_scene, load_scene
 
 __all__ = ["scene_toml", "write_scene", "scene_or_robot", "scene_from_args", "write_scene_option", "xacro_args_of"]
 

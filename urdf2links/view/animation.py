@@ -35,8 +35,8 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .svgplot import Panel, panel_svg
 from ..dynamics.transforms import base_state_at, link_transform
+from .svgplot import Panel, panel_svg
 from .visuals import RobotShapes, model_shapes
 
 __all__ = ["Motion", "Animation", "Panel", "render_animation", "animation_page", "trajectory_page",

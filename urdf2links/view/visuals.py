@@ -21,9 +21,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..parsers.description import Geometry, RobotDescription
-from ..errors import MeshError, URDFError
 from ..dynamics.rotations import homogeneous, rpy_to_matrix
+from ..errors import MeshError, URDFError
+from ..parsers.description import Geometry, RobotDescription
 
 __all__ = ["Shape", "RobotShapes", "robot_shapes", "model_shapes", "scene_shapes", "decimate", "tessellate",
            "DEFAULT_MAX_FACES", "MIN_PART_FACES"]

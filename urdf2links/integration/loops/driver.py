@@ -17,9 +17,9 @@ from collections import namedtuple
 
 import numpy as np
 
-from ..dense import DenseOutput, midpoint_dense
 from ...errors import IntegrationError
 from ...scenes.scene_kernels import CompiledScene
+from ..dense import DenseOutput, midpoint_dense
 from . import fixed
 from .common import AngleGuard
 from .erk import TABLEAUX, erk_chunk, initial_step
