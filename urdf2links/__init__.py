@@ -3,6 +3,10 @@
 This package never imports MuJoCo; the comparison lives in the ``compare`` package.
 """
 
+from . import numba_cache as _numba_cache
+
+_numba_cache.install()     # before any compiled function is defined: numba caches into the user's folder
+
 from .dynamics.loads import Wrench
 from .dynamics.model import Model
 from .dynamics.transforms import BaseState, base_transforms
