@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import re
 import sys
 import tempfile
 from pathlib import Path
@@ -33,6 +34,8 @@ __all__ = ["cache_dir", "install", "source_stamp"]
 
 _PACKAGE = "urdf2links"
 _STAMP: list = []
+#: A source file that defines compiled functions (its edits invalidate the cache).
+_COMPILED = re.compile(r"@njit|\bnjit\(|\bcfunc\(|@jit\b|numba\.jit\(|@vectorize|@guvectorize")
 
 
 def cache_dir() -> Path:
@@ -71,14 +74,14 @@ def _roots() -> list[Path]:
 
 
 def source_stamp() -> str:
-    """A digest of (path, size, modification time) of every source file of the package that uses
-    numba: the freshness of every cached function (module doc). Computed once per process."""
+    """A digest of (path, size, modification time) of every source file of the package that defines
+    compiled functions: the freshness of every cached function (module doc). Computed once per process."""
     if not _STAMP:
         h = hashlib.sha1()
         for root in _roots():
             for f in sorted(root.rglob("*.py")):
                 try:
-                    if "numba" not in f.read_text(encoding="utf-8", errors="ignore"):
+                    if not _COMPILED.search(f.read_text(encoding="utf-8", errors="ignore")):
                         continue
                     st = f.stat()
                 except OSError:

@@ -442,8 +442,13 @@ def _spring_map(names, springs) -> dict:
     return spring_of
 
 
-def _check_model(model, integrator, timestep) -> list[bool]:
-    """Refuse what route 1 cannot write; returns which links are massless."""
+def _check_model(model, integrator, timestep, moving_base: bool = False) -> tuple[list[bool], list[str]]:
+    """Refuse what route 1 cannot write; returns which links are written massless, and notes.
+
+    A link with zero mass but non-zero second moments is no physical body, and MuJoCo has no such
+    body. When no coordinate moves it and the base is fixed, it has no effect on the equations
+    (A, e and G involve moving links only): it is written without inertia, and noted. When it moves,
+    :class:`MjcfRefused` names it and the fix."""
     if model.coupling is not None:
         raise ValueError(f"model {model.name!r} has coupled coordinates (mimic='coupled'); route 1 "
                          "builds the tree's own coordinates only: load with mimic='independent'")
@@ -454,11 +459,25 @@ def _check_model(model, integrator, timestep) -> list[bool]:
     tree = model.tree
     mass = tree.H[:, 3, 3]
     massless = [bool(np.all(tree.H[p] == 0.0)) for p in range(tree.n_links)]
+    moves = [False] * tree.n_links          # a coordinate on the path from {A} to the link
+    for p in range(tree.n_links):           # parents come before their children
+        par = int(tree.parent[p])
+        moves[p] = bool(np.any(tree.coord[p] >= 0)) or (par >= 0 and moves[par])
+    notes, static = [], []
     for p in range(tree.n_links):
         if mass[p] == 0.0 and not massless[p]:
-            raise ValueError(f"link {tree.link_names[p]!r}: H has zero mass but non-zero second moments; "
-                             "MuJoCo cannot represent such a body")
-    return massless
+            if not moves[p] and not moving_base:
+                massless[p] = True
+                static.append(tree.link_names[p])
+                continue
+            raise MjcfRefused(model.name, f"link {tree.link_names[p]!r} has zero mass but non-zero second moments: "
+                              "no physical body has that, and MuJoCo cannot represent it. Load the robot with "
+                              "--inertia repair (inertia='repair': its inertia from its geometry, noted in the "
+                              "audit), or give the link a mass in the file")
+    if static:
+        notes.append(f"links with zero mass but non-zero second moments that nothing moves (welded to a fixed base; "
+                     f"no effect on A, e or G) written without inertia: {', '.join(static)}")
+    return massless, notes
 
 
 def _fold_notes(tree, folded, too_many, tiny_links, tiny) -> list[str]:
@@ -491,7 +510,7 @@ def mjcf_from_model(model, *, gravity=None, springs: Iterable = (), moving_base:
     moving_base : add the ``base_A`` body carrying the six base parameters as joints.
     timestep, integrator : MuJoCo's ``<option>``; integrator one of :data:`INTEGRATORS`.
     """
-    massless = _check_model(model, integrator, timestep)
+    massless, check_notes = _check_model(model, integrator, timestep, moving_base)
     tree = model.tree
     names = tuple(model.coordinate_names)
     g = None if gravity is None else np.asarray(gravity, float).reshape(3)
@@ -515,7 +534,7 @@ def mjcf_from_model(model, *, gravity=None, springs: Iterable = (), moving_base:
     else:
         for r in bodies.top():
             bodies.emit(r, "    ")
-    notes += _fold_notes(tree, folded, too_many, bodies.tiny_links, tiny)
+    notes += check_notes + _fold_notes(tree, folded, too_many, bodies.tiny_links, tiny)
     xml, note = _document(model, bodies.lines, g, springs, timestep, integrator)
     notes.append(note)
     try:
