@@ -24,9 +24,9 @@ from pathlib import Path
 
 from urdf2links.console import err, shown_path
 from urdf2links.integration.integrators import METHODS
-from urdf2links.locations import shipped_robots_dir
+from urdf2links.locations import DEFAULT_OUT, default_baselines, report_scenes, shipped_robots_dir
 from urdf2links.scenes.scene import load_scene
-from urdf2links.scenes.scene_toml import scene_from_args, write_scene_option
+from urdf2links.scenes.scene_toml import load_options_of, override_loading, scene_from_args, write_scene_option
 
 from .agreement.trajectory import compare_scene
 from .formatting import json_ready
@@ -82,7 +82,8 @@ def _print_headline(s: dict, stream=sys.stdout) -> None:
           + (f", growth rate {tr['growth_rate']:.3g} /s (chaotic)" if tr.get("growth_rate") is not None else ""),
           file=stream)
     print(f"  energy     drift urdf2links {en['project_drift']:.2e} J, MuJoCo {en['mujoco_drift']:.2e} J "
-          f"(relative {en['project_drift_rel']:.1e}, {en['mujoco_drift_rel']:.1e})", file=stream)
+          f"(relative {en['project_drift_rel']:.1e}, {en['mujoco_drift_rel']:.1e}, to {en['scale']:.2g} J)",
+          file=stream)
     if s["base"]["moving"]:
         print(f"  base       tracking error {s['base']['tracking_error']:.2e}", file=stream)
     print(f"  wall time  urdf2links {wt['project_s']:.3g} s (integrator), MuJoCo {wt['mujoco_s']:.3g} s (engine, "
@@ -96,14 +97,22 @@ def _print_headline(s: dict, stream=sys.stdout) -> None:
 
 def _compare_cmd(args) -> str:
     parts = ["urdf2links compare", shown_path(args.scene)]
-    parts += [f for f, on in (("--floating", args.floating), (f"--q0 {args.q0}", args.q0 != "zero")) if on]
-    parts += [f"--xacro-arg {a}" for a in args.xacro_arg]
+    parts += [f for f, on in (("--floating", args.floating), (f"--q0 {args.q0}", args.q0 != "zero"),
+                              (f"--inertia {args.inertia}", args.inertia), (f"--mimic {args.mimic}", args.mimic),
+                              ("--strict", args.strict)) if on]
+    parts += [f"--package-dir {shown_path(d)}" for d in args.package_dir] + [f"--xacro-arg {a}" for a in args.xacro_arg]
     for flag, value, default in (("--t-end", args.t_end, None), ("--mujoco-integrator", args.mujoco_integrator, "RK4"),
                                  ("--mujoco-dt", args.mujoco_dt, 1e-4), ("--method", args.method, None),
                                  ("--rtol", args.rtol, None), ("--states", args.states, 8), ("--seed", args.seed, 0)):
         if value is not None and value != default:
             parts.append(f"{flag} {value:g}" if isinstance(value, float) else f"{flag} {value}")
     return " ".join(parts)
+
+
+def _when(path: Path) -> str:
+    import datetime
+
+    return datetime.datetime.fromtimestamp(path.stat().st_mtime).strftime("%Y-%m-%d %H:%M")
 
 
 def compare_command(args) -> int:
@@ -129,6 +138,9 @@ def compare_command(args) -> int:
         except KeyError as exc:
             err(f"urdf2links compare: error: {exc.args[0]}")
             return 2
+    folder = Path(args.out) if args.out else DEFAULT_OUT / summary["robot"] / summary["scene"]
+    if (folder / "summary.json").is_file():
+        err(f"  {shown_path(folder)}: replacing the report written there before ({_when(folder / 'summary.json')})")
     paths = write_report(c, args.out, json_path=args.json, command=_compare_cmd(args), check=check,
                          animation_fps=args.animation_fps)
     _print_headline(paths["summary"])
@@ -146,26 +158,38 @@ def report_command(args) -> int:
         from .corpus.command import corpus_command
 
         return corpus_command(args)
-    out = Path(args.out or "reports")
-    files = [Path(p) for p in args.scenes] if args.scenes else shipped_scenes()
+    out = Path(args.out) if args.out else DEFAULT_OUT
+    if args.scenes:
+        files, where = [Path(p) for p in args.scenes], "the scene files given"
+    else:
+        files, where = report_scenes()
     if not files:
-        err("urdf2links report: error: no scenes found (robots/*.toml)")
+        err(f"urdf2links report: error: no scenes found ({where})")
         return 2
+    err(f"scenes: {len(files)} from {where}")
     if args.write_baselines is True:
         args.write_baselines = out / "baselines.json"
-    baselines_path = Path(args.check) if args.check else out / "baselines.json"
-    baselines = None
-    if not args.write_baselines and (args.check or baselines_path.is_file()):
-        try:
-            baselines = load_baselines(baselines_path)
-        except (OSError, ValueError) as exc:
-            err(f"urdf2links report: error: cannot read baselines {baselines_path}: {exc}")
-            return 2
+    load = load_options_of(args)
+    baselines, baselines_path = None, None
+    if args.write_baselines:
+        err(f"baselines: this run's figures are accepted into {shown_path(args.write_baselines)} (not checked)")
+    else:
+        baselines_path, looked = (Path(args.check), [Path(args.check)]) if args.check else default_baselines(out)
+        if baselines_path is None:
+            err(f"baselines: none found (looked for {', '.join(shown_path(p) for p in looked)}): the figures are "
+                "reported, not checked")
+        else:
+            try:
+                baselines = load_baselines(baselines_path)
+            except (OSError, ValueError) as exc:
+                err(f"urdf2links report: error: cannot read baselines {baselines_path}: {exc}")
+                return 2
+            err(f"baselines: {shown_path(baselines_path)} (exit 1 when a figure grows past its baseline)")
     entries, summaries, failed, errors = [], [], [], []
     start = time.perf_counter()
     for i, f in enumerate(files, 1):
         t0 = time.perf_counter()
-        scene = load_scene(f)
+        scene = override_loading(load_scene(f), load)
         T, note = report_t_end(scene, t_end=args.t_end, cap=args.cap)
         err(f"[{i}/{len(files)}] {Path(scene.robot).stem}/{scene.name}: t = 0..{T:g} s"
              + (f" (capped; scene {scene.run.t_end:g} s)" if note and args.t_end is None else ""))
@@ -207,7 +231,7 @@ def report_command(args) -> int:
         note += f" Baseline check against {shown_path(baselines_path)} (errors may grow {baselines.get('factor', 10):g}x)."
     corpus = out / "corpus" / "index.html"
     idx = write_index(entries, out, note=note.strip(), command="urdf2links report" + (f" --out {args.out}" if args.out
-                      and str(args.out) != "reports" else ""), corpus_link="corpus/index.html" if corpus.is_file() else None)
+                      else ""), corpus_link="corpus/index.html" if corpus.is_file() else None)
     if args.write_baselines:
         bp = write_baselines(summaries, args.write_baselines, factor=args.factor)
         err(f"wrote {shown_path(bp)}")
@@ -222,7 +246,7 @@ def report_command(args) -> int:
 
 def tradeoff_command(args) -> int:
     """``urdf2links tradeoff SCENE.toml``: the study, its files, the crossover on stdout."""
-    scene = load_scene(args.scene)
+    scene = scene_from_args(args)
 
     def names(text, what, allowed):
         if text is None:
@@ -248,7 +272,7 @@ def tradeoff_command(args) -> int:
     log = (lambda m: None) if args.quiet else (lambda m: err(f"  {scene.name}: {m}"))
     data = run_study(scene, t_end=args.t_end, quick=args.quick, repeats=args.repeats, budget=args.budget,
                      methods=methods, mujoco_integrators=integrators, log=log)
-    out = Path(args.out) if args.out else Path("reports") / data["robot"] / data["scene"]
+    out = Path(args.out) if args.out else DEFAULT_OUT / data["robot"] / data["scene"]
     cmd = " ".join(["urdf2links tradeoff", shown_path(args.scene)] + (["--quick"] if args.quick else [])
                    + ([f"--t-end {args.t_end:g}"] if args.t_end is not None else []))
     paths = write_study(data, out, command=cmd)

@@ -12,6 +12,7 @@ from .dynamics.model import Model
 from .dynamics.transforms import BaseState, base_transforms
 from .dynamics.tree import LinkSpec, LinkTree, build_tree, pseudo_inertia_from
 from .errors import (
+    DescriptionError,
     DynamicsError,
     InertiaError,
     MeshError,
@@ -23,6 +24,7 @@ from .errors import (
 from .parsers.importer import AuditRecord, load_urdf, load_urdf_string, urdf_link_poses
 
 __all__ = [
+    "DescriptionError",
     "load_urdf",
     "load_urdf_string",
     "urdf_link_poses",

@@ -8,15 +8,16 @@ and with it MuJoCo, only when they run). A robot file given to
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import warnings
 
 import numpy as np
 
 from .dynamics.transforms import PARAMETERS
-from .errors import DynamicsError, IntegrationError, SceneError, URDFError
+from .errors import DescriptionError, DynamicsError, IntegrationError, SceneError, URDFError
 from .scenes.limits import LimitExcursion
-from .scenes.scene_toml import scene_from_args, write_scene_option, xacro_args_of
+from .scenes.scene_toml import load_options_of, scene_from_args, write_scene_option, xacro_args_of
 
 __all__ = ["main", "build_parser", "format_tree", "scene_from_args", "xacro_args_of", "write_scene_option"]
 
@@ -77,39 +78,39 @@ def _joint_lines(joints) -> list[str]:
 
 
 def _inspect(args) -> int:
-    from .parsers.importer import load_urdf
+    from .scenes.plan import compile_plan
+    from .scenes.scene_toml import scene_or_robot, scene_toml
 
-    if args.scene:
-        from .scenes.plan import compile_plan
-        from .scenes.scene import default_scene
-        from .scenes.scene_toml import scene_toml
-
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            model = load_urdf(args.file, floating_base=args.floating_base, inertia=args.inertia, mimic=args.mimic,
-                              package_dirs=args.package_dir, strict=args.strict, xacro_args=xacro_args_of(args))
-        scene = default_scene(args.file, floating=args.floating_base, q0=args.q0, seed=args.seed,
-                              t_end=args.t_end or 1.0, xacro_args=xacro_args_of(args), package_dirs=args.package_dir,
-                              inertia=args.inertia, mimic=args.mimic, strict=args.strict, model=model)
-        print(scene_toml(scene))
-        print(compile_plan(scene, model).describe())
-        return 0
-    if str(args.file).endswith(".toml"):
-        from .scenes.plan import compile_plan
-        from .scenes.scene import load_scene
-
-        scene = load_scene(args.file)
+    if args.scene or str(args.file).endswith(".toml"):
+        scene = scene_or_robot(args.file, q0=args.q0, seed=args.seed, t_end=args.t_end, load=load_options_of(args))
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             model = scene.model()
+        if scene.path is None:
+            print(scene_toml(scene))
         print(compile_plan(scene, model).describe())
         return 0
+    from .parsers.importer import load_urdf
+
+    opts = load_options_of(args)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the findings are printed in the table below
-        model = load_urdf(args.file, floating_base=args.floating_base, inertia=args.inertia,
-                          mimic=args.mimic, package_dirs=args.package_dir, strict=args.strict,
-                          xacro_args=xacro_args_of(args))
+        model = load_urdf(args.file, **opts)
     print(format_tree(model))
+    return 0
+
+
+def _list(args) -> int:
+    """``urdf2links list``: the shipped robots and scenes, one line each, runnable by name from anywhere."""
+    from .locations import shipped, shipped_robots_dir
+
+    items = shipped()
+    width = max(len(s.name) for s in items)
+    kind_width = max(len(s.kind) for s in items)
+    print(f"shipped robots and scenes ({shipped_robots_dir()}); run them by name from any folder, e.g. "
+          "`urdf2links simulate ship_crane`, `urdf2links inspect ur5_like`:")
+    for s in items:
+        print(f"  {s.name:{width}s}  {s.kind:{kind_width}s}  {s.summary}")
     return 0
 
 
@@ -117,7 +118,7 @@ def _simulate(args) -> int:
     from pathlib import Path
 
     from .integration.simulate import simulate
-    from .scenes.scene import robot_stem
+    from .scenes.scene import robot_label
 
     scene = scene_from_args(args)
     write_scene_option(args, scene)
@@ -128,7 +129,7 @@ def _simulate(args) -> int:
                     progress=False if args.quiet else None, max_wall=args.max_wall)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    stem = scene.name if scene.path is not None else f"{robot_stem(scene.robot)}_{scene.name}"  # default scene
+    stem = scene.name if scene.path is not None else f"{robot_label(scene, model)}_{scene.name}"  # default scene
     npz = traj.save_npz(out / f"{stem}.npz")
     csv_path = traj.save_csv(out / f"{stem}.csv")
     s = traj.stats
@@ -175,7 +176,7 @@ def _sweep(args) -> int:
     from pathlib import Path
 
     from .integration.batch import simulate_batch, sweep_states
-    from .scenes.scene import robot_stem
+    from .scenes.scene import robot_label
 
     scene = scene_from_args(args)
     write_scene_option(args, scene)
@@ -203,11 +204,13 @@ def _sweep(args) -> int:
             client.close()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    stem = scene.name if scene.path is not None else f"{robot_stem(scene.robot)}_{scene.name}"
+    stem = scene.name if scene.path is not None else f"{robot_label(scene, model)}_{scene.name}"
     npz = out / f"{stem}_sweep.npz"
     np.savez_compressed(npz, t=res.t, q=res.q, qd=res.qd, work=res.work, nfev=res.nfev, status=res.status, q0=q0,
                         qd0=qd0, coordinate_names=np.array(res.coordinate_names))
     where = f"on {len(res.chunks)} chunks at {args.scheduler}" if client is not None else "on this machine"
+    if res.compilation is not None and res.compilation.happened:
+        print(res.compilation.describe("urdf2links sweep"))
     print(f"{scene.name}: {model.name}, {args.count} initial states (seed {args.seed}, spread {args.spread:g}), "
           f"t = 0..{res.t[-1]:g} s, {res.method}, {where}: {int(np.sum(res.status == 1))} reached the end, "
           f"{res.wall_time:.2f} s wall, {int(res.nfev.sum())} evaluations")
@@ -259,34 +262,55 @@ def _add_animation_option(p) -> None:
                    help="frames per second of simulated time in the report's animation (default 30; 0: no animation)")
 
 
-def _add_robot_options(p, *, inspect: bool = False) -> None:
-    """Options of a robot file run in its default scene (and of ``inspect``)."""
-    if not inspect:
-        p.add_argument("--floating", action="store_true", help="robot file: six coordinates for the root link "
-                       "(default: fixed base)")
-    p.add_argument("--q0", choices=("zero", "random"), default="zero", help="robot file: initial configuration, "
-                   "zero or seeded random within the joint limits (default zero)")
-    p.add_argument("--xacro-arg", action="append", default=[], metavar="NAME:=VALUE",
+def _add_load_options(p) -> None:
+    """How the robot is loaded: the same options on every command that loads one. For a scene file they
+    replace its ``[robot]`` options (the scene's notes say so)."""
+    from .parsers.importer import INERTIA_POLICIES, MIMIC_POLICIES
+
+    g = p.add_argument_group("loading the robot (for a scene file: replaces its [robot] options, noted)")
+    g.add_argument("--floating-base", "--floating", dest="floating", action="store_true",
+                   help="six coordinates for the root link (default: fixed base; robot files only)")
+    g.add_argument("--inertia", choices=INERTIA_POLICIES, help="audit (default: inconsistent inertias noted), strict "
+                   "(refused), repair (replaced by the nearest consistent one or one from the geometry, noted)")
+    g.add_argument("--mimic", choices=MIMIC_POLICIES, help="mimic joints as independent coordinates (default) or "
+                   "coupled to their leader")
+    g.add_argument("--strict", action="store_true", help="refuse what the default reading tolerates like urdfdom")
+    g.add_argument("--package-dir", action="append", default=[], metavar="DIR",
+                   help="folder searched for package:// meshes and $(find pkg) (repeat for more)")
+    g.add_argument("--xacro-arg", action="append", default=[], metavar="NAME:=VALUE",
                    help="argument of a .xacro robot (repeat for more)")
-    p.add_argument("--package-dir", action="append", default=[], help="folder searched for package:// meshes "
-                   "and $(find pkg)")
-    if not inspect:
-        p.add_argument("--write-scene", metavar="FILE.toml", help="robot file: also write its default scene to "
-                       "FILE.toml, to edit and run by name")
+
+
+def _add_default_scene_options(p, *, seed: bool = True, write_scene: bool = True) -> None:
+    """Options of a robot file run in its default scene."""
+    g = p.add_argument_group("a robot file's default scene")
+    g.add_argument("--q0", choices=("zero", "random"), default="zero", help="initial configuration: zero, or "
+                   "seeded random within the joint limits (default zero)")
+    if seed:
+        g.add_argument("--seed", type=int, default=0, help="seed of --q0 random (default 0)")
+    if write_scene:
+        g.add_argument("--write-scene", metavar="FILE.toml", help="also write the default scene to FILE.toml, to "
+                       "edit and run by name")
+
+
+_INPUT = ("a scene .toml, a robot (.urdf, .xacro), or the name of a shipped one from any folder (`urdf2links "
+          "list`)")
+
+
+def _list_parser(sub) -> None:
+    p = sub.add_parser("list", help="the shipped robots and scenes, one line each (run them by name)")
+    p.set_defaults(func=_list)
 
 
 def _inspect_parser(sub) -> None:
     """The ``inspect`` command's options."""
-    p = sub.add_parser("inspect", help="print a URDF's tree of links, joints, inertia audit and import notes")
-    p.add_argument("file", help="a .urdf or .xacro file (or a scene .toml: its plan)")
-    p.add_argument("--floating-base", "--floating", action="store_true", help="six coordinates for the root link")
-    p.add_argument("--inertia", choices=("audit", "strict", "repair"), default="audit")
-    p.add_argument("--mimic", choices=("independent", "coupled"), default="independent")
-    p.add_argument("--strict", action="store_true", help="refuse what the default reading tolerates like urdfdom")
+    p = sub.add_parser("inspect", help="print a robot's tree of links, joints, inertia audit and import notes (or a "
+                                       "scene's plan)")
+    p.add_argument("file", help=_INPUT + "; a scene prints its plan")
     p.add_argument("--scene", action="store_true", help="print the robot's default scene (TOML) and its plan")
-    p.add_argument("--seed", type=int, default=0, help="seed of --q0 random (default 0)")
     p.add_argument("--t-end", type=float, help="default scene's run length in s (default 1)")
-    _add_robot_options(p, inspect=True)
+    _add_load_options(p)
+    _add_default_scene_options(p, write_scene=False)
     p.set_defaults(func=_inspect)
 
 
@@ -294,10 +318,10 @@ def _simulate_parser(sub) -> None:
     """The ``simulate`` command's options."""
     p = sub.add_parser("simulate", help="simulate a scene (TOML), or a robot in its default scene, and save the "
                                         "trajectory")
-    p.add_argument("scene", help="a scene .toml file, or a robot (.urdf, .xacro) run in its default scene: gravity, "
-                                 "fixed base, at rest, URDF damping, 1 s")
-    _add_robot_options(p)
-    p.add_argument("--seed", type=int, default=0, help="seed of --q0 random (default 0)")
+    p.add_argument("scene", help=_INPUT + "; a robot runs in its default scene: gravity, fixed base, at rest, URDF "
+                                          "damping, 1 s")
+    _add_load_options(p)
+    _add_default_scene_options(p)
     p.add_argument("--t-end", type=float, help="override [run] t_end (s)")
     p.add_argument("--method", help="RK45, DOP853, Radau, BDF, LSODA, RK4 or midpoint")
     p.add_argument("--rtol", type=float)
@@ -319,13 +343,15 @@ def _compare_parser(sub) -> None:
                                    "base motion prescribed) from the same initial state; compare the terms at identical "
                                    "states (routes 1 and 2), the trajectories, the energies and the wall times; write "
                                    "report.html, summary.json and summary.md.")
-    p.add_argument("scene", help="a scene .toml file, or a robot (.urdf, .xacro) run in its default scene")
-    _add_robot_options(p)
+    p.add_argument("scene", help=_INPUT + "; a robot runs in its default scene")
+    _add_load_options(p)
+    _add_default_scene_options(p, seed=False)
     _add_mujoco_options(p)
     p.add_argument("--method", help="the project's integrator (default: the scene's)")
     p.add_argument("--rtol", type=float, help="the project's rtol (default: the scene's)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the random states (default 0)")
-    p.add_argument("--out", help="folder of the report (default reports/<robot>/<scene>/)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the terms' random states and of --q0 random "
+                   "(default 0)")
+    p.add_argument("--out", help="folder of the report (default out/reports/<robot>/<scene>/)")
     p.add_argument("--json", help="also write the summary JSON to this file")
     p.add_argument("--check", metavar="BASELINE.json", help="exit 1, naming the figure, when a discrepancy grew "
                    "past its baseline (wall times are not checked)")
@@ -342,9 +368,10 @@ def _report_parser(sub) -> None:
                                    "s), in parallel processes (--jobs) or on a Dask cluster (--scheduler); writes "
                                    "index.html, corpus.json, corpus.md and a page per robot into reports/corpus/. "
                                    "Progress on stderr.")
-    p.add_argument("scenes", nargs="*", help="scene files (default: robots/*.toml)")
-    p.add_argument("--out", help="folder of the reports and index.html (default reports; with --corpus "
-                   "reports/corpus)")
+    p.add_argument("scenes", nargs="*", help="scene files or names of shipped scenes (default: every shipped scene; "
+                   "in a urdf2links checkout, its robots/*.toml)")
+    p.add_argument("--out", help="folder of the reports and index.html (default out/reports; with --corpus "
+                   "out/reports/corpus); --out reports regenerates a checkout's committed reports")
     p.add_argument("--corpus", nargs="+", metavar="DIR|FILE|GLOB", help="every .urdf and .xacro under these folders "
                    "(and these files, and the files these patterns match): one row each, its default scene run for 0.5 s "
                    "(--t-end); 'example-robot-data': the installed example-robot-data robots")
@@ -355,8 +382,7 @@ def _report_parser(sub) -> None:
                    "pip install 'urdf2links[distributed]'")
     p.add_argument("--seed", type=int, default=0, help="--corpus: seed of each robot's random q0 and of the "
                    "terms' states (default 0)")
-    p.add_argument("--package-dir", action="append", default=[], help="--corpus: folder searched for package:// "
-                   "meshes and $(find pkg)")
+    _add_load_options(p)
     p.add_argument("--no-thumbnails", action="store_true", help="--corpus: no picture of each robot in the index "
                    "(saves the few seconds a robot its meshes take)")
     _add_mujoco_options(p)
@@ -378,8 +404,9 @@ def _sweep_parser(sub) -> None:
                                    "uniform draw in [-spread, spread]), integrate them with the compiled batch loop "
                                    "(DOP853 or RK45, one trajectory per thread), on this machine or split across the "
                                    "workers of a Dask cluster (same results), and save them as an .npz.")
-    p.add_argument("scene", help="a scene .toml file, or a robot (.urdf, .xacro) in its default scene")
-    _add_robot_options(p)
+    p.add_argument("scene", help=_INPUT + "; a robot runs in its default scene")
+    _add_load_options(p)
+    _add_default_scene_options(p, seed=False)
     p.add_argument("--count", type=int, default=100, help="number of initial states (default 100)")
     p.add_argument("--seed", type=int, default=0, help="seed of the states' draw (and of --q0 random; default 0)")
     p.add_argument("--spread", type=float, default=0.1, help="half-width of the uniform draw around q0, rad or m "
@@ -404,9 +431,11 @@ def _tradeoff_parser(sub) -> None:
                                    "median wall time of interleaved rounds, evaluations; the crossover. Writes "
                                    "tradeoff.json, tradeoff.md, work_precision.png, energy_drift.png (and the section "
                                    "of report.html when the folder has one). Progress on stderr.")
-    p.add_argument("scene", help="a scene .toml file")
+    p.add_argument("scene", help=_INPUT + "; a robot runs in its default scene")
+    _add_load_options(p)
+    _add_default_scene_options(p, write_scene=False)
     p.add_argument("--t-end", type=float, help="run length in s (default: the scene's, at most 2 s)")
-    p.add_argument("--out", help="output folder (default reports/<robot>/<scene>/)")
+    p.add_argument("--out", help="output folder (default out/reports/<robot>/<scene>/)")
     p.add_argument("--quick", action="store_true", help="short ladders, one timing round, DOP853 rtol 1e-12 as the "
                    "reference's check (instead of Radau rtol 1e-13)")
     p.add_argument("--repeats", type=int, help="timing rounds, median kept (default 3; --quick 1)")
@@ -424,17 +453,58 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="urdf2links", description="URDF robots as trees of links of the trace "
                                      "method, simulated, and compared with MuJoCo.")
     sub = parser.add_subparsers(dest="command", required=True)
-    for add in (_inspect_parser, _simulate_parser, _compare_parser, _report_parser, _sweep_parser, _tradeoff_parser):
+    for add in (_list_parser, _inspect_parser, _simulate_parser, _compare_parser, _report_parser, _sweep_parser,
+                _tradeoff_parser):
         add(sub)
     return parser
 
 
+def _resolve_inputs(args) -> None:
+    """The command's file arguments as paths: a file as given, or a shipped robot or scene by name
+    (:func:`urdf2links.locations.find_input`; a stand-in is said on stderr)."""
+    from .locations import find_input
+
+    for attr in ("file", "scene"):
+        if isinstance(getattr(args, attr, None), str):
+            path, note = find_input(getattr(args, attr))
+            setattr(args, attr, str(path))
+            if note:
+                print(f"urdf2links {args.command}: {note}", file=sys.stderr)
+    if getattr(args, "scenes", None):
+        paths = []
+        for a in args.scenes:
+            path, note = find_input(a, kinds=("scene",))
+            paths.append(str(path))
+            if note:
+                print(f"urdf2links {args.command}: {note}", file=sys.stderr)
+        args.scenes = paths
+
+
+#: Errors whose message is the whole story (a bad file, value or run): printed as they are.
+_USER_ERRORS = (DescriptionError, SceneError, DynamicsError, IntegrationError, ValueError, OSError)
+
+
 def main(argv=None) -> int:
+    """Run a command; every error ends in one message on stderr and exit status 2, never a traceback
+    (``URDF2LINKS_DEBUG=1`` shows the traceback of an internal error)."""
     args = build_parser().parse_args(argv)
     try:
+        _resolve_inputs(args)
         return args.func(args)
-    except (URDFError, SceneError, DynamicsError, IntegrationError) as err:
+    except KeyboardInterrupt:
+        print(f"urdf2links {args.command}: interrupted", file=sys.stderr)
+        return 130
+    except BrokenPipeError:          # the reader of stdout left (`| head`): stop quietly
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
+    except _USER_ERRORS as err:
         print(f"urdf2links {args.command}: error: {err}", file=sys.stderr)
+        return 2
+    except Exception as err:  # noqa: BLE001 -- never a traceback: say what, and how to see more
+        if os.environ.get("URDF2LINKS_DEBUG"):
+            raise
+        print(f"urdf2links {args.command}: error: {type(err).__name__}: {err} (an internal error of urdf2links: "
+              "please report it; URDF2LINKS_DEBUG=1 shows the traceback)", file=sys.stderr)
         return 2
 
 

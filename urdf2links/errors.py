@@ -1,7 +1,7 @@
 """Errors raised by urdf2links.
 
-Every error that comes from a robot description is a :class:`URDFError`
-(a ``ValueError``), so ``except ValueError`` still catches them. Messages name
+Every error that comes from a robot description is a :class:`DescriptionError` (a
+``ValueError``, so ``except ValueError`` still catches them); a URDF's are :class:`URDFError`. Messages name
 the file, the element (link, joint, attribute) and the value, and say what would
 fix the input.
 """
@@ -9,6 +9,7 @@ fix the input.
 from __future__ import annotations
 
 __all__ = [
+    "DescriptionError",
     "URDFError",
     "URDFSyntaxError",
     "URDFStructureError",
@@ -21,8 +22,12 @@ __all__ = [
 ]
 
 
-class URDFError(ValueError):
-    """Base class of every error raised while importing a robot description.
+class DescriptionError(ValueError):
+    """Base class of every error raised while reading a robot description, whatever its format."""
+
+
+class URDFError(DescriptionError):
+    """Base class of every error raised while importing a URDF (or xacro) robot description.
 
     ``problem`` is the defect alone (without file, line and fix), for a note when the reader
     tolerates it; the whole message when not given."""

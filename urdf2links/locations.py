@@ -10,7 +10,7 @@ from importlib.metadata import PackageNotFoundError, distribution
 from pathlib import Path
 
 __all__ = ["shipped_robots_dir", "example_robot_data_dir", "Shipped", "shipped", "find_input", "InputNotFound",
-           "DESCRIPTION_SUFFIXES"]
+           "DESCRIPTION_SUFFIXES", "DEFAULT_OUT", "checkout_root", "report_scenes", "default_baselines"]
 
 #: Suffixes of the files a command reads: scenes, and robot descriptions.
 DESCRIPTION_SUFFIXES = (".toml", ".urdf", ".xacro", ".xml")
@@ -114,3 +114,47 @@ def find_input(arg, *, kinds=("robot", "scene")) -> tuple[Path, str | None]:
     raise InputNotFound(f"no such file: {text!r} (looked in {Path.cwd()}); the shipped robots and scenes run by name "
                         f"from any folder (for example `urdf2links simulate ship_crane`, `urdf2links inspect "
                         f"ur5_like`); `urdf2links list` lists them (they are in {shipped_robots_dir()})")
+
+
+#: Where commands write their reports unless told (``--out``): a scratch folder under the current one,
+#: so that a checkout's committed ``reports/`` change only when asked (``--out reports``).
+DEFAULT_OUT = Path("out") / "reports"
+
+
+def checkout_root(start=None) -> Path | None:
+    """The urdf2links checkout the current folder (or ``start``) is in: that folder or an ancestor holding
+    a ``pyproject.toml`` of the project ``urdf2links`` and a ``robots/`` folder; None elsewhere."""
+    here = Path(start or Path.cwd()).resolve()
+    for folder in (here, *here.parents):
+        py = folder / "pyproject.toml"
+        if py.is_file() and (folder / "robots").is_dir():
+            try:
+                if tomllib.loads(py.read_text()).get("project", {}).get("name") == "urdf2links":
+                    return folder
+            except (OSError, tomllib.TOMLDecodeError):
+                return None
+    return None
+
+
+def report_scenes() -> tuple[list[Path], str]:
+    """``(scene files, where)`` that ``urdf2links report`` runs by default: a checkout's own
+    ``robots/*.toml`` when run inside one (an edit there counts without reinstalling), else the
+    installed package's; ``where`` says which, for the run's first line."""
+    root = checkout_root()
+    if root is not None:
+        return sorted((root / "robots").glob("*.toml")), f"robots/*.toml of the checkout {root}"
+    folder = shipped_robots_dir()
+    return sorted(folder.glob("*.toml")), f"the shipped scenes installed with urdf2links ({folder})"
+
+
+def default_baselines(out: Path, *, sub: str = "") -> tuple[Path | None, list[Path]]:
+    """``(baselines file or None, the places looked at)`` for a report written to ``out``:
+    ``<out>/baselines.json``, then a checkout's committed ``reports/<sub>/baselines.json``."""
+    looked = [Path(out) / "baselines.json"]
+    root = checkout_root()
+    if root is not None:
+        looked.append(root / "reports" / sub / "baselines.json" if sub else root / "reports" / "baselines.json")
+    for p in dict.fromkeys(looked):
+        if p.is_file():
+            return p, looked
+    return None, looked

@@ -67,7 +67,7 @@ from urdf2links.integration.simulate import Trajectory, simulate, warm_up
 from urdf2links.ranges import MAX_STEPS
 from urdf2links.scenes.limits import LimitExcursion
 from urdf2links.scenes.plan import compile_plan
-from urdf2links.scenes.scene import Scene, load_scene, robot_stem
+from urdf2links.scenes.scene import Scene, load_scene, robot_label
 
 from ..mujoco_side.mjcf import MjcfModel, mjcf_from_scene
 from ..mujoco_side.mujoco_run import TIMED_REGION as MUJOCO_REGION
@@ -85,12 +85,14 @@ __all__ = [
 
 #: Error (rad or m, largest over the coordinates) whose first crossing is the divergence time.
 DIVERGENCE_THRESHOLD = 1e-3
+#: The energy scale of the relative drifts is at least this many eps times max|E + V| (the rounding level).
+ENERGY_ROUNDING_EPS = 1000.0
 
 
-def scene_key(scene: Scene) -> str:
-    """``"<robot>/<scene>"``: the URDF file's stem and the scene's name (the baselines' key and the
-    report's folder)."""
-    return f"{robot_stem(scene.robot)}/{scene.name}"
+def scene_key(scene: Scene, model=None) -> str:
+    """``"<robot>/<scene>"``: the robot's name (:func:`~urdf2links.scenes.scene.robot_label`: its own name,
+    else the file's stem) and the scene's name (the baselines' key and the report's folder)."""
+    return f"{robot_label(scene, model)}/{scene.name}"
 
 
 # --------------------------------------------------------------------------- trajectory analysis
@@ -163,7 +165,7 @@ class SceneComparison:
 
     @property
     def key(self) -> str:
-        return scene_key(self.scene)
+        return scene_key(self.scene, self.model)
 
     @property
     def coordinate_names(self) -> tuple[str, ...]:
@@ -207,6 +209,7 @@ class SceneComparison:
             "project_drift": float(np.max(np.abs(e["ours_balance"]))),
             "mujoco_drift": float(np.max(np.abs(e["mujoco_balance"]))),
             "scale": float(self.info["energy_scale"]),
+            "scale_note": self.info["energy_scale_note"],
             "project_drift_rel": float(np.max(np.abs(e["ours_balance"])) / self.info["energy_scale"]),
             "mujoco_drift_rel": float(np.max(np.abs(e["mujoco_balance"])) / self.info["energy_scale"]),
             "max_engine_difference": float(np.max(np.abs(e["ours_EV"] - e["mujoco_EV"]))),
@@ -256,7 +259,7 @@ class SceneComparison:
         return {
             "schema": 1,
             "key": self.key,
-            "robot": robot_stem(sc.robot),
+            "robot": robot_label(sc, self.model),
             "robot_name": self.model.name,
             "scene": sc.name,
             "scene_file": shown_path(sc.path) or f"(none: the default scene of {shown_path(sc.robot)})",
@@ -438,9 +441,18 @@ def _energy_balances(scene, plan, mj, run, traj, EV_o, h_o, W) -> tuple[dict, di
     else:
         bal_m = h_m - h_m[0]
         note = "no work terms: MuJoCo's drift is max |(E + V) - (E + V)(0)| of its own energies"
-    scale = max(float(np.abs(traj.energy["kinetic"]).max()),
-                float(np.abs(traj.energy["potential"] - traj.energy["potential"][0]).max()),
-                float(np.abs(traj.energy["work"]).max()), 1e-300)
+    motion = max(float(np.abs(traj.energy["kinetic"]).max()),
+                 float(np.abs(traj.energy["potential"] - traj.energy["potential"][0]).max()),
+                 float(np.abs(traj.energy["work"]).max()))
+    # E + V is a sum of terms of size |V|: its rounding error is a few eps |V|, whatever the motion. A robot
+    # that barely moves has a motion energy below that, and a drift measured against it would read as an
+    # error when it is rounding; the scale is never below 1000 eps max|E + V|.
+    floor = ENERGY_ROUNDING_EPS * float(np.finfo(float).eps) * max(float(np.abs(EV_o).max()), float(np.abs(EV_m).max()))
+    scale = max(motion, floor, 1e-300)
+    scale_note = (f"relative to the motion's energy {motion:.3g} J (max of E, |V - V(0)|, |W|)" if motion >= floor else
+                  f"relative to the rounding level of E + V, {floor:.3g} J ({ENERGY_ROUNDING_EPS:g} eps max|E + V|): "
+                  f"the motion's energy, {motion:.3g} J, is below it (the robot barely moves)")
     energy = {"ours_EV": EV_o, "mujoco_EV": EV_m, "ours_h": h_o, "mujoco_h": h_m, "ours_balance": bal_o,
               "mujoco_balance": bal_m, "work": W}
-    return energy, {"energy_scale": scale, "energy_quantity": quantity, "energy_note": note, "work_terms": work_terms}
+    return energy, {"energy_scale": scale, "energy_quantity": quantity, "energy_note": note, "work_terms": work_terms,
+                    "energy_scale_note": scale_note}

@@ -16,6 +16,8 @@ import time
 from pathlib import Path
 
 from urdf2links.console import TaskBar, err, shown_path
+from urdf2links.locations import DEFAULT_OUT, default_baselines
+from urdf2links.scenes.scene_toml import xacro_args_of
 
 from ..reports.baselines import load_baselines, write_baselines
 from .report import write_corpus
@@ -24,7 +26,7 @@ from .runner import run_corpus
 
 __all__ = ["corpus_command", "regressions", "DEFAULT_CORPUS_OUT", "CORPUS_T_END"]
 
-DEFAULT_CORPUS_OUT = Path("reports") / "corpus"
+DEFAULT_CORPUS_OUT = DEFAULT_OUT / "corpus"
 #: Length (s) of each robot's default-scene run unless ``--t-end`` says otherwise.
 CORPUS_T_END = 0.5
 _BASELINES_ABOUT = (
@@ -75,11 +77,17 @@ def regressions(results, baselines: dict | None) -> list[str]:
     return out
 
 
-def _baselines(args, out: Path):
-    """``(baselines or None, path)`` as ``report`` reads them; OSError/ValueError when unreadable."""
-    path = Path(args.check) if args.check else out / "baselines.json"
-    if args.write_baselines or not (args.check or path.is_file()):
-        return None, path
+def _baselines(args, out: Path, log):
+    """``(baselines or None, path)`` as ``report`` reads them, said on ``log``; OSError/ValueError when
+    unreadable."""
+    if args.write_baselines:
+        return None, None
+    path, looked = (Path(args.check), [Path(args.check)]) if args.check else default_baselines(out, sub="corpus")
+    if path is None:
+        log(f"baselines: none found (looked for {', '.join(shown_path(p) for p in looked)}): the rows are reported, "
+            "not checked")
+        return None, None
+    log(f"baselines: {shown_path(path)} (exit 1 when a robot regresses)")
     return load_baselines(path), path
 
 
@@ -87,6 +95,8 @@ def _settings(args, baselines, path) -> CorpusSettings:
     return CorpusSettings(t_end=float(args.t_end if args.t_end is not None else CORPUS_T_END), seed=int(args.seed),
                           states=int(args.states), mujoco_integrator=args.mujoco_integrator,
                           mujoco_dt=float(args.mujoco_dt), package_dirs=tuple(str(p) for p in args.package_dir),
+                          inertia=args.inertia or "audit", mimic=args.mimic or "independent", strict=bool(args.strict),
+                          floating_base=bool(args.floating), xacro_args=xacro_args_of(args),
                           thumbnails=not args.no_thumbnails,
                           baselines=baselines, factor=args.factor,
                           baselines_source=shown_path(path) if baselines is not None else "")
@@ -141,7 +151,7 @@ def corpus_command(args) -> int:
     out = Path(args.out) if args.out else DEFAULT_CORPUS_OUT
     try:
         robots = find_robots(args.corpus)
-        baselines, bpath = _baselines(args, out)
+        baselines, bpath = _baselines(args, out, err)
     except (OSError, ValueError) as exc:
         err(f"urdf2links report: error: {exc}")
         return 2

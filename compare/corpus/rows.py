@@ -94,6 +94,10 @@ class CorpusSettings:
     mujoco_dt: float = 1e-4
     inertia: str = "audit"
     package_dirs: tuple[str, ...] = ()
+    mimic: str = "independent"
+    strict: bool = False
+    floating_base: bool = False
+    xacro_args: dict | None = None
     pages: bool = True
     thumbnails: bool = True
     baselines: dict | None = None
@@ -105,6 +109,9 @@ class CorpusSettings:
         return {"t_end": self.t_end, "q0": self.q0, "seed": self.seed, "states": self.states,
                 "mujoco_integrator": self.mujoco_integrator, "mujoco_dt": self.mujoco_dt, "inertia": self.inertia,
                 "package_dirs": list(self.package_dirs), "pages": self.pages, "thumbnails": self.thumbnails,
+                **{k: v for k, v in (("mimic", self.mimic), ("strict", self.strict),
+                                     ("floating_base", self.floating_base), ("xacro_args", self.xacro_args))
+                   if v not in ("independent", False, None, {})},
                 "baselines": self.baselines_source or None,
                 "scene": "default scene: gravity, fixed base, seeded random q0 within the joint limits, at rest, "
                          "URDF damping"}
@@ -320,7 +327,13 @@ def _load(robot: RobotFile, settings: CorpusSettings, inertia: str):
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the audit is in model.audit, and in the row
-        return load_urdf(robot.path, inertia=inertia, package_dirs=tuple(settings.package_dirs))
+        return load_urdf(robot.path, **_load_options(settings, inertia))
+
+
+def _load_options(settings: CorpusSettings, inertia: str) -> dict:
+    """The options every robot of the corpus is loaded with (``inertia``: the settings' or the repair)."""
+    return {"inertia": inertia, "package_dirs": tuple(settings.package_dirs), "mimic": settings.mimic,
+            "strict": settings.strict, "floating_base": settings.floating_base, "xacro_args": settings.xacro_args}
 
 
 def _import_info(row: dict, robot: RobotFile, model, inertia: str) -> None:
@@ -339,8 +352,9 @@ def _compare(robot: RobotFile, model, settings: CorpusSettings, inertia: str, at
     from ..agreement.trajectory import compare_scene
 
     at.name = "scene"
+    opts = _load_options(settings, inertia)
     scene = default_scene(robot.path, t_end=settings.t_end, q0=settings.q0, seed=settings.seed, model=model,
-                          inertia=inertia, package_dirs=settings.package_dirs)
+                          floating=opts.pop("floating_base"), **opts)
     at.name = "comparison"
     return compare_scene(scene, mujoco_integrator=settings.mujoco_integrator, mujoco_dt=settings.mujoco_dt,
                          states=settings.states, seed=settings.seed, progress=False, model=model)

@@ -22,6 +22,7 @@ import json
 import sys
 from pathlib import Path
 
+from urdf2links.locations import DEFAULT_OUT
 from urdf2links.view.animation import DEFAULT_FPS
 
 from ..formatting import fmt, fmt_md, fmt_t, json_ready
@@ -186,8 +187,8 @@ def _energy_section(c, s, light=False) -> list[str]:
     e = html.escape
     en = s["energy"]
     parts = ["<h2>3. Energy</h2>",
-            f"<p>Quantity balanced: {e(en['quantity'])}. {e(en['note'][0].upper() + en['note'][1:])}. Energy scale (max of "
-            f"|E|, |V &minus; V(0)|, |W|): {fmt(en['scale'])} J; largest difference of E + V between the engines: "
+            f"<p>Quantity balanced: {e(en['quantity'])}. {e(en['note'][0].upper() + en['note'][1:])}. Energy scale of the relative "
+            f"drifts: {fmt(en['scale'])} J, {e(en.get('scale_note') or 'the max of |E|, |V - V(0)|, |W|')}; largest difference of E + V between the engines: "
             f"{fmt(en['max_engine_difference'])} J.</p>",
             _rows([["urdf2links", fmt(en["project_drift"]), fmt(en["project_drift_rel"])],
                    ["MuJoCo", fmt(en["mujoco_drift"]), fmt(en["mujoco_drift_rel"])]],
@@ -309,16 +310,16 @@ def render_markdown(s: dict) -> str:
 # --------------------------------------------------------------------------- files
 
 
-def write_report(c, out_dir=None, *, root="reports", json_path=None, command: str | None = None,
+def write_report(c, out_dir=None, *, root=None, json_path=None, command: str | None = None,
                  check: "CheckResult | None" = None, index_link: str | None = None,
                  animation_fps: float = DEFAULT_FPS) -> dict:
     """Write ``report.html``, ``summary.json`` and ``summary.md`` for comparison ``c`` into
-    ``out_dir`` (default ``<root>/<robot>/<scene>/``, whose page then links ``../../index.html``;
+    ``out_dir`` (default ``<root>/<robot>/<scene>/``, ``root`` default ``out/reports``, whose page then links ``../../index.html``;
     else ``index_link``) and, if given, the summary also to ``json_path``; ``animation_fps`` as
     :func:`render_html`. Returns ``{"dir", "html", "json", "md", "summary"}``."""
     summary = json_ready(c.summary())
     if out_dir is None:
-        out = Path(root) / summary["robot"] / summary["scene"]
+        out = Path(DEFAULT_OUT if root is None else root) / summary["robot"] / summary["scene"]
         index_link = index_link or "../../index.html"
     else:
         out = Path(out_dir)

@@ -74,7 +74,7 @@ from urdf2links.integration.charts import floating_links
 from urdf2links.integration.integrators import METHODS, integrate
 from urdf2links.integration.simulate import simulate, warm_up
 from urdf2links.scenes.plan import compile_plan
-from urdf2links.scenes.scene import load_scene
+from urdf2links.scenes.scene import load_scene, robot_label
 
 from ..agreement.trajectory import scene_key
 from ..formatting import json_ready, machine_info
@@ -457,7 +457,7 @@ def _reference_record(st: _Study, chk, check, est_final) -> dict:
 def _study_record(st: _Study, rows, reference, *, quick, budget, repeats, t_note) -> dict:
     scene, model = st.scene, st.model
     return {
-        "schema": 1, "kind": "work-precision", "key": scene_key(scene), "robot": Path(scene.robot).stem,
+        "schema": 1, "kind": "work-precision", "key": scene_key(scene, st.model), "robot": robot_label(scene, st.model),
         "robot_name": model.name, "scene": scene.name, "scene_file": shown_path(scene.path),
         "description": scene.description, "chaotic": bool(scene.chaotic), "coordinates": list(model.coordinate_names),
         "effects": list(st.plan.terms), "t_end": st.T, "t_end_scene": float(scene.run.t_end), "t_end_note": t_note,

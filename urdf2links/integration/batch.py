@@ -24,6 +24,7 @@ import numpy as np
 from numba import njit, prange
 
 from ..scenes.plan import as_plan
+from .simulate import record_compilation
 from .loops import TABLEAUX, erk_chunk, evaluate, initial_step
 
 __all__ = ["BatchResult", "simulate_batch", "sweep_states", "split_rows"]
@@ -33,7 +34,7 @@ __all__ = ["BatchResult", "simulate_batch", "sweep_states", "split_rows"]
 class BatchResult:
     """``t`` (m,), ``q`` and ``qd`` (B, m, n), ``work`` (B, m); ``nfev`` (B,), ``status`` (B,) (1 reached
     the end; otherwise the codes of :mod:`urdf2links.integration.loops.driver`); ``wall_time`` of
-    the whole sweep; ``chunks``: for a sweep split across a Dask cluster, one ``{"rows": [i0, i1],
+    the whole sweep (the compiled loop alone: its compilation is in ``compilation``); ``chunks``: for a sweep split across a Dask cluster, one ``{"rows": [i0, i1],
     "wall_time": s}`` per chunk (empty on one machine)."""
 
     t: np.ndarray
@@ -46,6 +47,9 @@ class BatchResult:
     method: str
     coordinate_names: tuple
     chunks: tuple = ()
+    compilation: object = None
+    """:class:`~urdf2links.integration.simulate.Compilation` of the warm-up call before the timed one
+    (numba's compilation, or loading from its cache, kept out of ``wall_time``); None on a cluster."""
 
     @property
     def success(self) -> bool:
@@ -177,8 +181,13 @@ def simulate_batch(scene, q0, qd0=None, *, t_end: float | None = None, samples: 
     out = np.empty((nb, ts.size, d))
     nfev = np.zeros(nb, np.int64)
     status = np.zeros(nb, np.int64)
+    with record_compilation() as comp:    # one state over a few steps: compiles (or loads) what the sweep calls
+        _sweep_erk(tab, ts[:2] * min(1.0, 1e-3 / max(ts[1], 1e-300)), tol_r, tol_a, np.inf, Y0[:1].copy(),
+                   np.empty((1, 2, d)), np.zeros(1, np.int64), np.zeros(1, np.int64), rhs.I, rhs.F, W[:1].copy(),
+                   rhs.SI, rhs.SF, X[:1].copy())
     start = time.perf_counter()
     _sweep_erk(tab, ts, tol_r, tol_a, np.inf, Y0, out, nfev, status, rhs.I, rhs.F, W, rhs.SI, rhs.SF, X)
     wall = time.perf_counter() - start
     return BatchResult(t=ts, q=out[:, :, :n], qd=out[:, :, n:2 * n], work=out[:, :, 2 * n], nfev=nfev,
-                       status=status, wall_time=wall, method=method, coordinate_names=model.coordinate_names)
+                       status=status, wall_time=wall, method=method, coordinate_names=model.coordinate_names,
+                       compilation=comp)

@@ -3,7 +3,8 @@
 :func:`read_source` is the first step of :func:`urdf2links.parsers.urdf.parse_urdf`. It reads the bytes
 (strict XML parser, no entities, no network), tolerates what urdfdom's XML reader (tinyxml2)
 tolerates and lxml does not -- an XML declaration of an unusual version such as
-``<?xml version="0.0" ?>``, read as 1.0 with a note -- expands ``.xacro`` files
+``<?xml version="0.0" ?>``, read as 1.0; blank lines before the declaration; a NUL byte, where
+tinyxml2's C string ends -- each with a note, expands ``.xacro`` files
 (:mod:`urdf2links.parsers.xacro_input`), and refuses leftover ``xacro:`` elements in a URDF by name
 (urdfdom would skip them silently, and with them every link a macro was meant to make).
 
@@ -94,6 +95,65 @@ def _declaration(data: bytes, label: str, strict: bool, notes: list[str]) -> byt
     return data[:m.start(4)] + b"1.0" + data[m.end(4):]
 
 
+#: blanks before an XML declaration (which XML allows nowhere but at the very start)
+_LATE_DECLARATION = re.compile(rb"^(\xef\xbb\xbf)?([ \t\r\n]+)(<\?xml\s)")
+
+
+def _before_declaration(data: bytes, label: str, strict: bool, notes: list[str]) -> bytes:
+    """Blank lines before the XML declaration: XML refuses them, urdfdom's reader (tinyxml2) skips them.
+    Read like urdfdom (the blanks moved after the declaration, so that every line keeps its number),
+    with a note; refused when strict."""
+    m = _LATE_DECLARATION.match(data)
+    if m is None:
+        return data
+    blanks = m.group(2)
+    lines = blanks.count(b"\n")
+    if strict:
+        raise URDFSyntaxError(f"{label}, line {lines + 1}: the XML declaration (<?xml ...?>) does not stand at the start "
+                              f"of the file: {lines} blank line(s) come before it, and XML allows nothing there; "
+                              "delete them (or load with strict=False, which reads the file as urdfdom does)")
+    notes.append(f"XML declaration on line {lines + 1} after {lines} blank line(s): read as if at the start (XML allows "
+                 "nothing before it; urdfdom's reader, tinyxml2, skips the blanks)")
+    end = data.index(b"?>", m.end(2)) + 2
+    return (m.group(1) or b"") + data[m.end(2):end] + blanks + data[end:]
+
+
+def _nul(data: bytes, label: str, strict: bool, notes: list[str]) -> bytes:
+    """A NUL byte: urdfdom hands the text to tinyxml2 as a C string, which ends at the first NUL, so
+    whatever follows is never read. Read like urdfdom (the text up to the NUL) with a note saying where
+    it stands and what was dropped; refused when strict."""
+    k = data.find(b"\x00")
+    if k < 0:
+        return data
+    line = data[:k].count(b"\n") + 1
+    col = k - (data.rfind(b"\n", 0, k) + 1) + 1
+    rest = data[k:]
+    where = f"byte 0x00 (NUL) at line {line}, column {col}"
+    after = "nothing (the last byte of the file)" if len(rest) == 1 else f"{len(rest) - 1} more byte(s)"
+    if strict:
+        raise URDFSyntaxError(f"{label}: {where}, followed by {after}: a NUL is no XML character; delete it (or load "
+                              "with strict=False, which reads the file up to the NUL, as urdfdom does)")
+    notes.append(f"{where}: the file is read up to it, as urdfdom does (its XML reader stops at the first NUL); "
+                 f"dropped: the NUL" + ("" if len(rest) == 1 else f" and the {after} after it"))
+    return data[:k]
+
+
+def _describe_position(data: bytes, line: int | None, col: int | None) -> str:
+    """What stands at (``line``, ``col``) of ``data`` when it is not plain text: `` (byte 0x1b there)``;
+    empty otherwise (a message then quotes lxml alone)."""
+    if not line:
+        return ""
+    rows = data.split(b"\n")
+    if line > len(rows):
+        return ""
+    row = rows[line - 1]
+    bad = [(i, b) for i, b in enumerate(row) if b < 0x20 and b not in (0x09, 0x0d)]
+    if not bad:
+        return ""
+    i, b = next(((i, b) for i, b in bad if col is None or i >= col - 2), bad[0])
+    return f" (byte 0x{b:02x}, a control character, at line {line}, column {i + 1})"
+
+
 def _entities(data: bytes, label: str) -> None:
     """Entity declarations (``<!DOCTYPE robot [<!ENTITY ...>]>``) are refused before parsing: a URDF has
     no use for them, urdfdom's XML reader (tinyxml2) does not expand them, and they are how entity bombs
@@ -127,6 +187,8 @@ def _leftover_xacro(root, label: str) -> None:
 def read_source(source, *, strict: bool = False, xacro_args=None, package_dirs=()) -> Source:
     """The ``<robot>`` element of ``source`` (a path, URDF text, or a ``.xacro`` path)."""
     data, label, directory, stem, notes = _bytes_of(source, xacro_args=xacro_args, package_dirs=package_dirs)
+    data = _nul(data, label, strict, notes)
+    data = _before_declaration(data, label, strict, notes)
     data = _declaration(data, label, strict, notes)
     _entities(data, label)
     utf8 = label == "<string>" or is_xacro_path(source)
@@ -136,7 +198,8 @@ def read_source(source, *, strict: bool = False, xacro_args=None, package_dirs=(
         root = etree.fromstring(data, parser=parser)
     except etree.XMLSyntaxError as err:
         line = f", line {err.lineno}" if getattr(err, "lineno", None) else ""
-        raise URDFSyntaxError(f"{label}{line}: malformed XML: {err.msg}; fix the XML "
+        what = _describe_position(data, getattr(err, "lineno", None), getattr(err, "offset", None))
+        raise URDFSyntaxError(f"{label}{line}: malformed XML: {err.msg}{what}; fix the XML "
                               "(unclosed or mismatched tag, stray '&' or '<', truncated file?)") from err
     except ValueError as err:  # e.g. lxml refusing some encodings
         raise URDFSyntaxError(f"{label}: cannot parse the XML: {err}") from err

@@ -123,7 +123,7 @@ class Plan:
             lines.append(f"  tau: {c}: {f.describe()}")
         for sp in self.spring_set.springs:
             lines.append(f"  spring/damper on {sp.coordinate}: k = {sp.stiffness:g}, rest = {sp.rest:g}, c = {sp.damping:g}")
-        lines += [f"  note: {n}" for n in self.spring_set.notes]
+        lines += [f"  note: {n}" for n in (*self.spring_set.notes, *s.notes)]
         r = s.run
         lines.append(f"run: t_end {r.t_end:g} s, method {r.method}, rtol {r.rtol:g}, atol {r.atol:g}"
                      + (f", dt {r.dt:g}" if r.dt else "") + f", {r.samples} samples")

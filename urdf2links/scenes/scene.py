@@ -52,6 +52,7 @@ from __future__ import annotations
 
 import difflib
 import math
+import re
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -65,7 +66,7 @@ from ..ranges import MAX_SAMPLES, MAX_STEPS, METHODS, MIN_ATOL, MIN_T_END, RANGE
 from .functions import Constant, SceneValueError, TimeFunction, VectorFunction, parse_function, vector_function
 
 __all__ = ["Scene", "AppliedLoad", "Spring", "SpringSet", "RunSettings", "load_scene", "shipped_robots_dir",
-           "robot_stem", "default_scene", "DEFAULT_SCENE_NAME", "Q0_CHOICES"]
+           "robot_stem", "robot_label", "default_scene", "default_scene_name", "DEFAULT_SCENE_NAME", "Q0_CHOICES"]
 
 #: Name of the scene :func:`default_scene` makes (reports go to ``reports/<robot>/default/``).
 DEFAULT_SCENE_NAME = "default"
@@ -77,6 +78,14 @@ _ROBOT = ("urdf", "shipped", "example_robot_data", "floating_base", "inertia", "
           "xacro_args")
 #: Joint types whose URDF damping becomes a damper on their one coordinate.
 _DAMPED_TYPES = ("revolute", "continuous", "prismatic")
+
+
+def robot_label(scene: "Scene", model=None) -> str:
+    """The name reports and outputs of ``scene`` go by: the robot's own name (``<robot name>`` of the
+    URDF, or the model's) when it is a plain name, else the file's stem (:func:`robot_stem`); so
+    pybullet's ``kuka_iiwa/model.urdf`` reports as ``lbr_iiwa``, not ``model``."""
+    name = (getattr(model, "name", "") or "").strip()
+    return name if re.fullmatch(r"[A-Za-z0-9][\w.+-]{0,80}", name) else robot_stem(scene.robot)
 
 
 def robot_stem(path) -> str:
@@ -153,6 +162,8 @@ class Scene:
     run: RunSettings = RunSettings()
     link_poses: tuple[str, ...] = ()
     urdf_damping: bool = False
+    notes: tuple[str, ...] = ()
+    """What was changed from the scene file (loading options given on the command line, ...)."""
 
     def model(self):
         """Load the scene's robot with its options (a :class:`~urdf2links.dynamics.model.Model`)."""
@@ -365,11 +376,24 @@ def default_scene(robot, *, floating: bool = False, q0: str = "zero", seed: int 
             model = load_urdf(robot, **options)
     q_init = _random_q0(model, np.random.default_rng(seed)) if q0 == "random" else {}
     base = "floating base" if floating else "fixed base"
-    return Scene(name=DEFAULT_SCENE_NAME, path=None, robot=Path(robot), load_options=options,
+    return Scene(name=default_scene_name(floating=floating, q0=q0, seed=seed, inertia=inertia, mimic=mimic),
+                 path=None, robot=Path(robot), load_options=options,
                  description=f"default scene: gravity, {base}, q0 {q0}" + (f" (seed {seed})" if q0 == "random" else "")
                              + ", URDF damping, at rest",
                  gravity=np.array([0.0, 0.0, -9.81]), q0=q_init, urdf_damping=True,
                  run=RunSettings(t_end=t_end, samples=min(MAX_SAMPLES, max(101, int(round(500 * t_end)) + 1))))
+
+
+def default_scene_name(*, floating: bool = False, q0: str = "zero", seed: int = 0, inertia: str = "audit",
+                       mimic: str = "independent") -> str:
+    """:data:`DEFAULT_SCENE_NAME`, with what differs from the plain default scene appended
+    (``default-floating-random-seed3-repair``), so that reports of one robot in other settings do not
+    replace each other."""
+    parts = [DEFAULT_SCENE_NAME] + (["floating"] if floating else []) + ([f"random-seed{seed}"] if q0 == "random"
+                                                                          else [])
+    parts += [inertia] if inertia != "audit" else []
+    parts += [mimic] if mimic != "independent" else []
+    return "-".join(parts)
 
 
 def load_scene(path) -> Scene:

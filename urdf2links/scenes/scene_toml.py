@@ -103,24 +103,52 @@ def write_scene(scene: Scene, path) -> Path:
     return path
 
 
+#: The loading options every command that loads a robot takes (``urdf2links ... --inertia repair``).
+LOAD_OPTIONS = ("floating_base", "inertia", "mimic", "strict", "package_dirs", "xacro_args")
+
+
 def scene_or_robot(path, *, floating: bool = False, q0: str = "zero", seed: int = 0, t_end: float | None = None,
-                   xacro_args=None, package_dirs=()) -> Scene:
+                   xacro_args=None, package_dirs=(), load: dict | None = None) -> Scene:
     """A scene file (``.toml``), or the default scene of a robot file (``.urdf``, ``.xacro``, ...) with
-    these options (``t_end`` default 1 s). The robot options are refused for a scene file, which
-    says its own robot and initial state."""
+    these options (``t_end`` default 1 s). ``load``: loading options given on the command line
+    (``inertia``, ``mimic``, ``strict``, ``package_dirs``, ``xacro_args``; :func:`load_options_of`);
+    for a scene file they replace those of its ``[robot]`` (:func:`override_loading` says so). The
+    default scene's options (``--floating``, ``--q0``) are refused for a scene file, which says its own
+    robot and initial state."""
     path = Path(path)
+    load = dict(load or {})
+    if xacro_args:
+        load["xacro_args"] = dict(xacro_args)
+    if package_dirs:
+        load["package_dirs"] = tuple(package_dirs)
     if path.suffix == ".toml":
-        given = [o for o, on in (("--floating", floating), ("--q0", q0 != "zero"), ("--xacro-arg", bool(xacro_args)),
-                                 ("--package-dir", bool(package_dirs))) if on]
+        given = [o for o, on in (("--floating", floating or load.pop("floating_base", False)),
+                                 ("--q0", q0 != "zero")) if on]
         if given:
             raise SceneError(f"{path}: {', '.join(given)} apply to a robot file run in its default scene; a scene "
                              "file names its robot and initial state in [robot] and [initial]")
-        return load_scene(path)
-    return default_scene(path, floating=floating, q0=q0, seed=seed, t_end=1.0 if t_end is None else t_end,
-                         xacro_args=xacro_args, package_dirs=package_dirs)
+        return override_loading(load_scene(path), load)
+    opts = {k: v for k, v in load.items() if k in ("inertia", "mimic", "strict")}
+    return default_scene(path, floating=floating or bool(load.get("floating_base")), q0=q0, seed=seed,
+                         t_end=1.0 if t_end is None else t_end, xacro_args=load.get("xacro_args"),
+                         package_dirs=load.get("package_dirs", ()), **opts)
 
 
-# -- command-line options shared by simulate and compare -------------------------------------
+def override_loading(scene: Scene, load: dict) -> Scene:
+    """``scene`` with the loading options ``load`` in place of its ``[robot]``'s; each replaced value is
+    recorded in ``scene.notes`` (nothing changes silently)."""
+    load = {k: v for k, v in load.items() if v not in (None, (), {}, False)}
+    if not load:
+        return scene
+    import dataclasses
+
+    was = scene.load_options
+    notes = [f"{k} = {v!r} from the command line" + (f" (the scene file says {was[k]!r})" if k in was else "")
+             for k, v in load.items() if was.get(k) != v]
+    return dataclasses.replace(scene, load_options={**was, **load}, notes=tuple(scene.notes) + tuple(notes))
+
+
+# -- command-line options shared by the commands that load a robot ------------------------------
 def xacro_args_of(args) -> dict:
     """``--xacro-arg name:=value`` options as a dict (a URDFError names a malformed one)."""
     try:
@@ -129,11 +157,21 @@ def xacro_args_of(args) -> dict:
         raise URDFError(f"--xacro-arg: {err}") from None
 
 
+def load_options_of(args) -> dict:
+    """The loading options given on the command line (``--floating``, ``--inertia``, ``--mimic``,
+    ``--strict``, ``--package-dir``, ``--xacro-arg``), only those given."""
+    out = {"floating_base": bool(getattr(args, "floating", False)), "inertia": getattr(args, "inertia", None),
+           "mimic": getattr(args, "mimic", None), "strict": bool(getattr(args, "strict", False)),
+           "package_dirs": tuple(getattr(args, "package_dir", None) or ()), "xacro_args": xacro_args_of(args)}
+    return {k: v for k, v in out.items() if v not in (None, (), {}, False)}
+
+
 def scene_from_args(args):
-    """The scene a ``simulate``/``compare`` command runs: ``args.scene`` as a scene file, or a robot file in
-    its default scene with ``--floating``, ``--q0``, ``--seed``, ``--t-end``, ``--xacro-arg``, ``--package-dir``."""
-    return scene_or_robot(args.scene, floating=args.floating, q0=args.q0, seed=args.seed, t_end=args.t_end,
-                          xacro_args=xacro_args_of(args), package_dirs=args.package_dir)
+    """The scene a ``simulate``/``compare``/``sweep``/``tradeoff`` command runs: ``args.scene`` as a scene
+    file (with the loading options given), or a robot file in its default scene with ``--floating``,
+    ``--q0``, ``--seed``, ``--t-end`` and the loading options."""
+    return scene_or_robot(args.scene, q0=getattr(args, "q0", "zero"), seed=getattr(args, "seed", 0),
+                          t_end=getattr(args, "t_end", None), load=load_options_of(args))
 
 
 def write_scene_option(args, scene) -> None:

@@ -309,10 +309,15 @@ def render_animation(model, motions, *, shapes: RobotShapes | None = None, panel
     """The animation of ``motions`` (a list of :class:`Motion`, the same sample times) of ``model`` as
     an HTML fragment (module doc). ``shapes`` defaults to :func:`~urdf2links.view.visuals.model_shapes`
     (the model's URDF file; ``package_dirs`` for its meshes); ``base`` is the moving base as
-    :meth:`~urdf2links.dynamics.model.Model.link_poses` takes it; ``panels`` are plotted beside the viewer."""
+    :meth:`~urdf2links.dynamics.model.Model.link_poses` takes it (None, a BaseState, a callable ``t ->
+    BaseState``; a callable that says None, like a fixed-base scene's ``base_state``, is a fixed base);
+    ``panels`` are plotted beside the viewer."""
     motions = list(motions)
     if not motions:
         raise ValueError("render_animation needs at least one Motion")
+    if callable(base) and base(float(np.asarray(motions[0].t, float)[0])) is None:
+        base = None          # a scene's base_state of a fixed base (it says None): nothing moves {A}
+    base_state_at(base, 0.0)         # refuse anything else here, naming what it got
     shapes = shapes or model_shapes(model, package_dirs=package_dirs)
     data, t = _payload(model, shapes, motions, panels, base, fps)
     text = json.dumps(data, separators=(",", ":")).replace("</", "<\\/")
