@@ -119,10 +119,10 @@ def test_simulate_robot_file_without_scene(arm, tmp_path):
     out = cli("simulate", str(arm), "--q0", "random", "--out", str(tmp_path / "out"),
               "--write-scene", str(tmp_path / "arm.toml"), "--quiet")
     assert out.returncode == 0, out.stderr
-    assert "default: damped_arm" in out.stdout and "damper" in out.stdout
+    assert "default-random-seed0: damped_arm" in out.stdout and "damper" in out.stdout
     assert "note: joint 'shoulder' left its limits [-0.5, 0.5] rad at t =" in out.stdout
     assert "Coulomb friction" in out.stdout
-    assert (tmp_path / "out" / "damped_arm_default.npz").is_file() and (tmp_path / "arm.toml").is_file()
+    assert (tmp_path / "out" / "damped_arm_default-random-seed0.npz").is_file() and (tmp_path / "arm.toml").is_file()
     again = cli("simulate", str(tmp_path / "arm.toml"), "--out", str(tmp_path / "out2"), "--quiet")
     assert again.returncode == 0, again.stderr
     bad = cli("simulate", str(tmp_path / "arm.toml"), "--floating")
@@ -144,7 +144,7 @@ def test_compare_damped_urdf_without_scene(arm, tmp_path):
     out = cli("compare", str(arm), "--q0", "random", "--out", str(tmp_path / "rep"), "--quiet")
     assert out.returncode == 0, out.stderr
     s = json.loads((tmp_path / "rep" / "summary.json").read_text())
-    assert s["key"] == "damped_arm/default" and "damper" in s["effects"]
+    assert s["key"] == "damped_arm/default-random-seed0" and "damper" in s["effects"]
     assert s["terms"]["route1"]["max_rel_error"] < 1e-10 and s["terms"]["route2"]["max_rel_error"] < 1e-10
     assert s["terms"]["route2"]["max_rel_error_damping"] < 1e-12  # -c qd: one product each side
     assert s["trajectory"]["max_abs_error"] < 1e-6 and s["trajectory"]["divergence_time"] is None

@@ -105,8 +105,8 @@ def find_input(arg, *, kinds=("robot", "scene")) -> tuple[Path, str | None]:
     layout = path.parent.as_posix() in (".", "robots", "robots/hard", "hard")
     if len(wanted) == 1 and layout:
         hit = wanted[0]
-        note = None if path.parent.as_posix() == "." else (f"{text} is not a file here; using the shipped {hit.kind} "
-                                                            f"{hit.name!r} ({hit.path})")
+        note = None if path.parent.as_posix() == "." else (f"{text} is not a file here; using the shipped "
+                                                            f"{hit.kind.split()[0]} {hit.name!r} ({hit.path})")
         return hit.path, note
     if len(wanted) > 1:
         raise InputNotFound(f"{text!r} names several shipped files ({', '.join(str(s.path) for s in wanted)}): "

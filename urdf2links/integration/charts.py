@@ -376,6 +376,8 @@ def integrate_charted(original: Model, make_plan, y0, t_span, *, t_eval, method,
         pieces.append((np.asarray(res.t), np.asarray(res.y)))
         if not res.success:
             success, message = False, res.message
+            if max_wall is not None and res.message.startswith("max_wall="):   # the whole run's budget, not the segment's
+                message = wall_message(max_wall, float(res.sol.t_max), nsteps)
             break
         if not res.stopped or seg.t1 >= t1:
             break
