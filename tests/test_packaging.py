@@ -4,6 +4,7 @@ subpackages, no top-level `compare`, and shipped scenes that load from any folde
 from __future__ import annotations
 
 import functools
+import os
 import shutil
 import subprocess
 import sys
@@ -60,7 +61,12 @@ def installed(tmp_path_factory):
     with zipfile.ZipFile(wheel) as z:
         names = z.namelist()
         z.extractall(target)
+    BUILT.update(wheel=wheel, src=src)
     return target, names
+
+
+#: the wheel and the clean source copy the ``installed`` fixture built (for the install tests)
+BUILT: dict = {}
 
 
 def test_wheel_installs_compare_and_robots_inside_the_package(installed):
@@ -93,6 +99,95 @@ def test_installed_package_works_from_another_folder(installed, tmp_path):
     out = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, env=env)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "6"
+
+
+# --------------------------------------------------------------------------- install, run, reinstall
+
+
+def _venv(folder: Path) -> tuple[Path, Path]:
+    """A fresh virtual environment that sees this environment's packages (the dependencies) but
+    installs urdf2links into its own site-packages: ``(its bin folder, its site-packages)``."""
+    subprocess.run([sys.executable, "-m", "venv", "--system-site-packages", str(folder)], check=True)
+    bin_ = folder / "bin"
+    site = Path(subprocess.run([str(bin_ / "python"), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
+                               capture_output=True, text=True, check=True).stdout.strip())
+    return bin_, site
+
+
+def _user_env(home: Path, bin_: Path) -> dict:
+    """A user's environment: their own home and cache folder, no numba cache setting, this venv first."""
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("NUMBA_CACHE_DIR", "URDF2LINKS_CACHE_DIR", "PYTHONPATH", "XDG_CACHE_HOME")}
+    env.update(HOME=str(home), XDG_CACHE_HOME=str(home / ".cache"), PATH=f"{bin_}:{env.get('PATH', '')}")
+    return env
+
+
+def _recorded(site: Path) -> set[str]:
+    record = next(site.glob("urdf2links-*.dist-info")) / "RECORD"
+    return {line.split(",")[0] for line in record.read_text().splitlines() if line}
+
+
+def _package_files(site: Path) -> set[str]:
+    return {str(p.relative_to(site)) for p in (site / "urdf2links").rglob("*") if p.is_file()}
+
+
+def test_install_run_then_reinstall_editable(installed, tmp_path):
+    """Issue 22: ``pip install .``, a run (numba compiles and caches), then ``pip install -e .``: the
+    command must still start. numba used to cache into site-packages/urdf2links/**/__pycache__; pip's
+    uninstall left those folders, and the leftover urdf2links/ became a namespace package that hid the
+    editable install. Now the run writes nothing under site-packages, the cache is in the user's
+    cache folder, and the reinstall leaves no trace of the old install."""
+    bin_, site = _venv(tmp_path / "venv")
+    subprocess.run([str(bin_ / "python"), "-m", "pip", "install", "-q", "--no-deps", str(BUILT["wheel"])], check=True)
+    env = _user_env(tmp_path / "home", bin_)
+    work = tmp_path / "work"
+    work.mkdir()
+    before = _package_files(site)
+    assert before <= _recorded(site)
+    run = subprocess.run([str(bin_ / "urdf2links"), "sweep", "pendulum", "--count", "2", "--t-end", "0.01"], cwd=work,
+                         env=env, capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert "numba compiled" in run.stdout          # a fresh cache: the sweep says what compiling cost, apart
+    written = _package_files(site) - before
+    assert not written, f"files written into the installed package: {sorted(written)[:5]}"
+    assert list((tmp_path / "home" / ".cache" / "urdf2links" / "numba").rglob("*.nbi")), "no numba cache"
+    subprocess.run([str(bin_ / "python"), "-m", "pip", "install", "-q", "--no-deps", "-e", str(BUILT["src"])],
+                   check=True, capture_output=True)
+    assert not (site / "urdf2links").exists(), "the uninstall left urdf2links/ behind (a namespace package)"
+    again = subprocess.run([str(bin_ / "urdf2links"), "inspect", "ur5_like"], cwd=work, env=env, capture_output=True,
+                           text=True)
+    assert again.returncode == 0 and "6 coordinates" in again.stdout, again.stderr
+    where = subprocess.run([str(bin_ / "python"), "-c", "import urdf2links; print(urdf2links.__file__)"], cwd=work,
+                           env=env, capture_output=True, text=True)
+    assert Path(where.stdout.strip()).is_relative_to(BUILT["src"]), where.stdout + where.stderr
+
+
+def _read_only(site: Path, argv: list[str]) -> list[str]:
+    """``argv`` run with the installed package read-only: a read-only bind mount in a mount namespace
+    of its own when running as root (root writes through file modes), file modes otherwise."""
+    pkg = site / "urdf2links"
+    if os.geteuid() == 0:
+        if not shutil.which("unshare"):
+            pytest.fail("running as root, a read-only install needs `unshare` (util-linux) for a read-only mount")
+        return ["unshare", "-m", "sh", "-c", f'mount --bind -o ro "{pkg}" "{pkg}" && exec "$@"', "sh", *argv]
+    for p in [pkg, *pkg.rglob("*")]:
+        p.chmod(p.stat().st_mode & ~0o222)
+    return argv
+
+
+def test_a_read_only_install_runs(installed, tmp_path):
+    bin_, site = _venv(tmp_path / "venv")
+    subprocess.run([str(bin_ / "python"), "-m", "pip", "install", "-q", "--no-deps", str(BUILT["wheel"])], check=True)
+    env = _user_env(tmp_path / "home", bin_)
+    probe = subprocess.run(_read_only(site, [str(bin_ / "python"), "-c",
+                                             f"open({str(site / 'urdf2links' / 'probe')!r}, 'w')"]),
+                           env=env, capture_output=True, text=True)
+    assert probe.returncode != 0, "the install is not read-only: this test would prove nothing"
+    run = subprocess.run(_read_only(site, [str(bin_ / "urdf2links"), "simulate", "pendulum", "--t-end", "0.01",
+                                           "--method", "RK4", "--dt", "0.001"]),
+                         cwd=tmp_path, env=env, capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert (tmp_path / "out" / "pendulum_default.npz").is_file()
 
 
 # --------------------------------------------------------------------------- declared dependencies

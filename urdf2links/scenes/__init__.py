@@ -4,7 +4,7 @@ May import the base modules, :mod:`urdf2links.dynamics` and :mod:`urdf2links.par
 or compare.
 """
 
-from .plan import Plan, compile_plan
+from .plan import Plan, as_plan, compile_plan
 from .scene import Scene, default_scene, load_scene
 
-__all__ = ["Scene", "load_scene", "default_scene", "Plan", "compile_plan"]
+__all__ = ["Scene", "load_scene", "default_scene", "Plan", "compile_plan", "as_plan"]
