@@ -213,7 +213,8 @@ def test_batch_against_mujoco_mj_forward(name):
     Both engines solve ``A q'' = tau - e - G`` in double precision: the terms agree to ~1e-15
     relative (tests/test_mjcf_route.py), and each solve is backward stable, so q'' agrees to
     ~ n eps cond(A) relative. Bound: 1e3 eps cond(A) |q''| (a wrong term is O(|q''|))."""
-    mujoco = pytest.importorskip("mujoco")
+    import mujoco        # a core dependency: missing is a broken install, not a skip
+
     from urdf2links.compare.mujoco_side.mjcf import mjcf_from_model
 
     model = _shipped(name)
