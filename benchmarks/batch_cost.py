@@ -175,9 +175,7 @@ def measure_batch(B, ms, threads, n_rounds, log) -> list[dict]:
                 t["max_rel_difference"] = {
                     "Batch.forward": float(np.abs(out[k] - ref).max() / np.abs(ref).max()),
                     "rollout": float(np.abs(out[k] - states.qdd_rollout()).max() / np.abs(ref).max())}
-                t["mujoco"] = fastest({w: t[f"{w}_s"] for w in MUJOCO_WAYS})
-                t["vs_mujoco"] = compare(t["urdf2links_s"], t[f"{t['mujoco']}_s"])
-                t["vs_ways"] = {w: compare(t["urdf2links_s"], t[f"{w}_s"]) for w in MUJOCO_WAYS}
+                t.update(comparisons(t))
                 row[f"threads_{k}"] = t
                 log(f"{model.name[:20]:20s} n {model.n:3d} B {B:6d} threads {k}: urdf2links "
                     f"{fmt_spread(t['urdf2links_s'], 1e3)} ms, Batch.forward {fmt_spread(t['Batch.forward_s'], 1e3)} ms, "
@@ -188,6 +186,14 @@ def measure_batch(B, ms, threads, n_rounds, log) -> list[dict]:
         numba.set_num_threads(threads)
         for *_, states, _out in setups:
             states.close()
+
+
+def comparisons(t) -> dict:
+    """The faster MuJoCo way of a row and thread count, and urdf2links against it and against each way
+    under the tie rule (from the spreads: the render recomputes them)."""
+    way = fastest({w: t[f"{w}_s"] for w in MUJOCO_WAYS})
+    return {"mujoco": way, "vs_mujoco": compare(t["urdf2links_s"], t[f"{way}_s"]),
+            "vs_ways": {w: compare(t["urdf2links_s"], t[f"{w}_s"]) for w in MUJOCO_WAYS}}
 
 
 def _thread_keys(data):
@@ -279,6 +285,9 @@ def measure_all(args, log) -> dict:
 
 
 def render(data):
+    for r in data["rows"]:
+        for key in _thread_keys(data):
+            r[key].update(comparisons(r[key]))
     return table(data), plot(data)
 
 

@@ -187,12 +187,13 @@ def _command(argv) -> str:
 
 
 def run_benchmark(name: str, doc: str, measure: Callable, render: Callable, *, options: Callable | None = None,
-                  rounds_default: int = 5, argv=None) -> dict:
+                  rounds_default: int = 5, argv=None, accepts: tuple[int, ...] = (FORMAT,)) -> dict:
     """The command line of a benchmark: ``--out`` (default ``reports/benchmarks/<name>.json``),
     ``--rounds``, ``--render-only`` and the script's own ``options(parser)``. ``measure(args, log)``
     returns the JSON-ready figures; ``render(data)`` returns ``(markdown, figure or None)`` from them
     alone. Writes the JSON (with ``machine`` and ``command``), the Markdown (headed by the command
-    and ended by the machine line) and the PNG; returns the data."""
+    and ended by the machine line) and the PNG; returns the data. ``--render-only`` refuses a JSON
+    whose format (:data:`FORMAT`; 1 when absent) is not in ``accepts``."""
     from urdf2links.compare.figures import save_png
     from urdf2links.compare.formatting import json_ready
 
@@ -211,7 +212,7 @@ def run_benchmark(name: str, doc: str, measure: Callable, render: Callable, *, o
         out = ROOT / out
     if args.render_only:
         data = json.loads(out.read_text())
-        if data.get("format") != FORMAT:
+        if data.get("format", 1) not in accepts:
             raise SystemExit(f"{out}: format {data.get('format', 1)}, this script renders format {FORMAT}: "
                              f"regenerate it with {data.get('command', f'python benchmarks/{name}.py')}")
     else:

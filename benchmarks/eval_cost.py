@@ -78,9 +78,15 @@ def measure(model: Model, reps: int, n_rounds: int, log=None) -> dict:
     times, attempts = measured(variants, n_rounds, log=log)
     row = {"robot": model.name, "n": model.n, "chain": model.name.startswith("chain"), "attempts": attempts,
            **{f"{k}_s": spread(v) for k, v in times.items()}}
-    row["vs_mj_forward"] = {k: compare(row[f"{k}_s"], row["mj_forward_s"]) for k in CALLS}
-    row["vs_forward_dynamics"] = {k: compare(row[f"{k}_s"], row["forward_dynamics_s"]) for k in CALLS[1:]}
+    row.update(comparisons(row))
     return row
+
+
+def comparisons(row) -> dict:
+    """Each call against mj_forward and against forward_dynamics, under the tie rule (from the spreads:
+    the render recomputes them, so that a table never disagrees with its figures)."""
+    return {"vs_mj_forward": {k: compare(row[f"{k}_s"], row["mj_forward_s"]) for k in CALLS},
+            "vs_forward_dynamics": {k: compare(row[f"{k}_s"], row["forward_dynamics_s"]) for k in CALLS[1:]}}
 
 
 def growth(chains: list[dict], key: str) -> dict:
@@ -186,6 +192,8 @@ def measure_all(args, log) -> dict:
 
 
 def render(data):
+    for r in data["rows"]:
+        r.update(comparisons(r))
     return table(data), plot(data["rows"], data["growth"])
 
 

@@ -116,11 +116,17 @@ def measure(case, n_rounds, log) -> dict:
     row = {"scene": name, "integrator": integ, "dt": dt, "t_end": T_END, "steps": K, "samples": SAMPLES,
            "inputs": info["inputs"], "callback_calls": info["calls"],
            **{k: spread(v) for k, v in times.items()}, "harness": spread(harness)}
-    row["engine_vs_plain"] = compare(row["engine"], row["plain"])
-    row["before_vs_engine"] = compare(row["before"], row["engine"])
-    row["before_vs_plain"] = compare(row["before"], row["plain"])
+    row.update(comparisons(row))
     log(f"  engine / plain {fmt_ratio(row['engine_vs_plain'])}; before / engine {fmt_ratio(row['before_vs_engine'])}")
     return row
+
+
+def comparisons(row) -> dict:
+    """engine against plain, before against engine and plain, under the tie rule (from the spreads: the
+    render recomputes them)."""
+    return {"engine_vs_plain": compare(row["engine"], row["plain"]),
+            "before_vs_engine": compare(row["before"], row["engine"]),
+            "before_vs_plain": compare(row["before"], row["plain"])}
 
 
 def table(rows) -> str:
@@ -176,6 +182,8 @@ def measure_all(args, log) -> dict:
 
 
 def render(data):
+    for r in data["rows"]:
+        r.update(comparisons(r))
     return table(data["rows"]), plot(data["rows"])
 
 
