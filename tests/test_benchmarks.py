@@ -192,6 +192,10 @@ def test_eval_cost_times_every_public_model_call(tmp_path):
               "potential_energy"}
     assert set(eval_cost.CALLS) == public and public <= set(dir(Model))
     for data in _sources("eval_cost"):
+        chains = [r for r in data["rows"] if r["chain"]]
+        for key in ("forward_dynamics", "mj_forward"):        # both engines' growth with n
+            assert len(data["growth"][key]["local"]) == len(chains) - 1 >= 3
+            assert len(data["growth"][key]["large_n"]["n"]) >= 3
         for r in data["rows"]:
             assert all(f"{k}_s" in r for k in (*public, "mj_forward"))
             assert r["vs_mj_forward"]["bias"] == compare(r["bias_s"], r["mj_forward_s"])
