@@ -336,7 +336,8 @@ def test_a_robot_whose_dask_worker_dies_is_a_failed_row(tmp_path):
     out = tmp_path / "out"
     logging.getLogger("distributed").setLevel(logging.CRITICAL)       # the deaths' tracebacks
     with dask.config.set({"distributed.scheduler.allowed-failures": 1, "distributed.scheduler.worker-saturation": 1.0}):
-        with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
+        # its HTTP server on a free port: the session's other cluster (conftest.dask_client) may hold 8787
+        with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0",
                           preload=[str(KILLER)]) as cluster:
             run = subprocess.run([sys.executable, "-m", "urdf2links.cli", "report", "--corpus", str(fleet), "--scheduler",
                                   cluster.scheduler_address, *FLEET_ARGS, "--out", str(out)],
