@@ -1,19 +1,30 @@
-"""Batched dynamics: ``Model.forward_dynamics(Q, QD)`` on B states in one compiled call against
-``mujoco.rollout`` of one Euler step (``nstep=1``) from the same B states, 1 thread and all threads.
+"""Batched dynamics: ``Model.forward_dynamics(Q, QD)`` on B states in one compiled call against MuJoCo's
+two batched ways to get the same ``q''`` from the same B states, on 1 thread and all threads; each
+row compared with the faster MuJoCo way.
 
-Timed regions (one process, interleaved rounds, median (min-max) over the rounds):
+Timed regions (one process; per batch size, every model, thread count and engine interleaved in the
+same rounds, the order reversed every other round; median (min-max) over the rounds; a model whose
+spread is wide is measured again):
 
 * ``urdf2links``: one call ``model.forward_dynamics(Q, QD)`` with ``Q``, ``QD`` (B, n) (gravity,
   no torques): argument checks, the compiled batch (numba ``prange`` over chunks of rows) and the
   (B, n) result, with ``numba.set_num_threads(k)``.
-* ``mujoco.rollout``: one ``Rollout(nthread=k).rollout(models, datas, x0, nstep=1, state=buf,
-  skip_checks=True)`` from the B full-physics states ``x0`` of the same ``(q, q')`` (route-1 model,
-  Euler, dt 1e-4 s, energy flag off): one ``mj_step`` (forward dynamics and the Euler update) per row
-  and the copy of its state into ``buf``; ``k`` ``MjData`` (one per thread), the pool made beforehand.
+* ``Batch.forward``: ``mujoco.batch.Batch(m, nsim=B, nthread=k).forward()``: ``mj_forward`` of every
+  row on MuJoCo's thread pool, each row's state loaded into an ``MjData`` and ``qacc`` copied out
+  (bound before timing); the route-1 model, energy flag off.
+* ``rollout``: ``Rollout(nthread=k).rollout(models, datas, x0, nstep=1, state=buf,
+  skip_checks=True)``: one Euler ``mj_step`` per row (forward dynamics and the update, dt 1e-4 s)
+  and its state copied into ``buf``: more work than ``q''`` alone, timed because it was the
+  benchmark's only MuJoCo way before issue 23.
 
-Both sides compute ``q''`` of every row (MuJoCo integrates it as well); the JSON records the largest
-difference between our ``q''`` and MuJoCo's ``(q'_1 - q'_0) / dt`` (rounding of the Euler update
-divided by dt: ~1e-11 relative). Threads: 1 and ``numba.get_num_threads()`` at start (all, or
+The ratio is urdf2links / the faster MuJoCo way of the row (smaller median), with the ratio of the
+minima and the tie rule's verdict. The JSON records the largest difference between our ``q''`` and
+``Batch.forward``'s ``qacc`` (rounding: ~1e-13 relative) and rollout's ``(q'_1 - q'_0) / dt``
+(the Euler update's rounding divided by dt: ~1e-11). It also records what numba's threads do after a
+batched call (``spin_cpu_ms``: the CPU time this process burns in the 50 ms after one, threads
+asleep: ~0; libgomp's default active wait spins ~6 ms of a core after every parallel region, taking
+it from whatever runs next -- urdf2links sets ``OMP_WAIT_POLICY=PASSIVE`` unless the user chose
+otherwise, docs/speed.md). Threads: 1 and ``numba.get_num_threads()`` at start (all, or
 ``NUMBA_NUM_THREADS``). Usage::
 
     python benchmarks/batch_cost.py [--batches 1000 10000] [--rounds 5] [--out reports/benchmarks/batch_cost.json]
@@ -22,93 +33,167 @@ divided by dt: ~1e-11 relative). Threads: 1 and ``numba.get_num_threads()`` at s
 
 from __future__ import annotations
 
+import os
 import time
 
 import mujoco
 import numba
 import numpy as np
 from mujoco import rollout as mj_rollout
+from mujoco.batch import Batch
 
-from benchmarking import fmt_spread, load_models, markdown_table, rounds, run_benchmark, spread
-from eval_cost import chain
+from benchmarking import (
+    WIDE, chain, compare, fastest, fmt_ratio, fmt_spread, is_wide, load_models, markdown_table, measured, real,
+    rounds, run_benchmark, spread,
+)
 from urdf2links.compare.mujoco_side.mjcf import mjcf_from_model
 from urdf2links.locations import example_robot_data_dir
 
 DT = 1e-4
-REAL = ("ur_description/urdf/ur5_robot.urdf", "talos_data/robots/talos_reduced.urdf",
-        "g1_description/urdf/g1_29dof_rev_1_0.urdf")
+MUJOCO_WAYS = ("Batch.forward", "rollout")
 
 
 def models() -> list:
     # without example-robot-data, the shipped UR5-like arm stands in for its robots
     spare = () if example_robot_data_dir() is not None else ("ur5_like.urdf",)
-    out = load_models(("double_pendulum.urdf", *spare), REAL)
+    out = load_models(("double_pendulum.urdf", *spare), real("ur5", "talos", "g1"))
     return out + [chain(64)]
 
 
-class MujocoBatch:
-    """B states of the route-1 model, one Euler step each through ``mujoco.rollout`` on ``k`` threads."""
+class MujocoStates:
+    """B states ``(q, q')`` of the route-1 model and MuJoCo's two batched ways from them on ``k`` threads."""
 
-    def __init__(self, model, Q, QD, threads):
+    def __init__(self, model, Q, QD):
         mj = mjcf_from_model(model, gravity=model.gravity_vector, timestep=DT, integrator="Euler")
         m = mj.model
         m.opt.enableflags &= ~int(mujoco.mjtEnableBit.mjENBL_ENERGY)
-        self.mj, self.m = mj, m
-        spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
-        nstate = mujoco.mj_stateSize(m, spec)
+        self.mj, self.m, self.B = mj, m, len(Q)
         d = mujoco.MjData(m)
-        self.x0 = np.empty((len(Q), nstate))
+        full, integ = mujoco.mjtState.mjSTATE_FULLPHYSICS, mujoco.mjtState.mjSTATE_INTEGRATION
+        self.x0 = np.empty((len(Q), mujoco.mj_stateSize(m, full)))
+        self.rows = np.empty((len(Q), mujoco.mj_stateSize(m, integ)))
         for b in range(len(Q)):
             mujoco.mj_resetData(m, d)
             mj.set_state(d, Q[b], QD[b])
-            mujoco.mj_getState(m, d, self.x0[b], spec)
-        self.models = [m] * len(Q)
-        self.datas = [mujoco.MjData(m) for _ in range(threads)]
-        self.pool = mj_rollout.Rollout(nthread=threads if threads > 1 else 0)
-        self.buf = np.empty((len(Q), 1, nstate))
+            mujoco.mj_getState(m, d, self.x0[b], full)
+            mujoco.mj_getState(m, d, self.rows[b], integ)
+        self.buf = np.empty((len(Q), 1, self.x0.shape[1]))
         self.qd_at = 1 + m.nq + np.asarray(mj.dof_index)
+        self.pools, self.batches, self.qacc = {}, {}, {}
 
-    def step(self) -> float:
-        t0 = time.perf_counter()
-        self.pool.rollout(self.models, self.datas, self.x0, nstep=1, state=self.buf, skip_checks=True)
-        return time.perf_counter() - t0
+    def ways(self, k: int) -> dict:
+        """``{"Batch.forward": fn, "rollout": fn}`` on ``k`` threads; each ``fn()`` returns its seconds."""
+        batch = Batch(self.m, self.B, nthread=k)
+        batch.state[:] = self.rows
+        self.qacc[k] = batch.bind("qacc")                     # registered before timing: copied out by every call
+        self.batches[k] = batch
+        pool = self.pools[k] = mj_rollout.Rollout(nthread=k if k > 1 else 0)
+        datas = [mujoco.MjData(self.m) for _ in range(k)]
+        models = [self.m] * self.B
 
-    def qdd(self) -> np.ndarray:
+        def forward():
+            batch.state[:] = self.rows                        # the same states every round (forward keeps them)
+            t0 = time.perf_counter()
+            batch.forward()
+            return time.perf_counter() - t0
+
+        def step():
+            t0 = time.perf_counter()
+            pool.rollout(models, datas, self.x0, nstep=1, state=self.buf, skip_checks=True)
+            return time.perf_counter() - t0
+
+        return {"Batch.forward": forward, "rollout": step}
+
+    def qdd_forward(self, k) -> np.ndarray:
+        return np.array(self.qacc[k][:, np.asarray(self.mj.dof_index)])
+
+    def qdd_rollout(self) -> np.ndarray:
         return (self.buf[:, 0, self.qd_at] - self.x0[:, self.qd_at]) / DT
 
     def close(self):
-        self.pool.close()
+        for pool in self.pools.values():
+            pool.close()
 
 
-def measure(model, B, threads, n_rounds, log) -> dict:
+def spin_cpu_ms(model, Q, QD, k: int) -> float:
+    """CPU milliseconds this process burns in the 50 ms after one batched call on ``k`` threads, while
+    the calling thread sleeps: numba's worker threads waiting actively for the next call (median of 5)."""
+    numba.set_num_threads(k)
+    burnt = []
+    for _ in range(5):
+        model.forward_dynamics(Q, QD)
+        c0 = time.process_time()
+        time.sleep(0.05)
+        burnt.append(1e3 * (time.process_time() - c0))
+    return float(np.median(burnt))
+
+
+def _key(name, k, side):
+    return f"{name}|{k}|{side}"
+
+
+def measure_batch(B, ms, threads, n_rounds, log) -> list[dict]:
+    """Every model at batch size B: all models, thread counts and engines interleaved in one set of rounds."""
+    ks = sorted({1, threads})
     rng = np.random.default_rng(0)
-    Q, QD = rng.uniform(-1, 1, (B, model.n)), rng.normal(size=(B, model.n))
-    model.forward_dynamics(Q[:2], QD[:2])                     # compile / load first
-    row = {"robot": model.name, "n": model.n, "B": B}
-    for k in sorted({1, threads}):
-        mjb = MujocoBatch(model, Q, QD, k)
+    setups, variants = [], {}
+    for model in ms:
+        Q, QD = rng.uniform(-1, 1, (B, model.n)), rng.normal(size=(B, model.n))
+        model.forward_dynamics(Q[:2], QD[:2])                 # compile / load first
+        states = MujocoStates(model, Q, QD)
+        out = {}
+        setups.append((model, Q, QD, states, out))
+        for k in ks:
+            def ours(k=k, model=model, Q=Q, QD=QD, out=out):
+                numba.set_num_threads(k)
+                t0 = time.perf_counter()
+                out[k] = model.forward_dynamics(Q, QD)
+                return time.perf_counter() - t0
 
-        def ours(k=k):
-            numba.set_num_threads(k)
-            t0 = time.perf_counter()
-            row["_qdd"] = model.forward_dynamics(Q, QD)
-            return time.perf_counter() - t0
+            variants[_key(model.name, k, "urdf2links")] = ours
+            for way, fn in states.ways(k).items():
+                variants[_key(model.name, k, way)] = fn
+    log(f"B = {B}: {len(ms)} models x threads {ks} x 3 ways, interleaved")
+    try:
+        times = rounds(variants, n_rounds)
+        attempts = {model.name: 1 for model in ms}
+        for model, *_ in setups:
+            mine = {k: v for k, v in variants.items() if k.startswith(model.name + "|")}
+            if any(is_wide(spread(times[k])) for k in mine):
+                again, n = measured(mine, n_rounds, log=log)
+                widest = max(max(times[k]) / min(times[k]) for k in mine)
+                if max(max(v) / min(v) for v in again.values()) < widest:
+                    times.update(again)
+                attempts[model.name] += n
+        rows = []
+        for model, Q, QD, states, out in setups:
+            row = {"robot": model.name, "n": model.n, "B": B, "attempts": attempts[model.name]}
+            for k in ks:
+                t = {"threads": k, **{f"{side}_s": spread(times[_key(model.name, k, side)])
+                                      for side in ("urdf2links", *MUJOCO_WAYS)}}
+                ref = states.qdd_forward(k)
+                t["max_rel_difference"] = {
+                    "Batch.forward": float(np.abs(out[k] - ref).max() / np.abs(ref).max()),
+                    "rollout": float(np.abs(out[k] - states.qdd_rollout()).max() / np.abs(ref).max())}
+                t.update(comparisons(t))
+                row[f"threads_{k}"] = t
+                log(f"{model.name[:20]:20s} n {model.n:3d} B {B:6d} threads {k}: urdf2links "
+                    f"{fmt_spread(t['urdf2links_s'], 1e3)} ms, Batch.forward {fmt_spread(t['Batch.forward_s'], 1e3)} ms, "
+                    f"rollout {fmt_spread(t['rollout_s'], 1e3)} ms: / {t['mujoco']} {fmt_ratio(t['vs_mujoco'])}")
+            rows.append(row)
+        return rows
+    finally:
+        numba.set_num_threads(threads)
+        for *_, states, _out in setups:
+            states.close()
 
-        try:
-            times = rounds({"urdf2links": ours, "mujoco.rollout": mjb.step}, n_rounds)
-            ref = mjb.qdd()
-        finally:
-            numba.set_num_threads(threads)
-            mjb.close()
-        qdd = row.pop("_qdd")
-        row[f"threads_{k}"] = {"threads": k, "urdf2links_s": spread(times["urdf2links"]),
-                               "rollout_s": spread(times["mujoco.rollout"]),
-                               "max_rel_difference": float(np.abs(qdd - ref).max() / np.abs(ref).max())}
-        t = row[f"threads_{k}"]
-        t["ratio"] = t["urdf2links_s"]["median"] / t["rollout_s"]["median"]
-        log(f"{model.name[:20]:20s} n {model.n:3d} B {B:6d} threads {k}: urdf2links {fmt_spread(t['urdf2links_s'], 1e3)} ms, "
-            f"rollout {fmt_spread(t['rollout_s'], 1e3)} ms: x{t['ratio']:.2f} (max rel diff {t['max_rel_difference']:.1e})")
-    return row
+
+def comparisons(t) -> dict:
+    """The faster MuJoCo way of a row and thread count, and urdf2links against it and against each way
+    under the tie rule (from the spreads: the render recomputes them)."""
+    way = fastest({w: t[f"{w}_s"] for w in MUJOCO_WAYS})
+    return {"mujoco": way, "vs_mujoco": compare(t["urdf2links_s"], t[f"{way}_s"]),
+            "vs_ways": {w: compare(t["urdf2links_s"], t[f"{w}_s"]) for w in MUJOCO_WAYS}}
 
 
 def _thread_keys(data):
@@ -116,27 +201,32 @@ def _thread_keys(data):
 
 
 def table(data) -> str:
-    keys = _thread_keys(data)
-    head = ["robot", "n", "B"]
-    for key in keys:
-        k = key.split("_")[1]
-        head += [f"urdf2links {k} thr. ms", f"rollout {k} thr. ms", f"ratio ({k} thr.)"]
-    head.append("max rel. difference of q''")
+    head = ["robot", "n", "B", "threads", "urdf2links ms", "Batch.forward ms", "rollout nstep=1 ms", "faster MuJoCo",
+            "urdf2links / faster MuJoCo", "max rel. difference of q''"]
     body = []
     for r in data["rows"]:
-        line = [r["robot"], r["n"], r["B"]]
-        for key in keys:
+        for key in _thread_keys(data):
             t = r[key]
-            line += [fmt_spread(t["urdf2links_s"], 1e3), fmt_spread(t["rollout_s"], 1e3), f"{t['ratio']:.2f}"]
-        line.append(f"{max(r[key]['max_rel_difference'] for key in keys):.1e}")
-        body.append(line)
-    return ("# Batched forward dynamics against mujoco.rollout (one Euler step)\n\n"
-            f"Milliseconds per batch of B states, median (min-max) over {data['rounds']} interleaved rounds in one "
-            "process. urdf2links: one call model.forward_dynamics(Q, QD) (gravity, fixed base), numba threads set "
-            "with numba.set_num_threads. mujoco.rollout: Rollout(nthread).rollout(..., nstep=1) from the same states "
-            "(route-1 model, Euler, dt 1e-4 s), one MjData per thread: one mj_step per row and its state copied out. "
-            "ratio: urdf2links / rollout. Last column: largest difference between our q'' and MuJoCo's "
-            "(q'_1 - q'_0) / dt, relative to its largest entry.\n\n" + markdown_table(head, body))
+            body.append([r["robot"], r["n"], r["B"], t["threads"], fmt_spread(t["urdf2links_s"], 1e3),
+                         fmt_spread(t["Batch.forward_s"], 1e3), fmt_spread(t["rollout_s"], 1e3), t["mujoco"],
+                         fmt_ratio(t["vs_mujoco"]), f"{t['max_rel_difference']['Batch.forward']:.1e}"])
+    again = [f"{r['robot']} at B = {r['B']} ({r['attempts']} attempts)" for r in data["rows"] if r["attempts"] > 1]
+    spin = data["after_a_call"]
+    return ("# Batched forward dynamics against MuJoCo's batched calls\n\n"
+            f"Milliseconds per batch of B states, median (min-max) over {data['rounds']} rounds in one process; at each "
+            "B every model, thread count and engine runs in the same rounds (interleaved, the order reversed every "
+            "other round). urdf2links: one call model.forward_dynamics(Q, QD) (gravity, fixed base), numba threads "
+            "set with numba.set_num_threads. Batch.forward: mujoco.batch.Batch(m, B, nthread).forward(), mj_forward "
+            "of every row on MuJoCo's thread pool, qacc copied out. rollout nstep=1: Rollout(nthread).rollout(..., "
+            "nstep=1) from the same states (Euler, dt 1e-4 s): one mj_step per row and its state copied out (more "
+            "work than q''). The ratio is against the faster MuJoCo way of the row: ratio of the medians, (min: of "
+            "the minima), and the tie rule's verdict (faster or slower only when the spreads do not overlap). Last "
+            "column: largest difference between our q'' and Batch.forward's qacc, relative to its largest entry.\n\n"
+            + markdown_table(head, body) + "\n\n"
+            + (f"Measured again for a wide spread (max/min > {data['wide']:g}): {', '.join(again)}.\n\n" if again else "")
+            + f"After a batched call on {data['threads']} threads numba's worker threads burnt "
+              f"{spin['spin_cpu_ms']:.1f} ms of CPU in the next 50 ms (threading layer {spin['threading_layer']}, "
+              f"OMP_WAIT_POLICY {spin['OMP_WAIT_POLICY']}): CPU taken from whatever runs next, MuJoCo's threads here.")
 
 
 def plot(data):
@@ -146,38 +236,58 @@ def plot(data):
     rows = data["rows"]
     fig = figure(10.0, 4.4, dpi=100)
     axes = fig.subplots(1, len(data["batches"]), squeeze=False)[0]
-    colours = {"urdf2links": ("#2171b5", "#6baed6"), "rollout": ("#cb181d", "#fc9272")}
+    colours = {"urdf2links": ("#2171b5", "#6baed6"), "mujoco": ("#cb181d", "#fc9272")}
     for ax, B in zip(axes, data["batches"]):
         sub = [r for r in rows if r["B"] == B]
         x = np.arange(len(sub))
         j = 0
-        for side, label in (("urdf2links", "urdf2links forward_dynamics"), ("rollout", "mujoco.rollout nstep=1")):
+        for side in ("urdf2links", "mujoco"):
             for ki, key in enumerate(keys):
-                med = np.array([r[key][f"{side}_s"]["median"] * 1e6 / B for r in sub])
-                ax.bar(x + (j - 1.5) * 0.2, med, 0.19, color=colours[side][ki],
-                       label=f"{label}, {r_threads(key)} thread(s)")
+                k = key.split("_")[1]
+                spreads = [r[key][f"{r[key]['mujoco'] if side == 'mujoco' else side}_s"] for r in sub]
+                med = np.array([s["median"] * 1e6 / B for s in spreads])
+                err = np.array([[(s["median"] - s["min"]) * 1e6 / B, (s["max"] - s["median"]) * 1e6 / B]
+                                for s in spreads]).T
+                label = (f"urdf2links forward_dynamics, {k} thread(s)" if side == "urdf2links"
+                         else f"faster MuJoCo way, {k} thread(s)")
+                ax.bar(x + (j - 1.5) * 0.2, med, 0.19, color=colours[side][ki], label=label, yerr=err, capsize=2)
                 j += 1
+        for xi, r in zip(x, sub):
+            for ki, key in enumerate(keys):
+                if r[key]["vs_mujoco"]["verdict"] == "tie":
+                    top = r[key]["urdf2links_s"]["max"] * 1e6 / B
+                    ax.annotate("tie", (xi + (ki - 1.5) * 0.2, top), fontsize=6, ha="center", xytext=(0, 2),
+                                textcoords="offset points")
         ax.set_yscale("log")
         ax.set_xticks(x, [f"{r['robot']}\nn={r['n']}" for r in sub], fontsize=7, rotation=30, ha="right")
         ax.set_title(f"B = {B}", fontsize=9)
-        ax.set_ylabel("us per state (median of the rounds)")
+        ax.set_ylabel("us per state (median; bars min-max)")
         ax.grid(axis="y", which="both", alpha=0.3)
     axes[0].legend(fontsize=7)
-    fig.suptitle("Batched forward dynamics against mujoco.rollout (one Euler step), same states", fontsize=10)
+    fig.suptitle("Batched forward dynamics against the faster of MuJoCo's Batch.forward and rollout(nstep=1)",
+                 fontsize=10)
     return fig
-
-
-def r_threads(key) -> str:
-    return key.split("_")[1]
 
 
 def measure_all(args, log) -> dict:
     threads = numba.get_num_threads()
-    rows = [measure(model, B, threads, args.rounds, log) for B in args.batches for model in models()]
-    return {"rounds": args.rounds, "batches": list(args.batches), "threads": threads, "dt": DT, "rows": rows}
+    ms = models()
+    rows = [r for B in args.batches for r in measure_batch(B, ms, threads, args.rounds, log)]
+    model = ms[-1]
+    rng = np.random.default_rng(1)
+    Q, QD = rng.uniform(-1, 1, (1000, model.n)), rng.normal(size=(1000, model.n))
+    after = {"spin_cpu_ms": spin_cpu_ms(model, Q, QD, threads), "threading_layer": numba.threading_layer(),
+             "OMP_WAIT_POLICY": os.environ.get("OMP_WAIT_POLICY", "unset"), "model": model.name, "B": 1000}
+    numba.set_num_threads(threads)
+    log(f"after a batched call: {after['spin_cpu_ms']:.1f} ms of CPU burnt in 50 ms")
+    return {"rounds": args.rounds, "wide": WIDE, "batches": list(args.batches), "threads": threads, "dt": DT,
+            "after_a_call": after, "rows": rows}
 
 
 def render(data):
+    for r in data["rows"]:
+        for key in _thread_keys(data):
+            r[key].update(comparisons(r[key]))
     return table(data), plot(data)
 
 

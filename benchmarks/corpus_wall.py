@@ -19,7 +19,7 @@ from __future__ import annotations
 import tempfile
 import time
 
-from benchmarking import fmt_spread, markdown_table, run_benchmark, spread
+from benchmarking import compare, fmt_ratio, fmt_spread, markdown_table, run_benchmark, spread
 from urdf2links.compare.corpus.rows import RUN_DEPENDENT_KEYS, CorpusSettings, find_robots
 from urdf2links.compare.corpus.report import write_corpus
 from urdf2links.compare.corpus.runner import run_corpus
@@ -97,8 +97,8 @@ def measure(args, log) -> dict:
 def render(data: dict):
     from urdf2links.compare.figures import figure
 
-    serial = next(r for r in data["rows"] if r["way"] == "serial")["run"]["median"]
-    table = [[r["way"], fmt_spread(r["run"]), f"{serial / r['run']['median']:.2f}x",
+    serial = next(r for r in data["rows"] if r["way"] == "serial")["run"]
+    table = [[r["way"], fmt_spread(r["run"]), "-" if r["way"] == "serial" else fmt_ratio(compare(r["run"], serial)),
               "-" if r["cluster_start"] is None else fmt_spread(r["cluster_start"]), fmt_spread(r["report"]),
               fmt_spread(r["robots_sum"]), f"{r['slowest']} ({r['slowest_s']:.1f} s)"] for r in data["rows"]]
     md = "\n".join([
@@ -106,12 +106,14 @@ def render(data: dict):
         f"`run_corpus` over {data['robots']} robot files of {data['corpus']}, each in its default scene for "
         f"{data['t_end']:g} s with its light page and thumbnail, {data['rounds']} interleaved round(s); seconds, "
         "median (min-max).", "",
-        markdown_table(["way", "run (s)", "speed-up", "cluster start (s)", "report (s)", "sum over robots (s)",
+        markdown_table(["way", "run (s)", "run / serial", "cluster start (s)", "report (s)", "sum over robots (s)",
                         "slowest robot"], table), "",
         "Same figures whichever way: " + ("yes" if data["same_figures"] else "**NO**") + " (corpus.json rows "
         "compared exactly, wall times and the worker's name aside). Run: the worker processes' start and warm-up "
         "(kernels loaded from numba's cache, MuJoCo, matplotlib) and every robot; a Dask cluster's own start is the "
-        "column beside it. A run is never shorter than its slowest robot."])
+        "column beside it. A run is never shorter than its slowest robot. run / serial: ratio of the medians, "
+        "(min: of the minima), and the tie rule's verdict (faster or slower only when the spreads over the rounds "
+        "do not overlap; with one round a spread is a point)."])
     fig = figure(8.2, 2.6)
     ax = fig.subplots()
     ways = [r["way"] for r in data["rows"]]
@@ -132,4 +134,5 @@ def options(p) -> None:
 
 
 if __name__ == "__main__":
-    run_benchmark("corpus_wall", __doc__, measure, render, options=options, rounds_default=1)
+    # format 1 JSON renders as well: its figures are the same, the tie rule is applied here
+    run_benchmark("corpus_wall", __doc__, measure, render, options=options, rounds_default=1, accepts=(1, 2))

@@ -1,9 +1,15 @@
-"""Cost of one dynamics evaluation: urdf2links forward_dynamics / mass_matrix against MuJoCo's
-mj_forward on the same model (route 1: the project's tree as MJCF), in the same process.
+"""Cost of every public ``Model`` call against MuJoCo's mj_forward on the same model (route 1: the
+project's tree as MJCF), in the same process.
 
-Both are called from Python the same way (one call per evaluation, arguments already in arrays);
-a round times ``--reps`` calls of each and keeps their median, rounds interleave the three and
-each figure is the median (min-max) over the rounds. Models: n-link chains (spatial pendulums,
+Timed, one call per evaluation from Python, arguments already in arrays: ``forward_dynamics(q, qd)``,
+``mass_matrix(q)``, ``bias(q, qd)``, ``gravity(q)``, ``generalized_forces(q, [one Wrench])`` (a force,
+a moment and an offset point on the last link), ``kinetic_energy(q, qd)``, ``potential_energy(q)``
+and ``mujoco.mj_forward(m, d)``; at one random state (q uniform in [-1, 1], qd normal, seed 0). A
+round times ``--reps`` calls of each and keeps their median; rounds interleave all eight (the order
+reversed every other round); each figure is the median (min-max) over the rounds, and a model whose
+spread is wide is measured again (benchmarking.measured). Each call is compared with mj_forward and
+with forward_dynamics under the tie rule (benchmarking.compare): ratio of medians, ratio of minima,
+and faster / slower only when the spreads do not overlap. Models: n-link chains (spatial pendulums,
 hinges alternating x / y) and the shipped and (when installed) real robots.
 
 Growth with n, both engines: the **local slope** ``log(t2 / t1) / log(n2 / n1)`` between
@@ -11,7 +17,7 @@ neighbouring chain sizes (the curve is not a straight line: fixed per-call costs
 n, the O(n^2) mass matrix and the O(n^3) factorization large n), and a least-squares **fit over
 the large-n end** (the :data:`LARGE_N` largest chains). Usage::
 
-    python benchmarks/eval_cost.py [--reps 300] [--rounds 7] [--out reports/benchmarks/eval_cost.json]
+    python benchmarks/eval_cost.py [--reps 300] [--rounds 7] [--sizes 2 4 ...] [--out reports/benchmarks/eval_cost.json]
     python benchmarks/eval_cost.py --render-only      # the table and plot again from the JSON
 """
 
@@ -22,29 +28,21 @@ import time
 import mujoco
 import numpy as np
 
-from benchmarking import fmt_spread, load_models, markdown_table, rounds, run_benchmark, spread
-from urdf2links import LinkSpec, Model, build_tree
+from benchmarking import (
+    chain, compare, fmt_ratio, fmt_spread, load_models, markdown_table, measured, real, run_benchmark, spread,
+)
+from urdf2links import Model, Wrench
 from urdf2links.compare.mujoco_side.mjcf import mjcf_from_model
 
 CHAIN_SIZES = (2, 4, 8, 16, 24, 32, 48, 64, 96, 128)
 #: The fit over the large-n end uses this many of the largest chains.
 LARGE_N = 4
-REAL = ("ur_description/urdf/ur5_robot.urdf", "panda_description/urdf/panda.urdf",
-        "talos_data/robots/talos_reduced.urdf", "g1_description/urdf/g1_29dof_rev_1_0.urdf")
-VARIANTS = ("forward_dynamics", "mass_matrix", "mj_forward")
-
-
-def chain(n: int) -> Model:
-    """A spatial pendulum of n rods, hinge axes alternating x / y."""
-    specs = []
-    for i in range(n):
-        H = np.zeros((4, 4))
-        m, c = 1.0, np.array([0.0, 0.0, -0.25])
-        S = np.diag([0.02, 0.02, 0.002]) * 0.5 + m * np.outer(c, c)
-        H[:3, :3], H[:3, 3], H[3, :3], H[3, 3] = S, m * c, m * c, m
-        specs.append(LinkSpec(f"l{i}", None if i == 0 else f"l{i - 1}", params=(0, 0, 0 if i == 0 else -0.5, 0, 0, 0),
-                              coordinates={"phi_x" if i % 2 == 0 else "phi_y": f"q{i}"}, H=H))
-    return Model(build_tree(specs), name=f"chain{n}")
+#: Every public call of Model, in the tables' order.
+CALLS = ("forward_dynamics", "mass_matrix", "bias", "gravity", "generalized_forces", "kinetic_energy",
+         "potential_energy")
+VARIANTS = (*CALLS, "mj_forward")
+#: The curves of the growth section and the plot.
+GROWTH = ("forward_dynamics", "mass_matrix", "mj_forward")
 
 
 def median_time(fn, reps: int) -> float:
@@ -56,22 +54,39 @@ def median_time(fn, reps: int) -> float:
     return float(np.median(times))
 
 
-def measure(model: Model, reps: int, n_rounds: int) -> dict:
+def calls(model: Model, q, qd) -> dict:
+    """Each public call of ``model`` at ``(q, qd)``, as a function of nothing."""
+    loads = [Wrench(model.link_names[-1], force=[1.0, -2.0, 3.0], moment=[0.1, 0.2, -0.3], point=[0.05, 0.0, -0.1])]
+    return {"forward_dynamics": lambda: model.forward_dynamics(q, qd), "mass_matrix": lambda: model.mass_matrix(q),
+            "bias": lambda: model.bias(q, qd), "gravity": lambda: model.gravity(q),
+            "generalized_forces": lambda: model.generalized_forces(q, loads),
+            "kinetic_energy": lambda: model.kinetic_energy(q, qd), "potential_energy": lambda: model.potential_energy(q)}
+
+
+def measure(model: Model, reps: int, n_rounds: int, log=None) -> dict:
     mj = mjcf_from_model(model, gravity=model.gravity_vector)
     d = mujoco.MjData(mj.model)
     rng = np.random.default_rng(0)
     q, qd = rng.uniform(-1, 1, model.n), rng.normal(size=model.n)
     d.qpos[mj.qpos_index] = q
     d.qvel[mj.dof_index] = qd
-    model.forward_dynamics(q, qd), model.mass_matrix(q)      # compile / load the kernels first
-    times = rounds({"forward_dynamics": lambda: median_time(lambda: model.forward_dynamics(q, qd), reps),
-                    "mass_matrix": lambda: median_time(lambda: model.mass_matrix(q), reps),
-                    "mj_forward": lambda: median_time(lambda: mujoco.mj_forward(mj.model, d), reps)}, n_rounds)
-    row = {"robot": model.name, "n": model.n, "chain": model.name.startswith("chain"),
+    ours = calls(model, q, qd)
+    for fn in ours.values():                                 # compile / load the kernels first
+        fn()
+    variants = {k: (lambda fn=fn: median_time(fn, reps)) for k, fn in ours.items()}
+    variants["mj_forward"] = lambda: median_time(lambda: mujoco.mj_forward(mj.model, d), reps)
+    times, attempts = measured(variants, n_rounds, log=log)
+    row = {"robot": model.name, "n": model.n, "chain": model.name.startswith("chain"), "attempts": attempts,
            **{f"{k}_s": spread(v) for k, v in times.items()}}
-    row["ratio_forward"] = row["forward_dynamics_s"]["median"] / row["mj_forward_s"]["median"]
-    row["ratio_mass_matrix"] = row["mass_matrix_s"]["median"] / row["mj_forward_s"]["median"]
+    row.update(comparisons(row))
     return row
+
+
+def comparisons(row) -> dict:
+    """Each call against mj_forward and against forward_dynamics, under the tie rule (from the spreads:
+    the render recomputes them, so that a table never disagrees with its figures)."""
+    return {"vs_mj_forward": {k: compare(row[f"{k}_s"], row["mj_forward_s"]) for k in CALLS},
+            "vs_forward_dynamics": {k: compare(row[f"{k}_s"], row["forward_dynamics_s"]) for k in CALLS[1:]}}
 
 
 def growth(chains: list[dict], key: str) -> dict:
@@ -86,19 +101,32 @@ def growth(chains: list[dict], key: str) -> dict:
                                         "intercept_log_s": float(intercept)}}
 
 
-def table(rows, slopes) -> str:
-    head = ["robot", "n", "forward_dynamics us", "mass_matrix us", "mj_forward us", "forward / mj_forward"]
-    body = [[r["robot"], r["n"], fmt_spread(r["forward_dynamics_s"], 1e6), fmt_spread(r["mass_matrix_s"], 1e6),
-             fmt_spread(r["mj_forward_s"], 1e6), f"{r['ratio_forward']:.2f}"] for r in rows]
-    loc_head = ["chain sizes", "urdf2links forward_dynamics", "MuJoCo mj_forward"]
+def table(data) -> str:
+    rows, slopes = data["rows"], data["growth"]
+    us = markdown_table(["robot", "n", "mj_forward", *CALLS],
+                        [[r["robot"], r["n"], fmt_spread(r["mj_forward_s"], 1e6),
+                          *(fmt_spread(r[f"{k}_s"], 1e6) for k in CALLS)] for r in rows])
+    vs_mj = markdown_table(["robot", "n", *(f"{k} / mj_forward" for k in CALLS)],
+                           [[r["robot"], r["n"], *(fmt_ratio(r["vs_mj_forward"][k]) for k in CALLS)] for r in rows])
+    vs_fd = markdown_table(["robot", "n", *(f"{k} / forward_dynamics" for k in CALLS[1:])],
+                           [[r["robot"], r["n"], *(fmt_ratio(r["vs_forward_dynamics"][k]) for k in CALLS[1:])]
+                            for r in rows])
+    again = [f"{r['robot']} ({r['attempts']} attempts)" for r in rows if r["attempts"] > 1]
     loc = [[f"{a['n'][0]} -> {a['n'][1]}", f"{a['slope']:.2f}", f"{b['slope']:.2f}"]
            for a, b in zip(slopes["forward_dynamics"]["local"], slopes["mj_forward"]["local"])]
     big = slopes["forward_dynamics"]["large_n"]
-    return ("# Cost of one dynamics evaluation\n\n"
-            "Microseconds per call from Python, median (min-max) over interleaved rounds, each round the median of "
-            "its calls; same process, same model (route 1).\n\n" + markdown_table(head, body) + "\n\n"
-            "## Growth with the number of links (chains)\n\nLocal log-log slope between neighbouring sizes:\n\n"
-            + markdown_table(loc_head, loc) + "\n\n"
+    return ("# Cost of every Model call against mj_forward\n\n"
+            f"Microseconds per call from Python, median (min-max) over {data['rounds']} interleaved rounds, each round "
+            f"the median of its {data['reps']} calls; same process, same model (route 1), one random state. "
+            "generalized_forces: one Wrench (force, moment, offset point) on the last link.\n\n" + us + "\n\n"
+            "## Against mj_forward\n\nEach call's time over mj_forward's: ratio of the medians, (min: ratio of the "
+            "minima), and the verdict of the tie rule: faster or slower only when the spreads over the rounds do not "
+            "overlap, else tie.\n\n" + vs_mj + "\n\n"
+            "## Against forward_dynamics\n\nEach call's time over forward_dynamics' (what one evaluation of q'' "
+            "costs), same rule.\n\n" + vs_fd + "\n\n"
+            + (f"Measured again for a wide spread (max/min > {data['wide']:g}): {', '.join(again)}.\n\n" if again else "")
+            + "## Growth with the number of links (chains)\n\nLocal log-log slope between neighbouring sizes:\n\n"
+            + markdown_table(["chain sizes", "urdf2links forward_dynamics", "MuJoCo mj_forward"], loc) + "\n\n"
             f"Fit over the large-n end (n = {', '.join(map(str, big['n']))}): urdf2links forward_dynamics "
             f"{big['slope']:.2f}, MuJoCo mj_forward {slopes['mj_forward']['large_n']['slope']:.2f}; urdf2links "
             f"mass_matrix {slopes['mass_matrix']['large_n']['slope']:.2f}.")
@@ -149,24 +177,30 @@ def plot(rows, slopes):
 
 
 def measure_all(args, log) -> dict:
-    models = [chain(n) for n in CHAIN_SIZES] + load_models(("ur5_like.urdf",), REAL)
+    from benchmarking import WIDE
+
+    models = [chain(n) for n in args.sizes] + load_models(("ur5_like.urdf",), real("ur5", "panda", "talos", "g1"))
     rows = []
     for model in models:
-        rows.append(measure(model, args.reps, args.rounds))
+        rows.append(measure(model, args.reps, args.rounds, log))
         r = rows[-1]
         log(f"{r['robot'][:28]:28s} n {r['n']:3d}: forward {fmt_spread(r['forward_dynamics_s'], 1e6)} us, "
-            f"mj_forward {fmt_spread(r['mj_forward_s'], 1e6)} us, ratio {r['ratio_forward']:.2f}")
+            f"mj_forward {fmt_spread(r['mj_forward_s'], 1e6)} us: {fmt_ratio(r['vs_mj_forward']['forward_dynamics'])}")
     chains = [r for r in rows if r["chain"]]
-    return {"reps": args.reps, "rounds": args.rounds, "rows": rows, "large_n_points": LARGE_N,
-            "growth": {k: growth(chains, k) for k in VARIANTS}}
+    return {"reps": args.reps, "rounds": args.rounds, "wide": WIDE, "rows": rows, "large_n_points": LARGE_N,
+            "growth": {k: growth(chains, k) for k in GROWTH}}
 
 
 def render(data):
-    return table(data["rows"], data["growth"]), plot(data["rows"], data["growth"])
+    for r in data["rows"]:
+        r.update(comparisons(r))
+    return table(data), plot(data["rows"], data["growth"])
 
 
 def options(p):
     p.add_argument("--reps", type=int, default=300, help="calls per round and variant (default 300)")
+    p.add_argument("--sizes", type=int, nargs="+", default=list(CHAIN_SIZES),
+                   help=f"chain sizes (default {' '.join(map(str, CHAIN_SIZES))}; at least 2 for the slopes)")
 
 
 if __name__ == "__main__":

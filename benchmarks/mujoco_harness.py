@@ -1,7 +1,7 @@
 """MuJoCo's time in the comparison harness against MuJoCo alone: before and after issue 13.
 
-For each scene and integrator, in one process and interleaved rounds, over the same model and the
-same number of steps:
+For each scene and integrator, in one process, over the same model and the same number of steps,
+the three variants below interleaved in the same rounds (the order reversed every other round):
 
 * ``plain``: ``mujoco.mj_step(m, d, nstep=K)`` on a fresh ``MjData`` of the route-1 model, the
   energy flag off and no control callback: MuJoCo by itself, without the scene's inputs;
@@ -12,12 +12,13 @@ same number of steps:
 * ``before``: the harness as it was: a Python ``for`` loop of one ``mj_step`` per call, the energy
   flag on, ``mj_forward`` + copies + energies at each sample inside the timed loop, and the scene's
   inputs from the Python control callback (:class:`~urdf2links.compare.mujoco_side.mujoco_run.PythonInputs`) at
-  every RK4 stage. Scenes with inputs run it ``--before-rounds`` times only (tens of seconds each).
+  every RK4 stage (tens of seconds on scenes with inputs).
 
-The issue's criterion: ``engine`` within 2x of ``plain`` for ``urdf2links compare
+Ratios: of the medians, of the minima, and the tie rule's verdict (benchmarking.compare). The
+issue's criterion: ``engine`` within 2x of ``plain`` for ``urdf2links compare
 robots/ship_crane.toml --t-end 2`` (RK4, dt 1e-4 s). Usage::
 
-    python benchmarks/mujoco_harness.py [--rounds 5] [--before-rounds 1] [--out reports/benchmarks/mujoco_harness.json]
+    python benchmarks/mujoco_harness.py [--rounds 5] [--cases ship_crane:RK4 ...] [--out reports/benchmarks/mujoco_harness.json]
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ import time
 import mujoco
 import numpy as np
 
-from benchmarking import fmt_spread, markdown_table, rounds, run_benchmark, spread
+from benchmarking import compare, fmt_ratio, fmt_spread, markdown_table, rounds, run_benchmark, spread
 from urdf2links.compare.mujoco_side.mjcf import mjcf_from_scene
 from urdf2links.compare.mujoco_side.mujoco_run import PythonInputs, robot_energy, run_mujoco
 from urdf2links.locations import shipped_robots_dir
@@ -94,7 +95,7 @@ def before(scene, model, mj, plan, K):
         mujoco.set_mjcb_control(previous)
 
 
-def measure(case, n_rounds, before_rounds, log) -> dict:
+def measure(case, n_rounds, log) -> dict:
     name, integ, dt = case
     scene, model, mj, plan = _setup(name, integ, dt)
     K = int(round(T_END / dt))
@@ -110,36 +111,45 @@ def measure(case, n_rounds, before_rounds, log) -> dict:
     engine()   # the compiled callback is loaded (or compiled) once per process: not in a round
     harness.clear()
     log(f"{name} {integ} dt {dt:g}: {K} steps")
-    times = rounds({"plain": lambda: plain(scene, model, mj, K), "engine": engine}, n_rounds, log=log)
-    times["before"] = rounds({"before": lambda: before(scene, model, mj, plan, K)},
-                             before_rounds if info["inputs"] != "none" else n_rounds, log=log)["before"]
+    times = rounds({"plain": lambda: plain(scene, model, mj, K), "engine": engine,
+                    "before": lambda: before(scene, model, mj, plan, K)}, n_rounds, log=log)
     row = {"scene": name, "integrator": integ, "dt": dt, "t_end": T_END, "steps": K, "samples": SAMPLES,
            "inputs": info["inputs"], "callback_calls": info["calls"],
            **{k: spread(v) for k, v in times.items()}, "harness": spread(harness)}
-    row["engine_over_plain"] = row["engine"]["median"] / row["plain"]["median"]
-    row["before_over_engine"] = row["before"]["median"] / row["engine"]["median"]
-    row["before_over_plain"] = row["before"]["median"] / row["plain"]["median"]
-    log(f"  engine / plain x{row['engine_over_plain']:.2f}; before / engine x{row['before_over_engine']:.2f}")
+    row.update(comparisons(row))
+    log(f"  engine / plain {fmt_ratio(row['engine_vs_plain'])}; before / engine {fmt_ratio(row['before_vs_engine'])}")
     return row
+
+
+def comparisons(row) -> dict:
+    """engine against plain, before against engine and plain, under the tie rule (from the spreads: the
+    render recomputes them)."""
+    return {"engine_vs_plain": compare(row["engine"], row["plain"]),
+            "before_vs_engine": compare(row["before"], row["engine"]),
+            "before_vs_plain": compare(row["before"], row["plain"])}
 
 
 def table(rows) -> str:
     head = ["scene", "MuJoCo", "steps", "inputs", "plain mj_step(nstep) s", "engine s", "engine / plain",
             "whole run_mujoco s", "before s", "before / engine"]
     body = [[r["scene"], f"{r['integrator']} dt {r['dt']:g}", r["steps"], r["inputs"], fmt_spread(r["plain"]),
-             fmt_spread(r["engine"]), f"{r['engine_over_plain']:.2f}", fmt_spread(r["harness"]),
-             fmt_spread(r["before"]), f"{r['before_over_engine']:.1f}"] for r in rows]
-    crane = next(r for r in rows if r["scene"] == "ship_crane")
-    verdict = "within" if crane["engine_over_plain"] <= 2.0 else "NOT within"
+             fmt_spread(r["engine"]), fmt_ratio(r["engine_vs_plain"]), fmt_spread(r["harness"]),
+             fmt_spread(r["before"]), fmt_ratio(r["before_vs_engine"])] for r in rows]
+    crane = next((r for r in rows if r["scene"] == "ship_crane"), None)
+    verdict = "" if crane is None else (
+        f"\n\n`urdf2links compare robots/ship_crane.toml --t-end 2`: MuJoCo's engine time is "
+        f"{crane['engine_vs_plain']['median']:.2f}x (minima: {crane['engine_vs_plain']['min']:.2f}x) the plain "
+        f"mj_step(nstep) run of the same model and steps "
+        f"({'within' if crane['engine_vs_plain']['median'] <= 2.0 else 'NOT within'} 2x).")
     return ("# MuJoCo in the comparison harness, against MuJoCo alone\n\n"
-            f"t = 0..{T_END:g} s, {SAMPLES} samples; seconds: median (min-max) of interleaved rounds in one process. "
+            f"t = 0..{T_END:g} s, {SAMPLES} samples; seconds: median (min-max) of {rows[0]['plain']['rounds']} rounds "
+            "in one process, the three variants interleaved in every round. Ratios: of the medians, (min: of the "
+            "minima), and the tie rule's verdict (faster or slower only when the spreads do not overlap). "
             "plain: mj_step(m, d, nstep=K), no inputs, energy flag off. engine: run_mujoco's timed region "
             "(mj_step(nstep) from sample to sample, inputs from the compiled control callback). whole run_mujoco: "
             "the same call's set-up, sample copies and energy pass included. before: the harness before issue 13 "
             "(a Python loop of single mj_step calls, energy flag on, samples inside the loop, inputs from the Python "
-            "callback at every stage).\n\n" + markdown_table(head, body) + "\n\n"
-            f"`urdf2links compare robots/ship_crane.toml --t-end 2`: MuJoCo's engine time is "
-            f"{crane['engine_over_plain']:.2f}x the plain mj_step(nstep) run of the same model and steps ({verdict} 2x).")
+            "callback at every stage).\n\n" + markdown_table(head, body) + verdict)
 
 
 def plot(rows):
@@ -167,17 +177,18 @@ def plot(rows):
 
 
 def measure_all(args, log) -> dict:
-    return {"t_end": T_END, "samples": SAMPLES, "rounds": args.rounds, "before_rounds": args.before_rounds,
-            "rows": [measure(c, args.rounds, args.before_rounds, log) for c in CASES]}
+    cases = [c for c in CASES if not args.cases or f"{c[0]}:{c[1]}" in args.cases]
+    return {"t_end": T_END, "samples": SAMPLES, "rounds": args.rounds, "rows": [measure(c, args.rounds, log) for c in cases]}
 
 
 def render(data):
+    for r in data["rows"]:
+        r.update(comparisons(r))
     return table(data["rows"]), plot(data["rows"])
 
 
 def options(p):
-    p.add_argument("--before-rounds", type=int, default=1, help="rounds of the old harness on scenes with inputs "
-                   "(tens of seconds each; default 1)")
+    p.add_argument("--cases", nargs="+", help="only these cases, as scene:integrator (e.g. ur5_falling:Euler)")
 
 
 if __name__ == "__main__":

@@ -21,25 +21,17 @@ import time
 
 import numba
 import numpy as np
-from numba import njit
 
-from benchmarking import fmt_spread, markdown_table, rounds, run_benchmark, spread
+from benchmarking import compare, eval_loop, fmt_ratio, fmt_spread, markdown_table, rounds, run_benchmark, spread
 from urdf2links.integration.batch import simulate_batch
 from urdf2links.integration.integrators import integrate
 from urdf2links.locations import shipped_robots_dir
 from urdf2links.scenes.plan import compile_plan
 from urdf2links.scenes.scene import load_scene
-from urdf2links.scenes.scene_kernels import scene_rhs
 
 SCENES = ("double_pendulum_chaos", "ur5_falling", "spring_arm_torques", "ship_crane")
 SWEEP_SCENES = ("double_pendulum_chaos", "ur5_falling")
 SWEEP_SAMPLES = 101
-
-
-@njit(cache=True)
-def eval_loop(y, out, reps, I, F, W, SI, SF, X):
-    for r in range(reps):
-        scene_rhs(0.01 * r, y, out, I, F, W, SI, SF, X)
 
 
 def eval_cost(plan, y):
@@ -116,9 +108,9 @@ def sweep_row(name, T, B, n_rounds, log) -> dict:
            "single_s": spread(times["one at a time"]), "batch_nfev_mean": float(np.mean(out["batch"].nfev)),
            "single_nfev_mean": float(np.mean([r.nfev for r in out["single"]])), "max_difference": diff,
            "success": bool(out["batch"].success)}
-    row["speedup"] = row["single_s"]["median"] / row["batch_s"]["median"]
+    row["batch_vs_single"] = compare(row["batch_s"], row["single_s"])       # the render recomputes it
     log(f"sweep {name}: {B} trajectories, batch {fmt_spread(row['batch_s'])} s vs one at a time "
-        f"{fmt_spread(row['single_s'])} s (x{row['speedup']:.1f}; {row['threads']} threads)")
+        f"{fmt_spread(row['single_s'])} s (batch / single {fmt_ratio(row['batch_vs_single'])}; {row['threads']} threads)")
     return row
 
 
@@ -128,16 +120,17 @@ def table(rows, sweeps) -> str:
     body = [[r["scene"], r["n"], r["method"], f"{r['eval_us']:.2f}", fmt_spread(r["compiled_wall"]),
              f"{r['compiled_us_per_eval']:.2f}", f"{r['compiled_overhead']:.2f}", fmt_spread(r["python_wall"]),
              f"{r['python_us_per_eval']:.1f}", f"{r['python_overhead']:.1f}"] for r in rows]
-    sh = ["scene", "B", "threads", "batch s", "one at a time s", "speed-up", "evaluations per trajectory (batch / single)",
-          "max difference"]
+    sh = ["scene", "B", "threads", "batch s", "one at a time s", "batch / one at a time",
+          "evaluations per trajectory (batch / single)", "max difference"]
     sb = [[s["scene"], s["B"], s["threads"], fmt_spread(s["batch_s"]), fmt_spread(s["single_s"]),
-           f"{s['speedup']:.1f}", f"{s['batch_nfev_mean']:.0f} / {s['single_nfev_mean']:.0f}",
+           fmt_ratio(s["batch_vs_single"]), f"{s['batch_nfev_mean']:.0f} / {s['single_nfev_mean']:.0f}",
            f"{s['max_difference']:.1e}"] for s in sweeps]
     return ("# Where the time of a run goes\n\nIntegration wall times (integrate(), no samples), median (min-max) of "
             "interleaved rounds; overhead = wall / (evaluations x one evaluation's cost in a compiled loop).\n\n"
             + markdown_table(head, body) + "\n\n## Sweeps\n\nsimulate_batch against the same number of integrate() "
             "calls one after the other; both return (q, qd, W) at the same sample times (DOP853, the scene's "
-            "tolerances).\n\n" + markdown_table(sh, sb))
+            "tolerances). batch / one at a time: ratio of the medians, (min: of the minima), and the tie rule's "
+            "verdict (faster or slower only when the spreads do not overlap).\n\n" + markdown_table(sh, sb))
 
 
 def plot(rows):
@@ -166,6 +159,8 @@ def measure_all(args, log) -> dict:
 
 
 def render(data):
+    for s in data["sweeps"]:
+        s["batch_vs_single"] = compare(s["batch_s"], s["single_s"])
     return table(data["rows"], data["sweeps"]), plot(data["rows"])
 
 

@@ -127,6 +127,17 @@ def pytest_sessionfinish(session, exitstatus):
 
 
 @pytest.fixture(scope="session")
+def corpus_installed():
+    """The example-robot-data corpus's folder; fails the test (tests/corpus.py ``needs_corpus``) when it
+    is not installed: it is a test dependency, so missing means a broken install, never a skip."""
+    import corpus
+
+    if corpus.ROOT is None:
+        pytest.fail(corpus.MISSING)
+    return corpus.ROOT
+
+
+@pytest.fixture(scope="session")
 def dask_client():
     """A Dask client of a two-worker ``LocalCluster`` (one thread and one process each, as
     docs/corpus.md recommends), shared by the tests that compare a distributed run with the serial

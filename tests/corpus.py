@@ -17,8 +17,10 @@ MISSING = "example-robot-data is not installed: it is a test dependency (pip ins
 
 
 def needs_corpus(test):
-    """Marks a test that reads the corpus (for the reader; without the corpus :func:`path` fails it)."""
-    return test
+    """A test that reads the corpus: without it the test fails at its setup, naming what to install
+    (the session fixture ``corpus_installed`` of tests/conftest.py, set up before any fixture of a
+    narrower scope that would read the corpus first and fail with a less helpful error)."""
+    return pytest.mark.usefixtures("corpus_installed")(test)
 
 # Files of example-robot-data 6.0.0 that cannot be read (see tests/test_parse.py): an empty <robot>
 # without a name, which urdfdom (and so Pinocchio) refuses too. alex_psyonic_hands.urdf, whose <mimic>

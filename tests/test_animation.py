@@ -2,15 +2,13 @@
 
 Structural: the page holds the frames (at most 30 per simulated second), the links, every run's
 poses (decoded and compared with the model's own link poses), the shapes the URDF describes, the
-moving base; it references nothing on the network. Looked at: when Debian's chromium is installed,
-the page is rendered headless and the player must have run (it marks its element ready and writes
-the time). Real meshes: example-robot-data (test extra).
+moving base; it references nothing on the network. In a real browser (the player running, the robot
+drawn, play and the slider): tests/test_browser.py. Real meshes: example-robot-data (test extra).
 """
 
 from __future__ import annotations
 
 import re
-import shutil
 import subprocess
 import sys
 import warnings
@@ -33,7 +31,6 @@ from urdf2links.view.visuals import decimate, robot_shapes, tessellate
 
 ROOT = Path(__file__).resolve().parent.parent
 ROBOTS = ROOT / "robots"
-CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 
 
 @pytest.fixture(scope="module")
@@ -238,21 +235,3 @@ def test_thumbnail_of_a_meshed_robot(tmp_path):
     assert (tmp_path / "ur5.png").read_bytes() == png
     px = png_pixels(png)
     assert 0.01 < (px[..., :3] < 0.9).any(axis=-1).mean() < 0.6
-
-
-# --------------------------------------------------------------------------- looked at
-
-
-@pytest.mark.skipif(CHROMIUM is None, reason="no headless browser (apt-get install chromium)")
-def test_page_runs_in_a_headless_browser(pendulum_run, tmp_path):
-    """The player runs (no script error): it marks its element ready and shows the time asked for."""
-    scene, model, traj = pendulum_run
-    page, _ = trajectory_page(traj, model)
-    path = tmp_path / "page.html"
-    path.write_text(page)
-    out = subprocess.run([CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-                          "--virtual-time-budget=4000", "--dump-dom", f"file://{path}#t=1.25"],
-                         capture_output=True, text=True, timeout=120)
-    dom = out.stdout
-    assert 'data-ready="1"' in dom, out.stderr[-2000:]
-    assert "t = 1.250 s / 2.000 s" in dom

@@ -278,3 +278,73 @@ def test_thumbnail_beside_each_robot(tmp_path):
     assert ("<a href='double_pendulum.urdf/report.html'><img class='thumb' alt='' "
             "src='double_pendulum.urdf/thumbnail.png'></a>") in index
     assert (tmp_path / "double_pendulum.urdf" / "thumbnail.png").is_file()
+
+
+# --------------------------------------------------------------------------- a worker dies
+
+KILLER = Path(__file__).resolve().parent / "worker_killer.py"
+FLEET_ARGS = ["--t-end", "0.05", "--states", "1", "--no-thumbnails"]
+
+
+def _fleet(folder: Path, *names: str) -> Path:
+    """Copies of the shipped double pendulum named ``names`` (tests/worker_killer.py acts on the names)."""
+    for name in names:
+        _robot(folder, f"{name}.urdf")
+    return folder
+
+
+def _rows(out: Path) -> dict:
+    return {r["file"]: r for r in json.loads((out / "corpus.json").read_text())["robots"]}
+
+
+def test_a_robot_whose_worker_process_dies_is_a_failed_row(tmp_path):
+    """docs/corpus.md: a robot whose worker dies is reported as failed and the report completes. Two
+    worker processes (`--jobs 2`); ``die_once`` kills its worker the first time it runs, ``kill_me``
+    every time (SIGKILL, tests/worker_killer.py). The robots the dead pool had not finished run again
+    one at a time: ``die_once`` is then compared, ``kill_me`` kills its lone worker again and is a
+    failed row saying so; the others are compared, the report is written, the exit status is 1."""
+    fleet = _fleet(tmp_path / "fleet", "a", "die_once", "kill_me", "z")
+    out = tmp_path / "out"
+    run = subprocess.run([sys.executable, str(KILLER), "report", "--corpus", str(fleet), "--jobs", "2", *FLEET_ARGS,
+                          "--out", str(out)], capture_output=True, text=True, timeout=900)
+    assert run.returncode == 1, run.stderr[-3000:]
+    assert "a worker process died; running its" in run.stderr
+    rows = _rows(out)
+    assert {f: r["status"] for f, r in rows.items()} == {
+        "a.urdf": "compared", "die_once.urdf": "compared", "kill_me.urdf": "failed", "z.urdf": "compared"}
+    assert rows["kill_me.urdf"]["stage"] == "worker"
+    assert "worker process died while running this robot, alone" in rows["kill_me.urdf"]["reason"]
+    assert (tmp_path / "fleet" / "die_once.urdf.died").is_file()     # it did kill a worker once
+    assert (out / "index.html").is_file() and "kill_me.urdf" in (out / "corpus.md").read_text()
+    assert "kill_me.urdf failed at worker" in run.stderr
+
+
+def test_a_robot_whose_dask_worker_dies_is_a_failed_row(tmp_path):
+    """The same on a Dask cluster (`--scheduler ADDRESS`): a two-worker LocalCluster whose workers run
+    tests/worker_killer.py at start (its nanny restarts a killed worker, which runs it again). Dask
+    retries a task whose worker died (here once: ``allowed-failures`` 1, to keep the test short);
+    ``kill_me`` kills both tries and is a failed row naming KilledWorker; the others are compared, the
+    report is written, the exit status is 1. ``worker-saturation`` 1.0 sends each worker one task at a
+    time, so that a death blames only the robot that was running (Dask counts a death against every
+    task the worker held)."""
+    import logging
+
+    import dask
+    from dask.distributed import LocalCluster
+
+    fleet = _fleet(tmp_path / "fleet", "a", "kill_me", "z")
+    out = tmp_path / "out"
+    logging.getLogger("distributed").setLevel(logging.CRITICAL)       # the deaths' tracebacks
+    with dask.config.set({"distributed.scheduler.allowed-failures": 1, "distributed.scheduler.worker-saturation": 1.0}):
+        # its HTTP server on a free port: the session's other cluster (conftest.dask_client) may hold 8787
+        with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0",
+                          preload=[str(KILLER)]) as cluster:
+            run = subprocess.run([sys.executable, "-m", "urdf2links.cli", "report", "--corpus", str(fleet), "--scheduler",
+                                  cluster.scheduler_address, *FLEET_ARGS, "--out", str(out)],
+                                 capture_output=True, text=True, timeout=900)
+    assert run.returncode == 1, run.stderr[-3000:]
+    rows = _rows(out)
+    assert {f: r["status"] for f, r in rows.items()} == {"a.urdf": "compared", "kill_me.urdf": "failed",
+                                                         "z.urdf": "compared"}
+    assert rows["kill_me.urdf"]["stage"] == "worker" and "KilledWorker" in rows["kill_me.urdf"]["reason"]
+    assert (out / "index.html").is_file() and "kill_me.urdf failed at worker" in run.stderr
