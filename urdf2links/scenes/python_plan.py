@@ -82,7 +82,7 @@ class PythonPlan:
     def _power(self, qd, q, f, kin, base_T) -> float:
         plan = self.plan
         P = 0.0
-        if any(term in plan.terms for term in ("Q", "tau", "damper")):
+        if any(term in plan.terms for term in ("Q", "tau", "damper", "gravcomp")):
             f = f.copy()
             if plan.spring_index.size:  # springs are a potential, not work
                 f[plan.spring_index] += plan.stiffness * (q[plan.spring_index] - plan.rest)
