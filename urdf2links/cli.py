@@ -1,4 +1,4 @@
-"""Command line: ``urdf2links inspect FILE.urdf|FILE.xacro|SCENE.toml``, ``urdf2links simulate
+"""Command line: ``urdf2links inspect FILE.urdf|FILE.xacro|FILE.xml|SCENE.toml``, ``urdf2links simulate
 SCENE.toml|ROBOT.urdf``, ``urdf2links sweep SCENE.toml|ROBOT.urdf``, ``urdf2links compare
 SCENE.toml|ROBOT.urdf``, ``urdf2links report [--corpus DIR ...]`` and ``urdf2links tradeoff SCENE.toml``
 (the MuJoCo comparison and the work-precision study: the handlers import the ``compare`` package,
@@ -14,7 +14,7 @@ import warnings
 import numpy as np
 
 from .dynamics.transforms import PARAMETERS
-from .errors import DynamicsError, IntegrationError, SceneError, URDFError
+from .errors import DescriptionError, DynamicsError, IntegrationError, SceneError
 from .scenes.limits import LimitExcursion
 from .scenes.scene_toml import scene_from_args, write_scene_option, xacro_args_of
 
@@ -58,9 +58,28 @@ def _num(v) -> str:
     return "-" if v is None else f"{v:.4g}"
 
 
+def _mjcf_joint_lines(joints) -> list[str]:
+    """An MJCF model's joints: type, coordinates, limits, armature (in A), damping, stiffness at springref."""
+    rows = [("joint", "type", "coordinates", "lower", "upper", "armature", "damping", "stiffness", "springref",
+             "frictionloss")]
+    for j in joints:
+        rows.append((j["name"], j["type"], ", ".join(j["coordinates"]), _num(j["lower"]), _num(j["upper"]),
+                     _num(j["armature"]), _num(j["damping"]), _num(j["stiffness"]), _num(j["springref"]),
+                     _num(j["friction"])))
+    widths = [max(len(r[c]) for r in rows) for c in range(len(rows[0]))]
+    lines = ["  ".join(cell.ljust(w) for cell, w in zip(r, widths)).rstrip() for r in rows]
+    lines.insert(1, "  ".join("-" * w for w in widths))
+    return ["", "joints (MuJoCo's compiled values; qpos of hinges and slides is the coordinate; armature is part of A; "
+            "damping, stiffness and gravcomp act in scenes that ask ([dampers], [springs], [gravcomp] from_file, as "
+            "the default scene does); limits not enforced; friction not modelled):"] + lines
+
+
 def _joint_lines(joints) -> list[str]:
     """The URDF joints with what ``<limit>`` and ``<dynamics>`` say (limits are not enforced; damping acts
-    only in scenes with ``[dampers] from_urdf = true``; friction is not modelled)."""
+    only in scenes with ``[dampers] from_urdf = true``; friction is not modelled); an MJCF model's
+    joints with armature, damping and stiffness (:func:`_mjcf_joint_lines`)."""
+    if joints and "armature" in joints[0]:
+        return _mjcf_joint_lines(joints)
     moving = [j for j in joints if j["type"] != "fixed"]
     if not moving:
         return []
@@ -76,8 +95,15 @@ def _joint_lines(joints) -> list[str]:
             "from_urdf = true; friction not modelled):"] + lines
 
 
+def _load_options(args) -> dict:
+    """The loading options of ``inspect`` for :func:`~urdf2links.parsers.robot_file.load_robot` (an MJCF
+    file takes only ``inertia`` and ``strict``; the URDF ones are refused by name when given)."""
+    return dict(floating_base=args.floating_base, inertia=args.inertia, mimic=args.mimic,
+                package_dirs=args.package_dir, strict=args.strict, xacro_args=xacro_args_of(args))
+
+
 def _inspect(args) -> int:
-    from .parsers.importer import load_urdf
+    from .parsers.robot_file import load_robot as load_urdf
 
     if args.scene:
         from .scenes.plan import compile_plan
@@ -86,8 +112,7 @@ def _inspect(args) -> int:
 
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            model = load_urdf(args.file, floating_base=args.floating_base, inertia=args.inertia, mimic=args.mimic,
-                              package_dirs=args.package_dir, strict=args.strict, xacro_args=xacro_args_of(args))
+            model = load_urdf(args.file, **_load_options(args))
         scene = default_scene(args.file, floating=args.floating_base, q0=args.q0, seed=args.seed,
                               t_end=args.t_end or 1.0, xacro_args=xacro_args_of(args), package_dirs=args.package_dir,
                               inertia=args.inertia, mimic=args.mimic, strict=args.strict, model=model)
@@ -106,9 +131,7 @@ def _inspect(args) -> int:
         return 0
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the findings are printed in the table below
-        model = load_urdf(args.file, floating_base=args.floating_base, inertia=args.inertia,
-                          mimic=args.mimic, package_dirs=args.package_dir, strict=args.strict,
-                          xacro_args=xacro_args_of(args))
+        model = load_urdf(args.file, **_load_options(args))
     print(format_tree(model))
     return 0
 
@@ -277,8 +300,8 @@ def _add_robot_options(p, *, inspect: bool = False) -> None:
 
 def _inspect_parser(sub) -> None:
     """The ``inspect`` command's options."""
-    p = sub.add_parser("inspect", help="print a URDF's tree of links, joints, inertia audit and import notes")
-    p.add_argument("file", help="a .urdf or .xacro file (or a scene .toml: its plan)")
+    p = sub.add_parser("inspect", help="print a robot's tree of links, joints, inertia audit and import notes")
+    p.add_argument("file", help="a .urdf, .xacro or MJCF .xml file (or a scene .toml: its plan)")
     p.add_argument("--floating-base", "--floating", action="store_true", help="six coordinates for the root link")
     p.add_argument("--inertia", choices=("audit", "strict", "repair"), default="audit")
     p.add_argument("--mimic", choices=("independent", "coupled"), default="independent")
@@ -294,7 +317,7 @@ def _simulate_parser(sub) -> None:
     """The ``simulate`` command's options."""
     p = sub.add_parser("simulate", help="simulate a scene (TOML), or a robot in its default scene, and save the "
                                         "trajectory")
-    p.add_argument("scene", help="a scene .toml file, or a robot (.urdf, .xacro) run in its default scene: gravity, "
+    p.add_argument("scene", help="a scene .toml file, or a robot (.urdf, .xacro, .xml) run in its default scene: gravity, "
                                  "fixed base, at rest, URDF damping, 1 s")
     _add_robot_options(p)
     p.add_argument("--seed", type=int, default=0, help="seed of --q0 random (default 0)")
@@ -319,7 +342,7 @@ def _compare_parser(sub) -> None:
                                    "base motion prescribed) from the same initial state; compare the terms at identical "
                                    "states (routes 1 and 2), the trajectories, the energies and the wall times; write "
                                    "report.html, summary.json and summary.md.")
-    p.add_argument("scene", help="a scene .toml file, or a robot (.urdf, .xacro) run in its default scene")
+    p.add_argument("scene", help="a scene .toml file, or a robot (.urdf, .xacro, .xml) run in its default scene")
     _add_robot_options(p)
     _add_mujoco_options(p)
     p.add_argument("--method", help="the project's integrator (default: the scene's)")
@@ -378,7 +401,7 @@ def _sweep_parser(sub) -> None:
                                    "uniform draw in [-spread, spread]), integrate them with the compiled batch loop "
                                    "(DOP853 or RK45, one trajectory per thread), on this machine or split across the "
                                    "workers of a Dask cluster (same results), and save them as an .npz.")
-    p.add_argument("scene", help="a scene .toml file, or a robot (.urdf, .xacro) in its default scene")
+    p.add_argument("scene", help="a scene .toml file, or a robot (.urdf, .xacro, .xml) in its default scene")
     _add_robot_options(p)
     p.add_argument("--count", type=int, default=100, help="number of initial states (default 100)")
     p.add_argument("--seed", type=int, default=0, help="seed of the states' draw (and of --q0 random; default 0)")
@@ -433,7 +456,7 @@ def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)
-    except (URDFError, SceneError, DynamicsError, IntegrationError) as err:
+    except (DescriptionError, SceneError, DynamicsError, IntegrationError) as err:
         print(f"urdf2links {args.command}: error: {err}", file=sys.stderr)
         return 2
 

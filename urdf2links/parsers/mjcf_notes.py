@@ -67,7 +67,7 @@ def inventory(m, joint_kinds: dict) -> list[str]:
     add(len(friction), f"friction loss on joint(s) {', '.join(_joint_name(m, j) for j in friction[:8])}",
         "Coulomb friction is not modelled; MuJoCo's run disables it")
     fluid = [f"{k} {v}" for k, v in (("density", m.opt.density), ("viscosity", m.opt.viscosity)) if v != 0.0]
-    if np.any(m.opt.wind) or np.any(m.opt.magnetic):
+    if np.any(m.opt.wind):
         fluid.append(f"wind {m.opt.wind.tolist()}")
     add(len(fluid), f"<option> fluid forces ({', '.join(fluid)})",
         "not modelled; MuJoCo's run sets density, viscosity and wind to 0")
