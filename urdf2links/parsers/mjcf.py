@@ -97,10 +97,14 @@ def compile_mjcf(source, notes: list[str] | None = None):
     where = "<string>" if text else str(source)
     if not text and not Path(str(source)).is_file():
         raise MJCFError(f"MJCF file {where} does not exist (or is not a file)")
+    import warnings
+
     try:
-        with _captured(notes):
+        with _captured(notes), warnings.catch_warnings(record=True) as said:
+            warnings.simplefilter("always")
             spec = mujoco.MjSpec.from_string(source) if text else mujoco.MjSpec.from_file(str(source))
             m = spec.compile()
+        notes += [f"MuJoCo said: {w.message}" for w in said]
     except (ValueError, RuntimeError, mujoco.FatalError) as err:
         reason = " ".join(str(err).split())
         raise MJCFError(f"{where}: MuJoCo's compiler refused the file: {reason}", problem=reason) from None
