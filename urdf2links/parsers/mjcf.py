@@ -46,6 +46,7 @@ from ..dynamics.rotations import axis_alignment, homogeneous, matrix_to_xyz_angl
 from ..dynamics.transforms import PARAMETERS
 from ..dynamics.tree import LinkSpec, build_tree
 from ..errors import MJCFError
+from ..ranges import out_of_range
 from .mjcf_notes import inventory
 from .mjcf_state import MujocoJoint, MujocoMap, quat_to_matrix
 
@@ -131,7 +132,53 @@ def load_mjcf(source, *, inertia: str = "audit", strict: bool = False) -> Model:
         raise ValueError(f"inertia must be one of ('audit', 'strict', 'repair'), got {inertia!r}")
     notes: list[str] = []
     m, where = compile_mjcf(source, notes)
+    check_ranges(m, where)
     return _Builder(m, where, notes).model()
+
+
+#: What :func:`check_ranges` reads from the compiled model: (object, MjModel array, quantity, what it is).
+_CHECKED = (("body", "body_pos", "length", "position"), ("body", "body_mass", "mass", "mass"),
+            ("body", "body_ipos", "length", "centre of mass"), ("body", "body_inertia", "inertia", "inertia"),
+            ("body", "body_gravcomp", "scale", "gravcomp"), ("joint", "jnt_pos", "length", "anchor pos"),
+            ("joint", "jnt_stiffness", "damping", "stiffness"), ("joint", "qpos0", "state", "ref / qpos0"),
+            ("joint", "qpos_spring", "state", "springref"), ("dof", "dof_armature", "inertia", "armature"),
+            ("dof", "dof_damping", "damping", "damping"))
+
+
+def check_ranges(m, where: str) -> None:
+    """Every number of the compiled model the dynamics uses within its physical range
+    (:data:`urdf2links.ranges.RANGES`, as for a URDF): an :class:`MJCFError` names the file, the body or
+    joint, the attribute, the value and the range. MuJoCo's compiler takes ``pos="1e300 0 0"``; the
+    products of the equations of motion would overflow."""
+    import mujoco
+
+    for obj, attr, quantity, what in _CHECKED:
+        values = np.asarray(getattr(m, attr), float)
+        if values.size == 0:
+            continue
+        rows = values.reshape(values.shape[0], -1)
+        for i, row in enumerate(rows):
+            for v in row:
+                problem = out_of_range(float(v), quantity)
+                if problem is None:
+                    continue
+                if obj == "body":
+                    name = f"body {mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, i) or i!r}"
+                elif obj == "dof":
+                    j = int(m.dof_jntid[i])
+                    name = f"joint {mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, j) or j!r}"
+                elif attr in ("qpos0", "qpos_spring"):
+                    j = int(np.searchsorted(m.jnt_qposadr, i, side="right") - 1)
+                    name = f"joint {mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, j) or j!r}"
+                else:
+                    name = f"joint {mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, i) or i!r}"
+                raise MJCFError(f"{where}: {name}: {what} (MuJoCo's compiled {attr}) {problem}; correct the value in "
+                                "the file", problem=f"{name}: {what} {problem}")
+    g = np.asarray(m.opt.gravity, float)
+    for v in g:
+        problem = out_of_range(float(v), "acceleration")
+        if problem:
+            raise MJCFError(f"{where}: <option gravity>: {problem}; correct the value in the file")
 
 
 def load_mjcf_string(text: str, **options) -> Model:
