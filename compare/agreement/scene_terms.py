@@ -58,6 +58,7 @@ def _with_gravity(model, gravity):
     if np.array_equal(np.asarray(model.gravity_vector), g):
         return model
     out = copy.copy(model)
+    out._g = g.copy()       # the compiled hot path reads _g: without it, gravity() kept the model's own
     g = g.copy()
     g.setflags(write=False)
     out.gravity_vector = g

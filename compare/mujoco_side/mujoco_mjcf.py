@@ -134,9 +134,12 @@ def file_terms(mf: MujocoFile, model, scene, *, states: int = 8, seed: int = 0) 
     """``A`` against ``J^T M J`` and ``e + G`` (the scene's gravity) against ``J^T (qfrc_bias + M J' q')``
     at seeded states around MuJoCo's qpos0 (``q0 + U(-1, 1)``, ``q'`` standard normal). Returns a
     JSON-ready dict like route 2's for a URDF."""
-    from ..agreement.scene_terms import _with_gravity
-
-    ours = _with_gravity(model, scene.gravity)
+    g = np.zeros(3) if scene.gravity is None else np.asarray(scene.gravity, float)
+    ours = model if np.array_equal(model.gravity_vector, g) else copy.copy(model)
+    if ours is not model:     # the hot path reads _g (writable), the oracles gravity_vector
+        ours._g = g.copy()
+        g.setflags(write=False)
+        ours.gravity_vector = g
     m = mf.model
     d = mujoco.MjData(m)
     qmap = model.info["mujoco"]

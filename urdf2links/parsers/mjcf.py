@@ -174,6 +174,13 @@ def check_ranges(m, where: str) -> None:
                     name = f"joint {mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, i) or i!r}"
                 raise MJCFError(f"{where}: {name}: {what} (MuJoCo's compiled {attr}) {problem}; correct the value in "
                                 "the file", problem=f"{name}: {what} {problem}")
+    for j in range(m.njnt):
+        norm = float(np.linalg.norm(m.jnt_axis[j]))
+        if int(m.jnt_type[j]) in (2, 3) and not abs(norm - 1.0) < 1e-6:     # slide, hinge: MuJoCo normalised it
+            name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, j) or j
+            raise MJCFError(f"{where}: joint {name!r}: its axis has no direction after MuJoCo's compiler normalised it "
+                            f"({np.asarray(m.jnt_axis[j]).tolist()}: the file's axis was zero or overflowed); give a "
+                            "finite non-zero axis")
     g = np.asarray(m.opt.gravity, float)
     for v in g:
         problem = out_of_range(float(v), "acceleration")
