@@ -151,6 +151,16 @@ MODELS = {
     </body>
   </worldbody>
 </mujoco>""",
+    # the file's own <flag>s: gravity and dampers off (the default scene follows them)
+    "flags": """<mujoco model="flags">
+  <option gravity="0 0 -9.81"><flag gravity="disable" damper="disable"/></option>
+  <worldbody>
+    <body name="a" pos="0 0 1">
+      <joint name="ja" type="hinge" axis="0 1 0" damping="3" stiffness="2"/>
+      <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03"/>
+    </body>
+  </worldbody>
+</mujoco>""",
 }
 
 #: Files the models include, by name.

@@ -218,6 +218,18 @@ def test_default_scene_takes_the_files_effects(files):
     assert [(s.coordinate, s.stiffness, s.rest, s.damping) for s in springs] == [("h", 2.0, pytest.approx(np.radians(40)), 0.3)]
 
 
+def test_the_files_own_flags_are_followed(files):
+    """<flag gravity="disable" damper="disable"/>: the model's gravity is 0, and the default scene has no
+    gravity and no dampers (the stiffness still acts); MuJoCo's run switches on what a scene names."""
+    from urdf2links.scenes.plan import compile_plan
+    from urdf2links.scenes.scene import default_scene
+
+    model = load_mjcf(files["flags"])
+    assert model.gravity_vector.tolist() == [0.0, 0.0, 0.0] and "gravity" in model.info["option"]["disabled"]
+    scene = default_scene(files["flags"])
+    assert scene.gravity is None and set(compile_plan(scene, model).terms) == {"A", "e", "spring"}
+
+
 def test_gravcomp_equals_mujocos(files):
     """The gravcomp loads' generalized forces equal MuJoCo's qfrc_gravcomp (mapped by J^T), 1e-12."""
     from urdf2links.scenes.plan import compile_plan

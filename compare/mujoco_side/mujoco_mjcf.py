@@ -74,6 +74,8 @@ def mujoco_from_mjcf(plan, *, timestep: float | None = None, integrator: str | N
     m, where = compile_mjcf(str(scene.robot), notes)
     g = np.zeros(3) if scene.gravity is None else np.asarray(scene.gravity, float)
     m.opt.gravity[:] = g
+    for name in ("mjDSBL_GRAVITY", "mjDSBL_SPRING", "mjDSBL_DAMPER"):    # the scene says (the file's flags notwithstanding)
+        m.opt.disableflags &= ~int(getattr(mujoco.mjtDisableBit, name))
     for name in MUJOCO_OFF:
         m.opt.disableflags |= int(getattr(mujoco.mjtDisableBit, name))
     springs = plan.spring_set.springs

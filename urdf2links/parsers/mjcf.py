@@ -122,7 +122,8 @@ def load_mjcf(source, *, inertia: str = "audit", strict: bool = False) -> Model:
     use, and what the comparison does about it), ``joints`` (type, coordinates, limits, armature,
     damping, stiffness, springref), ``gravcomp`` (body -> its fraction), ``frame_of`` (body ->
     tree link and ``X``), ``q0`` (MuJoCo's qpos0 in the model's coordinates), ``option`` (gravity,
-    timestep, integrator). Gravity is the file's ``<option gravity>``.
+    timestep, integrator, the ``<flag>`` s the file disables). Gravity is the file's ``<option gravity>``,
+    or 0 when its ``<flag gravity="disable"/>``.
 
     ``inertia``: ``"audit"`` or ``"repair"`` (MuJoCo's compiler has checked every inertia, so nothing
     is found to repair), ``"strict"`` accepted likewise; ``strict``: MuJoCo's reading has nothing
@@ -354,6 +355,15 @@ class _Builder:
                               + (f", ... ({len(welded)} in all)" if len(welded) > 8 else ""))
         self.notes += inventory(m, kinds)
         integrator = mj.mjtIntegrator(int(m.opt.integrator)).name.removeprefix("mjINT_")
+        disabled = [name.removeprefix("mjDSBL_").lower() for name in dir(mj.mjtDisableBit)
+                    if name.startswith("mjDSBL_") and int(m.opt.disableflags) & int(getattr(mj.mjtDisableBit, name))]
+        gravity = np.zeros(3) if "gravity" in disabled else np.array(m.opt.gravity, float)
+        if disabled:
+            self.notes.append(f"<option><flag> disables {', '.join(disabled)}: "
+                              + ("the model's gravity is 0 (the file's gravity is off); " if "gravity" in disabled else "")
+                              + ("its default scene applies no joint stiffness; " if "spring" in disabled else "")
+                              + ("its default scene applies no joint damping; " if "damper" in disabled else "")
+                              + "a scene's own effects are switched on in MuJoCo's run regardless")
         gravcomp = {self.name("mjOBJ_BODY", b, f"body{b}"): float(m.body_gravcomp[b])
                     for b in range(1, m.nbody) if m.body_gravcomp[b] != 0.0}
         frame_of = {k: (tree.link_names[t], X.tolist()) for k, (t, X) in self.frame_of.items()}
@@ -361,12 +371,12 @@ class _Builder:
                 for b in range(1, m.nbody)}
         info = {"format": "mjcf", "coordinates": self.coord_info, "notes": self.notes, "joints": self.joint_rows,
                 "frame_of": frame_of, "mujoco": qmap, "q0": q0, "gravcomp": gravcomp, "body_mass_com": coms,
-                "option": {"gravity": np.array(m.opt.gravity, float).tolist(), "timestep": float(m.opt.timestep),
-                           "integrator": integrator},
+                "option": {"gravity": gravity.tolist(), "timestep": float(m.opt.timestep), "integrator": integrator,
+                           "disabled": disabled},
                 "source_file": None if self.where == "<string>" else str(Path(self.where).resolve())}
         try:
             model_name = self.name("mjOBJ_MODEL", 0, "")
         except (AttributeError, TypeError, ValueError):
             model_name = ""
         model_name = model_name or (Path(self.where).stem if self.where != "<string>" else "mjcf")
-        return Model(tree, gravity=np.array(m.opt.gravity, float), name=model_name, source=self.where, info=info)
+        return Model(tree, gravity=gravity, name=model_name, source=self.where, info=info)

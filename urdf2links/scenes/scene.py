@@ -445,12 +445,15 @@ def default_scene(robot, *, floating: bool = False, q0: str = "zero", seed: int 
     run = RunSettings(t_end=t_end, samples=min(MAX_SAMPLES, max(101, int(round(500 * t_end)) + 1)))
     if mjcf:
         g = np.asarray(model.info["option"]["gravity"], float)
+        off = model.info["option"].get("disabled", [])
         state = "MuJoCo's qpos0" + (f", random within the limits (seed {seed})" if q0 == "random" else "")
+        effects = [w for w, on in (("joint damping", "damper" not in off), ("stiffness (at springref)", "spring" not in off),
+                                   ("gravcomp", True)) if on]
         return Scene(name=DEFAULT_SCENE_NAME, path=None, robot=Path(robot), load_options=options,
-                     description=f"default scene of an MJCF file: the file's gravity {g.tolist()}"
-                                 + ", its joint damping, stiffness (at springref) and gravcomp; at rest at " + state,
-                     gravity=g if np.any(g) else None, q0=q_init, urdf_damping=True, file_springs=True, gravcomp=True,
-                     run=run)
+                     description=f"default scene of an MJCF file: the file's gravity {g.tolist()}, its "
+                                 + ", ".join(effects) + "; at rest at " + state,
+                     gravity=g if np.any(g) else None, q0=q_init, urdf_damping="damper" not in off,
+                     file_springs="spring" not in off, gravcomp=True, run=run)
     base = "floating base" if floating else "fixed base"
     return Scene(name=DEFAULT_SCENE_NAME, path=None, robot=Path(robot), load_options=options,
                  description=f"default scene: gravity, {base}, q0 {q0}" + (f" (seed {seed})" if q0 == "random" else "")
