@@ -167,6 +167,11 @@ class SceneComparison:
     def key(self) -> str:
         return scene_key(self.scene)
 
+    def summary_route(self) -> str:
+        """Which of MuJoCo's models ran the trajectory: ``"route 1"`` (the project's tree as MJCF) or
+        ``"route 2"`` (an MJCF file itself)."""
+        return "route 2" if self.info.get("trajectory_route") == FILE_LABEL else "route 1"
+
     @property
     def coordinate_names(self) -> tuple[str, ...]:
         return tuple(self.model.coordinate_names)
