@@ -6,8 +6,8 @@ from __future__ import annotations
 
 from ..dynamics.model import Model
 from ..errors import MJCFError
-from .importer import load_urdf
-from .mjcf import is_mjcf_path, load_mjcf
+from . import importer, mjcf
+from .mjcf import is_mjcf_path
 
 __all__ = ["load_robot", "is_mjcf_path", "URDF_ONLY"]
 
@@ -21,7 +21,7 @@ def load_robot(path, **options) -> Model:
     :func:`~urdf2links.parsers.importer.load_urdf`; an MJCF file takes ``inertia`` and ``strict``, and
     refuses the URDF-only ones when they ask for something)."""
     if not is_mjcf_path(path):
-        return load_urdf(path, **options)
+        return importer.load_urdf(path, **options)     # through the module: one place to count or wrap loads
     asked = [k for k, v in options.items() if k in URDF_ONLY and v not in (URDF_ONLY[k], None, (), [], {})]
     if asked:
         raise MJCFError(f"{path}: {', '.join(asked)} apply to URDF files; an MJCF file says itself how its bodies move "
@@ -30,4 +30,4 @@ def load_robot(path, **options) -> Model:
     unknown = [k for k in options if k not in URDF_ONLY and k not in ("inertia", "strict")]
     if unknown:
         raise TypeError(f"load_robot: unknown option(s) {unknown}")
-    return load_mjcf(path, **{k: v for k, v in options.items() if k in ("inertia", "strict")})
+    return mjcf.load_mjcf(path, **{k: v for k, v in options.items() if k in ("inertia", "strict")})
