@@ -294,3 +294,34 @@ def test_corpus_finds_mjcf_files_but_not_package_xml(files, tmp_path):
     (tmp_path / "arm.xml").write_text(MODELS["ball"])
     (tmp_path / "arm.urdf").write_text((ROOT / "robots" / "double_pendulum.urdf").read_text())
     assert [r.id for r in find_robots([tmp_path])] == ["arm.urdf", "arm.xml"]
+
+
+def test_scene_files_name_mjcf_robots_and_round_trip(files, tmp_path):
+    """A scene file names an .xml robot (``mjcf = ...``) and asks for the file's effects; the default
+    scene of an .xml written as TOML reads back to the same effects."""
+    from urdf2links.scenes.plan import compile_plan
+    from urdf2links.scenes.scene import default_scene, load_scene
+    from urdf2links.scenes.scene_toml import write_scene
+
+    scene_file = tmp_path / "free.toml"
+    scene_file.write_text(f'[robot]\nmjcf = "{files["free"]}"\n[gravity]\n[dampers]\nfrom_file = true\n'
+                          '[gravcomp]\nfrom_file = true\n[initial]\nqd = { flap = 1.0 }\n')
+    scene = load_scene(scene_file)
+    model = scene.model()
+    assert set(compile_plan(scene, model).terms) == {"A", "e", "G", "damper", "gravcomp"}
+    q0, qd0 = scene.initial_state(model)
+    assert q0 == pytest.approx(model.info["q0"]) and qd0[model.coordinate_names.index("flap")] == 1.0
+    default = default_scene(files["hinge_anchor"])
+    again = load_scene(write_scene(default, tmp_path / "hinge.toml"))
+    assert (again.urdf_damping, again.file_springs, again.gravcomp) == (True, True, True)
+    assert again.gravity == pytest.approx(default.gravity) and again.robot.resolve() == Path(files["hinge_anchor"]).resolve()
+
+
+def test_a_corpus_row_of_an_mjcf_file(files):
+    from urdf2links.compare.corpus.rows import CorpusSettings, RobotFile, evaluate_robot
+
+    res = evaluate_robot(RobotFile(id="ball.xml", path=str(files["ball"])), CorpusSettings(t_end=0.2, states=2,
+                                                                                           thumbnails=True))
+    assert res.row["status"] == "compared", res.row
+    assert res.row["terms"]["route1"] < 1e-10 and res.row["terms"]["route2"] < 1e-10, res.row["terms"]
+    assert "thumbnail" in res.row and "report.html" in res.files
