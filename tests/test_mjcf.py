@@ -325,3 +325,15 @@ def test_a_corpus_row_of_an_mjcf_file(files):
     assert res.row["status"] == "compared", res.row
     assert res.row["terms"]["route1"] < 1e-10 and res.row["terms"]["route2"] < 1e-10, res.row["terms"]
     assert "thumbnail" in res.row and "report.html" in res.files
+
+
+def test_batches_with_armature_equal_single_states_to_the_bit(files):
+    """The armature runs through the same compiled row functions: a batch equals per-state calls bit for bit."""
+    model = load_mjcf(files["ball"])
+    rng = np.random.default_rng(5)
+    Q, QD = model.info["q0"] + rng.uniform(-1, 1, (6, model.n)), rng.normal(size=(6, model.n))
+    A, QDD, E = model.mass_matrix(Q), model.forward_dynamics(Q, QD), model.kinetic_energy(Q, QD)
+    for b in range(6):
+        assert np.array_equal(A[b], model.mass_matrix(Q[b]))
+        assert np.array_equal(QDD[b], model.forward_dynamics(Q[b], QD[b]))
+        assert E[b] == model.kinetic_energy(Q[b], QD[b])
