@@ -86,7 +86,7 @@ def test_find_robots_folders_files_and_patterns(tmp_path):
     with pytest.raises(FileNotFoundError, match="no such folder or file"):
         find_robots([tmp_path / "nowhere"])
     (tmp_path / "empty").mkdir()
-    with pytest.raises(ValueError, match="no .urdf or .xacro"):
+    with pytest.raises(ValueError, match="no .urdf, .xacro or MJCF .xml"):
         find_robots([tmp_path / "empty"])
 
 

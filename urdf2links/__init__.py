@@ -1,4 +1,4 @@
-"""urdf2links: URDF robots as trees of links of the trace method, simulated and checked against MuJoCo.
+"""urdf2links: URDF and MJCF robots as trees of links of the trace method, simulated and checked against MuJoCo.
 
 This package never imports MuJoCo; the comparison lives in the ``compare`` package.
 """
@@ -26,18 +26,27 @@ from .dynamics.tree import LinkSpec, LinkTree, build_tree, pseudo_inertia_from
 from .errors import (
     DescriptionError,
     DynamicsError,
+    DescriptionError,
     InertiaError,
     MeshError,
+    MJCFError,
     URDFError,
     URDFStructureError,
     URDFSyntaxError,
     URDFValueError,
 )
 from .parsers.importer import AuditRecord, load_urdf, load_urdf_string, urdf_link_poses
+from .parsers.mjcf import load_mjcf, load_mjcf_string
+from .parsers.robot_file import load_robot
 
 __all__ = [
     "DescriptionError",
     "load_urdf",
+    "load_mjcf",
+    "load_mjcf_string",
+    "load_robot",
+    "DescriptionError",
+    "MJCFError",
     "load_urdf_string",
     "urdf_link_poses",
     "AuditRecord",

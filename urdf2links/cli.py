@@ -1,4 +1,4 @@
-"""Command line: ``urdf2links inspect FILE.urdf|FILE.xacro|SCENE.toml``, ``urdf2links simulate
+"""Command line: ``urdf2links inspect FILE.urdf|FILE.xacro|FILE.xml|SCENE.toml``, ``urdf2links simulate
 SCENE.toml|ROBOT.urdf``, ``urdf2links sweep SCENE.toml|ROBOT.urdf``, ``urdf2links compare
 SCENE.toml|ROBOT.urdf``, ``urdf2links report [--corpus DIR ...]`` and ``urdf2links tradeoff SCENE.toml``
 (the MuJoCo comparison and the work-precision study: the handlers import the ``compare`` package,
@@ -15,7 +15,7 @@ import warnings
 import numpy as np
 
 from .dynamics.transforms import PARAMETERS
-from .errors import DescriptionError, DynamicsError, IntegrationError, SceneError, URDFError
+from .errors import DescriptionError, DynamicsError, IntegrationError, SceneError
 from .scenes.limits import LimitExcursion
 from .scenes.scene_toml import load_options_of, scene_from_args, write_scene_option, xacro_args_of
 
@@ -59,9 +59,28 @@ def _num(v) -> str:
     return "-" if v is None else f"{v:.4g}"
 
 
+def _mjcf_joint_lines(joints) -> list[str]:
+    """An MJCF model's joints: type, coordinates, limits, armature (in A), damping, stiffness at springref."""
+    rows = [("joint", "type", "coordinates", "lower", "upper", "armature", "damping", "stiffness", "springref",
+             "frictionloss")]
+    for j in joints:
+        rows.append((j["name"], j["type"], ", ".join(j["coordinates"]), _num(j["lower"]), _num(j["upper"]),
+                     _num(j["armature"]), _num(j["damping"]), _num(j["stiffness"]), _num(j["springref"]),
+                     _num(j["friction"])))
+    widths = [max(len(r[c]) for r in rows) for c in range(len(rows[0]))]
+    lines = ["  ".join(cell.ljust(w) for cell, w in zip(r, widths)).rstrip() for r in rows]
+    lines.insert(1, "  ".join("-" * w for w in widths))
+    return ["", "joints (MuJoCo's compiled values; qpos of hinges and slides is the coordinate; armature is part of A; "
+            "damping, stiffness and gravcomp act in scenes that ask ([dampers], [springs], [gravcomp] from_file, as "
+            "the default scene does); limits not enforced; friction not modelled):"] + lines
+
+
 def _joint_lines(joints) -> list[str]:
     """The URDF joints with what ``<limit>`` and ``<dynamics>`` say (limits are not enforced; damping acts
-    only in scenes with ``[dampers] from_urdf = true``; friction is not modelled)."""
+    only in scenes with ``[dampers] from_urdf = true``; friction is not modelled); an MJCF model's
+    joints with armature, damping and stiffness (:func:`_mjcf_joint_lines`)."""
+    if joints and "armature" in joints[0]:
+        return _mjcf_joint_lines(joints)
     moving = [j for j in joints if j["type"] != "fixed"]
     if not moving:
         return []
@@ -90,12 +109,12 @@ def _inspect(args) -> int:
             print(scene_toml(scene))
         print(compile_plan(scene, model).describe())
         return 0
-    from .parsers.importer import load_urdf
+    from .parsers.robot_file import load_robot
 
     opts = load_options_of(args)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the findings are printed in the table below
-        model = load_urdf(args.file, **opts)
+        model = load_robot(args.file, **opts)
     print(format_tree(model))
     return 0
 

@@ -1,7 +1,8 @@
 """Errors raised by urdf2links.
 
 Every error that comes from a robot description is a :class:`DescriptionError` (a
-``ValueError``, so ``except ValueError`` still catches them); a URDF's are :class:`URDFError`. Messages name
+``ValueError``, so ``except ValueError`` still catches them): a :class:`URDFError` for URDF and
+xacro files, an :class:`MJCFError` for MuJoCo's MJCF files. Messages name
 the file, the element (link, joint, attribute) and the value, and say what would
 fix the input.
 """
@@ -11,6 +12,7 @@ from __future__ import annotations
 __all__ = [
     "DescriptionError",
     "URDFError",
+    "MJCFError",
     "URDFSyntaxError",
     "URDFStructureError",
     "URDFValueError",
@@ -23,11 +25,7 @@ __all__ = [
 
 
 class DescriptionError(ValueError):
-    """Base class of every error raised while reading a robot description, whatever its format."""
-
-
-class URDFError(DescriptionError):
-    """Base class of every error raised while importing a URDF (or xacro) robot description.
+    """Base class of every error raised while importing a robot description (URDF, xacro, MJCF).
 
     ``problem`` is the defect alone (without file, line and fix), for a note when the reader
     tolerates it; the whole message when not given."""
@@ -35,6 +33,16 @@ class URDFError(DescriptionError):
     def __init__(self, message: str = "", *, problem: str | None = None):
         super().__init__(message)
         self.problem = problem if problem is not None else message
+
+
+class URDFError(DescriptionError):
+    """An error raised while importing a URDF (or xacro) description."""
+
+
+class MJCFError(DescriptionError):
+    """An MJCF file that cannot become a tree of links: MuJoCo's compiler refused it (its own words
+    quoted, with the file), or it holds what a tree of links cannot be (the element, the body or
+    joint, and what would fix it)."""
 
 
 class URDFSyntaxError(URDFError):

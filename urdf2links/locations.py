@@ -52,7 +52,7 @@ def _robot_summaries(folder: Path) -> dict[str, str]:
         return {}
     out = {}
     text = readme.read_text()
-    for m in re.finditer(r"^##+ `([\w./-]+\.urdf)`\s*\n+(.+?)(?:\n\n|\Z)", text, re.M | re.S):
+    for m in re.finditer(r"^##+ `([\w./-]+\.(?:urdf|xml))`\s*\n+(.+?)(?:\n\n|\Z)", text, re.M | re.S):
         out[Path(m.group(1)).name] = _first_sentence(m.group(2))
     for m in re.finditer(r"^- `([\w./-]+\.urdf)`[^:]*:\s*(.+?)(?=\n- |\n\n|\Z)", text, re.M | re.S):
         out.setdefault(Path(m.group(1)).name, _first_sentence(m.group(2)))
@@ -72,9 +72,9 @@ def shipped() -> list[Shipped]:
     summaries = _robot_summaries(folder)
     out = []
     for sub in (folder, folder / "hard"):
-        for p in sorted(sub.glob("*.urdf")):
-            out.append(Shipped(p.stem, "robot" if sub == folder else "robot (hard case)", p,
-                               summaries.get(p.name, "")))
+        for p in sorted([*sub.glob("*.urdf"), *sub.glob("*.xml")]):
+            out.append(Shipped(p.stem, ("robot" if sub == folder else "robot (hard case)") + (" (MJCF)" if p.suffix ==
+                               ".xml" else ""), p, summaries.get(p.name, "")))
     for sub in (folder, folder / "hard"):
         for p in sorted(sub.glob("*.toml")):
             try:

@@ -58,16 +58,36 @@ def _with_gravity(model, gravity):
     if np.array_equal(np.asarray(model.gravity_vector), g):
         return model
     out = copy.copy(model)
+    out._g = g.copy()       # the compiled hot path reads _g: without it, gravity() kept the model's own
     g = g.copy()
     g.setflags(write=False)
     out.gravity_vector = g
     return out
 
 
+def _route1_model(model):
+    """``model`` as route 1 writes it: without the shared armature of a ball's three angles
+    (:func:`~urdf2links.compare.mujoco_side.mjcf.route1_armature`)."""
+    from urdf2links.dynamics.model import Model
+    from urdf2links.dynamics.tree import LinkTree
+
+    from ..mujoco_side.mjcf import route1_armature
+
+    arm, balls = route1_armature(model.tree)
+    if not balls:
+        return model
+    t = model.tree
+    tree = LinkTree(link_names=t.link_names, parent=t.parent, params=t.params, coord=t.coord, H=t.H,
+                    coordinate_names=t.coordinate_names, armature=arm)
+    coupling = None if model.coupling is None else (*model.coupling, model.coordinate_names)
+    return Model(tree, gravity=model.gravity_vector, coupling=coupling, name=model.name, source=model.source,
+                 info=model.info)
+
+
 def route1_terms(mj: MjcfModel, model, scene: Scene, *, states: int = 8, seed: int = 0) -> dict:
     """Route 1: ``A`` vs ``mj_fullM`` and ``e + G`` vs ``qfrc_bias`` of the scene's MJCF model at
     seeded random states (see the module doc). Returns a JSON-ready dict."""
-    ours = _with_gravity(model, scene.gravity)
+    ours = _with_gravity(_route1_model(model), scene.gravity)
     rng = np.random.default_rng(seed)
     n = model.n
     err_A = err_b = 0.0

@@ -64,12 +64,14 @@ from urdf2links.console import shown_path
 from urdf2links.errors import IntegrationError
 from urdf2links.integration.simulate import TIMED_REGION as PROJECT_REGION
 from urdf2links.integration.simulate import Trajectory, simulate, warm_up
+from urdf2links.parsers.robot_file import is_mjcf_path
 from urdf2links.ranges import MAX_STEPS
 from urdf2links.scenes.limits import LimitExcursion
 from urdf2links.scenes.plan import compile_plan
 from urdf2links.scenes.scene import Scene, load_scene, robot_label
 
 from ..mujoco_side.mjcf import MjcfModel, mjcf_from_scene
+from ..mujoco_side.mujoco_mjcf import FILE_LABEL, file_route_inputs, file_terms, mujoco_from_mjcf, run_file
 from ..mujoco_side.mujoco_run import TIMED_REGION as MUJOCO_REGION
 from ..mujoco_side.mujoco_run import MujocoRun, energy_function, run_mujoco
 from .scene_terms import ROUTE1_LABEL, route1_terms, route2_terms
@@ -166,6 +168,11 @@ class SceneComparison:
     @property
     def key(self) -> str:
         return scene_key(self.scene, self.model)
+
+    def summary_route(self) -> str:
+        """Which of MuJoCo's models ran the trajectory: ``"route 1"`` (the project's tree as MJCF) or
+        ``"route 2"`` (an MJCF file itself)."""
+        return "route 2" if self.info.get("trajectory_route") == FILE_LABEL else "route 1"
 
     @property
     def coordinate_names(self) -> tuple[str, ...]:
@@ -267,8 +274,10 @@ class SceneComparison:
             "chaotic": bool(sc.chaotic),
             "effects": list(self.info["effects"]),
             "coordinates": list(self.coordinate_names),
-            "route": "route 1 (the project's tree as MJCF)",
-            "route_description": ROUTE1_LABEL + ("; base motion prescribed" if moving else ""),
+            "route": ("route 2 (MuJoCo runs the MJCF file)" if self.info.get("trajectory_route") == FILE_LABEL
+                      else "route 1 (the project's tree as MJCF)"),
+            "route_description": self.info.get("trajectory_route", ROUTE1_LABEL)
+                                 + ("; base motion prescribed" if moving else ""),
             "t_end": float(self.info["t_end"]),
             "t_end_scene": float(sc.run.t_end),
             "t_end_note": self.info.get("t_end_note"),
@@ -332,8 +341,13 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     say(f"terms at {states} seeded states (route 1" + (", route 2)" if not scene.load_options.get("floating_base")
                                                        else ")"))
     mj = mjcf_from_scene(scene, model, timestep=mujoco_dt, integrator=mujoco_integrator)
-    terms = {"route1": route1_terms(mj, model, scene, states=states, seed=seed),
-             "route2": route2_terms(scene, states=states, seed=seed, model=model)}
+    mf = None
+    if is_mjcf_path(scene.robot):       # route 2: MuJoCo runs the file itself
+        mf = mujoco_from_mjcf(plan, timestep=mujoco_dt, integrator=mujoco_integrator)
+        route2 = file_terms(mf, model, scene, states=states, seed=seed)
+    else:
+        route2 = route2_terms(scene, states=states, seed=seed, model=model)
+    terms = {"route1": route1_terms(mj, model, scene, states=states, seed=seed), "route2": route2}
 
     meth = method or scene.run.method
     warm = warm_up(plan, methods=(meth,))
@@ -350,7 +364,11 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     if max_wall is not None and time.perf_counter() - start > max_wall:
         raise IntegrationError(f"{scene.path or scene.name}: max_wall={max_wall:g} s spent before MuJoCo's run")
     say(f"MuJoCo: {mujoco_integrator} dt {mujoco_dt:g}, {int(round(T / mujoco_dt))} steps")
-    run = run_mujoco(mj, plan, t_end=T, samples=samples)
+    file_run = mf is not None and not file_route_inputs(scene)
+    if file_run:
+        run = run_file(mf, plan, t_end=T, samples=samples, reference=traj.q if len(traj.q) == samples else None)
+    else:
+        run = run_mujoco(mj, plan, t_end=T, samples=samples)
     if run.compilation.happened:
         say(run.compilation.describe("MuJoCo's control callback"))
 
@@ -362,8 +380,15 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     growth = growth_fit(t, err_max, end_time=div) if scene.chaotic else None
     energy, info = _energy_balances(scene, plan, mj, run, traj, EV_o, h_o, W)
     notes = _run_notes(scene, plan, mj, run, traj, t_end_note, resampled=resampled)
+    if mf is not None:
+        notes += ([f"route 2 (the MJCF file in MuJoCo): {x}" for x in mf.notes]
+                  + [f"import: {x}" for x in model.info.get("notes", [])])
+        if not file_run:
+            notes.append(f"the scene's {', '.join(file_route_inputs(scene))} are time-dependent inputs that the run of the "
+                         "MJCF file does not take yet: MuJoCo's trajectory is route 1's (the project's tree as MJCF)")
     q0, qd0 = scene.initial_state(model)
-    info.update({"t_end": T, "t_end_note": t_end_note, "effects": plan.terms, "warm_up": warm,
+    info.update({"trajectory_route": FILE_LABEL if file_run else ROUTE1_LABEL,
+                 "t_end": T, "t_end_note": t_end_note, "effects": plan.terms, "warm_up": warm,
                  "q0": dict(zip(model.coordinate_names, q0.tolist())),
                  "qd0": dict(zip(model.coordinate_names, qd0.tolist())),
                  "total_s": time.perf_counter() - start})
@@ -421,7 +446,7 @@ def _project_at(traj, plan, t, T):
 def _energy_balances(scene, plan, mj, run, traj, EV_o, h_o, W) -> tuple[dict, dict]:
     """Both engines' balances ``h - h(0) - W`` (MuJoCo's without ``W`` when no work acts), the
     energy arrays for the report, and what the summary says about them."""
-    work_terms = any(term in plan.terms for term in ("Q", "tau", "damper", "base"))
+    work_terms = any(term in plan.terms for term in ("Q", "tau", "damper", "base", "gravcomp"))
     EV_m = run.total_energy
     if scene.base is not None:
         h_m = energy_function(mj, run, plan)
@@ -433,7 +458,8 @@ def _energy_balances(scene, plan, mj, run, traj, EV_o, h_o, W) -> tuple[dict, di
     if work_terms:
         bal_m = h_m - h_m[0] - W
         what = [w for w, on in (("forces/moments", "Q" in plan.terms), ("joint torques", "tau" in plan.terms),
-                                ("dampers", "damper" in plan.terms), ("the moving base", "base" in plan.terms)) if on]
+                                ("dampers", "damper" in plan.terms), ("the moving base", "base" in plan.terms),
+                                ("gravcomp", "gravcomp" in plan.terms)) if on]
         note = (f"work terms present ({', '.join(what)}): both drifts use the project's work W "
                 f"(integrated along the project's trajectory): max |{sym} - {sym}(0) - W|")
         if scene.base is not None:

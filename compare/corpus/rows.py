@@ -36,7 +36,7 @@ import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from urdf2links.errors import SceneError, URDFError
+from urdf2links.errors import DescriptionError, SceneError
 from urdf2links.scenes.scene import default_scene
 
 from ..formatting import json_ready
@@ -61,7 +61,7 @@ TERMS_TOLERANCE = 1e-9
 #: The name that stands for the installed example-robot-data robots (when no such folder is here).
 EXAMPLE_ROBOT_DATA = "example-robot-data"
 #: File names a folder is searched for.
-CORPUS_SUFFIXES = (".urdf", ".xacro")
+CORPUS_SUFFIXES = (".urdf", ".xacro", ".xml")
 #: The comparison's timings a row keeps (summary.json's ``wall_time.regions`` says what each holds):
 #: each engine's integration timed alike, the whole calls around them, the warm-up, the terms.
 _TIMES = ("project_s", "mujoco_s", "project_run_s", "mujoco_harness_s", "project_warmup_s", "terms_s")
@@ -134,7 +134,22 @@ class RobotResult:
 
 
 def _matches(folder: Path) -> list[Path]:
-    return sorted(p for p in folder.rglob("*") if p.is_file() and p.name.endswith(CORPUS_SUFFIXES))
+    return sorted(p for p in folder.rglob("*") if p.is_file() and p.name.endswith(CORPUS_SUFFIXES)
+                  and (not p.name.endswith(".xml") or is_mujoco_document(p)))
+
+
+def is_mujoco_document(path: Path) -> bool:
+    """An ``.xml`` file found in a folder is a robot when its root element is ``<mujoco>`` (a folder of
+    robots also holds ROS ``package.xml`` and launch files, which are not); a file named explicitly is
+    always taken."""
+    try:
+        head = path.read_bytes()[:4096].decode("utf-8", "replace")
+    except OSError:
+        return False
+    import re
+
+    head = re.sub(r"<\?.*?\?>|<!--.*?-->|<!DOCTYPE[^>]*>", "", head, flags=re.S)
+    return re.match(r"\s*<mujoco[\s>/]", head) is not None
 
 
 def _expand(arg: str) -> list[tuple[Path, Path]]:
@@ -159,7 +174,7 @@ def _expand(arg: str) -> list[tuple[Path, Path]]:
             out += [(p, h) for p in _matches(h)] if h.is_dir() else [(h, h.parent)] if h.name.endswith(CORPUS_SUFFIXES) else []
         return out
     raise FileNotFoundError(f"--corpus {arg}: no such folder or file, and not a glob pattern (give a folder of "
-                            "robots, a .urdf/.xacro file or a pattern such as 'robots/**/*.urdf')")
+                            "robots, a .urdf/.xacro/.xml file or a pattern such as 'robots/**/*.urdf')")
 
 
 def find_robots(paths) -> list[RobotFile]:
@@ -175,7 +190,7 @@ def find_robots(paths) -> list[RobotFile]:
     for arg in paths:
         hits = _expand(str(arg))
         if not hits:
-            raise ValueError(f"--corpus {arg}: no .urdf or .xacro file there")
+            raise ValueError(f"--corpus {arg}: no .urdf, .xacro or MJCF .xml file there")
         for p, base in hits:
             real = p.resolve()
             if real not in seen:
@@ -323,15 +338,20 @@ def _robot_files(robot: RobotFile, c, summary: dict, row: dict, check, settings:
 
 
 def _load(robot: RobotFile, settings: CorpusSettings, inertia: str):
-    from urdf2links.parsers.importer import load_urdf
+    from urdf2links.parsers.robot_file import is_mjcf_path, load_robot
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the audit is in model.audit, and in the row
-        return load_urdf(robot.path, **_load_options(settings, inertia))
+        return load_robot(robot.path, **_load_options(settings, inertia, robot.path))
 
 
-def _load_options(settings: CorpusSettings, inertia: str) -> dict:
-    """The options every robot of the corpus is loaded with (``inertia``: the settings' or the repair)."""
+def _load_options(settings: CorpusSettings, inertia: str, path) -> dict:
+    """The options every robot of the corpus is loaded with (``inertia``: the settings' or the repair);
+    an MJCF file takes only ``inertia`` and ``strict`` (the others are URDF's)."""
+    from urdf2links.parsers.robot_file import is_mjcf_path
+
+    if is_mjcf_path(path):
+        return {"inertia": inertia, "strict": settings.strict}
     return {"inertia": inertia, "package_dirs": tuple(settings.package_dirs), "mimic": settings.mimic,
             "strict": settings.strict, "floating_base": settings.floating_base, "xacro_args": settings.xacro_args}
 
@@ -352,9 +372,9 @@ def _compare(robot: RobotFile, model, settings: CorpusSettings, inertia: str, at
     from ..agreement.trajectory import compare_scene
 
     at.name = "scene"
-    opts = _load_options(settings, inertia)
+    opts = _load_options(settings, inertia, robot.path)
     scene = default_scene(robot.path, t_end=settings.t_end, q0=settings.q0, seed=settings.seed, model=model,
-                          floating=opts.pop("floating_base"), **opts)
+                          floating=opts.pop("floating_base", False), **opts)
     at.name = "comparison"
     return compare_scene(scene, mujoco_integrator=settings.mujoco_integrator, mujoco_dt=settings.mujoco_dt,
                          states=settings.states, seed=settings.seed, progress=False, model=model)
@@ -426,7 +446,7 @@ def evaluate_robot(robot: RobotFile, settings: CorpusSettings = CorpusSettings()
             t0 = time.perf_counter()
             result.files = _robot_files(robot, c, summary, row, check, settings)
             times["page_s"] = time.perf_counter() - t0
-    except (URDFError, SceneError) as exc:
+    except (DescriptionError, SceneError) as exc:
         (_refuse if at.name in ("import", "scene") else _fail)(row, at.name, exc)
     except Exception as exc:  # noqa: BLE001 - one robot's fault must not stop the corpus: its row says why
         _fail(row, at.name, exc)

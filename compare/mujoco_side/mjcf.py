@@ -50,7 +50,8 @@ and those before it (see :mod:`urdf2links.compare.mujoco_side.mujoco_run`).
 
 Physics switched off (everything the project does not model): contacts, limits, equality
 constraints, friction loss; springs and dampers unless a spring/damper is given (then as joint
-``stiffness``/``springref``/``damping``); armature 0; no geoms, inertias exactly as given
+``stiffness``/``springref``/``damping``); armature the model's own on each coordinate's joint (E49;
+not the shared armature of a ball's three angles, :func:`route1_armature`); no geoms, inertias exactly as given
 (``inertiafromgeom="false" balanceinertia="false" boundmass="0" boundinertia="0"``).
 
 Moving base ``{A}`` (``moving_base=True``): a root body ``base_A`` at the world origin with three
@@ -83,6 +84,7 @@ __all__ = [
     "BASE_JOINTS",
     "TINY_MASS_FRACTION",
     "BASE_MASS_FRACTION",
+    "route1_armature",
 ]
 
 
@@ -333,6 +335,7 @@ class _Bodies:
         self.tiny_links: list[str] = []
         self.notes: list[str] = []
         self.lines: list[str] = []
+        self.armature, self.ball_armature = route1_armature(self.tree)
 
     def chain_of(self, p: int) -> list[int]:
         """Links whose factors make the body of non-folded link p, top first."""
@@ -385,6 +388,8 @@ class _Bodies:
         s = self.spring_of.get(cname)
         if s is not None:
             extra = f' stiffness="{_num(s.stiffness)}" springref="{_num(s.rest)}" damping="{_num(s.damping)}"'
+        if self.armature[c] != 0.0:
+            extra += f' armature="{_num(self.armature[c])}"'
         pos = f' pos="{_vec(anchor)}"' if kind == "hinge" and np.any(anchor != 0.0) else ""
         return f'<joint name={quoteattr(cname)} type="{kind}" axis="{_vec(axis)}"{pos}{extra}/>'
 
@@ -401,6 +406,21 @@ class _Bodies:
             self.emit(r, indent + "  ")
         self.lines.append(f"{indent}</body>")
         return bname
+
+
+def route1_armature(tree) -> tuple[np.ndarray, list[str]]:
+    """The armature route 1 writes on each coordinate's joint (E49: a coordinate's own ``0.5 a q'^2``),
+    and the links whose three angles share an armature on their angular velocity (a ball or free joint
+    of an MJCF file): route 1 writes those angles as three hinges, where that armature has no
+    equivalent, so it is left out there (``route1_terms`` compares with it left out too)."""
+    arm = np.array(tree.armature, float)
+    balls = []
+    for p in range(tree.n_links):
+        tri = tree.coord[p, 3:6]
+        if np.all(tri >= 0) and arm[tri[0]] != 0.0:
+            arm[tri] = 0.0
+            balls.append(tree.link_names[p])
+    return arm, balls
 
 
 def _document(model, body_lines, g, springs, timestep, integrator) -> tuple[str, str]:
@@ -429,7 +449,8 @@ def _document(model, body_lines, g, springs, timestep, integrator) -> tuple[str,
     note = ("gravity " + ("off (0 0 0)" if g is None else f"{g.tolist()} m/s^2")
             + "; disabled: contact, limit, equality, frictionloss"
             + ("" if has_spring else ", spring") + ("" if has_damper else ", damper")
-            + f"; armature 0; no geoms; integrator {integrator}, timestep {timestep:g} s")
+            + "; armature " + ("the model's (E49)" if model.tree.has_armature else "0")
+            + f"; no geoms; integrator {integrator}, timestep {timestep:g} s")
     return xml, note
 
 
@@ -535,6 +556,10 @@ def mjcf_from_model(model, *, gravity=None, springs: Iterable = (), moving_base:
         for r in bodies.top():
             bodies.emit(r, "    ")
     notes += check_notes + _fold_notes(tree, folded, too_many, bodies.tiny_links, tiny)
+    if bodies.ball_armature:
+        notes.append("armature of the three angles of " + ", ".join(bodies.ball_armature) + " (on their angular "
+                     "velocity, E49) left out: route 1 writes them as three hinges, where it has no equivalent; "
+                     "route 1's terms are compared without it")
     xml, note = _document(model, bodies.lines, g, springs, timestep, integrator)
     notes.append(note)
     try:

@@ -26,7 +26,7 @@ def comparison_animation(c, *, fps: float = DEFAULT_FPS):
                                else f", rtol {stats['rtol']:g}")
     motions = [Motion("urdf2links", c.t, c.q_ours, label=label),
                Motion("MuJoCo", c.t, c.q_mujoco, ghost=True,
-                      label=f"{run.integrator}, dt {run.timestep:g} s (route 1), at the same times")]
+                      label=f"{run.integrator}, dt {run.timestep:g} s ({c.summary_route()}), at the same times")]
     err_max = c.error.max(axis=1) if c.error.size else c.t * 0.0
     names = c.coordinate_names
     panels = [Panel("|q urdf2links - q MuJoCo|, largest coordinate", c.t, {"max |dq|": err_max},

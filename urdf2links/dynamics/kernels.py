@@ -16,6 +16,10 @@ point velocities, which only need ``m``, ``c`` and ``J = tr(S) 1 - S`` (the iner
   ``n = J alpha + c x (a - g) + omega x (J omega) + c x (omega x v)``. Gravity is the uniform
   acceleration ``-g`` added to the base's (E33), which gives exactly the G of (E22).
 - (E36) ``Q_i = v_i.f_ext + w_i.n_ext`` over the subtree (moments about {0}).
+- (E49) armature: ``a`` on ``a_kk`` of a coordinate of its own; for the three angles of a ball or
+  free link, ``a w_i.w_l`` in ``A`` and ``a w_i.(alpha - alpha_s - omega x (omega - omega_s))`` in
+  ``e`` (``omega``, ``alpha``: the link's, ``_s``: its parent's), the world-twist form of
+  ``J^T a J`` and ``J^T a J' q'`` (:func:`armature`).
 
 Twists propagate from root to leaves (E33): a factor ``E_k(q_i)`` adds ``s_i q_i'`` to the twist and
 ``s_i q_i'' + (V x s_i) q_i'`` to the spatial acceleration; a constant factor changes only the pose;
@@ -50,8 +54,11 @@ from .tree_arrays import (
     F_SEG,
     FI,
     FX,
+    ARM_BALL,
+    F_ARM,
     I_ANCIDX,
     I_ANCPTR,
+    I_ARM,
     I_COORDLINK,
     I_PARENT,
     I_RUNPTR,
@@ -62,6 +69,7 @@ from .tree_arrays import (
     KF,
     KL,
     KS,
+    N_ARM,
     O_,
     W_A,
     W_B,
@@ -69,11 +77,13 @@ from .tree_arrays import (
     W_COORD,
     W_LINK,
     W_Q,
+    W_QD,
     WV,
     nn,
 )
 
-__all__ = ["kinematics", "dynamics", "energies", "add_wrench", "clear_wrenches", "base_power", "poses"]
+__all__ = ["kinematics", "dynamics", "energies", "add_wrench", "clear_wrenches", "base_power", "poses", "armature",
+           "armature_energy"]
 
 
 # -- root to leaves ---------------------------------------------------------------------------------
@@ -185,6 +195,7 @@ def kinematics(TI, TF, W, q, iq, qd, iqd, moving, B, ib, has_base, gx, gy, gz):
     L, n = TI[0], nn(TI[1])
     par, sp, ss, sc = nn(TI[I_PARENT]), nn(TI[I_SEGPTR]), nn(TI[I_SEGSLOT]), nn(TI[I_SEGCOORD])
     fs, wl, wc, wb = nn(TI[F_SEG]), nn(TI[W_LINK]), nn(TI[W_COORD]), nn(TI[W_BASE])
+    wqd = nn(TI[W_QD])
     iq, iqd, ib = nn(iq), nn(iqd), nn(ib)
     _base_frame(W, wb, B, ib, has_base, gx, gy, gz)
     for p in range(L):
@@ -207,6 +218,7 @@ def kinematics(TI, TF, W, q, iq, qd, iqd, moving, B, ib, has_base, gx, gy, gz):
                 for j in range(6):          # s by components: W[wc + j n + i]
                     W[wc + j * n + i] = sv[j]
                 xd = qd[iqd + i] if moving else 0.0
+                W[wqd + i] = xd
                 if xd != 0.0:
                     V, Acc = _rates(sv, xd, 0.0, V, Acc)
         _store(W, wl + KL * p, R, o, V, Acc)
@@ -339,8 +351,8 @@ def dynamics(TI, TF, W, want_A, loads, momentum):
     """Leaves to root after :func:`kinematics` (and, with ``loads``, the external wrenches of
     :func:`add_wrench`): ``b = -(e + G)`` (E34), ``Q`` (E36) with ``loads``, and with ``want_A`` the
     mass matrix (E31) packed by ancestor pairs (row ``i``: ``A[i, anc_idx[j]]`` at ``W[W_A + j]``,
-    ``j`` in ``anc_ptr[i]:anc_ptr[i + 1]``). With ``momentum`` the links' total momentum goes to the
-    base record (for :func:`base_power`)."""
+    ``j`` in ``anc_ptr[i]:anc_ptr[i + 1]``), armature included (:func:`armature`). With ``momentum``
+    the links' total momentum goes to the base record (for :func:`base_power`)."""
     L, n = TI[0], nn(TI[1])
     wl, wc, wb = nn(TI[W_LINK]), nn(TI[W_COORD]), nn(TI[W_BASE])
     if momentum:
@@ -390,6 +402,45 @@ def dynamics(TI, TF, W, want_A, loads, momentum):
                 sl = wc + nn(TI[ai + j0 + u])
                 W[wa + j0 + u] = (W[sl + 3 * n] * p0 + W[sl + 4 * n] * p1 + W[sl + 5 * n] * p2
                                   + W[sl] * h0 + W[sl + n] * h1 + W[sl + 2 * n] * h2)
+    if TI[N_ARM] > 0:
+        armature(TI, TF, W, want_A)
+
+
+@njit(cache=True)
+def armature(TI, TF, W, want_A):
+    """The armature's terms (E49) added to the packed ``A`` (with ``want_A``) and to ``b = -(e + G)``,
+    after :func:`dynamics`' own terms. A coordinate of its own: ``a`` on its diagonal. The three
+    angles ``i`` of a ball link ``p`` (parent record ``s``): ``a w_i.w_l`` on the 3 x 3 block and
+    ``-a w_i.(alpha_p - alpha_s - omega_p x (omega_p - omega_s))`` into ``b``: the relative angular
+    velocity ``omega_p - omega_s = sum w_i q_i'`` in {0}, and ``J^T a J' q'`` in world twists."""
+    n = nn(TI[1])
+    ia, fa = nn(TI[I_ARM]), nn(TI[F_ARM])
+    wl, wc, wb, wa, wbv = nn(TI[W_LINK]), nn(TI[W_COORD]), nn(TI[W_BASE]), nn(TI[W_A]), nn(TI[W_B])
+    ap, par = nn(TI[I_ANCPTR]), nn(TI[I_PARENT])
+    for k in range(TI[N_ARM]):
+        kind, i, p = TI[ia + 3 * k], nn(TI[ia + 3 * k + 1]), nn(TI[ia + 3 * k + 2])
+        a = TF[fa + k]
+        if kind != ARM_BALL:
+            if want_A:
+                W[wa + nn(TI[ap + i + 1] - 1)] += a
+            continue
+        d = wl + KL * p
+        s = TI[par + p]
+        e = wb if s < 0 else wl + KL * nn(s)
+        o0, o1, o2 = W[d + WV], W[d + WV + 1], W[d + WV + 2]
+        r0, r1, r2 = o0 - W[e + WV], o1 - W[e + WV + 1], o2 - W[e + WV + 2]
+        x0 = W[d + AC] - W[e + AC] - (o1 * r2 - o2 * r1)
+        x1 = W[d + AC + 1] - W[e + AC + 1] - (o2 * r0 - o0 * r2)
+        x2 = W[d + AC + 2] - W[e + AC + 2] - (o0 * r1 - o1 * r0)
+        for u in range(3):
+            si = wc + i + u
+            w0, w1, w2 = W[si], W[si + n], W[si + 2 * n]
+            W[wbv + i + u] -= a * (w0 * x0 + w1 * x1 + w2 * x2)
+            if want_A:
+                last = nn(TI[ap + i + u + 1] - 1)      # row i + u ends with i, .., i + u (the same link)
+                for v in range(u + 1):
+                    sl = wc + i + v
+                    W[wa + last - u + v] += a * (w0 * W[sl] + w1 * W[sl + n] + w2 * W[sl + 2 * n])
 
 
 # -- applied wrenches, energies, base power -----------------------------------------------------------
@@ -446,7 +497,30 @@ def energies(TI, TF, W, gx, gy, gz):
         x2 = om0 * c1 - om1 * c0
         E += 0.5 * (m * (v0 * v0 + v1 * v1 + v2 * v2) + 2.0 * (v0 * x0 + v1 * x1 + v2 * x2) + wJw)
         V -= gx * c0 + gy * c1 + gz * c2
+    if TI[N_ARM] > 0:
+        E += armature_energy(TI, TF, W)
     return E, V
+
+
+@njit(cache=True)
+def armature_energy(TI, TF, W):
+    """The armature's kinetic energy (E49) after :func:`kinematics`: ``0.5 a q'^2`` per coordinate of
+    its own, ``0.5 a |omega_p - omega_s|^2`` per ball link."""
+    ia, fa = nn(TI[I_ARM]), nn(TI[F_ARM])
+    wl, wb, wqd, par = nn(TI[W_LINK]), nn(TI[W_BASE]), nn(TI[W_QD]), nn(TI[I_PARENT])
+    E = 0.0
+    for k in range(TI[N_ARM]):
+        kind, i, p = TI[ia + 3 * k], nn(TI[ia + 3 * k + 1]), nn(TI[ia + 3 * k + 2])
+        a = TF[fa + k]
+        if kind != ARM_BALL:
+            E += 0.5 * a * W[wqd + i] * W[wqd + i]
+            continue
+        d = wl + KL * p
+        s = TI[par + p]
+        e = wb if s < 0 else wl + KL * nn(s)
+        r0, r1, r2 = W[d + WV] - W[e + WV], W[d + WV + 1] - W[e + WV + 1], W[d + WV + 2] - W[e + WV + 2]
+        E += 0.5 * a * (r0 * r0 + r1 * r1 + r2 * r2)
+    return E
 
 
 @njit(cache=True)

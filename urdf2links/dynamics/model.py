@@ -116,6 +116,26 @@ class Model:
     def __repr__(self) -> str:
         return f"<Model {self.name!r}: {self.tree.n_links} links, {self.n} coordinates>"
 
+    # -- MuJoCo's state (models read from MJCF) -----------------------------------------------------
+    def _mujoco_map(self):
+        qmap = self.info.get("mujoco")
+        if qmap is None:
+            raise ValueError(f"model {self.name!r} was not loaded from an MJCF file: it has no MuJoCo state to map "
+                             "to (load_mjcf gives one)")
+        return qmap
+
+    def to_mujoco(self, q, qd=None):
+        """``(qpos, qvel)`` in the compiled MJCF file's order of the state ``(q, qd)`` (``qvel`` None
+        without ``qd``): hinges and slides as they are, ball and free joints' ZYX angles as quaternions
+        and their rates as angular velocities (:mod:`urdf2links.parsers.mjcf_state`). Models read from
+        MJCF only."""
+        return self._mujoco_map().to_mujoco(q, qd)
+
+    def from_mujoco(self, qpos, qvel=None, *, reference=None):
+        """``(q, qd)`` of MuJoCo's ``(qpos, qvel)``: the inverse of :meth:`to_mujoco`; ``reference`` (n,)
+        picks, for ball and free joints, the branch of the ZYX angles nearest it."""
+        return self._mujoco_map().from_mujoco(qpos, qvel, reference=reference)
+
     # -- coordinates -----------------------------------------------------------------------------
     def vector(self, x, what: str) -> np.ndarray:
         """``x`` as a float array of shape (n,); a ValueError naming ``what`` and the coordinates

@@ -8,7 +8,12 @@ Per link ``p`` (links in topological order, parents first, docs/equations.md (E5
   (so ``params`` holds the coordinate's offset, usually 0);
 - ``coord[p]`` (6,): index into ``q`` of the coordinate in each slot, or ``-1`` for a constant;
 - ``H[p]`` (4, 4): the pseudo-inertia matrix (E10) in the link's frame; all zeros for a
-  massless link (a pure frame).
+  massless link (a pure frame);
+- ``armature`` (n,): the rotor inertia reflected to each coordinate (MJCF ``armature``, E49): it adds
+  ``0.5 a_k q_k'^2`` to the kinetic energy, except on a link whose three angle slots are all
+  coordinates (a ball or a free body), whose three angles share one armature ``a`` acting on the
+  link's angular velocity relative to its parent: ``0.5 a |omega|^2`` (MuJoCo's armature on the
+  three dofs of a ball joint).
 
 Coordinates are numbered link by link in tree order and, inside a link, in slot order
 ``x, y, z, phi_x, phi_y, phi_z``, which is the order of (E5).
@@ -39,13 +44,15 @@ def pseudo_inertia_from(mass: float, com=(0.0, 0.0, 0.0), inertia=None) -> np.nd
 class LinkSpec:
     """One link as written in code: name, parent name (None: the base {A}), the six constants
     ``params`` (6,) of (E3), ``coordinates`` mapping a slot name (``"x"`` ... ``"phi_z"``) to the
-    name of the generalized coordinate in that slot, and ``H`` (4, 4) (None: massless)."""
+    name of the generalized coordinate in that slot, ``H`` (4, 4) (None: massless), and
+    ``armature`` mapping a coordinate slot to its armature (E49; absent slots: 0)."""
 
     name: str
     parent: str | None = None
     params: Sequence[float] = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     coordinates: Mapping[str, str] = field(default_factory=dict)
     H: np.ndarray | None = None
+    armature: Mapping[str, float] = field(default_factory=dict)
 
 
 def _readonly(a: np.ndarray) -> np.ndarray:
@@ -58,8 +65,8 @@ def _readonly(a: np.ndarray) -> np.ndarray:
 class LinkTree:
     """Frozen array-backed tree of ``L`` links and ``n`` generalized coordinates (see module doc).
 
-    Derived arrays: ``coord_link`` (n,) the link of each coordinate, ``coord_slot`` (n,) its slot
-    0..5, ``ancestor`` (L, L) bool, ``ancestor[p, a]`` when ``a`` is ``p`` or precedes it
+    ``armature`` (n,) (E49), zeros when not given. Derived arrays: ``coord_link`` (n,) the link of
+    each coordinate, ``coord_slot`` (n,) its slot 0..5, ``ancestor`` (L, L) bool, ``ancestor[p, a]`` when ``a`` is ``p`` or precedes it
     (``a`` in ``N_p`` of (E5)), ``children`` tuple of tuples.
     """
 
@@ -69,6 +76,7 @@ class LinkTree:
     coord: np.ndarray
     H: np.ndarray
     coordinate_names: tuple[str, ...]
+    armature: np.ndarray | None = None
     coord_link: np.ndarray = field(init=False)
     coord_slot: np.ndarray = field(init=False)
     ancestor: np.ndarray = field(init=False)
@@ -105,8 +113,16 @@ class LinkTree:
             if parent[p] >= 0:
                 ancestor[p] |= ancestor[parent[p]]
         children = tuple(tuple(int(c) for c in np.nonzero(parent == p)[0]) for p in range(L))
+        armature = np.zeros(n) if self.armature is None else np.array(self.armature, dtype=float)
+        if armature.shape != (n,) or not np.all(np.isfinite(armature)) or np.any(armature < 0):
+            raise ValueError(f"armature must be {n} finite numbers >= 0 (one per coordinate), got {self.armature!r}")
+        for p in range(L):
+            tri = coord[p, 3:6]
+            if np.all(tri >= 0) and len(set(armature[tri].tolist())) > 1:
+                raise ValueError(f"link {self.link_names[p]!r}: its three angle coordinates share one armature (it acts "
+                                 f"on the link's angular velocity, E49); got {armature[tri].tolist()}")
         for name, value in (
-            ("parent", parent), ("params", params), ("coord", coord), ("H", H),
+            ("parent", parent), ("params", params), ("coord", coord), ("H", H), ("armature", armature),
             ("coord_link", coord_link), ("coord_slot", coord_slot), ("ancestor", ancestor),
         ):
             object.__setattr__(self, name, _readonly(value))
@@ -119,6 +135,10 @@ class LinkTree:
     @property
     def n_links(self) -> int:
         return len(self.link_names)
+
+    @property
+    def has_armature(self) -> bool:
+        return bool(np.any(self.armature != 0.0))
 
     @property
     def mass(self) -> np.ndarray:
@@ -152,7 +172,7 @@ class LinkTree:
 def build_tree(links: Sequence[LinkSpec]) -> LinkTree:
     """A :class:`LinkTree` from link specs in tree order (each parent named before its children)."""
     names: list[str] = []
-    parent, params, coord, H, coordinate_names = [], [], [], [], []
+    parent, params, coord, H, coordinate_names, armature = [], [], [], [], [], []
     for spec in links:
         if spec.name in names:
             raise ValueError(f"duplicate link name {spec.name!r}")
@@ -173,6 +193,9 @@ def build_tree(links: Sequence[LinkSpec]) -> LinkTree:
         for slot, cname in spec.coordinates.items():
             if slot not in PARAMETERS:
                 raise ValueError(f"link {spec.name!r}: unknown slot {slot!r}; slots are {PARAMETERS}")
+        for slot in spec.armature:
+            if slot not in spec.coordinates:
+                raise ValueError(f"link {spec.name!r}: armature on slot {slot!r}, which is not a coordinate of it")
         for k, slot in enumerate(PARAMETERS):
             if slot in spec.coordinates:
                 cname = spec.coordinates[slot]
@@ -180,6 +203,7 @@ def build_tree(links: Sequence[LinkSpec]) -> LinkTree:
                     raise ValueError(f"link {spec.name!r}: coordinate name {cname!r} used twice")
                 c[k] = len(coordinate_names)
                 coordinate_names.append(cname)
+                armature.append(float(spec.armature.get(slot, 0.0)))
         coord.append(c)
         h = np.zeros((4, 4)) if spec.H is None else np.asarray(spec.H, dtype=float)
         if h.shape != (4, 4) or not np.all(np.isfinite(h)) or not np.allclose(h, h.T, rtol=0, atol=1e-12 * max(1.0, np.abs(h).max())):
@@ -194,4 +218,5 @@ def build_tree(links: Sequence[LinkSpec]) -> LinkTree:
         coord=np.array(coord),
         H=np.array(H),
         coordinate_names=tuple(coordinate_names),
+        armature=np.array(armature, dtype=float),
     )

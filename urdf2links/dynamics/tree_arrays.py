@@ -20,12 +20,17 @@ Layout (the names are module constants, folded into the compiled code):
   row is one run), so that the loops over a row index coordinates directly.
 - ``TF`` blocks: per segment ``KS`` floats (offset, R (3, 3) row-major, p (3,)); per link ``KF`` floats
   (mass, first moment ``m r_C`` (3,) and ``J = tr(S) 1 - S`` (6,: xx yy zz xy xz yz) about the link
-  origin, in the link's axes, with ``S = H[:3, :3]``).
+  origin, in the link's axes, with ``S = H[:3, :3]``); the armature items' values.
+- armature (docs/equations.md (E49)): ``TI[N_ARM]`` items, each ``(kind, coordinate, link)`` in the
+  ``I_ARM`` block and its value in the ``F_ARM`` block: :data:`ARM_ONE` a coordinate's own
+  ``0.5 a q'^2``, :data:`ARM_BALL` the three angle coordinates (the first given) of a link whose
+  three angle slots are coordinates, ``0.5 a |omega - omega_parent|^2``. No item: no armature work.
 - ``W`` blocks: per link a record of ``KL`` floats (pose, twist, acceleration, subtree sums, wrenches;
   offsets ``R_ .. FX``), the coordinates' unit twists ``s = (w, v)`` by component (6, n): ``s_i[j]``
   at ``W[W_COORD + j n + i]``, the mass matrix packed by
   rows of ``anc_idx`` (P,) (factorized in place, :mod:`urdf2links.dynamics.factor`), ``b``, ``Q``, ``x`` (n,),
-  and the base record (``BASE_*``).
+  the base record (``BASE_*``), and the tree's rates ``q'`` (n,) (written by the kinematics, for the
+  armature's energy).
 """
 
 from __future__ import annotations
@@ -35,7 +40,8 @@ from numba import njit
 
 from .transforms import elementary
 
-__all__ = ["flat_tree", "HEADER", "CONSTANT", "KS", "KF", "KL", "workspace_size", "nn"]
+__all__ = ["flat_tree", "HEADER", "CONSTANT", "KS", "KF", "KL", "workspace_size", "nn", "armature_items",
+           "ARM_ONE", "ARM_BALL"]
 
 CONSTANT = 6        # seg_slot of a constant transform
 KS = 13             # floats per segment in TF: offset, R (9), p (3)
@@ -45,8 +51,10 @@ KL = 48             # floats per link record in W
 # TI header
 I_PARENT, I_SEGPTR, I_SEGSLOT, I_SEGCOORD, I_COORDLINK, I_ANCPTR, I_ANCIDX, I_ANCROW, I_RUNPTR, I_RUNS = range(4, 14)
 F_SEG, F_LINK = 14, 15
-W_LINK, W_COORD, W_A, W_B, W_Q, W_X, W_BASE, W_SIZE = range(16, 24)
-HEADER = 24
+W_LINK, W_COORD, W_A, W_B, W_Q, W_X, W_BASE, W_QD, W_SIZE = range(16, 25)
+I_ARM, F_ARM, N_ARM = 25, 26, 27    # armature items (E49): TI (kind, coordinate, link) per item, TF its value
+HEADER = 28
+ARM_ONE, ARM_BALL = 0, 1            # an item's kind: one coordinate (0.5 a q'^2); a link's three angles (0.5 a |omega|^2)
 
 # the link record in W (offsets from the record's start)
 R_ = 0      # rotation (9,) row-major
@@ -99,7 +107,25 @@ def _segments(tree):
 
 
 def workspace_size(L: int, n: int, P: int) -> int:
-    return KL * L + 6 * n + P + 3 * n + KB
+    return KL * L + 6 * n + P + 3 * n + KB + n
+
+
+def armature_items(tree) -> list[tuple[int, int, int, float]]:
+    """``(kind, coordinate, link, a)`` of every non-zero armature of ``tree`` (E49): a link whose
+    three angle slots are coordinates gives one :data:`ARM_BALL` item (its ``phi_x`` coordinate),
+    every other coordinate with an armature one :data:`ARM_ONE` item."""
+    arm = np.asarray(tree.armature, float)
+    items, done = [], set()
+    for p in range(tree.n_links):
+        tri = tree.coord[p, 3:6]
+        if np.all(tri >= 0):
+            done.update(int(i) for i in tri)
+            if arm[tri[0]] != 0.0:
+                items.append((ARM_BALL, int(tri[0]), p, float(arm[tri[0]])))
+    for i in range(tree.n):
+        if i not in done and arm[i] != 0.0:
+            items.append((ARM_ONE, i, int(tree.coord_link[i]), float(arm[i])))
+    return items
 
 
 def flat_tree(tree) -> tuple[np.ndarray, np.ndarray]:
@@ -127,12 +153,15 @@ def flat_tree(tree) -> tuple[np.ndarray, np.ndarray]:
         run_ptr.append(len(runs) // 2)
     blocks = [np.asarray(tree.parent), ptr, [s[0] for s in flat], [s[1] for s in flat],
               np.asarray(tree.coord_link), anc_ptr, anc_idx, anc_row, run_ptr, runs]
+    arm = armature_items(tree)
+    blocks.append([x for item in arm for x in item[:3]])
     head = np.zeros(HEADER, np.int64)
     head[:4] = L, n, S, P
     o = HEADER
     for k, b in enumerate(blocks):
-        head[I_PARENT + k] = o
+        head[I_PARENT + k if k < 10 else I_ARM] = o
         o += len(b)
+    head[N_ARM] = len(arm)
     H = np.asarray(tree.H, float)
     seg_f = np.zeros((S, KS))
     for j, (_, _, off, R, p) in enumerate(flat):
@@ -143,10 +172,10 @@ def flat_tree(tree) -> tuple[np.ndarray, np.ndarray]:
         J = np.trace(Sm) * np.eye(3) - Sm
         link_f[p, 0], link_f[p, 1:4] = H[p, 3, 3], H[p, :3, 3]
         link_f[p, 4:10] = J[0, 0], J[1, 1], J[2, 2], J[0, 1], J[0, 2], J[1, 2]
-    head[F_SEG], head[F_LINK] = 0, S * KS
-    w = [KL * L, 6 * n, P, n, n, n, KB]
+    head[F_SEG], head[F_LINK], head[F_ARM] = 0, S * KS, S * KS + L * KF
+    w = [KL * L, 6 * n, P, n, n, n, KB, n]
     head[W_LINK:W_SIZE + 1] = np.cumsum([0] + w)
     assert head[W_SIZE] == workspace_size(L, n, P)
     TI = np.concatenate([head] + [np.asarray(b, np.int64).ravel() for b in blocks])
-    TF = np.concatenate([seg_f.ravel(), link_f.ravel()])
+    TF = np.concatenate([seg_f.ravel(), link_f.ravel(), np.array([item[3] for item in arm], float)])
     return np.ascontiguousarray(TI), np.ascontiguousarray(TF)

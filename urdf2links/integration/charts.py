@@ -151,15 +151,21 @@ def recharted_model(original: Model, rotations: dict) -> Model:
     for p, name in enumerate(tree.link_names):
         parent = None if tree.parent[p] < 0 else tree.link_names[tree.parent[p]]
         coords = {PARAMETERS[k]: tree.coordinate_names[tree.coord[p, k]] for k in range(6) if tree.coord[p, k] >= 0}
+        arm = {PARAMETERS[k]: float(tree.armature[tree.coord[p, k]]) for k in range(6)
+               if tree.coord[p, k] >= 0 and tree.armature[tree.coord[p, k]] != 0.0}
         H = tree.H[p]
         if name not in rotations:
-            specs.append(LinkSpec(name, parent, tuple(tree.params[p]), coords, H))
+            specs.append(LinkSpec(name, parent, tuple(tree.params[p]), coords, H, arm))
             continue
         c = matrix_to_xyz_angles(rotations[name])
+        # the angles' armature acts on the angular velocity relative to the parent (E49), which p~chart
+        # (constant rotation, translations only) does not change
         specs.append(LinkSpec(name + _SUFFIX, parent, (*tree.params[p, :3], *c),
-                              {s: v for s, v in coords.items() if s in PARAMETERS[:3]}, None))
+                              {s: v for s, v in coords.items() if s in PARAMETERS[:3]}, None,
+                              {s: v for s, v in arm.items() if s in PARAMETERS[:3]}))
         specs.append(LinkSpec(name, name + _SUFFIX, (0.0,) * 6,
-                              {s: v for s, v in coords.items() if s in PARAMETERS[3:]}, H))
+                              {s: v for s, v in coords.items() if s in PARAMETERS[3:]}, H,
+                              {s: v for s, v in arm.items() if s in PARAMETERS[3:]}))
     new = build_tree(specs)
     if new.coordinate_names != tree.coordinate_names:  # the original numbering was not link by link
         raise ValueError(f"re-charting {sorted(rotations)} would reorder the coordinates of {original.name!r}")

@@ -13,9 +13,15 @@ G               gravity as a base acceleration (kinematics)         ``[gravity]`
 Q               :func:`urdf2links.dynamics.kernels.add_wrench`               ``[[force]]`` or ``[[moment]]``
 tau             joint torques ``[[torque]]``                        ``[[torque]]``
 spring          ``-k (q - rest)`` (a potential)                     a ``[[spring]]`` with k > 0
-damper          ``-c qd`` (dissipation D)                           a ``[[spring]]`` with c > 0, or URDF
-                                                                    damping with ``[dampers] from_urdf``
+damper          ``-c qd`` (dissipation D)                           a ``[[spring]]`` with c > 0, or the
+                                                                    file's damping with ``[dampers]``
+gravcomp        ``-gravcomp m g`` at a body's COM (a constant load) MJCF ``gravcomp`` with ``[gravcomp]
+                                                                    from_file`` and ``[gravity]``
 ==============  ==================================================  ==============================
+
+Armature (MJCF) is part of ``A`` and ``e`` (docs/equations.md (E49)), like the links' inertia: always
+computed. A spring comes from a ``[[spring]]`` or, with ``[springs] from_file``, an MJCF joint's
+stiffness at its springref.
 
 The state integrated is ``y = (q, qd, W)``: ``W`` is the work done on the system by everything
 that is not a potential (Q, tau, dampers, and the moving base through ``-dL/dt``), so that
@@ -47,10 +53,12 @@ class Plan:
         self.gravity_vector = None if scene.gravity is None else np.asarray(scene.gravity, float)
         frame_of = model.info.get("frame_of") or {nm: (nm, np.eye(4).tolist()) for nm in tree.link_names}
         self.loads = []
-        for load in scene.loads:
+        gravcomp, self.gravcomp_notes = scene.gravcomp_loads(model)
+        for load in scene.loads + gravcomp:
             tname, X = frame_of[load.link]
             X = np.asarray(X)
             self.loads.append((tree.link_index(tname), X, load))
+        self.n_gravcomp = len(gravcomp)
         self.torque_index = np.array([names.index(c) for c, _ in scene.torques], dtype=int)
         self.torque_funcs = [f for _, f in scene.torques]
         self.spring_set = scene.springs_for(model)
@@ -64,8 +72,8 @@ class Plan:
         self.damping = np.array([s.damping for s in dampers])
         self.terms = tuple(t for t, on in (
             ("A", True), ("e", True), ("base", self.base is not None), ("G", self.gravity_vector is not None),
-            ("Q", bool(self.loads)), ("tau", len(self.torque_funcs) > 0), ("spring", len(springs) > 0),
-            ("damper", len(dampers) > 0)) if on)
+            ("Q", bool(scene.loads)), ("tau", len(self.torque_funcs) > 0), ("spring", len(springs) > 0),
+            ("damper", len(dampers) > 0), ("gravcomp", self.n_gravcomp > 0)) if on)
         self.rhs = CompiledScene(self)
         """``y' = (qd, q'', P)`` for ``y = (q, qd, W)`` (2n + 1,): the compiled right-hand side
         (:mod:`urdf2links.scenes.scene_kernels`)."""
@@ -107,23 +115,30 @@ class Plan:
         s, m = self.scene, self.model
         lines = [f"scene {s.name!r}: robot {m.name!r} ({m.n} coordinates, {m.tree.n_links} links)",
                  f"terms computed: {', '.join(self.terms)}"]
-        skipped = [t for t in ("base", "G", "Q", "tau", "spring", "damper") if t not in self.terms]
+        skipped = [t for t in ("base", "G", "Q", "tau", "spring", "damper", "gravcomp") if t not in self.terms]
+        if "gravcomp" in skipped and not m.info.get("gravcomp"):
+            skipped.remove("gravcomp")
         lines.append(f"not computed (the scene does not call for them): {', '.join(skipped) or 'nothing'}")
         all_coords = ", ".join(m.coordinate_names)
         lines.append(f"  A, e: all coordinates ({all_coords})")
+        if m.tree.has_armature:
+            arm = [f"{nm} {a:g}" for nm, a in zip(m.tree.coordinate_names, m.tree.armature) if a]
+            lines.append(f"  armature (part of A and e, always): {', '.join(arm)}")
         if s.base is not None:
             lines.append("  base {A}: " + "; ".join(f"{p}: {f.describe()}" for p, f in
                                                    zip(("x", "y", "z", "phi_x", "phi_y", "phi_z"), s.base)))
         if self.gravity_vector is not None:
             lines.append(f"  G: gravity {self.gravity_vector.tolist()} m/s^2, all coordinates")
-        for link, X, load in self.loads:
+        for link, X, load in self.loads[:len(self.loads) - self.n_gravcomp]:
             lines.append(f"  Q: {load.kind} on {load.link!r} ({load.frame} axes): {load.value.describe()}"
                          f"; touches the coordinates that move {load.link!r}")
+        for link, X, load in self.loads[len(self.loads) - self.n_gravcomp:]:
+            lines.append(f"  gravcomp: {load.value(0.0).tolist()} N (world axes) at the COM of {load.link!r}")
         for (c, f) in s.torques:
             lines.append(f"  tau: {c}: {f.describe()}")
         for sp in self.spring_set.springs:
             lines.append(f"  spring/damper on {sp.coordinate}: k = {sp.stiffness:g}, rest = {sp.rest:g}, c = {sp.damping:g}")
-        lines += [f"  note: {n}" for n in (*self.spring_set.notes, *s.notes)]
+        lines += [f"  note: {n}" for n in (*self.spring_set.notes, *self.gravcomp_notes, *s.notes)]
         r = s.run
         lines.append(f"run: t_end {r.t_end:g} s, method {r.method}, rtol {r.rtol:g}, atol {r.atol:g}"
                      + (f", dt {r.dt:g}" if r.dt else "") + f", {r.samples} samples")

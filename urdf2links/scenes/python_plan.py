@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..dynamics.oracles.armature import armature_terms
 from ..dynamics.oracles.recursive import RecursivePlan
 from ..dynamics.transforms import base_transforms
 
@@ -41,7 +42,11 @@ class PythonPlan:
         rhs = -rp.bias(kin)
         if plan.gravity_vector is not None:
             rhs -= rp.gravity(kin, plan.gravity_vector, Hc)
-        return model.reduce(rp.mass_matrix(kin, Hc)), model.reduce(rhs), kin
+        A = rp.mass_matrix(kin, Hc)
+        if model.tree.has_armature:     # (E49)
+            arm = armature_terms(model.tree, qt, qdt)
+            A, rhs = A + arm["A"], rhs - arm["e"]
+        return model.reduce(A), model.reduce(rhs), kin
 
     def generalized_forces(self, t, q, qd, kin=None) -> np.ndarray:
         """Everything on the right of (E24) but ``-G - e``: Q of loads, tau, springs, dampers. (n,)"""
@@ -77,7 +82,7 @@ class PythonPlan:
     def _power(self, qd, q, f, kin, base_T) -> float:
         plan = self.plan
         P = 0.0
-        if any(term in plan.terms for term in ("Q", "tau", "damper")):
+        if any(term in plan.terms for term in ("Q", "tau", "damper", "gravcomp")):
             f = f.copy()
             if plan.spring_index.size:  # springs are a potential, not work
                 f[plan.spring_index] += plan.stiffness * (q[plan.spring_index] - plan.rest)
@@ -104,7 +109,10 @@ class PythonPlan:
     # -- energy ----------------------------------------------------------------------------------
     def kinetic_energy(self, t, q, qd) -> float:
         qt, qdt = self.model.tree_state(q, qd)
-        return self.rp.kinetic_energy(self.rp.kinematics(qt, qdt, self._base_T(t)))
+        E = self.rp.kinetic_energy(self.rp.kinematics(qt, qdt, self._base_T(t)))
+        if self.model.tree.has_armature:        # (E49)
+            E += armature_terms(self.model.tree, qt, qdt)["E"]
+        return E
 
     def potential_energy(self, t, q) -> float:
         """V = V of gravity (E21) + spring energies 0.5 k (q - rest)^2."""

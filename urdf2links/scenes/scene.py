@@ -7,7 +7,8 @@ not computed, see :mod:`urdf2links.scenes.plan`)::
     chaotic = false                         # the comparison reports a divergence time, not an error
 
     [robot]
-    urdf = "double_pendulum.urdf"           # path relative to this file (.urdf or .xacro); or
+    urdf = "double_pendulum.urdf"           # path relative to this file (.urdf, .xacro, or .xml: MJCF); or
+    # mjcf = "ant.xml"                      # an MJCF file (the same as urdf = "ant.xml")
     # shipped = "double_pendulum"           # a robot of robots/; or
     # example_robot_data = "ur_description/urdf/ur5_robot.urdf"
     floating_base = false
@@ -33,8 +34,13 @@ not computed, see :mod:`urdf2links.scenes.plan`)::
     [[spring]]                              # coordinate, stiffness [N m/rad], rest [rad], damping [N m s/rad]
 
     [dampers]
-    from_urdf = true                        # each joint's <dynamics damping> as a damper (a [[spring]]'s
-                                            # own damping on the same coordinate takes precedence)
+    from_urdf = true                        # each joint's <dynamics damping> (MJCF: damping) as a damper (a
+                                            # [[spring]]'s own damping on the same coordinate takes precedence);
+                                            # from_file = true says the same
+    [springs]
+    from_file = true                        # MJCF: each hinge's and slide's stiffness, at its springref
+    [gravcomp]
+    from_file = true                        # MJCF: each body's gravcomp: -gravcomp m g at its COM
 
     [initial]
     q = { shoulder = 1.2 }                  # by coordinate name; unnamed coordinates start at 0
@@ -73,11 +79,11 @@ DEFAULT_SCENE_NAME = "default"
 Q0_CHOICES = ("zero", "random")
 
 _TOP = ("description", "chaotic", "robot", "gravity", "base", "force", "moment", "torque", "spring",
-        "dampers", "initial", "run", "record")
-_ROBOT = ("urdf", "shipped", "example_robot_data", "floating_base", "inertia", "mimic", "package_dirs", "strict",
-          "xacro_args")
-#: Joint types whose URDF damping becomes a damper on their one coordinate.
-_DAMPED_TYPES = ("revolute", "continuous", "prismatic")
+        "dampers", "springs", "gravcomp", "initial", "run", "record")
+_ROBOT = ("urdf", "mjcf", "shipped", "example_robot_data", "floating_base", "inertia", "mimic", "package_dirs",
+          "strict", "xacro_args")
+#: Joint types whose damping (URDF or MJCF) becomes a damper on their one coordinate.
+_DAMPED_TYPES = ("revolute", "continuous", "prismatic", "hinge", "slide")
 
 
 def robot_label(scene: "Scene", model=None) -> str:
@@ -92,7 +98,7 @@ def robot_stem(path) -> str:
     """The robot file's name without ``.xacro`` and ``.urdf`` (``robot.urdf.xacro`` -> ``robot``): the
     ``<robot>`` part of a report's key."""
     name = Path(path).name
-    for suffix in (".xacro", ".urdf"):
+    for suffix in (".xacro", ".urdf", ".xml", ".mjcf"):
         name = name.removesuffix(suffix)
     return name
 _RUN = ("t_end", "method", "rtol", "atol", "dt", "samples", "recharting")
@@ -162,14 +168,16 @@ class Scene:
     run: RunSettings = RunSettings()
     link_poses: tuple[str, ...] = ()
     urdf_damping: bool = False
+    file_springs: bool = False
+    gravcomp: bool = False
     notes: tuple[str, ...] = ()
     """What was changed from the scene file (loading options given on the command line, ...)."""
 
     def model(self):
         """Load the scene's robot with its options (a :class:`~urdf2links.dynamics.model.Model`)."""
-        from ..parsers.importer import load_urdf
+        from ..parsers.robot_file import load_robot
 
-        model = load_urdf(self.robot, **self.load_options)
+        model = load_robot(self.robot, **self.load_options)
         self.check_names(model)
         return model
 
@@ -208,15 +216,24 @@ class Scene:
         mimic followers and negative damping are left out, with a note."""
         joints = model.info.get("joints", [])
         friction = [j["name"] for j in joints if j.get("friction")]
-        notes = [f"URDF <dynamics friction> (Coulomb friction) is not modelled, on either engine: joints "
-                 f"{', '.join(friction)}"] if friction else []
+        notes = [f"joint friction (URDF <dynamics friction>, MJCF frictionloss: Coulomb friction) is not modelled, "
+                 f"on either engine: joints {', '.join(friction)}"] if friction else []
+        springs = self.springs
+        if self.file_springs:
+            springs, more = _file_springs(model, springs)
+            notes += more
+        else:
+            stiff = [j["name"] for j in joints if j.get("stiffness")]
+            if stiff:
+                notes.append(f"joint stiffness of the file not applied (the scene does not ask: [springs] from_file = "
+                             f"true): joints {', '.join(stiff)}")
         if not self.urdf_damping:
             damped = [j["name"] for j in joints if j.get("damping")]
             if damped:
-                notes.append(f"URDF <dynamics damping> not applied (the scene does not ask: [dampers] from_urdf = "
+                notes.append(f"joint damping of the file not applied (the scene does not ask: [dampers] from_urdf = "
                              f"true): joints {', '.join(damped)}")
-            return SpringSet(self.springs, tuple(notes))
-        own = {s.coordinate: s for s in self.springs}
+            return SpringSet(tuple(springs), tuple(notes))
+        own = {s.coordinate: s for s in springs}
         added, skipped = {}, []
         for j in joints:
             c = j.get("damping")
@@ -233,20 +250,74 @@ class Scene:
                 skipped.append(f"{j['name']} (the scene's [[spring]] damping {own[coord].damping:g} is used instead)")
             else:
                 added[coord] = c
-        springs = [Spring(s.coordinate, s.stiffness, s.rest, added.get(s.coordinate, s.damping)) for s in self.springs]
+        springs = [Spring(s.coordinate, s.stiffness, s.rest, added.get(s.coordinate, s.damping)) for s in springs]
         springs += [Spring(coord, damping=c) for coord, c in added.items() if coord not in own]
         if added:
-            notes.append("URDF <dynamics damping> applied as dampers ([dampers] from_urdf = true): "
+            notes.append("joint damping of the file applied as dampers ([dampers] from_urdf = true): "
                          + ", ".join(f"{coord} {c:g}" for coord, c in added.items()))
         if skipped:
-            notes.append(f"URDF <dynamics damping> not applied: {'; '.join(skipped)}")
+            notes.append(f"joint damping of the file not applied: {'; '.join(skipped)}")
         return SpringSet(tuple(springs), tuple(notes))
 
+    def gravcomp_loads(self, model) -> tuple[tuple[AppliedLoad, ...], tuple[str, ...]]:
+        """With ``[gravcomp] from_file`` (MJCF ``gravcomp``): a constant world-frame force
+        ``-gravcomp m g`` at the COM of every body that has one (MuJoCo's ``qfrc_gravcomp``), for the
+        scene's gravity; and notes."""
+        table = model.info.get("gravcomp") or {}
+        if not table:
+            return (), ()
+        if not self.gravcomp:
+            return (), (f"gravcomp of bodies {', '.join(table)} not applied (the scene does not ask: [gravcomp] "
+                        "from_file = true)",)
+        if self.gravity is None:
+            return (), ("gravcomp not applied: the scene has no gravity to compensate",)
+        masses = model.info.get("body_mass_com", {})
+        loads = []
+        for body, frac in table.items():
+            m, com = masses[body]
+            f = -frac * m * np.asarray(self.gravity, float)
+            loads.append(AppliedLoad("force", body, "world", VectorFunction(tuple(Constant(float(x)) for x in f)),
+                                     np.asarray(com, float)))
+        return tuple(loads), (f"gravcomp applied ([gravcomp] from_file = true): a force -gravcomp m g at the COM of "
+                              + ", ".join(f"{b} ({v:g})" for b, v in table.items()),)
+
     def initial_state(self, model) -> tuple[np.ndarray, np.ndarray]:
+        """``(q0, qd0)``: the scene's ``[initial]``; unnamed coordinates at rest and at 0, or for an MJCF
+        robot at MuJoCo's default ``qpos0`` (``model.info['q0']``)."""
         names = model.coordinate_names
-        q = np.array([float(self.q0.get(n, 0.0)) for n in names])
+        base = model.info.get("q0")
+        base = np.zeros(len(names)) if base is None else np.asarray(base, float)
+        q = np.array([float(self.q0.get(n, base[i])) for i, n in enumerate(names)])
         qd = np.array([float(self.qd0.get(n, 0.0)) for n in names])
         return q, qd
+
+
+def _file_springs(model, springs) -> tuple[list, list[str]]:
+    """The scene's springs plus, with ``[springs] from_file``, every hinge's and slide's ``stiffness`` at
+    its ``springref`` (MJCF); a ``[[spring]]`` of the scene on the same coordinate takes precedence."""
+    own = {s.coordinate: s for s in springs}
+    out, added, skipped = list(springs), [], []
+    for j in model.info.get("joints", []):
+        k = j.get("stiffness")
+        if not k:
+            continue
+        if j["type"] not in ("hinge", "slide") or len(j["coordinates"]) != 1:
+            skipped.append(f"{j['name']} ({j['type']} joint)")
+            continue
+        coord = j["coordinates"][0]
+        if coord in own and own[coord].stiffness > 0:
+            skipped.append(f"{j['name']} (the scene's [[spring]] stiffness {own[coord].stiffness:g} is used instead)")
+            continue
+        rest = float(j.get("springref") or 0.0)
+        if coord in own:
+            out = [Spring(s.coordinate, k, rest, s.damping) if s.coordinate == coord else s for s in out]
+        else:
+            out.append(Spring(coord, stiffness=k, rest=rest))
+        added.append(f"{coord} k {k:g} rest {rest:g}")
+    notes = ["joint stiffness of the file applied as springs ([springs] from_file = true): " + ", ".join(added)] if added else []
+    if skipped:
+        notes.append(f"joint stiffness of the file not applied: {'; '.join(skipped)}")
+    return out, notes
 
 
 def _hint(name, choices) -> str:
@@ -334,10 +405,12 @@ def _random_q0(model, rng) -> dict:
     limits = {j["coordinates"][0]: (j["lower"], j["upper"]) for j in model.info.get("joints", [])
               if len(j["coordinates"]) == 1 and j["lower"] is not None and j["upper"] is not None
               and j["lower"] < j["upper"] and max(abs(j["lower"]), abs(j["upper"])) < NO_LIMIT}
-    root = {c["name"] for c in model.info.get("coordinates", []) if c.get("joint") is None and c["slot"] in "xyz"}
+    root = {c["name"] for c in model.info.get("coordinates", [])
+            if (c.get("joint") is None or c.get("type") == "free") and c["slot"] in "xyz"}
+    start = model.info.get("q0")      # MJCF: around MuJoCo's qpos0 where a joint has no limits
     q0 = {}
-    for name in model.coordinate_names:
-        lo, hi = limits.get(name, (-1.0, 1.0))
+    for i, name in enumerate(model.coordinate_names):
+        lo, hi = limits.get(name, (-1.0, 1.0) if start is None else (start[i] - 1.0, start[i] + 1.0))
         value = float(rng.uniform(lo, hi))
         if name not in root:
             q0[name] = value
@@ -361,7 +434,14 @@ def default_scene(robot, *, floating: bool = False, q0: str = "zero", seed: int 
     r = _Reader(where)
     r.choice(q0, "q0", Q0_CHOICES)
     t_end = r.number(t_end, "t_end", positive=True, quantity="time")
-    options = {"floating_base": bool(floating), "inertia": inertia, "mimic": mimic, "strict": bool(strict)}
+    from ..parsers.robot_file import is_mjcf_path, load_robot
+
+    mjcf = is_mjcf_path(robot)
+    if mjcf and (floating or xacro_args or package_dirs or mimic != "independent"):
+        r.fail("robot", f"{robot} is an MJCF file: --floating, --xacro-arg, --package-dir and --mimic apply to URDF "
+                        "files (an MJCF file says itself how its bodies move)")
+    options = ({"inertia": inertia, "strict": bool(strict)} if mjcf else
+               {"floating_base": bool(floating), "inertia": inertia, "mimic": mimic, "strict": bool(strict)})
     if package_dirs:
         options["package_dirs"] = tuple(Path(p) for p in package_dirs)
     if xacro_args:
@@ -369,19 +449,28 @@ def default_scene(robot, *, floating: bool = False, q0: str = "zero", seed: int 
     if model is None:
         import warnings
 
-        from ..parsers.importer import load_urdf
-
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # the audit is in model.audit; inspect shows it
-            model = load_urdf(robot, **options)
+            model = load_robot(robot, **options)
     q_init = _random_q0(model, np.random.default_rng(seed)) if q0 == "random" else {}
+    run = RunSettings(t_end=t_end, samples=min(MAX_SAMPLES, max(101, int(round(500 * t_end)) + 1)))
+    if mjcf:
+        g = np.asarray(model.info["option"]["gravity"], float)
+        off = model.info["option"].get("disabled", [])
+        state = "MuJoCo's qpos0" + (f", random within the limits (seed {seed})" if q0 == "random" else "")
+        effects = [w for w, on in (("joint damping", "damper" not in off), ("stiffness (at springref)", "spring" not in off),
+                                   ("gravcomp", True)) if on]
+        return Scene(name=default_scene_name(q0=q0, seed=seed, inertia=inertia), path=None, robot=Path(robot),
+                     load_options=options, description=f"default scene of an MJCF file: the file's gravity {g.tolist()}, its "
+                                 + ", ".join(effects) + "; at rest at " + state,
+                     gravity=g if np.any(g) else None, q0=q_init, urdf_damping="damper" not in off,
+                     file_springs="spring" not in off, gravcomp=True, run=run)
     base = "floating base" if floating else "fixed base"
     return Scene(name=default_scene_name(floating=floating, q0=q0, seed=seed, inertia=inertia, mimic=mimic),
                  path=None, robot=Path(robot), load_options=options,
                  description=f"default scene: gravity, {base}, q0 {q0}" + (f" (seed {seed})" if q0 == "random" else "")
                              + ", URDF damping, at rest",
-                 gravity=np.array([0.0, 0.0, -9.81]), q0=q_init, urdf_damping=True,
-                 run=RunSettings(t_end=t_end, samples=min(MAX_SAMPLES, max(101, int(round(500 * t_end)) + 1))))
+                 gravity=np.array([0.0, 0.0, -9.81]), q0=q_init, urdf_damping=True, run=run)
 
 
 def default_scene_name(*, floating: bool = False, q0: str = "zero", seed: int = 0, inertia: str = "audit",
@@ -424,6 +513,7 @@ def scene_from_dict(data: dict, *, where: str = "<scene>", directory: Path | Non
     loads, torques, springs = _loads(r, data), _torques(r, data), _springs(r, data)
     (q0, qd0), run, link_poses = _initial(r, data), _run(r, data), _record(r, data)
     urdf_damping = _dampers(r, data)
+    file_springs, gravcomp = _from_file(r, data, "springs"), _from_file(r, data, "gravcomp")
     description = data.get("description", "")
     chaotic = data.get("chaotic", False)
     if not isinstance(description, str):
@@ -432,17 +522,34 @@ def scene_from_dict(data: dict, *, where: str = "<scene>", directory: Path | Non
         r.fail("chaotic", f"must be true or false, got {chaotic!r}")
     return Scene(name=name, path=path, robot=robot, load_options=options, description=description,
                  chaotic=chaotic, gravity=gravity, base=base, loads=loads, torques=torques, springs=springs,
-                 q0=q0, qd0=qd0, run=run, link_poses=link_poses, urdf_damping=urdf_damping)
+                 q0=q0, qd0=qd0, run=run, link_poses=link_poses, urdf_damping=urdf_damping,
+                 file_springs=file_springs, gravcomp=gravcomp)
 
 
 def _dampers(r: _Reader, data: dict) -> bool:
-    """``[dampers] from_urdf``: whether the URDF's joint damping acts (:meth:`Scene.springs_for`)."""
+    """``[dampers] from_urdf`` (or ``from_file``): whether the file's joint damping acts
+    (:meth:`Scene.springs_for`)."""
     if "dampers" not in data:
         return False
-    r.keys(data["dampers"], ("from_urdf",), "dampers")
-    value = data["dampers"].get("from_urdf", False)
+    r.keys(data["dampers"], ("from_urdf", "from_file"), "dampers")
+    values = [data["dampers"][k] for k in ("from_urdf", "from_file") if k in data["dampers"]]
+    for k in ("from_urdf", "from_file"):
+        if k in data["dampers"] and not isinstance(data["dampers"][k], bool):
+            r.fail(f"dampers.{k}", f"must be true or false, got {data['dampers'][k]!r}")
+    if len(set(values)) > 1:
+        r.fail("dampers", "from_urdf and from_file say the same thing: give one, or the same value")
+    return bool(values and values[0])
+
+
+def _from_file(r: _Reader, data: dict, table: str) -> bool:
+    """``[springs] from_file`` / ``[gravcomp] from_file``: whether the MJCF file's joint stiffness (at
+    springref) or its bodies' gravcomp act."""
+    if table not in data:
+        return False
+    r.keys(data[table], ("from_file",), table)
+    value = data[table].get("from_file", False)
     if not isinstance(value, bool):
-        r.fail("dampers.from_urdf", f"must be true or false, got {value!r}")
+        r.fail(f"{table}.from_file", f"must be true or false, got {value!r}")
     return value
 
 
@@ -609,15 +716,15 @@ def _record(r: _Reader, data: dict) -> tuple:
 
 
 def _robot_path(r: _Reader, t: dict, directory) -> Path:
-    given = [k for k in ("urdf", "shipped", "example_robot_data") if k in t]
+    given = [k for k in ("urdf", "mjcf", "shipped", "example_robot_data") if k in t]
     if len(given) != 1:
-        r.fail("robot", f"name the robot exactly one way: urdf = 'path', shipped = 'name' or "
+        r.fail("robot", f"name the robot exactly one way: urdf = 'path', mjcf = 'path.xml', shipped = 'name' or "
                         f"example_robot_data = 'path inside its robots/ folder'; got {given or 'none'}")
     key = given[0]
     value = t[key]
     if not isinstance(value, str):
         r.fail(f"robot.{key}", f"must be a string, got {value!r}")
-    if key == "urdf":
+    if key in ("urdf", "mjcf"):
         p = Path(value)
         p = p if p.is_absolute() else (directory or Path.cwd()) / p
     elif key == "shipped":

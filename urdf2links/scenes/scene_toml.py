@@ -46,7 +46,8 @@ def _robot_lines(scene: Scene, folder: Path | None) -> list[str]:
     robot = Path(scene.robot).resolve()
     if folder is not None and robot.is_relative_to(folder.resolve()):  # else absolute: no ../../ chains
         robot = robot.relative_to(folder.resolve())
-    lines = ["[robot]", f"urdf = {_value(robot.as_posix())}"]
+    key = "mjcf" if robot.suffix.lower() in (".xml", ".mjcf") else "urdf"
+    lines = ["[robot]", f"{key} = {_value(robot.as_posix())}"]
     for key, value in scene.load_options.items():
         if key == "package_dirs":
             value = [Path(p).resolve().as_posix() for p in value]
@@ -83,8 +84,12 @@ def scene_toml(scene: Scene, *, folder=None) -> str:
     for s in scene.springs:
         out += ["[[spring]]", f"coordinate = {_value(s.coordinate)}", f"stiffness = {_value(float(s.stiffness))}",
                 f"rest = {_value(float(s.rest))}", f"damping = {_value(float(s.damping))}", ""]
-    out += ["[dampers]", "# each joint's URDF <dynamics damping> as a damper on its coordinate",
+    out += ["[dampers]", "# each joint's damping (URDF <dynamics damping>, MJCF damping) as a damper on its coordinate",
             f"from_urdf = {_value(scene.urdf_damping)}", ""]
+    if scene.file_springs:
+        out += ["[springs]", "# each MJCF hinge's and slide's stiffness as a spring at its springref", "from_file = true", ""]
+    if scene.gravcomp:
+        out += ["[gravcomp]", "# each MJCF body's gravcomp: a force -gravcomp m g at its COM", "from_file = true", ""]
     out += ["[initial]", f"q = {_value({k: float(v) for k, v in scene.q0.items()})}",
             f"qd = {_value({k: float(v) for k, v in scene.qd0.items()})}", ""]
     out += _run_lines(scene.run) + [""]

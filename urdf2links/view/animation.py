@@ -292,7 +292,7 @@ def _legend(motions, shapes: RobotShapes, n_frames: int, fps: float, base) -> st
         items.append(f"<span class='u2l-swatch' style='background: {swatch}'></span><b>{e(m.name)}</b>"
                      + (" (translucent)" if m.ghost else "") + (f": {e(m.label)}" if m.label else ""))
     sources = sorted({s.source for s in shapes.shapes})
-    what = {"visual": "URDF &lt;visual&gt; geometry", "collision": "&lt;collision&gt; geometry where a link has no "
+    what = {"visual": "URDF &lt;visual&gt; geometry", "geom": "MJCF geoms (MuJoCo's compiled ones)", "collision": "&lt;collision&gt; geometry where a link has no "
             "&lt;visual&gt;", "frame": "axes (x red, y green, z blue) for links with no geometry"}
     text = "<br>".join(items) + "<br>Shown: " + "; ".join(what[s] for s in sources if s in what)
     if shapes.faces_read > shapes.faces:

@@ -256,6 +256,10 @@ def model_shapes(model, *, description: RobotDescription | None = None, package_
     tree links, or its URDF links when known)."""
     from ..parsers.urdf import parse_urdf
 
+    if description is None and model.info.get("format") == "mjcf" and model.info.get("source_file"):
+        from .mjcf_visuals import mjcf_shapes
+
+        return mjcf_shapes(model)
     if description is None and model.source and model.source != "<string>":
         try:
             description = parse_urdf(model.source, package_dirs=package_dirs, xacro_args=xacro_args)

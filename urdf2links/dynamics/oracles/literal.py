@@ -15,6 +15,7 @@ from functools import reduce
 import numpy as np
 
 from ..transforms import elementary, elementary_derivative, elementary_second_derivative
+from .armature import armature_terms
 
 __all__ = ["LiteralTerms", "literal_terms"]
 
@@ -84,7 +85,8 @@ def literal_terms(tree, q, qd, *, base_T=None, gravity_vector=(0.0, 0.0, -9.81),
     Returns
     -------
     dict with ``A`` (n, n) (E19), ``e`` (n,) (E20), ``G`` (n,) (E22), ``Q`` (n,) (E23),
-    ``E`` kinetic energy (E17), ``V`` potential energy of gravity (E21).
+    ``E`` kinetic energy (E17), ``V`` potential energy of gravity (E21); the armature's terms (E49)
+    are in ``A``, ``e`` and ``E``.
     """
     n = tree.n
     q = np.asarray(q, float)
@@ -133,4 +135,7 @@ def literal_terms(tree, q, qd, *, base_T=None, gravity_vector=(0.0, 0.0, -9.81),
                 + Mloc[1] * sum(t[l, 0] * ti[l, 2] for l in range(3))
                 + Mloc[2] * sum(t[l, 1] * ti[l, 0] for l in range(3))
             )
+    if tree.has_armature:                                             # (E49), term by term
+        arm = armature_terms(tree, q, qd)
+        A, e, E = A + arm["A"], e + arm["e"], E + arm["E"]
     return {"A": A, "e": e, "G": G, "Q": Q, "E": E, "V": V}

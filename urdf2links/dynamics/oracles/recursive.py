@@ -24,6 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..transforms import GENERATORS, elementary
+from .armature import armature_terms
 
 __all__ = ["RecursivePlan", "Kinematics", "numpy_terms"]
 
@@ -245,6 +246,10 @@ def numpy_terms(plan: RecursivePlan, q, qd, *, base_T=None, gravity_vector=(0.0,
     :func:`urdf2links.dynamics.oracles.literal.literal_terms` returns them (same arguments)."""
     kin = plan.kinematics(np.asarray(q, float), np.asarray(qd, float), base_T, acceleration=True)
     Hc = plan.composite_inertia(kin)
-    return {"A": plan.mass_matrix(kin, Hc), "e": plan.bias(kin), "G": plan.gravity(kin, gravity_vector, Hc),
-            "Q": plan.generalized_forces(kin, list(wrenches)), "E": plan.kinetic_energy(kin),
-            "V": plan.potential_energy(kin, gravity_vector)}
+    out = {"A": plan.mass_matrix(kin, Hc), "e": plan.bias(kin), "G": plan.gravity(kin, gravity_vector, Hc),
+           "Q": plan.generalized_forces(kin, list(wrenches)), "E": plan.kinetic_energy(kin),
+           "V": plan.potential_energy(kin, gravity_vector)}
+    if plan.tree.has_armature:          # (E49)
+        arm = armature_terms(plan.tree, q, qd)
+        out["A"], out["e"], out["E"] = out["A"] + arm["A"], out["e"] + arm["e"], out["E"] + arm["E"]
+    return out

@@ -1,0 +1,230 @@
+"""Route 2 for an MJCF robot: MuJoCo runs the file as written, with only the scene's effects enabled.
+
+Route 2 is "MuJoCo's own reading of the robot file": for a URDF, MuJoCo's URDF import
+(:mod:`urdf2links.compare.mujoco_side.mujoco_urdf`); for an MJCF file, the file itself, compiled by
+MuJoCo (:func:`mujoco_from_mjcf`). What the scene does not name is switched off so that both engines
+run the same physics (:data:`urdf2links.parsers.mjcf_notes.MUJOCO_OFF`): contacts, every constraint
+(equality, limits, friction loss), actuation; tendons' stiffness and damping, fluid forces
+(density, viscosity, wind) set to 0. The joints' springs and dampers are the scene's
+(:meth:`~urdf2links.scenes.scene.Scene.springs_for`: the file's own in the default scene) written into
+``jnt_stiffness``, ``qpos_spring`` and ``dof_damping`` of hinges and slides (0 elsewhere, ball and
+free joints included); ``body_gravcomp`` is kept only with ``[gravcomp] from_file``; gravity is the
+scene's (0 without ``[gravity]``). The armature is the file's (part of the model's inertia, E49).
+
+States go through the model's own map (:meth:`~urdf2links.dynamics.model.Model.to_mujoco`), so
+MuJoCo's terms are compared in the project's coordinates (:func:`file_terms`): ``A`` against
+``J^T M J`` and ``e + G`` against ``J^T (qfrc_bias + M J' q')`` (docs/equations.md (E50)), and its
+runs (:func:`run_file`) are read back with :meth:`~urdf2links.dynamics.model.Model.from_mujoco`, each
+ball or free joint's angles on the branch nearest the previous sample's (then nearest the project's
+own run when given). MuJoCo is timed as in route 1: ``mj_step(m, d, nstep=k)`` from sample to sample.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import time
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+
+from urdf2links.parsers.mjcf import compile_mjcf
+from urdf2links.parsers.mjcf_notes import MUJOCO_OFF
+
+from .mjcf import INTEGRATORS
+from .mujoco_run import _INTEGRATOR_ENUM, MujocoRun, _blow_ups, instability_note
+
+__all__ = ["MujocoFile", "mujoco_from_mjcf", "file_terms", "run_file", "FILE_LABEL", "file_route_inputs"]
+
+FILE_LABEL = "route 2: MuJoCo runs the MJCF file as written (only the scene's effects enabled)"
+
+
+@dataclass(frozen=True, eq=False)
+class MujocoFile:
+    """An MJCF file compiled by MuJoCo for a scene: ``model`` (``mujoco.MjModel``), the project's
+    ``source`` model (its map of states), ``gravity``, ``notes`` (what was switched off and why)."""
+
+    model: mujoco.MjModel
+    source: object
+    gravity: np.ndarray
+    path: str
+    notes: list[str] = field(default_factory=list)
+    moving_base: bool = False
+
+    @property
+    def n(self) -> int:
+        return self.source.n
+
+    @property
+    def coordinate_names(self) -> tuple[str, ...]:
+        return self.source.coordinate_names
+
+
+def file_route_inputs(scene) -> list[str]:
+    """What of ``scene`` route 2 for an MJCF file does not run (time-dependent inputs): empty when it runs it."""
+    return [w for w, on in (("[base]", scene.base is not None), ("[[force]]/[[moment]]", bool(scene.loads)),
+                            ("[[torque]]", bool(scene.torques))) if on]
+
+
+def mujoco_from_mjcf(plan, *, timestep: float | None = None, integrator: str | None = None) -> MujocoFile:
+    """The scene's MJCF robot compiled by MuJoCo with only the scene's effects (module doc)."""
+    scene, model = plan.scene, plan.model
+    notes: list[str] = []
+    m, where = compile_mjcf(str(scene.robot), notes)
+    g = np.zeros(3) if scene.gravity is None else np.asarray(scene.gravity, float)
+    m.opt.gravity[:] = g
+    for name in ("mjDSBL_GRAVITY", "mjDSBL_SPRING", "mjDSBL_DAMPER"):    # the scene says (the file's flags notwithstanding)
+        m.opt.disableflags &= ~int(getattr(mujoco.mjtDisableBit, name))
+    for name in MUJOCO_OFF:
+        m.opt.disableflags |= int(getattr(mujoco.mjtDisableBit, name))
+    springs = plan.spring_set.springs
+    if not any(s.stiffness > 0 for s in springs):
+        m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_SPRING)
+    if not any(s.damping > 0 for s in springs):
+        m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_DAMPER)
+    m.jnt_stiffness[:] = 0.0
+    m.dof_damping[:] = 0.0
+    qmap = model.info["mujoco"]
+    by_coord = {}
+    for j in qmap.joints:
+        if j.kind in ("hinge", "slide"):
+            by_coord[model.coordinate_names[j.coordinates[0]]] = j
+    for s in springs:
+        j = by_coord[s.coordinate]
+        jid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, j.name)
+        if jid < 0:     # an unnamed joint: found by its address
+            jid = int(np.flatnonzero(m.jnt_qposadr == j.qposadr)[0])
+        m.jnt_stiffness[jid] = s.stiffness
+        m.qpos_spring[j.qposadr] = s.rest
+        m.dof_damping[j.dofadr] = s.damping
+    changed = [a for a in ("tendon_stiffness", "tendon_damping") if np.any(getattr(m, a))]
+    m.tendon_stiffness[:] = 0.0
+    m.tendon_damping[:] = 0.0
+    fluid = [k for k in ("density", "viscosity") if getattr(m.opt, k) != 0.0] + (["wind"] if np.any(m.opt.wind) else [])
+    m.opt.density, m.opt.viscosity = 0.0, 0.0
+    m.opt.wind[:] = 0.0
+    if not scene.gravcomp and np.any(m.body_gravcomp):
+        m.body_gravcomp[:] = 0.0
+        notes.append("gravcomp set to 0 (the scene does not ask: [gravcomp] from_file = true)")
+    if timestep is not None:
+        m.opt.timestep = float(timestep)
+    if integrator is not None:
+        if integrator not in INTEGRATORS:
+            raise ValueError(f"integrator must be one of {INTEGRATORS}, got {integrator!r}")
+        m.opt.integrator = int(_INTEGRATOR_ENUM[integrator])
+    notes.append(f"the file compiled by MuJoCo {mujoco.__version__}; gravity {g.tolist()}; disabled: "
+                 + ", ".join(n.removeprefix("mjDSBL_").lower() for n in MUJOCO_OFF)
+                 + "; joint stiffness, springref and damping set to the scene's springs and dampers ("
+                 + (", ".join(f"{s.coordinate}: k {s.stiffness:g} rest {s.rest:g} c {s.damping:g}" for s in springs)
+                    or "none") + ")"
+                 + (f"; {', '.join(changed)} set to 0" if changed else "")
+                 + (f"; fluid {', '.join(fluid)} set to 0" if fluid else ""))
+    return MujocoFile(model=m, source=model, gravity=g, path=where, notes=notes)
+
+
+def _rel(ours, theirs, floor: float = 0.0) -> float:
+    theirs = np.asarray(theirs, float)
+    if theirs.size == 0:
+        return 0.0
+    diff = float(np.max(np.abs(np.asarray(ours, float) - theirs)))
+    scale = max(float(np.max(np.abs(theirs))), floor)
+    return 0.0 if diff == 0.0 else (math.inf if scale == 0.0 else diff / scale)
+
+
+def file_terms(mf: MujocoFile, model, scene, *, states: int = 8, seed: int = 0) -> dict:
+    """``A`` against ``J^T M J`` and ``e + G`` (the scene's gravity) against ``J^T (qfrc_bias + M J' q')``
+    at seeded states around MuJoCo's qpos0 (``q0 + U(-1, 1)``, ``q'`` standard normal). Returns a
+    JSON-ready dict like route 2's for a URDF."""
+    g = np.zeros(3) if scene.gravity is None else np.asarray(scene.gravity, float)
+    ours = model if np.array_equal(model.gravity_vector, g) else copy.copy(model)
+    if ours is not model:     # the hot path reads _g (writable), the oracles gravity_vector
+        ours._g = g.copy()
+        g.setflags(write=False)
+        ours.gravity_vector = g
+    m = mf.model
+    d = mujoco.MjData(m)
+    qmap = model.info["mujoco"]
+    rng = np.random.default_rng(seed)
+    q0 = np.asarray(model.info["q0"], float)
+    err_A = err_b = 0.0
+    per_state = []
+    start = time.perf_counter()
+    M = np.zeros((m.nv, m.nv))
+    for _ in range(states):
+        q = q0 + rng.uniform(-1.0, 1.0, model.n)
+        qd = rng.standard_normal(model.n)
+        d.qpos[:], d.qvel[:] = qmap.to_mujoco(q, qd)
+        mujoco.mj_forward(m, d)
+        mujoco.mj_fullM(m, d, M)
+        J = qmap.jacobian(q)
+        A_mj = J.T @ M @ J
+        b_mj = J.T @ (d.qfrc_bias + M @ qmap.jacobian_rate(q, qd))
+        A = ours.mass_matrix(q)
+        eG = ours.bias(q, qd) + (ours.gravity(q) if scene.gravity is not None else 0.0)
+        floor = float(np.max(np.abs(A_mj))) * max(1.0, float(np.max(np.abs(qd))) ** 2) * 1e-3 if model.n else 0.0
+        ra, rb = _rel(A, A_mj), _rel(eG, b_mj, floor)
+        per_state.append([ra, rb])
+        err_A, err_b = max(err_A, ra), max(err_b, rb)
+    return {"label": FILE_LABEL, "route": "mjcf-file", "max_rel_error_A": err_A, "max_rel_error_bias": err_b,
+            "max_rel_error": max(err_A, err_b), "states": states, "seed": seed, "per_state": per_state,
+            "mapping": "A vs J^T mj_fullM J, e + G vs J^T (qfrc_bias + mj_fullM J' q'), qvel = J q' (E50)",
+            "refusals": [], "notes": list(mf.notes), "wall_time_s": time.perf_counter() - start}
+
+
+def run_file(mf: MujocoFile, plan, *, t_end: float, samples: int, reference=None) -> MujocoRun:
+    """MuJoCo's run of the file from the scene's initial state: ``mj_step(nstep)`` from sample to sample,
+    the samples read back in the project's coordinates (module doc), MuJoCo's energies (armature and
+    springs included) from an untimed pass. ``reference`` (samples, n): the project's ``q`` at the same
+    times, for the branch of the angles."""
+    start = time.perf_counter()
+    m, model = mf.model, mf.source
+    qmap = model.info["mujoco"]
+    q0, qd0 = plan.scene.initial_state(model)
+    d = mujoco.MjData(m)
+    d.qpos[:], d.qvel[:] = qmap.to_mujoco(q0, qd0)
+    dt = float(m.opt.timestep)
+    t_req = np.linspace(0.0, float(t_end), int(samples))
+    ks = np.rint(t_req / dt).astype(np.int64)
+    notes = []
+    offset = float(np.max(np.abs(ks * dt - t_req)))
+    if offset > 1e-9 * dt:
+        notes.append(f"timestep {dt:g} s does not divide the sample interval: samples at the nearest steps "
+                     f"(largest offset {offset:.3g} s)")
+    S = len(ks)
+    qpos, qvel, ts = np.empty((S, m.nq)), np.empty((S, m.nv)), np.empty(S)
+    engine, done = 0.0, 0
+    for j in range(S):
+        k = int(ks[j])
+        if k > done:
+            t0 = time.perf_counter()
+            mujoco.mj_step(m, d, nstep=k - done)
+            engine += time.perf_counter() - t0
+            done = k
+        ts[j], qpos[j], qvel[j] = d.time, d.qpos, d.qvel
+    blow = _blow_ups(d)
+    integ = mujoco.mjtIntegrator(int(m.opt.integrator)).name.removeprefix("mjINT_")
+    integ = {"EULER": "Euler", "RK4": "RK4", "IMPLICIT": "implicit", "IMPLICITFAST": "implicitfast"}.get(integ, integ)
+    if blow:
+        notes.append(instability_note(blow, integ, dt))
+        ts = ks * dt
+    q, qd = np.empty((S, model.n)), np.empty((S, model.n))
+    prev = np.asarray(q0, float)
+    for j in range(S):
+        ref = prev if reference is None else np.asarray(reference[j], float)
+        q[j], qd[j] = qmap.from_mujoco(qpos[j], qvel[j], reference=ref)
+        prev = q[j]
+    me = copy.deepcopy(m)
+    me.opt.enableflags |= int(mujoco.mjtEnableBit.mjENBL_ENERGY)
+    de = mujoco.MjData(me)
+    energy = np.empty((S, 2))
+    for j in range(S):
+        de.qpos[:], de.qvel[:] = qpos[j], qvel[j]
+        mujoco.mj_fwdPosition(me, de)
+        mujoco.mj_energyPos(me, de)
+        mujoco.mj_fwdVelocity(me, de)
+        mujoco.mj_energyVel(me, de)
+        energy[j] = de.energy[1], de.energy[0]
+    return MujocoRun(t=ts, q=q, qd=qd, energy=energy, base_tracking_error=0.0, wall_time=engine, nsteps=int(ks[-1]),
+                     timestep=dt, integrator=integ, coordinate_names=model.coordinate_names, notes=notes,
+                     harness_time=time.perf_counter() - start, inputs="none", blow_ups=blow)
