@@ -65,7 +65,7 @@ def test_shipped_names_resolve_from_any_folder(tmp_path, monkeypatch):
 def test_list_shows_every_shipped_file_with_a_line(tmp_path):
     out = run("list", cwd=tmp_path)
     assert out.returncode == 0, out.stderr
-    files = sorted(p.stem for p in shipped_robots_dir().rglob("*") if p.suffix in (".urdf", ".toml"))
+    files = sorted(p.stem for p in shipped_robots_dir().rglob("*") if p.suffix in (".urdf", ".toml", ".xml"))
     assert sorted(s.name for s in shipped()) == files
     for s in shipped():
         line = next(ln for ln in out.stdout.splitlines() if ln.split()[:1] == [s.name])
