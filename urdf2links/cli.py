@@ -42,9 +42,7 @@ def format_tree(model) -> str:
         com = "-" if m <= 0 else "(" + ", ".join(f"{c:.3g}" for c in tree.com[p]) + ")"
         eig = "massless" if not np.any(tree.H[p]) else ", ".join(f"{e:.3g}" for e in np.linalg.eigvalsh(tree.H[p]))
         rows.append((name, parent, *cells, f"{m:.4g}", com, eig))
-    widths = [max(len(r[c]) for r in rows) for c in range(len(rows[0]))]
-    lines = ["  ".join(cell.ljust(w) for cell, w in zip(r, widths)).rstrip() for r in rows]
-    lines.insert(1, "  ".join("-" * w for w in widths))
+    lines = _table(rows)
     out = [f"robot {model.name!r} from {model.source}: {tree.n_links} links, {model.n} coordinates", ""] + lines
     out += _joint_lines(model.info.get("joints", []))
     out += ["", f"inertia audit: {len(model.audit)} finding(s)"]
@@ -53,6 +51,14 @@ def format_tree(model) -> str:
     if notes:
         out += ["", "import notes:"] + [f"  - {n}" for n in notes]
     return "\n".join(out)
+
+
+def _table(rows) -> list[str]:
+    """Rows of cells as aligned text lines, a rule under the first (the header)."""
+    widths = [max(len(r[c]) for r in rows) for c in range(len(rows[0]))]
+    lines = ["  ".join(cell.ljust(w) for cell, w in zip(r, widths)).rstrip() for r in rows]
+    lines.insert(1, "  ".join("-" * w for w in widths))
+    return lines
 
 
 def _num(v) -> str:
@@ -67,9 +73,7 @@ def _mjcf_joint_lines(joints) -> list[str]:
         rows.append((j["name"], j["type"], ", ".join(j["coordinates"]), _num(j["lower"]), _num(j["upper"]),
                      _num(j["armature"]), _num(j["damping"]), _num(j["stiffness"]), _num(j["springref"]),
                      _num(j["friction"])))
-    widths = [max(len(r[c]) for r in rows) for c in range(len(rows[0]))]
-    lines = ["  ".join(cell.ljust(w) for cell, w in zip(r, widths)).rstrip() for r in rows]
-    lines.insert(1, "  ".join("-" * w for w in widths))
+    lines = _table(rows)
     return ["", "joints (MuJoCo's compiled values; qpos of hinges and slides is the coordinate; armature is part of A; "
             "damping, stiffness and gravcomp act in scenes that ask ([dampers], [springs], [gravcomp] from_file, as "
             "the default scene does); limits not enforced; friction not modelled):"] + lines
@@ -89,9 +93,7 @@ def _joint_lines(joints) -> list[str]:
         rows.append((j["name"], j["type"], ", ".join(j["coordinates"]) or "(coupled)", _num(j["lower"]),
                      _num(j["upper"]), _num(j["effort"]), _num(j["velocity"]), _num(j["damping"]),
                      _num(j["friction"])))
-    widths = [max(len(r[c]) for r in rows) for c in range(len(rows[0]))]
-    lines = ["  ".join(cell.ljust(w) for cell, w in zip(r, widths)).rstrip() for r in rows]
-    lines.insert(1, "  ".join("-" * w for w in widths))
+    lines = _table(rows)
     return ["", "joints (limits not enforced, noted when a run leaves them; damping acts in scenes with [dampers] "
             "from_urdf = true; friction not modelled):"] + lines
 
