@@ -56,7 +56,8 @@ def test_the_table_has_the_commands():
 
 @pytest.mark.parametrize("command, what", ROWS, ids=[c for c, _ in ROWS])
 def test_a_readme_command_runs_from_an_empty_folder(command, what, tmp_path):
-    exe = shutil.which("urdf2links")
+    beside = Path(sys.executable).parent / "urdf2links"      # the command of this environment's install
+    exe = str(beside) if beside.is_file() else shutil.which("urdf2links")
     argv = _argv(command)
     prefix = [exe] if exe else [sys.executable, "-m", "urdf2links"]
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
