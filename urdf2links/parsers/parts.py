@@ -75,6 +75,13 @@ class JointPart:
     armature: float = 0.0
     friction: float = 0.0
     source_type: str = ""
+    written_axis: np.ndarray | None = None
+
+    @property
+    def built_axis(self) -> np.ndarray:
+        """The axis the tree is built with: as the file wrote it (a URDF axis need not be unit: the importer
+        aligns the written one, E8), unless ``axis`` was changed since."""
+        return np.asarray(self.axis if self.written_axis is None else self.written_axis, float)
 
     @property
     def coordinates(self) -> tuple[str, ...]:
@@ -133,7 +140,10 @@ class RobotParts:
         return replace(self, bodies=tuple(replace(b, **changes) if b.name == name else b for b in self.bodies))
 
     def with_joint(self, name: str, **changes) -> "RobotParts":
-        """A copy with joint ``name``'s fields changed (``axis``, ``armature``, ``anchor``, ...)."""
+        """A copy with joint ``name``'s fields changed (``axis``, ``armature``, ``anchor``, ...; a new ``axis``
+        is the one built with)."""
+        if "axis" in changes:
+            changes.setdefault("written_axis", None)
         bodies = []
         for b in self.bodies:
             if any(j.name == name for j in b.joints):
@@ -176,7 +186,8 @@ def _urdf_parts(path, *, floating_base, package_dirs, strict, xacro_args) -> Rob
         u = np.array([0.0, 0.0, 1.0]) if kind in ("ball", "free") else u / np.linalg.norm(u)
         lo, hi = (j.limit_lower, j.limit_upper) if j.type in ("revolute", "prismatic") else (None, None)
         jp = JointPart(j.name, kind, axis=u, home=(0.0,) * len(JOINT_KINDS[kind]), lower=lo, upper=hi,
-                       damping=float(j.damping or 0.0), friction=float(j.friction or 0.0), source_type=j.type)
+                       damping=float(j.damping or 0.0), friction=float(j.friction or 0.0), source_type=j.type,
+                       written_axis=None if kind in ("ball", "free") else np.asarray(j.axis, float))
         bodies.append(BodyPart(name, j.parent, pose, H, (jp,)))
     return RobotParts(desc.name, str(desc.source), "urdf", tuple(bodies), notes=tuple(desc.notes))
 
@@ -296,7 +307,7 @@ class _Builder:
             if not np.array_equal(F[:3, :3], np.eye(3)):
                 t, F = self.add(f"{j.name}.frame", t, _params(F)), _I4
             return self.add(link, t, np.r_[F[:3, 3], 0, 0, 0], coords, arm), _trans(-np.asarray(j.anchor))
-        Ra = homogeneous(axis_alignment(np.asarray(j.axis, float)), np.zeros(3))
+        Ra = homogeneous(axis_alignment(j.built_axis), np.zeros(3))
         if j.kind == "hinge":
             params = _params(X @ _trans(j.anchor) @ Ra)
             params[5] -= j.ref
