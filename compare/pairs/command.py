@@ -148,15 +148,15 @@ def report_pairs_command(args) -> int:
                                                   seed=p.seed, q0=p.q0, t_end=t_end, mujoco_dt=args.mujoco_dt,
                                                   mujoco_integrator=args.mujoco_integrator, fps=args.animation_fps,
                                                   log=(lambda m: None) if args.quiet else (lambda m: err(f"    {m}")))
+                failures = check_tolerances(summary, p.tolerances)
+                write_pair_page(summary, out / p.name, title=f"{p.name}: two descriptions", animation_html=anim,
+                                failures=failures, index_link="../index.html",
+                                command=f"urdf2links report --pairs {shown_path(path)}")
         except Exception as exc:  # noqa: BLE001 -- one broken pair must not hide the others
             err(f"    FAILED: {type(exc).__name__}: {exc}")
             broken.append(p.name)
             entries.append({"name": p.name, "error": f"{type(exc).__name__}: {exc}"})
             continue
-        failures = check_tolerances(summary, p.tolerances)
-        write_pair_page(summary, out / p.name, title=f"{p.name}: two descriptions", animation_html=anim,
-                        failures=failures, index_link="../index.html",
-                        command=f"urdf2links report --pairs {shown_path(path)}")
         entries.append({"name": p.name, "link": f"{p.name}/report.html", "summary": summary, "failures": failures})
         if failures:
             failed.append(p.name)

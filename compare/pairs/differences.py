@@ -230,7 +230,7 @@ class _Comparer:
                                     "", f"joint type {a.kind} against {b.kind}", links))
                 continue
             if a.kind in ("hinge", "slide", "planar"):
-                self._axis(a, b, mt, links)
+                self._axis(a, b, mt, links, bu[a.name], bm[b.name])
             if len(JOINT_KINDS[a.kind]) == 1:
                 self._limits(a, b, mt, links)
             unit = {"hinge": ("N m s/rad", "N m/rad", "kg m^2"), "slide": ("N s/m", "N/m", "kg")}.get(a.kind,
@@ -242,12 +242,27 @@ class _Comparer:
                 self.add(Difference(kind, a.name, b.name, va, vb, abs(va - vb), u,
                                     f"{attr} {va:.6g} against {vb:.6g} {u}".rstrip(), links, undo=undo))
 
-    def _axis(self, a, b, mt, links):
-        ang = float(np.arccos(np.clip(float(np.dot(a.axis, b.axis)), -1.0, 1.0)))
-        what = (f"axis negated ({np.round(a.axis, 6).tolist()} against {np.round(b.axis, 6).tolist()} in the body "
-                f"frame): q maps with sign -1" if mt.sign < 0 and ang > math.pi - 1e-5 else
-                f"axis turned by {ang:.4g} rad in the body frame" + (" (q maps with sign -1)" if mt.sign < 0 else ""))
-        undo = lambda s, n=b.name, u=np.array(a.axis, float): replace(s, parts=s.parts.with_joint(n, axis=u))
+    def _axis(self, a, b, mt, links, bU, bM):
+        """The axes compared in the frame of the nearest body both sides have above them (a body frame placed
+        differently is not an axis difference; a turned origin above the joint is one, beside the origin's)."""
+        ua, ub = np.asarray(a.axis, float), np.asarray(b.axis, float)
+        if self.bodies.get(bU) == bM:
+            refU, refM, _ = self._reference(bU)
+            RU, RM = self._rel(self.WU, refU, bU)[:3, :3], self._rel(self.WM, refM, bM)[:3, :3]
+            ua, ub = RU @ ua, RM @ ub
+        ang = float(np.arccos(np.clip(float(np.dot(ua, ub)), -1.0, 1.0)))
+        what = (f"axis negated ({np.round(ua, 6).tolist()} against {np.round(ub, 6).tolist()} in the frame of the body "
+                f"above): q maps with sign -1" if mt.sign < 0 and ang > math.pi - 1e-5 else
+                f"axis turned by {ang:.4g} rad" + (" (q maps with sign -1)" if mt.sign < 0 else ""))
+        refs = self._reference(bU)[:2] if self.bodies.get(bU) == bM else None
+        world_a = ua
+
+        def undo(s, n=b.name, bM=bM, refs=refs, u=np.array(world_a, float)):
+            """The second's axis made the first's, in the frame of the body above as the second is now."""
+            if refs is None:
+                return replace(s, parts=s.parts.with_joint(n, axis=u))
+            RM = self._rel(home_poses(s.parts), refs[1], bM)[:3, :3]
+            return replace(s, parts=s.parts.with_joint(n, axis=RM.T @ u))
         self.add(Difference("axis", a.name, b.name, a.axis, b.axis, ang, "rad", what, links, undo=undo))
 
     def _limits(self, a, b, mt, links):

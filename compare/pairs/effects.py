@@ -141,9 +141,14 @@ def _attribute(terms: Terms, M: RobotParts, diffs: list[Difference], *, signs: b
     return base, rows
 
 
+#: The order in which every difference is undone at once: frames before what is expressed in them (an axis is
+#: set relative to the body above as the body is then placed).
+_UNDO_ORDER = {"origin": 0, "axis": 1}
+
+
 def _undo_all(terms: Terms, M: RobotParts, diffs: list[Difference], *, signs: bool) -> dict:
     side = Side(M)
-    for d in diffs:
+    for d in sorted(diffs, key=lambda d: _UNDO_ORDER.get(d.kind, 2)):
         if d.undo is not None:
             side = d.undo(side)
     r = terms.compare(side, signs=signs)

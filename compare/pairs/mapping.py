@@ -9,7 +9,7 @@ of the same kind under the matched ancestor whose axis and anchor at home are ne
 descriptions' home poses, in the world), rounds repeated until nothing more matches.
 
 A matched pair of one-coordinate joints maps its coordinate as ``q_mjcf = sign q_urdf + offset``
-(docs/equations.md (E52)): ``sign`` -1 when the axes point opposite ways in the body frame (a negated
+(docs/equations.md (E52)): ``sign`` -1 when the axes point opposite ways in the world at home (a negated
 axis: the comparison reports it as kind ``axis``, and goes on in mapped coordinates), ``offset`` the
 difference of the coordinates at home (an MJCF hinge's ``ref``: MuJoCo's qpos is the coordinate).
 Joints with several coordinates (ball, free, planar) map slot by slot, sign 1.
@@ -114,10 +114,13 @@ def _world_axes(parts: RobotParts) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     return out
 
 
-def _sign_offset(ju, jm) -> tuple[float, float]:
+def _sign_offset(ju, jm, wu=None, wm=None) -> tuple[float, float]:
+    """``(sign, offset)`` of a pair (E52): the sign of the axes' product in the world at home (``wu``, ``wm``: the
+    joints' axes there; without them, in their body frames)."""
     if len(JOINT_KINDS[ju.kind]) != 1 or len(JOINT_KINDS[jm.kind]) != 1:
         return 1.0, 0.0
-    s = -1.0 if float(np.dot(ju.axis, jm.axis)) < 0 else 1.0
+    u, v = (ju.axis, jm.axis) if wu is None or wm is None else (wu, wm)
+    s = -1.0 if float(np.dot(u, v)) < 0 else 1.0
     return s, jm.ref - s * ju.ref
 
 
@@ -169,7 +172,7 @@ def map_joints(urdf: RobotParts, mjcf: RobotParts, *, explicit: dict | None = No
     for a in ju:                       # in the first description's tree order
         if a in pairs:
             b, by = pairs[a]
-            s, c = _sign_offset(ju[a], jm[b])
+            s, c = _sign_offset(ju[a], jm[b], axes_u[a][0], axes_m[b][0])
             matches.append(JointMatch(a, b, by, ju[a].kind, jm[b].kind, s, c))
     return JointMapping(tuple(matches), tuple(a for a in ju if a not in pairs), tuple(b for b in jm if b not in taken))
 
@@ -180,11 +183,12 @@ def coordinate_map(urdf: RobotParts, mjcf: RobotParts, mapping: JointMapping, *,
     coordinates taken as equal by name). Pairs of different kinds map the slots they share."""
     ju = {j.name: j for j, _ in urdf.joints}
     jm = {j.name: j for j, _ in mjcf.joints}
+    wu, wm = _world_axes(urdf), _world_axes(mjcf)
     out = []
     for m in mapping.matches:
         a, b = ju[m.urdf], jm[m.mjcf]
         if len(JOINT_KINDS[a.kind]) == 1 and len(JOINT_KINDS[b.kind]) == 1:
-            s, c = _sign_offset(a, b)
+            s, c = _sign_offset(a, b, wu[a.name][0], wm[b.name][0])
             if not signs:
                 s, c = 1.0, b.ref - a.ref
             out.append((a.coordinates[0], b.coordinates[0], s, c))

@@ -30,6 +30,8 @@ import mujoco
 import numpy as np
 
 from urdf2links.integration.simulate import simulate, warm_up
+from urdf2links.dynamics.rotations import matrix_to_xyz_angles, xyz_angles_to_matrix
+from urdf2links.parsers.mjcf_state import _nearest, matrix_to_quat, quat_to_matrix, rate_matrix
 from urdf2links.parsers.robot_file import is_mjcf_path
 from urdf2links.scenes.plan import as_plan
 from urdf2links.scenes.scene import default_scene
@@ -89,34 +91,47 @@ class PairMotion:
 
 
 def _mujoco_urdf_run(plan, *, t_end, samples, timestep, integrator) -> tuple[np.ndarray, list[str]]:
-    """MuJoCo's own import of the scene's URDF run from the scene's initial state: ``q`` (samples, n)."""
+    """MuJoCo's own import of the scene's URDF run from the scene's initial state: ``q`` (samples, n). A floating
+    base is MuJoCo's free joint added to the root (route 2's), its pose read back as the root's six coordinates
+    (ZYX angles on the branch nearest the previous sample's, E7)."""
     scene, model = plan.scene, plan.model
-    if scene.load_options.get("floating_base"):
-        raise ValueError("MuJoCo's URDF import has no floating base of its own: not run")
     if str(scene.robot).endswith(".xacro"):
         raise ValueError("a .xacro file: MuJoCo reads URDF only; not run")
+    floating = bool(scene.load_options.get("floating_base"))
     g = np.zeros(3) if scene.gravity is None else np.asarray(scene.gravity, float)
-    mj = mujoco_from_urdf(scene.robot, gravity=g, damping=bool(scene.urdf_damping))
+    mj = mujoco_from_urdf(scene.robot, gravity=g, damping=bool(scene.urdf_damping), floating_base=floating)
     m = mj.model
     m.opt.timestep = float(timestep)
     m.opt.integrator = int(_INTEGRATOR_ENUM[integrator])
-    names = model.coordinate_names
-    missing = [n for n in names if n not in mj.qpos_of_joint]
-    if missing:
-        raise ValueError(f"MuJoCo's import has no joint for {missing[:4]}")
+    names = list(model.coordinate_names)
+    root = [i for i, n in enumerate(names) if n not in mj.qpos_of_joint]
+    if (len(root) != 6 if floating else root):
+        raise ValueError(f"MuJoCo's import has no joint for {[names[i] for i in root][:4]}")
+    joints = [i for i in range(len(names)) if i not in root]
+    adr = [mj.qpos_of_joint[names[i]] for i in joints]
+    dof = [mj.dof_of_joint[names[i]] for i in joints]
     q0, qd0 = scene.initial_state(model)
     d = mujoco.MjData(m)
-    for i, n in enumerate(names):
-        d.qpos[mj.qpos_of_joint[n]] = q0[i]
-        d.qvel[mj.dof_of_joint[n]] = qd0[i]
+    d.qpos[adr], d.qvel[dof] = q0[joints], qd0[joints]
+    if floating:
+        a, f = mj.free_qpos, list(mj.free_dofs)
+        phi = q0[root[3:]]
+        d.qpos[a:a + 3] = q0[root[:3]]
+        d.qpos[a + 3:a + 7] = matrix_to_quat(xyz_angles_to_matrix(phi))
+        d.qvel[f[:3]] = qd0[root[:3]]
+        d.qvel[f[3:]] = rate_matrix(phi) @ qd0[root[3:]]
     ks = np.rint(np.linspace(0.0, t_end, samples) / timestep).astype(np.int64)
-    out, done = np.empty((samples, len(names))), 0
-    adr = [mj.qpos_of_joint[n] for n in names]
+    out, done, prev = np.empty((samples, len(names))), 0, q0[root[3:]] if floating else None
     for j, k in enumerate(ks):
         if k > done:
             mujoco.mj_step(m, d, nstep=int(k - done))
             done = int(k)
-        out[j] = d.qpos[adr]
+        out[j, joints] = d.qpos[adr]
+        if floating:
+            a = mj.free_qpos
+            out[j, root[:3]] = d.qpos[a:a + 3]
+            prev = _nearest(matrix_to_xyz_angles(quat_to_matrix(d.qpos[a + 3:a + 7])), prev)
+            out[j, root[3:]] = prev
     return out, [f"MuJoCo's URDF import: {n}" for n in mj.notes[-1:]]
 
 
@@ -173,7 +188,7 @@ def run_pair_motion(pair, *, q0: str = "zero", seed: int = 0, t_end: float = 1.0
                                   reference=traj.q)
             mj.append(q)
             notes += [f"{label}: {n}" for n in more]
-        except (ValueError, MujocoRefused) as exc:
+        except (ValueError, MujocoRefused, NotImplementedError) as exc:
             mj.append(None)
             notes.append(f"{label}: MuJoCo's run of the file skipped: {exc}")
     iu = [model_u.coordinate_names.index(a) for a, *_ in cmap]
@@ -187,6 +202,10 @@ def run_pair_motion(pair, *, q0: str = "zero", seed: int = 0, t_end: float = 1.0
         return np.abs(qu[:, iu] - s * (qm[:, im] - c))
 
     notes += [f"urdf scene: {n}" for n in plans[0].spring_set.notes] + [f"mjcf scene: {n}" for n in plans[1].spring_set.notes]
+    if any(b.parent is None and any(j.kind == "free" for j in b.joints) for b in pair.urdf.bodies) and not np.any(qd0u):
+        notes.insert(0, "a floating base at rest under gravity alone falls as one rigid body (no contact here): its joints "
+                        "do not move, whatever the descriptions' differences, so this divergence says little of them; "
+                        "the differences' effect on A and G does")
     return PairMotion(t, runs[0].q, runs[1].q, mj[0], mj[1], [a for a, *_ in cmap], divergence(runs[0].q, runs[1].q),
                       divergence(mj[0], mj[1]), (model_u, model_m), (scene_u, scene_m),
                       {"integrator": mujoco_integrator, "timestep": mujoco_dt}, notes)

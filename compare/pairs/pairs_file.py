@@ -3,8 +3,12 @@ they must stay.
 
 Schema (every key checked; paths relative to the file's folder)::
 
+    description = "what these pairs are"    # optional: the line `urdf2links list` shows
+
     # optional: what every pair gets unless it says otherwise
     [defaults]
+    root = "$ROBOT_FILES"    # where the pairs' relative paths start (default: this file's folder);
+                             #   ~ and $VARIABLES expanded, itself relative to this file's folder
     t_end = 1.0              # s of motion in each file's default scene (0: no motion, descriptions only)
     q0 = "zero"              # or "random": the first description's initial state (seeded by seed)
     seed = 0                 # seed of q0 random and of the states A and G are compared at
@@ -32,6 +36,7 @@ its rounding level (:data:`~urdf2links.compare.pairs.differences.ROUNDING`): any
 from __future__ import annotations
 
 import math
+import os
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -96,6 +101,22 @@ def _settings(where: str, table: dict) -> dict:
     return out
 
 
+def _root(path: Path, root) -> Path:
+    """The folder the pairs' paths start from: ``root`` (``~``, ``$VARIABLES`` expanded; relative to the file's
+    folder) or the file's folder."""
+    if root is None:
+        return path.parent
+    if not isinstance(root, str):
+        _fail(f"{path} [defaults]", f"root = {root!r}: give a folder (a string)")
+    text = os.path.expanduser(os.path.expandvars(root))
+    if "$" in text:
+        _fail(f"{path} [defaults]", f"root = {root!r}: the environment variable in it is not set")
+    folder = (path.parent / text).resolve()
+    if not folder.is_dir():
+        _fail(f"{path} [defaults]", f"root = {root!r}: {folder} is not a folder")
+    return folder
+
+
 def read_pairs_file(path) -> list[PairSpec]:
     """The pairs of a pairs file (module doc); a ValueError names the file, the pair and the key."""
     path = Path(path)
@@ -105,13 +126,15 @@ def read_pairs_file(path) -> list[PairSpec]:
         raise ValueError(f"pairs file {path} does not exist") from None
     except tomllib.TOMLDecodeError as err:
         raise ValueError(f"{path}: not valid TOML: {err}") from None
-    unknown = [k for k in data if k not in ("defaults", "pair")]
+    unknown = [k for k in data if k not in ("defaults", "pair", "description")]
     if unknown:
-        _fail(str(path), f"unknown top-level key(s) {unknown}: a pairs file has [defaults] and [[pair]] tables")
+        _fail(str(path), f"unknown top-level key(s) {unknown}: a pairs file has a description, [defaults] and "
+                         "[[pair]] tables")
     defaults = data.get("defaults", {})
-    bad = [k for k in defaults if k not in (*DEFAULTS, "tolerances")]
+    bad = [k for k in defaults if k not in (*DEFAULTS, "tolerances", "root")]
     if bad:
-        _fail(f"{path} [defaults]", f"unknown key(s) {bad}; allowed: {', '.join((*DEFAULTS, 'tolerances'))}")
+        _fail(f"{path} [defaults]", f"unknown key(s) {bad}; allowed: {', '.join((*DEFAULTS, 'tolerances', 'root'))}")
+    folder = _root(path, defaults.get("root"))
     base = {**DEFAULTS, **_settings(f"{path} [defaults]", defaults)}
     base_tol = _tolerances(f"{path} [defaults]", defaults.get("tolerances", {}))
     pairs = data.get("pair", [])
@@ -127,7 +150,7 @@ def read_pairs_file(path) -> list[PairSpec]:
         for key in ("urdf", "mjcf"):
             if not isinstance(p.get(key), str):
                 _fail(where, f"{key} = <path of a robot file> is required")
-            f = (path.parent / p[key]).resolve() if not Path(p[key]).is_absolute() else Path(p[key])
+            f = (folder / p[key]).resolve() if not Path(p[key]).is_absolute() else Path(p[key])
             if not f.is_file():
                 _fail(where, f"{key} = {p[key]!r}: no such file ({f})")
             files.append(f)
@@ -142,7 +165,7 @@ def read_pairs_file(path) -> list[PairSpec]:
         if p.get("floating_base"):
             load["floating_base"] = True
         if p.get("package_dirs"):
-            load["package_dirs"] = tuple(str((path.parent / d).resolve()) for d in p["package_dirs"])
+            load["package_dirs"] = tuple(str((folder / d).resolve()) for d in p["package_dirs"])
         if p.get("xacro_args"):
             load["xacro_args"] = {str(k): str(v) for k, v in p["xacro_args"].items()}
         settings = {**base, **_settings(where, p)}

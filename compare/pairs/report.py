@@ -52,6 +52,8 @@ def _table(rows, header, num_cols=()) -> str:
 def _value(v) -> str:
     if v is None:
         return "&ndash;"
+    if isinstance(v, str):
+        return _E(v)
     a = np.asarray(v, dtype=object if isinstance(v, list) and any(x is None for x in v) else float)
     if a.dtype == object:
         return _E(str(v))
@@ -87,7 +89,8 @@ def _verdict(s: dict, failures) -> str:
     check = ""
     if failures is not None:
         check = ("<br><b>Tolerances:</b> <span class='ok'>pass</span>" if not failures else
-                 "<br><b>Tolerances:</b> <span class='fail'>FAIL</span>: " + _E("; ".join(failures)))
+                 "<br><b>Tolerances:</b> <span class='fail'>FAIL</span>: " + _E("; ".join(failures[:6]))
+                 + (f" ... ({len(failures) - 6} more, in summary.md)" if len(failures) > 6 else ""))
     return f"<div class='{cls}'>{head}<br>{'; '.join(terms)}.{check}</div>"
 
 

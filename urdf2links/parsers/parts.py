@@ -38,7 +38,6 @@ from ..dynamics.model import DEFAULT_GRAVITY, Model
 from ..dynamics.rotations import axis_alignment, homogeneous, matrix_to_xyz_angles, rpy_to_matrix
 from ..dynamics.transforms import PARAMETERS
 from ..dynamics.tree import LinkSpec, build_tree
-from ..errors import DescriptionError
 from .mjcf import compile_mjcf, is_mjcf_path
 from .mjcf_state import quat_to_matrix
 from .urdf import parse_urdf
@@ -298,10 +297,12 @@ class _Builder:
         coords = dict(zip(slots, j.coordinates))
         arm = {s: j.armature for s in slots} if j.armature else None
         if j.kind == "free":
-            if t is not None:
-                raise DescriptionError(f"{self.parts.source}: free joint {j.name!r} below a moving body cannot be a "
-                                       "tree of links here (top level only)")
-            return self.add(link, None, np.zeros(6), coords, arm), _I4
+            if t is None:                 # MJCF (top level only), or a URDF root loaded with a floating base
+                return self.add(link, None, np.zeros(6), coords, arm), _I4
+            if np.array_equal(X[:3, :3], np.eye(3)):          # a URDF floating joint below a link (the importer)
+                return self.add(link, t, np.r_[X[:3, 3], 0, 0, 0], coords, arm), _I4
+            t = self.add(f"{j.name}.frame", t, _params(X))
+            return self.add(link, t, np.zeros(6), coords, arm), _I4
         if j.kind == "ball":
             F = X @ _trans(j.anchor)
             if not np.array_equal(F[:3, :3], np.eye(3)):
@@ -323,7 +324,7 @@ class _Builder:
         frame_of: dict[str, tuple[int | None, np.ndarray]] = {}
         for b in self.parts.bodies:
             t, X = (None, _I4) if b.parent is None else frame_of[b.parent]
-            free = len(b.joints) == 1 and b.joints[0].kind == "free"
+            free = len(b.joints) == 1 and b.joints[0].kind == "free" and b.parent is None
             X = X if free else X @ b.pose
             for k, j in enumerate(b.joints):
                 t, X = self.joint(j, b.name if k == len(b.joints) - 1 else f"{b.name}:{j.name}", t, X)
@@ -356,7 +357,7 @@ def home_poses(parts: RobotParts) -> dict[str, np.ndarray]:
     out: dict[str, np.ndarray] = {}
     for b in parts.bodies:
         W = _I4 if b.parent is None else out[b.parent]
-        if len(b.joints) == 1 and b.joints[0].kind == "free":
+        if len(b.joints) == 1 and b.joints[0].kind == "free" and b.parent is None:
             from ..dynamics.transforms import link_transform
 
             out[b.name] = link_transform(np.asarray(b.joints[0].home, float))
