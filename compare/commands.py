@@ -116,6 +116,12 @@ def _when(path: Path) -> str:
 
 
 def compare_command(args) -> int:
+    if getattr(args, "against", None):       # two descriptions of one robot
+        from .pairs.command import compare_against_command
+
+        return compare_against_command(args)
+    if getattr(args, "map", None):
+        raise ValueError("--map pairs joints of two descriptions: give the second with --against")
     scene = scene_from_args(args)
     write_scene_option(args, scene)
     quiet = getattr(args, "quiet", False)
@@ -154,6 +160,10 @@ def compare_command(args) -> int:
 
 
 def report_command(args) -> int:
+    if getattr(args, "pairs", None):
+        from .pairs.command import report_pairs_command
+
+        return report_pairs_command(args)
     if getattr(args, "corpus", None):
         from .corpus.command import corpus_command
 

@@ -31,6 +31,7 @@ LAYERS = [
     ("compare: agreement", ("urdf2links.compare.agreement",)),
     ("compare: tradeoff", ("urdf2links.compare.tradeoff",)),
     ("compare: reports", ("urdf2links.compare.reports",)),
+    ("compare: pairs", ("urdf2links.compare.pairs",)),
     ("compare: corpus", ("urdf2links.compare.corpus",)),
     ("compare: commands", ("urdf2links.compare", "urdf2links.compare.commands")),
     ("command line", ("urdf2links.cli", "urdf2links.__main__")),

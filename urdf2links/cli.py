@@ -376,6 +376,10 @@ def _compare_parser(sub) -> None:
     p.add_argument("--json", help="also write the summary JSON to this file")
     p.add_argument("--check", metavar="BASELINE.json", help="exit 1, naming the figure, when a discrepancy grew "
                    "past its baseline (wall times are not checked)")
+    p.add_argument("--against", metavar="ROBOT.xml", help="a second description of the same robot (MJCF, URDF or "
+                   "xacro): both compared part by part and in motion, first in the report (docs/pairs.md)")
+    p.add_argument("--map", action="append", default=[], metavar="URDF_JOINT=MJCF_JOINT",
+                   help="with --against: a joint of the first file and its name in the second (repeat for more)")
     p.set_defaults(func=_compare)
 
 
@@ -396,6 +400,9 @@ def _report_parser(sub) -> None:
     p.add_argument("--corpus", nargs="+", metavar="DIR|FILE|GLOB", help="every .urdf and .xacro under these folders "
                    "(and these files, and the files these patterns match): one row each, its default scene run for 0.5 s "
                    "(--t-end); 'example-robot-data': the installed example-robot-data robots")
+    p.add_argument("--pairs", metavar="PAIRS.toml", help="pairs of descriptions of one robot (a URDF and its MJCF, "
+                   "...), compared part by part and in motion: a page per pair and an index in out/reports/pairs/; "
+                   "exit 1 when a pair differs past the tolerances the file gives (schema: docs/pairs.md)")
     p.add_argument("--jobs", type=int, help="--corpus: run the robots in N processes on this machine (default: "
                    "every core; 1: one after the other here)")
     p.add_argument("--scheduler", metavar="ADDRESS", help="--corpus: run the robots on the Dask cluster whose "
@@ -485,7 +492,7 @@ def _resolve_inputs(args) -> None:
     (:func:`urdf2links.locations.find_input`; a stand-in is said on stderr)."""
     from .locations import find_input
 
-    for attr in ("file", "scene"):
+    for attr in ("file", "scene", "against"):
         if isinstance(getattr(args, attr, None), str):
             path, note = find_input(getattr(args, attr))
             setattr(args, attr, str(path))

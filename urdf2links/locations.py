@@ -67,7 +67,8 @@ def _first_sentence(text: str) -> str:
 
 
 def shipped() -> list[Shipped]:
-    """Every shipped robot and scene (``robots/`` and ``robots/hard/``), robots first, by name."""
+    """Every shipped robot and scene (``robots/`` and ``robots/hard/``), robots first, by name; then the pairs
+    files of ``urdf2links report --pairs`` (``robots/pairs/``, kind ``pairs``)."""
     folder = shipped_robots_dir()
     summaries = _robot_summaries(folder)
     out = []
@@ -82,6 +83,12 @@ def shipped() -> list[Shipped]:
             except (OSError, tomllib.TOMLDecodeError):
                 summary = ""
             out.append(Shipped(p.stem, "scene" if sub == folder else "scene (hard case)", p, summary))
+    for p in sorted((folder / "pairs").glob("*.toml")):      # pairs files of `report --pairs NAME`
+        try:
+            summary = str(tomllib.loads(p.read_text()).get("description", ""))
+        except (OSError, tomllib.TOMLDecodeError):
+            summary = ""
+        out.append(Shipped(p.stem, "pairs", p, summary))
     return out
 
 

@@ -258,16 +258,17 @@ def _closing_sections(s, command) -> list[str]:
 
 def render_html(c, summary: dict, *, command: str | None = None, check: "CheckResult | None" = None,
                 index_link: str | None = None, animation_fps: float = DEFAULT_FPS, index_label: str = "all scenes",
-                light: bool = False, extra_sections=()) -> str:
+                light: bool = False, extra_sections=(), first_sections=()) -> str:
     """The scene's self-contained report page (plots as base64 PNG, the motion section's viewer
     inlined); ``index_link``: relative address of the index page, if any, shown as ``index_label``;
     ``animation_fps``: frames per second of simulated time of the motion section (0: no motion
     section). ``light``: no motion section and one overview figure
     (:func:`~urdf2links.compare.reports.plots.plot_overview`: the difference and both energy balances)
     instead of the four plots, for pages made by the dozen (a corpus); ``extra_sections``: HTML
-    fragments put after the energy section."""
+    fragments put after the energy section; ``first_sections``: HTML fragments put first, after the headline
+    figures (a comparison of two descriptions, :mod:`urdf2links.compare.pairs.report`)."""
     motion = [] if light else motion_section(c, fps=animation_fps)
-    parts = (_top(summary, check, index_link, index_label) + motion + _terms_section(summary, light)
+    parts = (_top(summary, check, index_link, index_label) + list(first_sections) + motion + _terms_section(summary, light)
              + _trajectory_section(c, summary, light) + _energy_section(c, summary, light) + list(extra_sections)
              + _closing_sections(summary, command) + ["</body></html>"])
     return "\n".join(parts)
@@ -312,12 +313,14 @@ def render_markdown(s: dict) -> str:
 
 def write_report(c, out_dir=None, *, root=None, json_path=None, command: str | None = None,
                  check: "CheckResult | None" = None, index_link: str | None = None,
-                 animation_fps: float = DEFAULT_FPS) -> dict:
+                 animation_fps: float = DEFAULT_FPS, first_sections=(), summary_extra: dict | None = None) -> dict:
     """Write ``report.html``, ``summary.json`` and ``summary.md`` for comparison ``c`` into
     ``out_dir`` (default ``<root>/<robot>/<scene>/``, ``root`` default ``out/reports``, whose page then links ``../../index.html``;
     else ``index_link``) and, if given, the summary also to ``json_path``; ``animation_fps`` as
-    :func:`render_html`. Returns ``{"dir", "html", "json", "md", "summary"}``."""
-    summary = json_ready(c.summary())
+    :func:`render_html`; ``first_sections`` go first on the page and ``summary_extra`` (keys added to the
+    summary) into ``summary.json``: a comparison of two descriptions. Returns ``{"dir", "html", "json", "md",
+    "summary"}``."""
+    summary = json_ready({**c.summary(), **(summary_extra or {})})
     if out_dir is None:
         out = Path(DEFAULT_OUT if root is None else root) / summary["robot"] / summary["scene"]
         index_link = index_link or "../../index.html"
@@ -332,7 +335,8 @@ def write_report(c, out_dir=None, *, root=None, json_path=None, command: str | N
         jp.write_text(text)
     (out / "summary.md").write_text(render_markdown(summary))
     (out / "report.html").write_text(render_html(c, summary, command=command, check=check, index_link=index_link,
-                                                 animation_fps=animation_fps), encoding="utf-8")
+                                                 animation_fps=animation_fps, first_sections=first_sections),
+                                     encoding="utf-8")
     if (out / "tradeoff.json").is_file():  # a work-precision study of this scene (urdf2links tradeoff): its section
         try:
             insert_section(out / "report.html", json.loads((out / "tradeoff.json").read_text()))

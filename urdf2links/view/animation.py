@@ -52,13 +52,17 @@ _DATA_TAG = "<script type='application/json' class='u2l-data'>"
 @dataclass(frozen=True)
 class Motion:
     """One run to animate: ``t`` (m,) and ``q`` (m, n) in the model's coordinates; ``ghost`` draws
-    it translucent (the reference an eye compares against); ``label`` says what it is."""
+    it translucent (the reference an eye compares against); ``label`` says what it is. ``model``: the
+    run's own robot when it is not the animation's (another description of it: both robots drawn,
+    each run with its own model's shapes, ``shapes`` or :func:`~urdf2links.view.visuals.model_shapes`)."""
 
     name: str
     t: np.ndarray
     q: np.ndarray
     ghost: bool = False
     label: str = ""
+    model: object = None
+    shapes: RobotShapes | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -237,6 +241,23 @@ def _motion_points(model, shapes: RobotShapes, poses: np.ndarray):
     return points, weights, first, max((s.extent() for s in shapes.shapes), default=0.0)
 
 
+def _groups(model, shapes: RobotShapes, motions) -> list[tuple]:
+    """``[(model, shapes, link prefix, run indices)]``: the animation's model first, then each other model
+    a run brings (its links prefixed ``<k>:`` so that two descriptions' links never share a node)."""
+    groups = [(model, shapes, "", [])]
+    for k, m in enumerate(motions):
+        if m.model is None or m.model is model:
+            groups[0][3].append(k)
+            continue
+        for g in groups[1:]:
+            if g[0] is m.model:
+                g[3].append(k)
+                break
+        else:
+            groups.append((m.model, m.shapes or model_shapes(m.model), f"{len(groups)}:", [k]))
+    return groups
+
+
 def _payload(model, shapes: RobotShapes, motions, panels, base, fps) -> tuple[dict, np.ndarray]:
     ref = motions[0]
     t_all = np.asarray(ref.t, float)
@@ -246,10 +267,26 @@ def _payload(model, shapes: RobotShapes, motions, panels, base, fps) -> tuple[di
                              "sample times")
     idx = frame_indices(t_all, fps)
     t = t_all[idx]
-    links = list(shapes.links)
-    link_index = {k: i for i, k in enumerate(links)}
-    poses = [link_poses_over(model, links, t, np.asarray(m.q, float)[idx], base) for m in motions]
-    camera, radius = _camera(*_motion_points(model, shapes, poses[0]))
+    groups = _groups(model, shapes, motions)
+    links, shape_rows, columns = [], [], []
+    for gmodel, gshapes, prefix, runs in groups:
+        first = len(links)
+        links += [prefix + k for k in gshapes.links]
+        columns.append(slice(first, len(links)))
+        index = {k: first + i for i, k in enumerate(gshapes.links)}
+        for s in gshapes.shapes:
+            row = _shape_data(s, index[s.link])
+            if len(groups) > 1:
+                row["runs"] = list(runs)
+            shape_rows.append(row)
+    poses = []
+    for k, m in enumerate(motions):
+        P = np.tile(np.eye(4), (len(t), len(links), 1, 1))
+        for (gmodel, gshapes, _prefix, runs), cols in zip(groups, columns):
+            if k in runs:
+                P[:, cols] = link_poses_over(gmodel, list(gshapes.links), t, np.asarray(m.q, float)[idx], base)
+        poses.append(P)
+    camera, radius = _camera(*_motion_points(model, shapes, poses[groups[0][3][0] if groups[0][3] else 0][:, columns[0]]))
     frame_size = 0.08 * radius
     readout = []
     for p in panels:
@@ -257,11 +294,11 @@ def _payload(model, shapes: RobotShapes, motions, panels, base, fps) -> tuple[di
             readout += [{"label": label, "unit": p.unit if p.log else "", "log": p.log, "values": values}
                         for label, values in p.at(t).items()]
     data = {"version": 1, "t": [float(v) for v in t], "links": links, "frame_size": frame_size,
-            "shapes": [_shape_data(s, link_index[s.link]) for s in shapes.shapes],
+            "shapes": shape_rows,
             "runs": [{"name": m.name, "path": _run_path(k, m),
                       "label": m.label, "ghost": bool(m.ghost), "poses": _b64(_pose7(P), "<f4")}
                      for k, (m, P) in enumerate(zip(motions, poses))],
-            "base": _base_data(base, t, poses[0][0], frame_size), "camera": camera, "readout": readout}
+            "base": _base_data(base, t, poses[0][0][columns[0]], frame_size), "camera": camera, "readout": readout}
     return data, t
 
 
@@ -291,7 +328,7 @@ def _legend(motions, shapes: RobotShapes, n_frames: int, fps: float, base) -> st
         swatch = "#ff7a00; opacity: 0.45" if m.ghost else "#8a95a8"
         items.append(f"<span class='u2l-swatch' style='background: {swatch}'></span><b>{e(m.name)}</b>"
                      + (" (translucent)" if m.ghost else "") + (f": {e(m.label)}" if m.label else ""))
-    sources = sorted({s.source for s in shapes.shapes})
+    sources = sorted({s.source for s in shapes.shapes} | {s.source for m in motions if m.shapes for s in m.shapes.shapes})
     what = {"visual": "URDF &lt;visual&gt; geometry", "geom": "MJCF geoms (MuJoCo's compiled ones)", "collision": "&lt;collision&gt; geometry where a link has no "
             "&lt;visual&gt;", "frame": "axes (x red, y green, z blue) for links with no geometry"}
     text = "<br>".join(items) + "<br>Shown: " + "; ".join(what[s] for s in sources if s in what)

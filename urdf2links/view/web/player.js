@@ -7,7 +7,8 @@
  *
  * Data: t (F,) frame times; links (L,) node names; shapes [{link, kind, origin (16, column-major),
  * color, source, ... box size, cylinder radius/length (axis z), sphere radius, mesh vertices
- * (base64 float32) and faces (base64 uint16/uint32)}]; runs [{name, path, label, ghost, poses:
+ * (base64 float32) and faces (base64 uint16/uint32); runs: the runs that draw it, when runs show
+ * different robots (two descriptions of one robot)}]; runs [{name, path, label, ghost, poses:
  * base64 float32 (F, L, 7) = position, quaternion (x, y, z, w)}]; base: {poses (F, 7), plate
  * [sx, sy, cx, cy]} or null; camera {target, offset} (world, z up); readout [{label, unit,
  * log, values (F,)}]; frame_size (m).
@@ -120,9 +121,10 @@
 
     const T = data.t, F = T.length, L = data.links.length;
     const geoms = data.shapes.map(function (s) { return geometry(THREE, s); });
-    const runs = data.runs.map(function (run) {
+    const runs = data.runs.map(function (run, r) {
       const nodes = data.links.map(function (link) { return viewer.scene_tree.find([run.path, link]).object; });
       data.shapes.forEach(function (s, k) {
+        if (s.runs && s.runs.indexOf(r) < 0) return;  // another description's shape: not this run's robot
         const obj = s.kind === "frame" ? frameObject(THREE, data.frame_size, run.ghost)
                                        : new THREE.Mesh(geoms[k], material(THREE, s, run));
         if (run.ghost) obj.renderOrder = 1;  // translucent: drawn after the solid robot

@@ -1,0 +1,462 @@
+"""Two descriptions of one robot compared part by part: every difference, in the file's own terms.
+
+Both descriptions are read as bodies and joints (:func:`urdf2links.parsers.parts.robot_parts`) and
+folded the same way: every body welded to another (a URDF fixed joint, an MJCF body without joints,
+or bodies MuJoCo's ``fusestatic`` merged) counts in the part of the moving joint that carries it
+(:func:`urdf2links.parsers.parts.parts_model`, E51). So a conversion that merged bodies compares equal
+to the file it came from, unless it merged them wrongly. Compared, for each matched joint
+(:mod:`urdf2links.compare.pairs.mapping`):
+
+- its part's ``mass`` (relative), ``com`` (metres) and ``inertia`` about the COM (relative, or radians when
+  only the principal axes turned: an inertial frame whose ``rpy`` was lost), in the joint's body frame;
+- its ``axis`` (radians; pi for a negated axis, which the mapping's sign absorbs), ``type``, ``limits``
+  (in the first description's coordinates), ``armature``, ``damping`` and ``stiffness``;
+- the ``origin`` of every body both sides have: its frame at home relative to the nearest ancestor body
+  both sides have (metres, or radians when it turned more than it moved), so that a moved joint origin is
+  named at that joint, and a fixed joint's lost ``rpy`` at that fixed joint (or, where the other side
+  merged its child, at the next joint, ``through`` it);
+- ``joint_missing`` and ``link_missing``: what one side has and the other does not.
+
+Each :class:`Difference` carries how to undo it in the second description (copy the first
+description's value in), which :mod:`urdf2links.compare.pairs.effects` uses to say what it does to
+``A`` and ``G``. Differences below :data:`ROUNDING` (MuJoCo's XML writer prints 6 significant digits)
+are counted, not listed.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from typing import Callable
+
+import numpy as np
+
+from urdf2links.dynamics.inertia import pseudo_inertia
+from urdf2links.parsers.parts import JOINT_KINDS, RobotParts, home_poses, parts_model
+
+from .mapping import JointMapping
+
+__all__ = ["Difference", "Side", "side_model", "compare_descriptions", "ROUNDING", "KINDS", "split_H"]
+
+#: Below these a difference is rounding (MuJoCo's XML writer prints 6 significant digits): relative for
+#: mass and inertia, m for com and origin, rad for axis and turned frames, the joints' own units else.
+ROUNDING = {"mass": 1e-5, "com": 1e-5, "inertia": 1e-5, "axis": 1e-5, "origin": 1e-5, "armature": 1e-9,
+            "damping": 1e-9, "stiffness": 1e-9, "limits": 1e-5, "type": 0.0, "joint_missing": 0.0,
+            "link_missing": 0.0}
+KINDS = tuple(ROUNDING)
+
+
+@dataclass
+class Difference:
+    """One difference: ``kind`` (:data:`KINDS`), the ``urdf`` and ``mjcf`` names (joint, or body where no
+    joint names it), both values, ``difference`` (a number in ``unit``), ``what`` it is in words,
+    ``links`` (the bodies), ``through`` (fixed joints of the first description merged on the other side),
+    ``explanation`` (why it is expected, when known), ``undo`` (second side -> second side with this one
+    difference undone; None when it cannot be), ``effect`` (filled by the attribution)."""
+
+    kind: str
+    urdf: str | None
+    mjcf: str | None
+    urdf_value: object
+    mjcf_value: object
+    difference: float
+    unit: str
+    what: str
+    links: tuple = ()
+    through: tuple = ()
+    explanation: str | None = None
+    undo: Callable | None = None
+    effect: dict | None = None
+
+    @property
+    def ratio(self) -> float:
+        """How many times the rounding level it is (the order among differences of no effect)."""
+        tol = ROUNDING.get(self.kind, 0.0)
+        return math.inf if tol == 0 else self.difference / tol
+
+    def label(self) -> str:
+        names = " / ".join(n for n in (self.urdf, self.mjcf) if n) or "-"
+        return f"{self.kind} {names}"
+
+    def to_json(self) -> dict:
+        out = {"kind": self.kind, "urdf": self.urdf, "mjcf": self.mjcf, "urdf_value": _plain(self.urdf_value),
+               "mjcf_value": _plain(self.mjcf_value), "difference": float(self.difference), "unit": self.unit,
+               "what": self.what}
+        if self.links:
+            out["links"] = list(self.links)
+        if self.through:
+            out["through"] = list(self.through)
+        if self.explanation:
+            out["explanation"] = self.explanation
+        if self.effect is not None:
+            out["effect"] = self.effect
+        return out
+
+
+def _plain(v):
+    if v is None or isinstance(v, (str, bool)):
+        return v
+    a = np.asarray(v, float)
+    return float(a) if a.ndim == 0 else a.round(12).tolist()
+
+
+# -- the second description as it is, or with differences undone --------------------------------------
+@dataclass(frozen=True)
+class Side:
+    """The second description's parts as they are, or with differences undone (each undo returns a new Side)."""
+
+    parts: RobotParts
+
+
+def split_H(H) -> tuple[float, np.ndarray, np.ndarray]:
+    """``H`` (4, 4) (E10) -> mass, COM (3,), inertia tensor about the COM (3, 3) (URDF convention)."""
+    H = np.asarray(H, float)
+    m = float(H[3, 3])
+    if m <= 0.0:
+        return 0.0, np.zeros(3), np.zeros((3, 3))
+    c = H[:3, 3] / m
+    Sc = H[:3, :3] - m * np.outer(c, c)
+    return m, c, np.trace(Sc) * np.eye(3) - Sc
+
+
+def side_model(side: Side, *, gravity=None):
+    """The :class:`~urdf2links.parsers.parts.PartsModel` of ``side``, with ``gravity`` (3,) when given."""
+    parts = side.parts if gravity is None else replace(side.parts, gravity=np.asarray(gravity, float))
+    return parts_model(parts)
+
+
+def group_H(parts: RobotParts, keep) -> dict[str, np.ndarray]:
+    """Body -> the pseudo-inertia (4, 4), in its frame, of itself and every welded body folded onto it: a body
+    is folded onto its parent unless it has joints or is in ``keep`` (the bodies both descriptions have), so
+    both sides fold what only one side has, and compare the rest body by body (E11 at home)."""
+    W = home_poses(parts)
+    target, out = {}, {}
+    for b in parts.bodies:
+        own = b.joints or b.name in keep or b.parent is None
+        target[b.name] = b.name if own else target[b.parent]
+        t = target[b.name]
+        X = np.linalg.inv(W[t]) @ W[b.name]
+        out[t] = out.get(t, np.zeros((4, 4))) + X @ np.asarray(b.H, float) @ X.T
+    return out
+
+
+# -- helpers ---------------------------------------------------------------------------------------------
+def _angle(R) -> float:
+    return float(np.arccos(np.clip((np.trace(R) - 1.0) / 2.0, -1.0, 1.0)))
+
+
+def _frame_turn(I1, I2) -> float | None:
+    """The rotation (rad) that turns the principal axes of ``I1`` into those of ``I2`` when both have the
+    same principal moments (to 1e-6 of the largest), else None."""
+    w1, V1 = np.linalg.eigh(I1)
+    w2, V2 = np.linalg.eigh(I2)
+    scale = max(float(w1.max()), 1e-300)
+    if np.max(np.abs(w1 - w2)) > 1e-6 * scale:
+        return None
+    gaps = np.abs(np.diff(w1)) <= 1e-6 * scale
+    if gaps.all():
+        return 0.0                                   # isotropic: no axes to turn
+    if gaps.any():                                   # symmetric top: only the unique axis counts
+        k = 2 if gaps[0] else 0
+        return float(np.arccos(np.clip(abs(float(V1[:, k] @ V2[:, k])), -1.0, 1.0)))
+    best = math.pi
+    for s in ((1, 1, 1), (1, -1, -1), (-1, 1, -1), (-1, -1, 1)):
+        R = V2 @ np.diag(s) @ V1.T
+        if np.linalg.det(R) < 0:
+            R = V2 @ np.diag([-x for x in s]) @ V1.T
+        best = min(best, _angle(R))
+    return best
+
+
+def _last_joint_body(parts: RobotParts) -> dict[str, str]:
+    """Joint -> its body, for joints that are their body's last (whose tree link the body's mass is in)."""
+    return {b.joints[-1].name: b.name for b in parts.bodies if b.joints}
+
+
+def _body_of(parts: RobotParts) -> dict[str, str]:
+    return {j.name: b.name for j, b in parts.joints}
+
+
+def _joint_label(b) -> str:
+    """The name a body is known by in a difference: its (last) joint, its fixed joint, or itself."""
+    if b.joints:
+        return b.joints[-1].name
+    return b.fixed_joint or b.name
+
+
+def _match_bodies(U: RobotParts, M: RobotParts, mapping: JointMapping) -> dict[str, str]:
+    lu, lm = _last_joint_body(U), _last_joint_body(M)
+    pairs = {}
+    for mt in mapping.matches:
+        if mt.urdf in lu and mt.mjcf in lm:
+            pairs[lu[mt.urdf]] = lm[mt.mjcf]
+    taken = set(pairs.values())
+    names_m = {b.name for b in M.bodies}
+    for b in U.bodies:
+        if b.name not in pairs and b.name in names_m and b.name not in taken:
+            pairs[b.name] = b.name
+            taken.add(b.name)
+    return pairs
+
+
+# -- the comparison --------------------------------------------------------------------------------------
+class _Comparer:
+    def __init__(self, U: RobotParts, M: RobotParts, mapping: JointMapping):
+        self.U, self.M, self.mapping = U, M, mapping
+        self.bodies = _match_bodies(U, M, mapping)
+        self.pmU, self.pmM = parts_model(U), parts_model(M)
+        self.WU, self.WM = home_poses(U), home_poses(M)
+        self.bu = {b.name: b for b in U.bodies}
+        self.bm = {b.name: b for b in M.bodies}
+        self.out: list[Difference] = []
+        self.below = {k: 0 for k in KINDS}
+
+    def add(self, d: Difference) -> None:
+        if d.difference > ROUNDING[d.kind] or (ROUNDING[d.kind] == 0 and d.difference > 0):
+            self.out.append(d)
+        else:
+            self.below[d.kind] += 1
+
+    # joints ------------------------------------------------------------------------------------------
+    def joints(self):
+        ju = {j.name: j for j, _ in self.U.joints}
+        jm = {j.name: j for j, _ in self.M.joints}
+        bu, bm = _body_of(self.U), _body_of(self.M)
+        for mt in self.mapping.matches:
+            a, b = ju[mt.urdf], jm[mt.mjcf]
+            links = (bu[a.name], bm[b.name])
+            if a.kind != b.kind:
+                self.add(Difference("type", a.name, b.name, a.source_type or a.kind, b.source_type or b.kind, 1.0,
+                                    "", f"joint type {a.kind} against {b.kind}", links))
+                continue
+            if a.kind in ("hinge", "slide", "planar"):
+                self._axis(a, b, mt, links, bu[a.name], bm[b.name])
+            if len(JOINT_KINDS[a.kind]) == 1:
+                self._limits(a, b, mt, links)
+            unit = {"hinge": ("N m s/rad", "N m/rad", "kg m^2"), "slide": ("N s/m", "N/m", "kg")}.get(a.kind,
+                                                                                                   ("", "", ""))
+            for kind, attr, u in (("damping", "damping", unit[0]), ("stiffness", "stiffness", unit[1]),
+                                  ("armature", "armature", unit[2])):
+                va, vb = float(getattr(a, attr)), float(getattr(b, attr))
+                undo = (lambda s, n=b.name, v=va, at=attr: replace(s, parts=s.parts.with_joint(n, **{at: v})))
+                self.add(Difference(kind, a.name, b.name, va, vb, abs(va - vb), u,
+                                    f"{attr} {va:.6g} against {vb:.6g} {u}".rstrip(), links, undo=undo))
+
+    def _axis(self, a, b, mt, links, bU, bM):
+        """The axes compared in the frame of the nearest body both sides have above them (a body frame placed
+        differently is not an axis difference; a turned origin above the joint is one, beside the origin's)."""
+        ua, ub = np.asarray(a.axis, float), np.asarray(b.axis, float)
+        if self.bodies.get(bU) == bM:
+            refU, refM, _ = self._reference(bU)
+            RU, RM = self._rel(self.WU, refU, bU)[:3, :3], self._rel(self.WM, refM, bM)[:3, :3]
+            ua, ub = RU @ ua, RM @ ub
+        ang = float(np.arccos(np.clip(float(np.dot(ua, ub)), -1.0, 1.0)))
+        what = (f"axis negated ({np.round(ua, 6).tolist()} against {np.round(ub, 6).tolist()} in the frame of the body "
+                f"above): q maps with sign -1" if mt.sign < 0 and ang > math.pi - 1e-5 else
+                f"axis turned by {ang:.4g} rad" + (" (q maps with sign -1)" if mt.sign < 0 else ""))
+        refs = self._reference(bU)[:2] if self.bodies.get(bU) == bM else None
+        world_a = ua
+
+        def undo(s, n=b.name, bM=bM, refs=refs, u=np.array(world_a, float)):
+            """The second's axis made the first's, in the frame of the body above as the second is now."""
+            if refs is None:
+                return replace(s, parts=s.parts.with_joint(n, axis=u))
+            RM = self._rel(home_poses(s.parts), refs[1], bM)[:3, :3]
+            return replace(s, parts=s.parts.with_joint(n, axis=RM.T @ u))
+        self.add(Difference("axis", a.name, b.name, a.axis, b.axis, ang, "rad", what, links, undo=undo))
+
+    def _limits(self, a, b, mt, links):
+        lu = (a.lower, a.upper)
+        if b.lower is None:
+            lm = (None, None)
+        else:
+            ends = sorted([mt.sign * (b.lower - mt.offset), mt.sign * (b.upper - mt.offset)])
+            lm = (ends[0], ends[1])
+        if lu == (None, None) and lm == (None, None):
+            return
+        if None in lu or None in lm:
+            d, what = math.inf, "limited on one side only"
+        else:
+            d = max(abs(lu[0] - lm[0]), abs(lu[1] - lm[1]))
+            what = f"range [{lu[0]:.6g}, {lu[1]:.6g}] against [{lm[0]:.6g}, {lm[1]:.6g}] (mapped)"
+        self.add(Difference("limits", a.name, b.name, list(lu), list(lm), d, "rad" if a.kind == "hinge" else "m",
+                            what, links))
+
+    # parts: mass, COM, inertia -----------------------------------------------------------------------
+    def parts(self):
+        self.keep_u, self.keep_m = set(self.bodies), set(self.bodies.values())
+        gu, gm = group_H(self.U, self.keep_u), group_H(self.M, self.keep_m)
+        for bU, bM in self.bodies.items():
+            if bU not in gu or bM not in gm:
+                continue
+            moving = self.bu[bU].joints or self.bm[bM].joints
+            if not moving and self._welded_to_world(bU):
+                continue                  # on a fixed base: no term depends on it
+            mu, cu, Iu = split_H(gu[bU])
+            mm, cm, Im = split_H(gm[bM])
+            folded = [b.name for b in self.U.bodies if b.name != bU and not b.joints and b.name not in self.keep_u
+                      and self._onto(b.name) == bU]
+            names = (_joint_label(self.bu[bU]), self._mj_label(bM))
+            links = (bU, bM)
+            rel = abs(mu - mm) / max(mu, mm, 1e-300)
+            self.add(Difference("mass", *names, mu, mm, rel if abs(mu - mm) > 1e-12 else 0.0, "relative",
+                                f"mass {mu:.6g} against {mm:.6g} kg" + (f" (with {', '.join(folded)} folded in)"
+                                                                        if folded else ""), links,
+                                undo=self._fix(bM, "mass", mu)))
+            if mu <= 0.0 or mm <= 0.0:
+                continue
+            self.add(Difference("com", *names, cu, cm, float(np.linalg.norm(cu - cm)), "m",
+                                "centre of mass in the body frame", links, undo=self._fix(bM, "com", cu)))
+            scale = max(float(np.linalg.norm(Iu)), float(np.linalg.norm(Im)), 1e-300)
+            rel = float(np.linalg.norm(Iu - Im)) / scale
+            turn = _frame_turn(Iu, Im) if rel > ROUNDING["inertia"] else None
+            if turn is not None and turn > ROUNDING["inertia"]:
+                d, unit, what = turn, "rad", (f"inertial frame turned by {turn:.4g} rad (principal moments equal): "
+                                              "as when an inertial's rpy is dropped")
+            else:
+                d, unit, what = rel, "relative", "inertia tensor about the COM, in the body frame"
+            self.add(Difference("inertia", *names, Iu, Im, d, unit, what, links, undo=self._fix(bM, "inertia", Iu)))
+
+    def _onto(self, body: str) -> str:
+        b = self.bu[body]
+        while not b.joints and b.name not in self.keep_u and b.parent is not None:
+            b = self.bu[b.parent]
+        return b.name
+
+    def _welded_to_world(self, body: str) -> bool:
+        b = self.bu[body]
+        while b is not None:
+            if b.joints:
+                return False
+            b = self.bu.get(b.parent) if b.parent is not None else None
+        return True
+
+    def _mj_label(self, bM: str) -> str:
+        b = self.bm[bM]
+        return b.joints[-1].name if b.joints else bM
+
+    def _fix(self, body, key, value):
+        keep = set(self.keep_m)
+
+        def undo(s, body=body, key=key, value=np.array(value, float) if np.ndim(value) else float(value)):
+            """Set the group's ``key`` to ``value``: the body's own H is the new group's minus what is folded onto it."""
+            group = group_H(s.parts, keep)[body]
+            m, c, I = split_H(group)
+            new = {"mass": m, "com": c, "inertia": I}
+            new[key] = value
+            own = np.asarray(s.parts.body(body).H, float)
+            H = pseudo_inertia(new["mass"], new["com"], new["inertia"]) - (group - own)
+            return replace(s, parts=s.parts.replaced(body, H=0.5 * (H + H.T)))
+        return undo
+
+    # origins -----------------------------------------------------------------------------------------
+    def _reference(self, bU: str) -> tuple[str | None, str | None, list[str]]:
+        """The nearest ancestor body both sides have (None: the world), its name on each side, and the
+        fixed joints of the first description between them whose child the other side does not have."""
+        through = []
+        p = self.bu[bU].parent
+        while p is not None and p not in self.bodies:
+            b = self.bu[p]
+            if b.fixed_joint:
+                through.append(b.fixed_joint)
+            elif b.joints:
+                through.append(b.joints[-1].name)
+            p = b.parent
+        return p, (None if p is None else self.bodies[p]), through[::-1]
+
+    def origins(self):
+        mj_last = _last_joint_body(self.M)
+        lm = {v: k for k, v in mj_last.items()}
+        for bU, bM in self.bodies.items():
+            if self.bu[bU].parent is None and self.bm[bM].parent is None:
+                continue
+            refU, refM, through = self._reference(bU)
+            if refM is not None and not self._is_ancestor(refM, bM):
+                continue
+            PU = self._rel(self.WU, refU, bU)
+            PM = self._rel(self.WM, refM, bM)
+            dp = float(np.linalg.norm(PU[:3, 3] - PM[:3, 3]))
+            rot = _angle(PU[:3, :3].T @ PM[:3, :3])
+            line = self._axis_line(bU, bM, PU, PM)
+            dist = max(dp, line)
+            d, unit = (rot, "rad") if rot > dist else (dist, "m")
+            what = (f"frame at home relative to {refU or 'the world'}: moved {dp:.4g} m, turned {rot:.4g} rad"
+                    + (f", joint axis line {line:.4g} m apart" if line > ROUNDING["origin"] else "")
+                    + (f" (through {', '.join(through)}, merged on the other side)" if through else ""))
+            self.add(Difference("origin", _joint_label(self.bu[bU]), lm.get(bM, self.bm[bM].fixed_joint or bM),
+                                PU[:3, 3], PM[:3, 3], d, unit, what, (bU, bM), tuple(through),
+                                undo=self._undo_origin(bU, bM, refU, refM)))
+
+    def _is_ancestor(self, anc: str, body: str) -> bool:
+        p = self.bm[body].parent
+        while p is not None:
+            if p == anc:
+                return True
+            p = self.bm[p].parent
+        return False
+
+    @staticmethod
+    def _rel(W, ref, body):
+        return W[body] if ref is None else np.linalg.inv(W[ref]) @ W[body]
+
+    def _axis_line(self, bU, bM, PU, PM) -> float:
+        """Distance between the joint axis lines of two matched bodies' last hinges, in the reference frame."""
+        ju, jm = self.bu[bU].joints, self.bm[bM].joints
+        if not ju or not jm or ju[-1].kind != "hinge" or jm[-1].kind != "hinge":
+            return 0.0
+        pu = PU[:3, :3] @ ju[-1].anchor + PU[:3, 3]
+        pm = PM[:3, :3] @ jm[-1].anchor + PM[:3, 3]
+        u = PU[:3, :3] @ ju[-1].axis
+        d = pm - pu
+        return float(np.linalg.norm(d - (d @ u) * u))
+
+    def _undo_origin(self, bU, bM, refU, refM):
+        PU = self._rel(self.WU, refU, bU)
+        anchor = self.bu[bU].joints[-1].anchor if self.bu[bU].joints else None
+
+        def undo(s):
+            W = home_poses(s.parts)
+            parent = s.parts.body(bM).parent
+            WP = np.eye(4) if parent is None else W[parent]
+            WR = np.eye(4) if refM is None else W[refM]
+            parts = s.parts.replaced(bM, pose=np.linalg.inv(WP) @ WR @ PU)
+            b = parts.body(bM)
+            if anchor is not None and b.joints and b.joints[-1].kind == "hinge":
+                parts = parts.with_joint(b.joints[-1].name, anchor=np.array(anchor, float))
+            return replace(s, parts=parts)
+        return undo
+
+    # missing -----------------------------------------------------------------------------------------
+    def missing(self):
+        bu, bm = _body_of(self.U), _body_of(self.M)
+        for side, names, owner, pm, label in ((self.U, self.mapping.unmatched_urdf, bu, self.pmU, "urdf"),
+                                              (self.M, self.mapping.unmatched_mjcf, bm, self.pmM, "mjcf")):
+            ju = {j.name: j for j, _ in side.joints}
+            for n in names:
+                other = "mjcf" if label == "urdf" else "urdf"
+                kw = {label: n, other: None}
+                self.add(Difference("joint_missing", kw["urdf"], kw["mjcf"], n if label == "urdf" else None,
+                                    n if label == "mjcf" else None, float(len(ju[n].coordinates)), "coordinates",
+                                    f"joint {n!r} ({ju[n].kind}) of the {label} side has no match on the {other} side",
+                                    (owner[n],)))
+                body = owner[n]
+                matched = body in self.bodies if label == "urdf" else body in self.bodies.values()
+                last = side.body(body).joints[-1].name == n
+                if not matched and last:
+                    m = split_H(pm.part_H(body))[0]
+                    kw = {label: body, other: None}
+                    self.add(Difference("link_missing", kw["urdf"], kw["mjcf"], m if label == "urdf" else None,
+                                        m if label == "mjcf" else None, m if m > 0 else 1e-300, "kg",
+                                        f"body {body!r} ({m:.6g} kg with what is folded into it) moved by the unmatched "
+                                        f"joint {n!r}", (body,)))
+
+
+def compare_descriptions(U: RobotParts, M: RobotParts, mapping: JointMapping) -> tuple[list[Difference], dict]:
+    """Every difference between ``U`` (the first description) and ``M`` above :data:`ROUNDING` (module doc),
+    in no order yet, and ``{kind: how many were below rounding}``."""
+    c = _Comparer(U, M, mapping)
+    c.joints()
+    c.parts()
+    c.origins()
+    c.missing()
+    return c.out, c.below

@@ -1,0 +1,216 @@
+"""What the differences do: ``A`` and ``G`` of both descriptions at seeded states in common coordinates,
+and which difference explains most of their difference.
+
+Both descriptions are evaluated by the project's own equations (their trees rebuilt from the parts,
+:func:`urdf2links.parsers.parts.parts_model`, E51) with the first description's gravity, at ``states``
+seeded states of the first description's coordinates (each joint uniform within its limits and
+within [-1, 1] of home; the joints with no match at home), mapped into the second's
+(:func:`~urdf2links.compare.pairs.mapping.coordinate_map`, E52: ``q_mjcf = sign q_urdf + offset``; its
+joints with no match at home), and back: ``A_mapped[i, k] = s_i s_k A_mjcf[i', k']``,
+``G_mapped[i] = s_i G_mjcf[i']``. The figures are ``max |A_urdf - A_mapped| / max |A_urdf|`` and the same
+for ``G``, over all states and matched coordinates (the largest entry named).
+
+Attribution (E53): each difference is undone alone in the second description (the first
+description's value copied in, :attr:`Difference.undo`) and the terms recomputed; a difference explains
+the share of the squared difference ``sum |A_urdf - A_mapped|^2`` over states and entries (and the same
+for ``G``) that undoing it removes: shares of differences that touch different entries add up to 1
+(three equal armatures explain a third each), where the largest entry alone would credit none of them. Then every difference is undone at once: what is
+left is what the listed differences do not account for (unmatched joints, or a difference below
+rounding that adds up). When a joint maps with sign -1 the same is done with the coordinates taken as
+equal by name (sign 1: what a user who believes the files agree sees), where a negated axis shows.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import replace
+
+import numpy as np
+
+from urdf2links.parsers.parts import JOINT_KINDS, RobotParts, parts_model
+
+from .differences import Difference, Side, side_model
+from .mapping import JointMapping, coordinate_map
+
+__all__ = ["evaluate_effects", "seeded_states", "Terms"]
+
+
+def seeded_states(parts: RobotParts, coordinate_names, mapped: set, *, states: int = 8, seed: int = 0) -> np.ndarray:
+    """``(states, n)`` configurations of the first description (module doc)."""
+    rng = np.random.default_rng(seed)
+    index = {n: i for i, n in enumerate(coordinate_names)}
+    Q = np.zeros((states, len(coordinate_names)))
+    for j, _b in parts.joints:
+        for k, name in enumerate(j.coordinates):
+            home = float(j.home[k]) if k < len(j.home) else 0.0
+            if name not in mapped:
+                Q[:, index[name]] = home
+                continue
+            lo, hi = home - 1.0, home + 1.0
+            if len(JOINT_KINDS[j.kind]) == 1 and j.lower is not None and j.upper is not None and j.lower < j.upper:
+                lo, hi = max(lo, j.lower), min(hi, j.upper)
+                if lo >= hi:
+                    lo, hi = j.lower, j.upper
+            Q[:, index[name]] = rng.uniform(lo, hi, states)
+    return Q
+
+
+class Terms:
+    """``A`` (S, n, n) and ``G`` (S, n) of the first description, and the machinery to compare another
+    side's against them (module doc)."""
+
+    def __init__(self, U: RobotParts, mapping: JointMapping, *, states: int, seed: int):
+        self.U, self.mapping = U, mapping
+        self.model = parts_model(U).model
+        self.names = self.model.coordinate_names
+        ju = {m.urdf for m in mapping.matches}
+        mapped = {c for j, _ in U.joints if j.name in ju for c in j.coordinates}
+        self.Q = seeded_states(U, self.names, mapped, states=states, seed=seed)
+        self.A = np.array([self.model.mass_matrix(q) for q in self.Q])
+        self.G = np.array([self.model.gravity(q) for q in self.Q])
+        self.gravity = np.asarray(U.gravity, float)
+
+    def compare(self, side: Side, *, signs: bool = True) -> dict:
+        """``{"A": rel, "G": rel, "worst_A": ..., "worst_G": ...}`` of ``side`` against the first description."""
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            pm = side_model(side, gravity=self.gravity)
+        m = pm.model
+        cmap = coordinate_map(self.U, side.parts, self.mapping, signs=signs)
+        iu = np.array([self.names.index(a) for a, *_ in cmap], dtype=int)
+        im = np.array([m.coordinate_names.index(b) for _, b, *_ in cmap], dtype=int)
+        s = np.array([x[2] for x in cmap], float)
+        c = np.array([x[3] for x in cmap], float)
+        q0 = _home(side.parts, m.coordinate_names)
+        dA = dG = 0.0
+        sA = sG = 0.0
+        worst_A = worst_G = None
+        for k, q in enumerate(self.Q):
+            qm = q0.copy()
+            qm[im] = s * q[iu] + c
+            Am = m.mass_matrix(qm)[np.ix_(im, im)] * np.outer(s, s)
+            Gm = m.gravity(qm)[im] * s
+            Au, Gu = self.A[k][np.ix_(iu, iu)], self.G[k][iu]
+            sA += float(np.sum((Au - Am) ** 2))
+            sG += float(np.sum((Gu - Gm) ** 2))
+            if Au.size:
+                i, j = np.unravel_index(int(np.argmax(np.abs(Au - Am))), Au.shape)
+                if abs(Au[i, j] - Am[i, j]) > dA or worst_A is None:
+                    dA = max(dA, float(abs(Au[i, j] - Am[i, j])))
+                    worst_A = {"entry": [self.names[iu[i]], self.names[iu[j]]], "urdf": float(Au[i, j]),
+                               "mjcf": float(Am[i, j]), "state": k}
+                i = int(np.argmax(np.abs(Gu - Gm)))
+                if abs(Gu[i] - Gm[i]) > dG or worst_G is None:
+                    dG = max(dG, float(abs(Gu[i] - Gm[i])))
+                    worst_G = {"coordinate": self.names[iu[i]], "urdf": float(Gu[i]), "mjcf": float(Gm[i]), "state": k}
+        scale_A = float(np.max(np.abs(self.A[:, iu][:, :, iu]))) if iu.size else 0.0
+        scale_G = float(np.max(np.abs(self.G[:, iu]))) if iu.size else 0.0
+        return {"A": dA / scale_A if scale_A > 0 else (0.0 if dA == 0 else np.inf),
+                "G": dG / scale_G if scale_G > 0 else (0.0 if dG == 0 else np.inf),
+                "worst_A": worst_A, "worst_G": worst_G, "scale_A": scale_A, "scale_G": scale_G,
+                "sq_A": sA, "sq_G": sG}
+
+
+def _home(parts: RobotParts, names) -> np.ndarray:
+    q = np.zeros(len(names))
+    index = {n: i for i, n in enumerate(names)}
+    for j, _ in parts.joints:
+        for k, n in enumerate(j.coordinates):
+            if k < len(j.home):
+                q[index[n]] = float(j.home[k])
+    return q
+
+
+def _explained(before: float, after: float) -> float:
+    """The share of the squared difference (E53) that an undo removes: shares of independent differences add up."""
+    if before <= 0 or not np.isfinite(before):
+        return 0.0
+    return float((before - after) / before)
+
+
+def _attribute(terms: Terms, M: RobotParts, diffs: list[Difference], *, signs: bool) -> tuple[dict, list[dict]]:
+    base = terms.compare(Side(M), signs=signs)
+    rows = []
+    for i, d in enumerate(diffs):
+        if d.undo is None:
+            continue
+        after = terms.compare(d.undo(Side(M)), signs=signs)
+        rows.append({"index": i, "A_after": after["A"], "G_after": after["G"],
+                     "explains_A": _explained(base["sq_A"], after["sq_A"]),
+                     "explains_G": _explained(base["sq_G"], after["sq_G"])})
+    return base, rows
+
+
+#: The order in which every difference is undone at once: frames before what is expressed in them (an axis is
+#: set relative to the body above as the body is then placed).
+_UNDO_ORDER = {"origin": 0, "axis": 1}
+
+
+def _undo_all(terms: Terms, M: RobotParts, diffs: list[Difference], *, signs: bool) -> dict:
+    side = Side(M)
+    for d in sorted(diffs, key=lambda d: _UNDO_ORDER.get(d.kind, 2)):
+        if d.undo is not None:
+            side = d.undo(side)
+    r = terms.compare(side, signs=signs)
+    return {"A": r["A"], "G": r["G"]}
+
+
+def _summary(base, rows, diffs, label) -> dict:
+    out = {"A": {"max_rel_difference": base["A"], "largest": base["worst_A"]},
+           "G": {"max_rel_difference": base["G"], "largest": base["worst_G"]}, "coordinates": label}
+    for term in ("A", "G"):
+        best = max(rows, key=lambda r: r[f"explains_{term}"], default=None)
+        if best is not None and best[f"explains_{term}"] > 0.0:
+            d = diffs[best["index"]]
+            out[term]["explained_by"] = {"kind": d.kind, "urdf": d.urdf, "mjcf": d.mjcf,
+                                         "explains": best[f"explains_{term}"], "after_undoing": best[f"{term}_after"]}
+        else:
+            out[term]["explained_by"] = None
+    return out
+
+
+def evaluate_effects(U: RobotParts, M: RobotParts, mapping: JointMapping, diffs: list[Difference], *,
+                     states: int = 8, seed: int = 0) -> dict:
+    """``A`` and ``G`` of both at seeded states, the attribution to ``diffs`` (each difference's ``effect``
+    is set), and what is left with every difference undone (module doc). JSON-ready."""
+    terms = Terms(U, mapping, states=states, seed=seed)
+    base, rows = _attribute(terms, M, diffs, signs=True)
+    effects = {i: {"A_after": None, "G_after": None, "explains_A": 0.0, "explains_G": 0.0} for i in range(len(diffs))}
+    for r in rows:
+        effects[r["index"]] = {k: v for k, v in r.items() if k != "index"}
+    out = {"states": states, "seed": seed, "gravity": terms.gravity.tolist(),
+           "mapped": _summary(base, rows, diffs, "mapped: q_mjcf = sign q_urdf + offset"),
+           "after_undoing_all": _undo_all(terms, M, diffs, signs=True)}
+    if any(m.sign < 0 for m in mapping.matches):
+        base_n, rows_n = _attribute(terms, M, diffs, signs=False)
+        out["as_named"] = _summary(base_n, rows_n, diffs, "as named: q_mjcf = q_urdf + offset (every sign 1)")
+        for r in rows_n:
+            e = effects[r["index"]]
+            e["as_named_explains_A"], e["as_named_explains_G"] = r["explains_A"], r["explains_G"]
+    for i, d in enumerate(diffs):
+        e = effects[i]
+        e["undoable"] = d.undo is not None
+        d.effect = e
+    return out
+
+
+def effect_size(d: Difference, effects: dict) -> float:
+    """The share of ``A`` or ``G``'s difference (mapped, or as named) that undoing ``d`` removes, times the size
+    of that difference: the order of :func:`order_differences`."""
+    e = d.effect or {}
+    best = 0.0
+    for view, key in (("mapped", ""), ("as_named", "as_named_")):
+        if view not in effects:
+            continue
+        for term in ("A", "G"):
+            x = e.get(f"{key}explains_{term}") or 0.0
+            size = effects[view][term]["max_rel_difference"]
+            if np.isfinite(size):
+                best = max(best, x * size)
+    return best
+
+
+def order_differences(diffs: list[Difference], effects: dict | None) -> list[Difference]:
+    """Largest first: by what undoing each does to ``A`` and ``G``, then by how many times its rounding level
+    it is (damping, limits and the like change no term)."""
+    return sorted(diffs, key=lambda d: (-(effect_size(d, effects) if effects else 0.0), -d.ratio))

@@ -1,0 +1,83 @@
+"""MuJoCo's own import of a URDF file, saved as MJCF: the conversion whose result teams then keep and edit.
+
+:func:`save_mujoco_import` hands the URDF to MuJoCo's URDF reader the way route 2 prepares it
+(:func:`urdf2links.compare.mujoco_side.mujoco_urdf._prepare`: the file's inertias used as written, no
+balancing, no bounds, none from geometry; ``fusestatic`` as asked), compiles it
+(``mujoco.MjModel.from_xml_string``) and writes what MuJoCo kept with ``mujoco.mj_saveLastXML``. MuJoCo's
+writer prints 6 significant digits: that is the rounding a comparison of the two files must see
+through. When MuJoCo refuses the file as written, ``balance=True`` lets its compiler repair the
+inertias (``balanceinertia``, and ``boundmass``/``boundinertia`` of 1e-6 for massless moving links), as a
+user's conversion would have to; the result says so, and the differences that follow are explained.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import mujoco
+from lxml import etree
+
+from ..mujoco_side.mujoco_urdf import MujocoRefused, _mujoco_warnings, _prepare, _read
+
+__all__ = ["ImportResult", "save_mujoco_import", "BOUND"]
+
+#: ``boundmass`` and ``boundinertia`` of a balanced import: what MuJoCo gives a massless moving link.
+BOUND = 1e-6
+
+
+@dataclass(frozen=True)
+class ImportResult:
+    """``path`` of the saved MJCF, the compiler ``settings`` MuJoCo read it with, ``balanced`` (its
+    compiler had to repair inertias), ``notes`` (what MuJoCo said and what was changed)."""
+
+    path: Path
+    settings: dict
+    balanced: bool = False
+    notes: list[str] = field(default_factory=list)
+
+
+def _with_settings(text: str, extra: dict) -> str:
+    root = etree.fromstring(text.encode("utf-8"))
+    comp = root.find("mujoco").find("compiler")
+    for k, v in extra.items():
+        comp.set(k, v)
+    return etree.tostring(root, encoding="unicode")
+
+
+def save_mujoco_import(urdf, out_path, *, fusestatic: bool = True, keep_geometry: bool = True,
+                       balance: bool = False) -> ImportResult:
+    """MuJoCo's import of ``urdf`` written to ``out_path`` as MJCF (module doc). ``keep_geometry``: keep
+    the ``<visual>``/``<collision>`` geometry (meshes must then resolve from the file's folder);
+    ``balance``: let MuJoCo's compiler repair inertias it would refuse. :class:`MujocoRefused` carries
+    MuJoCo's words when it refuses."""
+    text, source, folder = _read(Path(urdf))
+    notes: list[str] = []
+    prepared, _links = _prepare(text, source, strip_meshes=not keep_geometry, fusestatic=fusestatic,
+                                meshdir=folder, notes=notes)
+    settings = {"fusestatic": "true" if fusestatic else "false", "balanceinertia": "false"}
+    if balance:
+        extra = {"balanceinertia": "true", "boundmass": f"{BOUND:g}", "boundinertia": f"{BOUND:g}"}
+        prepared = _with_settings(prepared, extra)
+        settings.update(extra)
+        notes.append("MuJoCo's compiler may repair inertias: " + ", ".join(f'{k}="{v}"' for k, v in extra.items()))
+    try:
+        with _mujoco_warnings(notes):
+            m = mujoco.MjModel.from_xml_string(prepared)
+    except ValueError as err:
+        raise MujocoRefused(source, str(err).strip()) from None
+    out = Path(out_path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    mujoco.mj_saveLastXML(str(out), m)
+    root = etree.parse(str(out)).getroot()
+    comp = root.find("compiler")
+    if comp is None:
+        comp = etree.Element("compiler")
+        root.insert(0, comp)
+    if m.nmesh == 0:     # no mesh to find: the writer's absolute meshdir would only tie the file to this machine
+        comp.attrib.pop("meshdir", None)
+    if balance:          # the written values sit on the bounds, 6 digits: without these MuJoCo refuses its own file
+        for k, v in extra.items():
+            comp.set(k, v)
+    out.write_text(etree.tostring(root, encoding="unicode") + "\n")
+    return ImportResult(out, settings, balanced=balance, notes=notes)

@@ -1,0 +1,132 @@
+"""One pair of descriptions compared: read, map, compare part by part, say what each difference does.
+
+:func:`compare_descriptions_of` is the description half of ``urdf2links compare A --against B`` and of
+every pair of ``urdf2links report --pairs``: both files read as parts
+(:func:`urdf2links.parsers.parts.robot_parts`), their joints matched
+(:func:`~urdf2links.compare.pairs.mapping.map_joints`), compared
+(:func:`~urdf2links.compare.pairs.differences.compare_descriptions`), the differences' effects on ``A``
+and ``G`` attributed (:func:`~urdf2links.compare.pairs.effects.evaluate_effects`) and ordered, largest
+first. :meth:`PairComparison.summary` is the JSON the report writes (``joint_mapping``,
+``description_differences``, ``description_effects``), and :meth:`PairComparison.check` the verdict
+against tolerances.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from urdf2links.console import shown_path
+from urdf2links.parsers.parts import RobotParts, robot_parts
+
+from .differences import KINDS, ROUNDING, Difference, compare_descriptions
+from .effects import evaluate_effects, order_differences
+from .explanations import explain
+from .mapping import JointMapping, map_joints
+
+__all__ = ["PairComparison", "compare_descriptions_of", "TERM_KEYS", "check_tolerances"]
+
+#: Tolerances a pair may give besides the kinds: the relative differences of ``A`` and ``G`` (mapped).
+TERM_KEYS = ("A", "G")
+
+
+@dataclass(eq=False)
+class PairComparison:
+    """Both descriptions' parts, the joint mapping, the ordered differences, their effects, notes."""
+
+    urdf: RobotParts
+    mjcf: RobotParts
+    urdf_path: Path
+    mjcf_path: Path
+    mapping: JointMapping
+    differences: list[Difference]
+    below_rounding: dict
+    effects: dict
+    notes: list[str] = field(default_factory=list)
+    seconds: float = 0.0
+
+    def first_of(self, kind: str) -> Difference | None:
+        """The largest difference of ``kind`` (None when there is none above rounding)."""
+        return next((d for d in self.differences if d.kind == kind), None)
+
+    def summary(self) -> dict:
+        """The JSON of the description half (module doc)."""
+        counts = {k: sum(d.kind == k for d in self.differences) for k in KINDS}
+        return {
+            "descriptions": {"urdf": {"file": shown_path(self.urdf_path), "format": self.urdf.format,
+                                      "name": self.urdf.name, "bodies": len(self.urdf.bodies),
+                                      "joints": len(self.urdf.joints)},
+                             "mjcf": {"file": shown_path(self.mjcf_path), "format": self.mjcf.format,
+                                      "name": self.mjcf.name, "bodies": len(self.mjcf.bodies),
+                                      "joints": len(self.mjcf.joints)},
+                             "note": "'urdf' is the first description, 'mjcf' the one given with --against "
+                                     "(either may be a URDF, xacro or MJCF file)"},
+            "joint_mapping": self.mapping.to_json(),
+            "description_differences": [d.to_json() for d in self.differences],
+            "description_difference_counts": {"listed": counts, "below_rounding": dict(self.below_rounding),
+                                              "rounding": dict(ROUNDING)},
+            "description_effects": self.effects,
+            "description_notes": list(self.notes),
+        }
+
+    def check(self, tolerances: dict | None = None) -> list[str]:
+        """What exceeds ``tolerances`` (``{kind or "A"/"G": number}``, in each kind's unit; a kind not given is
+        held to its rounding level): one line per failure, empty when the pair passes."""
+        return check_tolerances(self.summary(), tolerances)
+
+
+def check_tolerances(summary: dict, tolerances: dict | None = None) -> list[str]:
+    """:meth:`PairComparison.check` on a written summary (``summary.json`` of a pair)."""
+    tol = dict(tolerances or {})
+    bad = [k for k in tol if k not in KINDS and k not in TERM_KEYS]
+    if bad:
+        raise ValueError(f"tolerances: unknown key(s) {bad}; the kinds are {list(KINDS)}, and A, G for the terms")
+    fails = []
+    for d in summary["description_differences"]:
+        limit = float(tol.get(d["kind"], ROUNDING[d["kind"]]))
+        value = d["difference"]
+        value = math.inf if value in ("inf", "nan") else float(value)
+        if not value <= limit:
+            names = " / ".join(str(n) for n in (d["urdf"], d["mjcf"]) if n)
+            fails.append(f"{d['kind']} {names}: {value:.4g} {d['unit']} > {limit:g}")
+    eff = summary["description_effects"]["mapped"]
+    for term in TERM_KEYS:
+        if term in tol:
+            value = eff[term]["max_rel_difference"]
+            value = math.inf if value in ("inf", "nan") else float(value)
+            if not value <= float(tol[term]):
+                fails.append(f"{term}: max relative difference {value:.4g} > {float(tol[term]):g}")
+    return fails
+
+
+def _notes(U: RobotParts, M: RobotParts) -> list[str]:
+    notes = []
+    if not np.allclose(U.gravity, M.gravity):
+        notes.append(f"gravity differs: {U.gravity.tolist()} ({U.format}) against {M.gravity.tolist()} ({M.format}); "
+                     "A and G are compared with the first description's, the motion runs each file's own")
+    for label, p in (("urdf", U), ("mjcf", M)):
+        notes += [f"{label}: {n}" for n in p.notes if "MuJoCo said" in n]
+    return notes
+
+
+def compare_descriptions_of(urdf, mjcf, *, explicit_map: dict | None = None, load: dict | None = None,
+                            states: int = 8, seed: int = 0) -> PairComparison:
+    """Compare the robot files ``urdf`` and ``mjcf`` part by part (module doc). ``explicit_map``: ``{urdf
+    joint: mjcf joint}`` (``--map``); ``load``: the first file's loading options (``floating_base``,
+    ``package_dirs``, ``strict``, ``xacro_args``; the second takes ``package_dirs`` and ``xacro_args`` too when
+    it is a URDF)."""
+    start = time.perf_counter()
+    load = dict(load or {})
+    U = robot_parts(urdf, **load)
+    M = robot_parts(mjcf, **{k: v for k, v in load.items() if k != "floating_base"})
+    mapping = map_joints(U, M, explicit=explicit_map)
+    diffs, below = compare_descriptions(U, M, mapping)
+    explain(diffs, U, M)
+    effects = evaluate_effects(U, M, mapping, diffs, states=states, seed=seed)
+    ordered = order_differences(diffs, effects)
+    return PairComparison(U, M, Path(urdf), Path(mjcf), mapping, ordered, below, effects, _notes(U, M),
+                          time.perf_counter() - start)
