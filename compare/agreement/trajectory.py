@@ -446,7 +446,8 @@ def _project_at(traj, plan, t, T):
 def _energy_balances(scene, plan, mj, run, traj, EV_o, h_o, W) -> tuple[dict, dict]:
     """Both engines' balances ``h - h(0) - W`` (MuJoCo's without ``W`` when no work acts), the
     energy arrays for the report, and what the summary says about them."""
-    work_terms = any(term in plan.terms for term in ("Q", "tau", "damper", "base", "gravcomp"))
+    work_terms = any(term in plan.terms for term in ("Q", "tau", "damper", "base", "gravcomp", "actuator",
+                                                   "computed_torque"))
     EV_m = run.total_energy
     if scene.base is not None:
         h_m = energy_function(mj, run, plan)
@@ -459,7 +460,8 @@ def _energy_balances(scene, plan, mj, run, traj, EV_o, h_o, W) -> tuple[dict, di
         bal_m = h_m - h_m[0] - W
         what = [w for w, on in (("forces/moments", "Q" in plan.terms), ("joint torques", "tau" in plan.terms),
                                 ("dampers", "damper" in plan.terms), ("the moving base", "base" in plan.terms),
-                                ("gravcomp", "gravcomp" in plan.terms)) if on]
+                                ("gravcomp", "gravcomp" in plan.terms), ("actuators", "actuator" in plan.terms),
+                                ("the computed torque", "computed_torque" in plan.terms)) if on]
         note = (f"work terms present ({', '.join(what)}): both drifts use the project's work W "
                 f"(integrated along the project's trajectory): max |{sym} - {sym}(0) - W|")
         if scene.base is not None:
