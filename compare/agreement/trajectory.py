@@ -65,6 +65,7 @@ from urdf2links.errors import IntegrationError
 from urdf2links.integration.simulate import TIMED_REGION as PROJECT_REGION
 from urdf2links.integration.simulate import Trajectory, simulate, warm_up
 from urdf2links.parsers.robot_file import is_mjcf_path
+from urdf2links.parsers.xacro_input import is_xacro_path
 from urdf2links.ranges import MAX_STEPS
 from urdf2links.scenes.limits import LimitExcursion
 from urdf2links.scenes.plan import compile_plan
@@ -74,6 +75,7 @@ from ..mujoco_side.mjcf import MjcfModel, mjcf_from_scene
 from ..mujoco_side.mujoco_mjcf import FILE_LABEL, file_route_inputs, file_terms, mujoco_from_mjcf, run_file
 from ..mujoco_side.mujoco_run import TIMED_REGION as MUJOCO_REGION
 from ..mujoco_side.mujoco_run import MujocoRun, energy_function, run_mujoco
+from .actuator_terms import file_actuators, merged, route1_actuators, route2_actuators
 from .scene_terms import ROUTE1_LABEL, route1_terms, route2_terms
 
 __all__ = [
@@ -348,6 +350,12 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     else:
         route2 = route2_terms(scene, states=states, seed=seed, model=model)
     terms = {"route1": route1_terms(mj, model, scene, states=states, seed=seed), "route2": route2}
+    if plan.actuator_set.actuators:     # the actuators' forces at identical states, on both routes
+        terms["route1"] = merged(terms["route1"], route1_actuators(plan, mj, states=states, seed=seed))
+        act2 = (file_actuators(plan, mf, states=states, seed=seed) if mf is not None else
+                route2_actuators(plan, scene.robot, states=states, seed=seed) if not is_xacro_path(scene.robot)
+                else {"label": "route 2", "skipped": "a xacro robot: route 2's actuators are checked on URDF files"})
+        terms["route2"] = merged(terms["route2"], act2)
 
     meth = method or scene.run.method
     warm = warm_up(plan, methods=(meth,))
@@ -364,7 +372,7 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     if max_wall is not None and time.perf_counter() - start > max_wall:
         raise IntegrationError(f"{scene.path or scene.name}: max_wall={max_wall:g} s spent before MuJoCo's run")
     say(f"MuJoCo: {mujoco_integrator} dt {mujoco_dt:g}, {int(round(T / mujoco_dt))} steps")
-    file_run = mf is not None and not file_route_inputs(scene)
+    file_run = mf is not None and not file_route_inputs(scene, plan)
     if file_run:
         run = run_file(mf, plan, t_end=T, samples=samples, reference=traj.q if len(traj.q) == samples else None)
     else:
@@ -384,7 +392,7 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
         notes += ([f"route 2 (the MJCF file in MuJoCo): {x}" for x in mf.notes]
                   + [f"import: {x}" for x in model.info.get("notes", [])])
         if not file_run:
-            notes.append(f"the scene's {', '.join(file_route_inputs(scene))} are time-dependent inputs that the run of the "
+            notes.append(f"the scene's {', '.join(file_route_inputs(scene, plan))} are inputs that the run of the "
                          "MJCF file does not take yet: MuJoCo's trajectory is route 1's (the project's tree as MJCF)")
     q0, qd0 = scene.initial_state(model)
     info.update({"trajectory_route": FILE_LABEL if file_run else ROUTE1_LABEL,

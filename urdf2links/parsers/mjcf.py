@@ -88,9 +88,10 @@ def _captured(notes: list[str]):
                     notes.append(f"MuJoCo said: {line.strip()}")
 
 
-def compile_mjcf(source, notes: list[str] | None = None):
+def compile_mjcf(source, notes: list[str] | None = None, *, edit=None):
     """``(MjModel, source name)`` of an MJCF file (or MJCF text) compiled by MuJoCo; :class:`MJCFError`
-    with MuJoCo's own words and the file when it refuses."""
+    with MuJoCo's own words and the file when it refuses. ``edit(spec)``, when given, changes the
+    ``MjSpec`` before it is compiled (MuJoCo's run of a file adds a scene's actuators that way)."""
     import mujoco
 
     notes = [] if notes is None else notes
@@ -104,6 +105,8 @@ def compile_mjcf(source, notes: list[str] | None = None):
         with _captured(notes), warnings.catch_warnings(record=True) as said:
             warnings.simplefilter("always")
             spec = mujoco.MjSpec.from_string(source) if text else mujoco.MjSpec.from_file(str(source))
+            if edit is not None:
+                edit(spec)
             m = spec.compile()
         notes += [f"MuJoCo said: {w.message}" for w in said]
     except (ValueError, RuntimeError, mujoco.FatalError) as err:
