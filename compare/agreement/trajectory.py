@@ -68,6 +68,7 @@ from urdf2links.parsers.robot_file import is_mjcf_path
 from urdf2links.parsers.xacro_input import is_xacro_path
 from urdf2links.ranges import MAX_STEPS
 from urdf2links.scenes.limits import LimitExcursion
+from urdf2links.scenes.actuators import describe_actuator
 from urdf2links.scenes.plan import compile_plan
 from urdf2links.scenes.scene import Scene, load_scene, robot_label
 
@@ -275,6 +276,8 @@ class SceneComparison:
             "description": sc.description,
             "chaotic": bool(sc.chaotic),
             "effects": list(self.info["effects"]),
+            "actuators": [{"name": a.name, "coordinate": a.coordinate, "source": a.source, "law": describe_actuator(a)}
+                          for a in self.info.get("actuators", ())],
             "coordinates": list(self.coordinate_names),
             "route": ("route 2 (MuJoCo runs the MJCF file)" if self.info.get("trajectory_route") == FILE_LABEL
                       else "route 1 (the project's tree as MJCF)"),
@@ -397,6 +400,7 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     q0, qd0 = scene.initial_state(model)
     info.update({"trajectory_route": FILE_LABEL if file_run else ROUTE1_LABEL,
                  "t_end": T, "t_end_note": t_end_note, "effects": plan.terms, "warm_up": warm,
+                 "actuators": plan.actuator_set.actuators,
                  "q0": dict(zip(model.coordinate_names, q0.tolist())),
                  "qd0": dict(zip(model.coordinate_names, qd0.tolist())),
                  "total_s": time.perf_counter() - start})
@@ -431,7 +435,16 @@ def _run_notes(scene, plan, mj, run, traj, t_end_note, *, resampled: bool) -> li
         notes.append(f"the project re-charted the ZYX angles of {sorted({r['link'] for r in traj.stats['recharts']})} "
                      f"{traj.stats['n_recharts']} times near phi_y = +-pi/2 (urdf2links.integration.charts); its q are converted "
                      "back to the loaded model's coordinates, which MuJoCo integrates as hinges through the singularity")
-    notes += [f"scene: {x}" for x in plan.spring_set.notes]
+    notes += [f"scene: {x}" for x in (*plan.spring_set.notes, *plan.actuator_set.notes)]
+    clamps = [a.name for a in plan.actuator_set.actuators if a.ctrlrange is not None or a.forcerange is not None]
+    if clamps:
+        notes.append(f"the clamps of {', '.join(clamps[:6])} (ctrlrange, forcerange) make the right-hand side non-smooth "
+                     "where they engage: both integrators lose order across those instants (the project's error estimate "
+                     "too); the difference shrinks with MuJoCo's step and the project's rtol")
+    if plan.reference_funcs:
+        notes.append("computed torque: MuJoCo's side applies the project's own torque (the scene's inverse dynamics at "
+                     "the reference, E54) through qfrc_applied at every stage, evaluated by the compiled control callback; "
+                     "MuJoCo's mj_inverse is compared with the project's inverse dynamics in the tests (1e-10)")
     notes += [f"limits: {LimitExcursion(**x).text()} (urdf2links' trajectory)" for x in traj.stats["limit_excursions"]]
     return notes + [f"MJCF: {x}" for x in mj.notes] + [f"MuJoCo run: {x}" for x in run.notes]
 
