@@ -51,7 +51,7 @@ from numba.extending import intrinsic
 from urdf2links.dynamics.factor import cholesky, cholesky_solve
 from urdf2links.integration.simulate import Compilation, record_compilation
 from urdf2links.scenes.scene_arrays import scene_view
-from urdf2links.scenes.scene_kernels import computed_torque, ct_torque_at, fn_data_eval
+from urdf2links.scenes.scene_kernels import _actuators, computed_torque, ct_torque_at, fn_data_eval
 
 __all__ = ["CompiledInputs", "LayoutError", "mjdata_offsets", "check_offsets", "callback_pointer", "control",
            "HEADER_FIELDS"]
@@ -226,9 +226,10 @@ def _libmujoco_functions() -> dict[str, int]:
 #: The run's integer data (one int64 array), section by section: its start offsets are header slots
 #: (a section ends where the next one starts; the slot after the last holds the total).
 INT_SECTIONS = ("body_of", "parent", "coord_q", "host", "dof", "bdof", "moving", "base_fn", "torque_dof", "torque_fn",
-                "load_link", "load_kind", "load_local", "load_fn", "fn_kind", "fn_ptr", "act_fn", "act_ctrl")
+                "load_link", "load_kind", "load_local", "load_fn", "fn_kind", "fn_ptr", "act_fn", "act_ctrl", "ball",
+                "coord_qpos", "coord_dof")
 #: The run's float data (one float64 array), likewise; ``scratch`` is the callback's work space.
-FLOAT_SECTIONS = ("params", "load_X", "load_point", "fn_data", "scratch")
+FLOAT_SECTIONS = ("params", "load_X", "load_point", "fn_data", "scratch", "ball_ref", "ystate", "fball")
 #: Slots of :data:`HEADER` (int64): the run the callback acts on.
 HEADER_FIELDS = (
     "active", "data", "time_offset", "nv", "nq", "nbody", "n", "L", "base_body", "prescribe",
@@ -237,17 +238,19 @@ HEADER_FIELDS = (
     *(f"i_{k}" for k in INT_SECTIONS), "i_end", *(f"f_{k}" for k in FLOAT_SECTIONS), "f_end",
     "calls", "error", "error_count",
     # actuators' controls and the computed torque (issue 26): d->ctrl, and the project's compiled scene
-    "ctrl", "nctrl", "fwdActuation", "ct", "pTI", "nTI", "pTF", "nTF", "pW", "nW", "pSI", "nSI", "pSF", "nSF", "pX", "nX",
+    "ctrl", "nctrl", "fwdActuation", "qvel", "ct", "pTI", "nTI", "pTF", "nTF", "pW", "nW", "pSI", "nSI", "pSF", "nSF", "pX", "nX",
 )
 _H = {name: k for k, name in enumerate(HEADER_FIELDS)}
 (ACTIVE, DATA, TIME_OFF, NV, NQ, NBODY, NR, NL, BASE_BODY, PRESCRIBE, QFRC_APPLIED, XFRC_APPLIED, XPOS, XMAT, XIPOS,
  QFRC_PASSIVE, QFRC_ACTUATOR, QFRC_BIAS, QPOS, FN_FULLM, FN_APPLYFT, FN_JAC, A_I, A_F) = range(24)
 (I_BODY_OF, I_PARENT, I_COORD_Q, I_HOST, I_DOF, I_BDOF, I_MOVING, I_BASE_FN, I_TORQUE_DOF, I_TORQUE_FN, I_LOAD_LINK,
- I_LOAD_KIND, I_LOAD_LOCAL, I_LOAD_FN, I_FN_KIND, I_FN_PTR, I_ACT_FN, I_ACT_CTRL, I_END) = range(24, 24 + len(INT_SECTIONS) + 1)
-(F_PARAMS, F_LOAD_X, F_LOAD_POINT, F_FN_DATA, F_SCRATCH, F_END) = range(I_END + 1, I_END + 1 + len(FLOAT_SECTIONS) + 1)
+ I_LOAD_KIND, I_LOAD_LOCAL, I_LOAD_FN, I_FN_KIND, I_FN_PTR, I_ACT_FN, I_ACT_CTRL, I_BALL, I_COORD_QPOS, I_COORD_DOF,
+ I_END) = range(24, 24 + len(INT_SECTIONS) + 1)
+(F_PARAMS, F_LOAD_X, F_LOAD_POINT, F_FN_DATA, F_SCRATCH, F_BALL_REF, F_YSTATE, F_FBALL, F_END) = range(
+    I_END + 1, I_END + 1 + len(FLOAT_SECTIONS) + 1)
 CALLS, ERROR, ERROR_COUNT = F_END + 1, F_END + 2, F_END + 3
-(CTRL, NCTRL, FN_FWDACT, CT, P_TI, N_TI, P_TF, N_TF, P_W, N_W, P_SI, N_SI, P_SF, N_SF, P_X, N_X) = range(
-    ERROR_COUNT + 1, ERROR_COUNT + 17)
+(CTRL, NCTRL, FN_FWDACT, QVEL, CT, P_TI, N_TI, P_TF, N_TF, P_W, N_W, P_SI, N_SI, P_SF, N_SF, P_X, N_X) = range(
+    ERROR_COUNT + 1, ERROR_COUNT + 18)
 NHEADER = len(HEADER_FIELDS)
 assert HEADER_FIELDS[A_F] == "F" and HEADER_FIELDS[I_END] == "i_end" and HEADER_FIELDS[ERROR_COUNT] == "error_count"
 assert HEADER_FIELDS[CTRL] == "ctrl" and HEADER_FIELDS[N_X] == "nX" and NHEADER == N_X + 1
@@ -495,6 +498,65 @@ def _computed_torque(H, I, t, qfrc):
 
 
 @njit(cache=True)
+def _ball_servos(H, I, F, t, qfrc):
+    """The scene's actuators on the ZYX angles of ball and free joints, for MuJoCo running an MJCF file
+    (whose joints carry no such actuator): the project's state from MuJoCo's (hinges and slides as they
+    are; a ball's quaternion to its ZYX angles by (E7), on the branch of the angles within pi of their
+    reference ``ball_ref`` (their initial value), and its rates ``E(phi)^-1 omega``, E43), the project's
+    law there (:func:`urdf2links.scenes.scene_kernels._actuators`, E52), and the torques ``tau`` of the
+    angles applied as MuJoCo's generalized forces ``f = E^-T tau`` (``tau = E^T f``: the same power,
+    E50); a free joint's translations as they are."""
+    SI = carray(_voidptr(H[P_SI]), H[N_SI], np.int64)
+    SF = carray(_voidptr(H[P_SF]), H[N_SF], np.float64)
+    n = SI[0]
+    qpos = carray(_voidptr(H[QPOS]), H[NQ], np.float64)
+    qvel = carray(_voidptr(H[QVEL]), H[NV], np.float64)
+    y, f, ref = _float(H, F, F_YSTATE), _float(H, F, F_FBALL), _float(H, F, F_BALL_REF)
+    cq, cd = _int(H, I, I_COORD_QPOS), _int(H, I, I_COORD_DOF)
+    balls = _int(H, I, I_BALL)
+    for i in range(n):
+        y[i] = qpos[cq[i]] if cq[i] >= 0 else 0.0
+        y[n + i] = qvel[cd[i]] if cd[i] >= 0 else 0.0
+        f[i] = 0.0
+    nb = balls.size // 4
+    for b in range(nb):
+        kind, qa, da, c0 = balls[4 * b], balls[4 * b + 1], balls[4 * b + 2], balls[4 * b + 3]
+        off = 3 if kind == 1 else 0
+        for k in range(off):
+            y[c0 + k] = qpos[qa + k]
+            y[n + c0 + k] = qvel[da + k]
+        w, x, yq, z = qpos[qa + off], qpos[qa + off + 1], qpos[qa + off + 2], qpos[qa + off + 3]
+        s = 1.0 / np.sqrt(w * w + x * x + yq * yq + z * z)
+        w, x, yq, z = w * s, x * s, yq * s, z * s
+        r00, r01, r02 = 1 - 2 * (yq * yq + z * z), 2 * (x * yq - w * z), 2 * (x * z + w * yq)
+        r12, r22 = 2 * (yq * z - w * x), 1 - 2 * (x * x + yq * yq)
+        py = np.arctan2(r02, np.sqrt(r00 * r00 + r01 * r01))
+        px, pz = np.arctan2(-r12, r22), np.arctan2(-r01, r00)
+        px += 2 * np.pi * np.round((ref[3 * b] - px) / (2 * np.pi))
+        pz += 2 * np.pi * np.round((ref[3 * b + 2] - pz) / (2 * np.pi))
+        cy, sy, cz, sz = np.cos(py), np.sin(py), np.cos(pz), np.sin(pz)
+        o1, o2, o3 = qvel[da + off], qvel[da + off + 1], qvel[da + off + 2]
+        dx = (cz * o1 - sz * o2) / cy
+        c = c0 + off
+        y[c], y[c + 1], y[c + 2] = px, py, pz
+        y[n + c], y[n + c + 1], y[n + c + 2] = dx, sz * o1 + cz * o2, o3 - sy * dx
+    _actuators(SI, SF, t, y, 0, f, 0)
+    for b in range(nb):
+        kind, qa, da, c0 = balls[4 * b], balls[4 * b + 1], balls[4 * b + 2], balls[4 * b + 3]
+        off = 3 if kind == 1 else 0
+        for k in range(off):
+            qfrc[da + k] += f[c0 + k]
+        c = c0 + off
+        py, pz = y[c + 1], y[c + 2]
+        cy, sy, cz, sz = np.cos(py), np.sin(py), np.cos(pz), np.sin(pz)
+        u = (f[c] - sy * f[c + 2]) / cy
+        v = f[c + 1]
+        qfrc[da + off] += cz * u + sz * v
+        qfrc[da + off + 1] += -sz * u + cz * v
+        qfrc[da + off + 2] += f[c + 2]
+
+
+@njit(cache=True)
 def control(m, d, header_address):
     """The control callback's work for ``mjData* d`` (see the module doc): clear ``qfrc_applied``
     and ``xfrc_applied``, then joint torques, the actuators' controls (``d->ctrl``), the computed torque,
@@ -524,6 +586,8 @@ def control(m, d, header_address):
             ctrl[act_ctrl[k]] = _fn(H, I, F, act_fn[k], t, 0)
     if H[CT]:
         _computed_torque(H, I, t, qfrc)
+    if _int(H, I, I_BALL).size:
+        _ball_servos(H, I, F, t, qfrc)
     if _int(H, I, I_LOAD_LINK).size:
         _apply_loads(m, d, H, I, F, t, xfrc, qfrc)
     if H[PRESCRIBE]:
@@ -574,9 +638,11 @@ class CompiledInputs:
                 "torque_dof": dof[sc.torque_idx], "torque_fn": sc.torque_fn, "load_link": sc.load_link[:nl],
                 "load_kind": sc.load_kind[:nl], "load_local": sc.load_local[:nl], "load_fn": sc.load_fn[:nl],
                 "fn_kind": sc.fn_kind, "fn_ptr": sc.fn_ptr, "act_fn": sc.act_fn,
-                "act_ctrl": [int(m.actuator_ctrladr[k]) for k in range(len(sc.act_fn))]}
+                "act_ctrl": [int(m.actuator_ctrladr[k]) for k in range(len(sc.act_fn))], "ball": np.zeros(0),
+                "coord_qpos": np.zeros(0), "coord_dof": np.zeros(0)}
         floats = {"params": np.asarray(tree.params, float), "load_X": sc.load_X[:nl], "load_point": sc.load_point[:nl],
-                  "fn_data": sc.fn_data, "scratch": np.zeros(6 * nv + _LOAD_SCRATCH + nv * nv + 2 * nv + 2 * n + 2 * n * n + 6)}
+                  "fn_data": sc.fn_data, "scratch": np.zeros(6 * nv + _LOAD_SCRATCH + nv * nv + 2 * nv + 2 * n + 2 * n * n + 6),
+                  "ball_ref": np.zeros(0), "ystate": np.zeros(0), "fball": np.zeros(0)}
         if len(sc.act_fn) != m.nu:
             raise ValueError(f"the MJCF model has {m.nu} actuators, the scene {len(sc.act_fn)}: build it with mjcf_from_scene")
         self._build(plan, m, d, ints, floats, offsets, extra={
@@ -586,17 +652,35 @@ class CompiledInputs:
     @classmethod
     def for_file(cls, plan, m: mujoco.MjModel, d: mujoco.MjData, actuator_ids):
         """The inputs of MuJoCo running an MJCF file itself (:mod:`urdf2links.compare.mujoco_side.mujoco_mjcf`):
-        the actuators' controls only, the scene's actuator ``k`` being the file's actuator ``actuator_ids[k]``
-        (no torques, loads, computed torque or base: that route does not take them)."""
+        the actuators' controls, the scene's actuator ``k`` being MuJoCo's actuator ``actuator_ids[k]``, and
+        for ``-1`` (an actuator on a ball's or free joint's angles, which no MuJoCo joint actuator carries)
+        the project's law applied through ``qfrc_applied`` (:func:`_ball_servos`). No torques, loads, computed
+        torque or base: that route does not take them."""
         self = cls.__new__(cls)
         self.mj, self.plan, self.m, self.d = None, plan, m, d
         offsets = mjdata_offsets(d)
         sc = scene_view(plan.rhs.SI, plan.rhs.SF)
+        carried = [k for k, a in enumerate(actuator_ids) if a >= 0]
         ints = {k: np.zeros(0) for k in INT_SECTIONS}
         ints.update({"base_fn": np.full(6, -1), "bdof": np.zeros(6), "fn_kind": sc.fn_kind, "fn_ptr": sc.fn_ptr,
-                     "act_fn": sc.act_fn, "act_ctrl": [int(m.actuator_ctrladr[k]) for k in actuator_ids]})
+                     "act_fn": sc.act_fn[carried], "act_ctrl": [int(m.actuator_ctrladr[actuator_ids[k]]) for k in carried]})
         floats = {"params": np.zeros(0), "load_X": np.zeros(0), "load_point": np.zeros(0), "fn_data": sc.fn_data,
-                  "scratch": np.zeros(6 * m.nv + _LOAD_SCRATCH)}
+                  "scratch": np.zeros(6 * m.nv + _LOAD_SCRATCH), "ball_ref": np.zeros(0), "ystate": np.zeros(0),
+                  "fball": np.zeros(0)}
+        if len(carried) < len(actuator_ids):
+            model = plan.model
+            qmap = model.info["mujoco"]
+            q0, _ = plan.scene.initial_state(model)
+            need = {a.index for k, a in enumerate(plan.actuator_set.actuators) if actuator_ids[k] < 0}
+            balls = [j for j in qmap.joints if j.kind in ("ball", "free") and need & set(j.coordinates)]
+            cq, cd = np.full(model.n, -1), np.full(model.n, -1)
+            for j in qmap.joints:
+                if j.kind in ("hinge", "slide"):
+                    cq[j.coordinates[0]], cd[j.coordinates[0]] = j.qposadr, j.dofadr
+            ints.update({"ball": [[int(j.kind == "free"), j.qposadr, j.dofadr, j.coordinates[0]] for j in balls],
+                         "coord_qpos": cq, "coord_dof": cd})
+            floats.update({"ball_ref": [q0[list(j.coordinates)[-3:]] for j in balls], "ystate": np.zeros(2 * model.n),
+                           "fball": np.zeros(model.n)})
         self._build(plan, m, d, ints, floats, offsets, extra={"nv": m.nv, "nq": m.nq, "nbody": m.nbody, "n": 0,
                                                                 "L": 0, "base_body": -1, "prescribe": 0}, file=True)
         return self
@@ -608,7 +692,7 @@ class CompiledInputs:
         fns = _libmujoco_functions()
         # the computed torque runs the project's compiled scene in the callback, with scratch of its own
         ct = bool(plan.reference_funcs) and not file
-        self.arrays = (plan.rhs.fresh_args() if ct else ())
+        self.arrays = plan.rhs.fresh_args() if ct or len(ints["ball"]) else ()
         values = {
             "active": 0, "data": d._address, "time_offset": offsets["time"], **extra,
             "qfrc_applied": d.qfrc_applied.ctypes.data, "xfrc_applied": d.xfrc_applied.ctypes.data,
@@ -620,7 +704,7 @@ class CompiledInputs:
             **{f"f_{k}": v for k, v in zip(FLOAT_SECTIONS + ("end",), f_at)},
             "calls": 0, "error": 0, "error_count": 0,
             "ctrl": d.ctrl.ctypes.data if d.ctrl.size else 0, "nctrl": int(d.ctrl.size), "ct": int(ct),
-            "fwdActuation": fns["mj_fwdActuation"],
+            "fwdActuation": fns["mj_fwdActuation"], "qvel": d.qvel.ctypes.data,
         }
         for key, arr in zip(("TI", "TF", "W", "SI", "SF", "X"), self.arrays):
             values[f"p{key}"], values[f"n{key}"] = arr.ctypes.data, arr.size

@@ -59,7 +59,8 @@ class MujocoFile:
     notes: list[str] = field(default_factory=list)
     moving_base: bool = False
     actuator_ids: tuple = ()
-    """MuJoCo's actuator id of each of the plan's actuators (the scene's own added after the file's)."""
+    """MuJoCo's actuator id of each of the plan's actuators (the scene's own added after the file's), -1 for
+    those on a ball's or free joint's angles (applied through the control callback); empty: no actuators."""
 
     @property
     def n(self) -> int:
@@ -72,20 +73,30 @@ class MujocoFile:
 
 def file_route_inputs(scene, plan=None) -> list[str]:
     """What of ``scene`` route 2 for an MJCF file does not run (time-dependent inputs, and with ``plan``
-    the scene actuators MuJoCo's joints cannot carry: on a ball's or free joint's coordinates, or on a
-    joint the file leaves unnamed): empty when it runs it."""
+    the scene actuators on a hinge or slide the file leaves unnamed, which ``MjSpec`` cannot address):
+    empty when it runs it. Actuators on a ball's or free joint's angles run through the control callback
+    (:meth:`~urdf2links.compare.mujoco_side.mujoco_inputs.CompiledInputs.for_file`)."""
     out = [w for w, on in (("[base]", scene.base is not None), ("[[force]]/[[moment]]", bool(scene.loads)),
                            ("[[torque]]", bool(scene.torques)), ("[[computed_torque]]", bool(scene.computed_torque)))
            if on]
     if plan is not None:
-        joints = {c: j for j in plan.model.info["mujoco"].joints for c in j.coordinates}
-        names = plan.model.coordinate_names
-        bad = [a.name for a in plan.actuator_set.actuators if a.source != "file"
-               and (joints[a.index].kind not in ("hinge", "slide") or joints[a.index].name != names[a.index])]
+        bad = [a.name for a in plan.actuator_set.actuators if _carried(plan, a) is False]
         if bad:
-            out.append(f"actuators on coordinates no joint of the file carries as a hinge or slide ({', '.join(bad[:4])}"
-                       + (", ..." if len(bad) > 4 else "") + ")")
+            out.append(f"actuators on joints the file leaves unnamed ({', '.join(bad[:4])}" + (", ..." if len(bad) > 4
+                                                                                            else "") + ")")
     return out
+
+
+def _carried(plan, a):
+    """How MuJoCo's run of the file carries the scene's actuator ``a``: True as a MuJoCo actuator (the file's
+    own, or the scene's on a named hinge or slide), None through the callback (a ball's or free joint's
+    coordinate), False not at all (a hinge or slide without a name in the file)."""
+    if a.source == "file":
+        return True
+    joint = {c: j for j in plan.model.info["mujoco"].joints for c in j.coordinates}[a.index]
+    if joint.kind in ("ball", "free"):
+        return None
+    return joint.name == plan.model.coordinate_names[a.index] or False
 
 
 def _edit(actuators, gravcomp: dict, notes: list[str]):
@@ -160,10 +171,16 @@ def mujoco_from_mjcf(plan, *, timestep: float | None = None, integrator: str | N
     notes: list[str] = []
     acts = plan.actuator_set.actuators
     if acts and any(w.startswith("actuators on") for w in file_route_inputs(scene, plan)):
-        notes.append("the scene's actuators are not all carried by the file's hinges and slides: this model runs "
-                     "without them (its terms only; the trajectory is route 1's)")
+        notes.append("the scene's actuators are not all carried by the file's joints: this model runs without them "
+                     "(its terms only; the trajectory is route 1's)")
         acts = ()
-    own = [a for a in acts if a.source != "file"]
+    via_callback = [a for a in acts if _carried(plan, a) is None]
+    if via_callback:
+        notes.append(f"actuators on ball or free joints' angles ({', '.join(a.name for a in via_callback[:6])}"
+                     + (", ..." if len(via_callback) > 6 else "") + "): no MuJoCo joint actuator acts on ZYX angles; "
+                     "the project's law is applied through qfrc_applied from the control callback (f = E^-T tau, E50)")
+    carried_acts = [a for a in acts if _carried(plan, a)]
+    own = [a for a in carried_acts if a.source != "file"]
     table = scene.gravcomp_table(model)
     m, where = compile_mjcf(str(scene.robot), notes, edit=_edit(own, table, notes) if own or table else None)
     g = np.zeros(3) if scene.gravity is None else np.asarray(scene.gravity, float)
@@ -173,7 +190,8 @@ def mujoco_from_mjcf(plan, *, timestep: float | None = None, integrator: str | N
     off_flags = [n for n in MUJOCO_OFF if not (acts and n == "mjDSBL_ACTUATION")]
     for name in off_flags:
         m.opt.disableflags |= int(getattr(mujoco.mjtDisableBit, name))
-    actuator_ids = _actuation(m, acts, notes) if acts else []
+    ids = dict(zip((a.name for a in carried_acts), _actuation(m, carried_acts, notes))) if acts else {}
+    actuator_ids = [ids.get(a.name, -1) for a in acts]
     springs = plan.spring_set.springs
     if not any(s.stiffness > 0 for s in springs) and not table:     # MuJoCo's mj_passive skips gravcomp too
         m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_SPRING)   # when springs and dampers are both off
