@@ -122,6 +122,24 @@ def test_mjcf_robots_held_by_hold_run_by_mujoco_from_the_file(name, record_figur
     assert np.abs(c.traj.q - c.traj.q[0]).max() < 0.3       # held: it sags, it does not fall
 
 
+def test_servos_on_a_ball_joints_angles_away_from_zero(record_figure):
+    """Position servos driving the three ZYX angles of cart_arm's ball joint through large rotations (the map
+    f = E^-T tau is the identity only at zero angles), MuJoCo running the file."""
+    act = [{"coordinate": f"wrist.{a}", "kind": "position", "kp": 2.0, "kv": 0.2,
+            "ctrl": {"sines": [[0.5, 0.5 + 0.2 * k, k]], "offset": 0.3}} for k, a in enumerate(("phi_x", "phi_y", "phi_z"))]
+    act += [{"coordinate": c, "kind": "position", "kp": 200.0, "kv": 20.0, "ctrl": 0.0} for c in ("shoulder", "elbow")]
+    scene = scene_from_dict({"robot": {"mjcf": str(ROBOTS / "cart_arm.xml")}, "gravity": {}, "actuator": act,
+                             "run": {"t_end": 2.0}}, name="ball_servos")
+    c = compare_scene(scene)
+    s = c.summary()
+    assert s["route"].startswith("route 2")
+    i = c.model.coordinate_names.index("wrist.phi_z")
+    assert np.abs(c.traj.q[:, i]).max() > 0.5                   # the angles do go far from zero
+    record_figure("servo scenes", "ball joint servos (cart_arm), MuJoCo running the file", s["trajectory"]["max_abs_error"],
+                  "{:.1e}")
+    assert s["trajectory"]["max_abs_error"] < 1e-6
+
+
 def test_computed_torque_follows_the_reference_on_both_engines(record_figure):
     refs = [{"coordinate": "shoulder_pan_joint", "reference": {"sines": [[0.5, 0.5]]}},
             {"coordinate": "shoulder_lift_joint", "reference": {"sines": [[0.3, 0.4]], "offset": -1.0}},
