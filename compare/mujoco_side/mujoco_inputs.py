@@ -23,8 +23,15 @@ Here the same steps are numba code (:func:`control`), installed as a C function 
   ``mjdata.h`` in order) laid out by ``ctypes`` and checked at run time against the bindings
   (the pointer fields at their derived offsets must hold the arrays' addresses, ``time`` a written
   sentinel): a disagreement refuses the run with :class:`LayoutError`;
-* MuJoCo's ``mj_fullM``, ``mj_applyFT`` and ``mj_jac``, called through their addresses in the
-  bundled ``libmujoco`` (the library the bindings loaded).
+* MuJoCo's ``mj_fullM``, ``mj_applyFT``, ``mj_jac`` and ``mj_fwdActuation``, called through their
+  addresses in the bundled ``libmujoco`` (the library the bindings loaded).
+
+Since issue 26 it also writes the actuators' controls into ``d->ctrl`` (MuJoCo then clamps them and
+applies its own law after the callback; with a prescribed base it calls ``mj_fwdActuation`` first, so that
+``qfrc_actuator`` is current), adds the scene's computed torque (the project's compiled
+:func:`urdf2links.scenes.scene_kernels.computed_torque`, on the project's own arrays, into
+``qfrc_applied``) and, for MuJoCo running an MJCF file (:meth:`CompiledInputs.for_file`), the scene's
+actuators on ball and free joints' ZYX angles (:func:`_ball_servos`).
 
 The callback finds its run through one process-wide header (:data:`HEADER`, int64 slots) whose
 address the compiled code takes from an external symbol registered with LLVM's linker, so the
