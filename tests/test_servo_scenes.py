@@ -36,6 +36,7 @@ from urdf2links.scenes.plan import as_plan
 from urdf2links.scenes.scene import default_scene, scene_from_dict
 
 ROBOTS = shipped_robots_dir()
+FIGURE_BOUNDS = {"servo scenes": "1e-6 rad or m: max |q_urdf2links - q_MuJoCo| (MuJoCo RK4 at 1e-4 s)"}
 UR5 = str(ROBOTS / "ur5_like.urdf")
 
 
@@ -206,6 +207,8 @@ def test_euler_and_implicit_say_what_they_treat_implicitly():
         c = compare_scene(scene, mujoco_integrator=integ, mujoco_dt=1e-3)
         notes = " ".join(c.summary()["mujoco"]["notes"])
         assert (words in notes) if words else ("implicitly" not in notes), notes
+    c = compare_scene(ROBOTS / "spring_arm_torques.toml", mujoco_integrator="Euler", mujoco_dt=1e-3, t_end=0.2)
+    assert "Euler integrates joint damping implicitly" in " ".join(c.summary()["mujoco"]["notes"])
 
 
 def test_cli_compare_with_hold(tmp_path):
