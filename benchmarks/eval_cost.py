@@ -190,7 +190,7 @@ def _inverse_section(rows) -> str:
                     for k, v in r.get("inverse_agreement", {}).items())]
          for r in rows])
     return ("## Inverse dynamics against mj_inverse and Pinocchio's rnea\n\n`inverse_dynamics(q, qd, qdd)` (one compiled "
-            "O(n) pass, E51) against MuJoCo's `mj_inverse` (`qacc` set, route 1's model) and Pinocchio's `pin.rnea` (the "
+            "O(n) pass, E54) against MuJoCo's `mj_inverse` (`qacc` set, route 1's model) and Pinocchio's `pin.rnea` (the "
             "same URDF), all three called from Python at the same state; microseconds, median (min-max), the ratio "
             "under the tie rule, and the largest difference of the results at that state.\n\n" + body + "\n\n")
 

@@ -1,4 +1,4 @@
-"""Actuators as scene effects (issue 26): reading ``[[actuator]]``, MuJoCo's law (E52) against MuJoCo itself,
+"""Actuators as scene effects (issue 26): reading ``[[actuator]]``, MuJoCo's law (E55) against MuJoCo itself,
 the compiled right-hand side against its numpy twin, an MJCF file's own actuators, gravcomp, ``--hold``.
 
 Tolerances: the law is a handful of products, so the project's forces equal MuJoCo's ``qfrc_actuator``
@@ -258,7 +258,7 @@ def test_gravcomp_with_different_factors_in_one_route1_body_falls_back_to_loads(
 
 # -- --hold ---------------------------------------------------------------------------------------------
 def test_hold_gains_come_from_the_mass_matrix():
-    """kp_i = A_ii (2 pi f)^2, kv_i = 2 A_ii (2 pi f) at q0 (E53): each coordinate alone is critically damped."""
+    """kp_i = A_ii (2 pi f)^2, kv_i = 2 A_ii (2 pi f) at q0 (E56): each coordinate alone is critically damped."""
     scene = default_scene(UR5, hold=3.0, q0="random", seed=2)
     model = scene.model()
     q0, _ = scene.initial_state(model)

@@ -1,4 +1,4 @@
-"""``Model.inverse_dynamics`` (E51): ``tau = A q'' + e + G - Q`` in one compiled pass, against
+"""``Model.inverse_dynamics`` (E54): ``tau = A q'' + e + G - Q`` in one compiled pass, against
 
 - the literal oracle (the trace formulas term by term) on every kind of model: shipped robots, random
   trees, a moving base, loads, coupled (mimic) coordinates, MJCF armature (hinges and balls);

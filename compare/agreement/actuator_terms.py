@@ -1,4 +1,4 @@
-"""The actuators' generalized forces at identical states: the project's law (E52) against MuJoCo's ``qfrc_actuator``.
+"""The actuators' generalized forces at identical states: the project's law (E55) against MuJoCo's ``qfrc_actuator``.
 
 For a scene that names actuators, each route's MuJoCo model carries them (route 1 writes them into its
 MJCF, route 2 adds them to MuJoCo's URDF import, an MJCF file keeps its own and gets the scene's added):
@@ -55,7 +55,7 @@ def actuator_terms(plan, m, set_state, to_project, actuator_ids, *, label: str, 
     return {"label": label, "max_rel_error_actuator": worst, "states": states, "seed": seed, "actuators": len(acts),
             "not_mujoco_actuators": left,
             "per_state": per_state, "wall_time_s": time.perf_counter() - start,
-            "mapping": "the project's actuator law (E52) vs MuJoCo's qfrc_actuator with d.ctrl at the same t"}
+            "mapping": "the project's actuator law (E55) vs MuJoCo's qfrc_actuator with d.ctrl at the same t"}
 
 
 def route1_actuators(plan, mj, *, states: int = 8, seed: int = 0) -> dict:

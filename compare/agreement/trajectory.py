@@ -443,7 +443,7 @@ def _run_notes(scene, plan, mj, run, traj, t_end_note, *, resampled: bool) -> li
                      "too); the difference shrinks with MuJoCo's step and the project's rtol")
     if plan.reference_funcs:
         notes.append("computed torque: MuJoCo's side applies the project's own torque (the scene's inverse dynamics at "
-                     "the reference, E54) through qfrc_applied at every stage, evaluated by the compiled control callback; "
+                     "the reference, E57) through qfrc_applied at every stage, evaluated by the compiled control callback; "
                      "MuJoCo's mj_inverse is compared with the project's inverse dynamics in the tests (1e-10)")
     notes += [f"limits: {LimitExcursion(**x).text()} (urdf2links' trajectory)" for x in traj.stats["limit_excursions"]]
     return notes + [f"MJCF: {x}" for x in mj.notes] + [f"MuJoCo run: {x}" for x in run.notes]

@@ -145,7 +145,7 @@ class MjcfModel:
     base_body: int = -1
     notes: list[str] = field(default_factory=list)
     actuators: tuple = ()
-    """The scene's actuators written as MuJoCo ``<general>`` actuators, in this order (E52)."""
+    """The scene's actuators written as MuJoCo ``<general>`` actuators, in this order (E55)."""
     gravcomp_in_bodies: bool = False
     """The scene's gravcomp written as the bodies' own ``gravcomp`` (MuJoCo's ``qfrc_passive``), not as loads."""
 
@@ -433,7 +433,7 @@ def route1_armature(tree) -> tuple[np.ndarray, list[str]]:
 
 def _actuator_lines(actuators) -> list[str]:
     """The scene's actuators (:mod:`urdf2links.scenes.actuators`) as MuJoCo ``general`` actuators on their
-    coordinates' joints: dynamics none, gain fixed, bias affine, the gear, and both clamps when given (E52)."""
+    coordinates' joints: dynamics none, gain fixed, bias affine, the gear, and both clamps when given (E55)."""
     if not actuators:
         return []
     out = ["  <actuator>"]
@@ -482,7 +482,7 @@ def _document(model, body_lines, g, springs, timestep, integrator, actuators=(),
             + ("" if has_spring else ", spring") + ("" if has_damper else ", damper")
             + "; armature " + ("the model's (E49)" if model.tree.has_armature else "0")
             + f"; no geoms; integrator {integrator}, timestep {timestep:g} s"
-            + (f"; {len(actuators)} general actuator(s) on their coordinates' joints (MuJoCo's law, E52)" if actuators
+            + (f"; {len(actuators)} general actuator(s) on their coordinates' joints (MuJoCo's law, E55)" if actuators
                else ""))
     return xml, note
 

@@ -510,7 +510,7 @@ def _ball_servos(H, I, F, t, qfrc):
     (whose joints carry no such actuator): the project's state from MuJoCo's (hinges and slides as they
     are; a ball's quaternion to its ZYX angles by (E7), on the branch of the angles within pi of their
     reference ``ball_ref`` (their initial value), and its rates ``E(phi)^-1 omega``, E43), the project's
-    law there (:func:`urdf2links.scenes.scene_kernels._actuators`, E52), and the torques ``tau`` of the
+    law there (:func:`urdf2links.scenes.scene_kernels._actuators`, E55), and the torques ``tau`` of the
     angles applied as MuJoCo's generalized forces ``f = E^-T tau`` (``tau = E^T f``: the same power,
     E50); a free joint's translations as they are."""
     SI = carray(_voidptr(H[P_SI]), H[N_SI], np.int64)

@@ -101,7 +101,7 @@ def _carried(plan, a):
 
 def _edit(actuators, gravcomp: dict, notes: list[str]):
     """An ``MjSpec`` edit: the scene's own actuators (not the file's) added on their joints, as route 1
-    writes them (``general``: dynamics none, gain fixed, bias affine, E52), and the scene's gravcomp on the
+    writes them (``general``: dynamics none, gain fixed, bias affine, E55), and the scene's gravcomp on the
     bodies (MuJoCo counts the bodies with gravcomp when it compiles: ``ngravcomp``; a gravcomp set
     afterwards on a model compiled without any would not act)."""
     import mujoco

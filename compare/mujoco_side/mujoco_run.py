@@ -346,7 +346,7 @@ def run_mujoco(mj: MjcfModel, scene=None, *, q0=None, qd0=None, t_end: float | N
     ctrl : callable ``t -> (nu,)``: the actuators' controls (``d.ctrl``; MuJoCo applies its own law).
     inputs : ``"compiled"`` (the scene's inputs from the compiled callback) or ``"python"`` (the
         Python callback). Inputs given as callables (``base``, ``torques``, ``loads``, ``ctrl``) always run
-        the Python callback (``notes`` says so). A scene's computed torque (E54) is the project's, applied
+        the Python callback (``notes`` says so). A scene's computed torque (E57) is the project's, applied
         through ``qfrc_applied`` at every stage (:mod:`urdf2links.compare.mujoco_side.mujoco_inputs`).
     """
     start = _time.perf_counter()

@@ -239,7 +239,7 @@ def _compile(text: str, source: str, floating_base: bool, notes: list[str], actu
 def _add_actuators(spec, actuators) -> None:
     """A scene's actuators added to MuJoCo's import as ``general`` actuators on the URDF joints of their
     coordinates (the coordinates of revolute and prismatic joints are those joints' positions), as route 1
-    writes them (E52)."""
+    writes them (E55)."""
     for a in actuators:
         kw = dict(name=a.name, target=a.coordinate, trntype=mujoco.mjtTrn.mjTRN_JOINT,
                   dyntype=mujoco.mjtDyn.mjDYN_NONE, gaintype=mujoco.mjtGain.mjGAIN_FIXED,

@@ -155,7 +155,7 @@ def _terms_section(s, light=False) -> list[str]:
                      f"<code>{r2['max_rel_error_damping']:.2e}</code> (included in route 2's max).</p>")
     acts = [(tag, r["actuators"]) for tag, r in (("route 1", r1), ("route 2", r2)) if r.get("actuators")]
     if acts:
-        parts.append("<p>The actuators' generalized forces too (MuJoCo's law, E52): the project's against MuJoCo's "
+        parts.append("<p>The actuators' generalized forces too (MuJoCo's law, E55): the project's against MuJoCo's "
                      "<code>qfrc_actuator</code> with <code>d.ctrl</code> at the same time, at seeded states "
                      "(included in each route's max): "
                      + "; ".join(f"{tag} " + (f"<code>{a['max_rel_error_actuator']:.2e}</code>" if "max_rel_error_actuator"

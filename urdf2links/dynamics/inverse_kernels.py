@@ -1,10 +1,10 @@
-"""Inverse dynamics compiled (numba): ``tau = A q'' + e + G - Q`` in one O(n) pass (docs/equations.md (E51)).
+"""Inverse dynamics compiled (numba): ``tau = A q'' + e + G - Q`` in one O(n) pass (docs/equations.md (E54)).
 
 The recursive form of :mod:`urdf2links.dynamics.kernels` evaluates ``e + G`` as the pairing of each
 coordinate's unit twist with the subtree's inertial wrench (E34), the wrench of the accelerations
 at ``q'' = 0``. Propagating the *whole* accelerations instead -- each coordinate factor adds
 ``s_i q_i''`` besides ``(V x s_i) q_i'`` (E33) -- gives, by the same pairing, ``A q'' + e + G``
-(E51): the point accelerations become ``a_0(r) + sum_l u_l(r) q_l''`` and
+(E54): the point accelerations become ``a_0(r) + sum_l u_l(r) q_l''`` and
 ``int u_i . u_l dm = a_il`` (E31). So one root-to-leaves pass (:func:`kinematics_acc`) and one
 leaves-to-root pass (:func:`~urdf2links.dynamics.kernels.dynamics` without ``A``) give ``tau``;
 loads give ``Q`` in the same pass (E36). The armature (E49): a ball link's term in
@@ -113,7 +113,7 @@ def inverse_size(nt: int) -> int:
 
 @njit(cache=True)
 def id_row(TI, TF, W, X, q, qd, qdd, base, has_base, gx, gy, gz, loads, C, d, coupled, out):
-    """``tau = A q'' + e + G - Q`` (E51) into ``out`` (n,) at the model state ``(q, q', q'')``: ``base``
+    """``tau = A q'' + e + G - Q`` (E54) into ``out`` (n,) at the model state ``(q, q', q'')``: ``base``
     (18,) when ``has_base``, gravity ``g``, ``loads`` (k, 11) as for
     :func:`~urdf2links.dynamics.model_kernels.terms_row`, coupled coordinates ``q_tree = C q + d``
     (then ``tau = C^T tau_tree`` at ``C q'``, ``C q''``, E42; ``X`` holds those, 3 n_tree)."""

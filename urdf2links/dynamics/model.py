@@ -357,13 +357,13 @@ class Model:
     def inverse_dynamics(self, q, qd, qdd, *, t=0.0, base=None, loads: Iterable[Wrench] = (), gravity: bool = True,
                          method: str = "recursive") -> np.ndarray:
         """tau (n,), or (B, n) for a batch: the generalized forces that give the state ``(q, q')`` the
-        accelerations ``q''``, ``tau = A q'' + e + G - Q`` (E51), the inverse of :meth:`forward_dynamics`
+        accelerations ``q''``, ``tau = A q'' + e + G - Q`` (E54), the inverse of :meth:`forward_dynamics`
         (``forward_dynamics(q, qd, tau, loads=...)`` returns ``qdd``).
 
         Sign convention: ``loads`` (applied wrenches, the same for every row) act on the robot, so
         their generalized forces ``Q`` (E23) are subtracted: ``tau`` is what the joints must add to
         them. ``e`` includes the base terms of a moving ``base`` and the armature (E49);
-        ``gravity=False`` leaves ``G`` out. One compiled O(n) pass (E51) with ``method="recursive"``
+        ``gravity=False`` leaves ``G`` out. One compiled O(n) pass (E54) with ``method="recursive"``
         (batches: one compiled call, parallel over rows, equal to the per-state calls to the bit);
         ``"literal"`` and ``"numpy"`` evaluate ``A q'' + e + G - Q`` from the oracles' terms."""
         if base is None and not loads and self._C is None and method == "recursive":    # the hot path

@@ -1,4 +1,4 @@
-"""Actuators as scene effects: MuJoCo's actuator law, exactly (docs/equations.md (E52)).
+"""Actuators as scene effects: MuJoCo's actuator law, exactly (docs/equations.md (E55)).
 
 A scene's ``[[actuator]]`` block drives one coordinate through a joint transmission, with MuJoCo's
 ``general`` actuator (dynamics ``none``, gain ``fixed``, bias ``affine``) or one of its shortcuts::
@@ -100,7 +100,7 @@ class Actuator:
 
     def force(self, t, q, qd) -> float:
         """The actuator's scalar force ``f`` (after both clamps) at ``t`` for the coordinate's ``q``,
-        ``q'`` (E52)."""
+        ``q'`` (E55)."""
         c = float(self.ctrl(t))
         if self.ctrlrange is not None:
             c = min(max(c, self.ctrlrange[0]), self.ctrlrange[1])
@@ -283,7 +283,7 @@ def resolve_actuators(specs, model, *, where="<scene>") -> ActuatorSet:
 
 
 def actuator_forces(actuators, t, q, qd, n) -> np.ndarray:
-    """The actuators' generalized forces (n,) at ``t``, ``q``, ``qd`` (E52), in numpy: the oracle of the
+    """The actuators' generalized forces (n,) at ``t``, ``q``, ``qd`` (E55), in numpy: the oracle of the
     compiled right-hand side."""
     tau = np.zeros(n)
     for a in actuators:
@@ -293,7 +293,7 @@ def actuator_forces(actuators, t, q, qd, n) -> np.ndarray:
 
 def hold_actuators(model, q0, *, bandwidth: float = HOLD_BANDWIDTH_HZ) -> tuple[ActuatorSpec, ...]:
     """``--hold``: a position servo on every coordinate, ``ctrl = q0_i``, critically damped at
-    ``bandwidth`` Hz on its own inertia (E53): ``kp_i = A_ii (2 pi f)^2``, ``kv_i = 2 A_ii (2 pi f)``, with
+    ``bandwidth`` Hz on its own inertia (E56): ``kp_i = A_ii (2 pi f)^2``, ``kv_i = 2 A_ii (2 pi f)``, with
     ``A = A(q0)`` (armature included)."""
     if not (isinstance(bandwidth, (int, float)) and math.isfinite(bandwidth) and 0.0 < bandwidth <= 1e4):
         raise SceneError(f"--hold-bandwidth must be a frequency in (0, 1e4] Hz, got {bandwidth!r}")

@@ -17,9 +17,9 @@ damper          ``-c qd`` (dissipation D)                           a ``[[spring
                                                                     file's damping with ``[dampers]``
 gravcomp        ``-gravcomp m g`` at a body's COM (a constant load) ``[gravcomp]`` (MJCF ``from_file``,
                                                                     ``factor``, ``bodies``) and ``[gravity]``
-actuator        MuJoCo's actuator law (E52): ``gear (gain c +      ``[[actuator]]`` (or ``--hold``)
+actuator        MuJoCo's actuator law (E55): ``gear (gain c +      ``[[actuator]]`` (or ``--hold``)
                 b0 + b1 gear q + b2 gear q')``, both clamps
-computed_torque the scene's inverse dynamics at a reference (E54): ``[[computed_torque]]``
+computed_torque the scene's inverse dynamics at a reference (E57): ``[[computed_torque]]``
                 one more O(n) pass
 ==============  ==================================================  ==============================
 
@@ -100,7 +100,7 @@ class Plan:
 
     # -- the scene's inputs at a time --------------------------------------------------------------
     def actuator_forces(self, t, q, qd) -> np.ndarray:
-        """The actuators' generalized forces (n,) at ``t``, ``q``, ``qd`` (E52), in numpy."""
+        """The actuators' generalized forces (n,) at ``t``, ``q``, ``qd`` (E55), in numpy."""
         return actuator_forces(self.actuator_set.actuators, t, q, qd, self.n)
 
     def ctrl(self, t) -> np.ndarray:
@@ -112,7 +112,7 @@ class Plan:
         return np.array([float(f._at(t, order)) for f in self.reference_funcs])
 
     def computed_torque(self, t) -> np.ndarray:
-        """The computed torque (n,) at ``t`` (E54), compiled (:func:`urdf2links.scenes.scene_kernels.computed_torque`)."""
+        """The computed torque (n,) at ``t`` (E57), compiled (:func:`urdf2links.scenes.scene_kernels.computed_torque`)."""
         return self.rhs.computed_torque(t)
 
     def base_state(self, t) -> BaseState | None:

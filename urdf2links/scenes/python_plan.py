@@ -50,7 +50,7 @@ class PythonPlan:
 
     def generalized_forces(self, t, q, qd, kin=None, *, computed: bool = True) -> np.ndarray:
         """Everything on the right of (E24) but ``-G - e``: Q of loads, tau, springs, dampers, actuators
-        (E52) and, with ``computed``, the computed torque (E54). (n,)"""
+        (E55) and, with ``computed``, the computed torque (E57). (n,)"""
         plan, model = self.plan, self.model
         f = np.zeros(plan.n)
         if plan.loads:
@@ -71,7 +71,7 @@ class PythonPlan:
         return f
 
     def computed_torque(self, t) -> np.ndarray:
-        """The computed torque (E54) in numpy: ``A r'' + e + G`` from this twin's own terms at the
+        """The computed torque (E57) in numpy: ``A r'' + e + G`` from this twin's own terms at the
         reference ``(r, r', r'')`` minus every other force of the scene there (loads, torques, springs,
         dampers, actuators)."""
         plan, model = self.plan, self.model

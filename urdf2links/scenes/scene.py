@@ -44,14 +44,14 @@ not computed, see :mod:`urdf2links.scenes.plan`)::
     factor = 1.0                            # every body (URDF link or MJCF body) with mass
     bodies = { upper_arm_link = 0.5 }       # these bodies (after factor and from_file)
 
-    [[actuator]]                            # MuJoCo's actuator law (urdf2links.scenes.actuators, E52)
+    [[actuator]]                            # MuJoCo's actuator law (urdf2links.scenes.actuators, E55)
     coordinate = "elbow"; kind = "position" # motor | position | velocity | general
     kp = 300.0; kv = 30.0; gear = 1.0       # general: gainprm = [k], biasprm = [b0, b1, b2]
     ctrl = { sines = [[0.8, 1.0, 0.0]] }    # a function of time
     ctrlrange = [-2.0, 2.0]; forcerange = [-20.0, 20.0]   # optional clamps
     # name = "shoulder_motor"; ctrl = 0.3   # an MJCF robot's own actuator: the scene sets its ctrl
 
-    [[computed_torque]]                     # inverse dynamics of a reference (E54): q = reference exactly
+    [[computed_torque]]                     # inverse dynamics of a reference (E57): q = reference exactly
     coordinate = "elbow"                    # when the model matches; other coordinates held at [initial]
     reference = { sines = [[0.5, 0.5]] }
 

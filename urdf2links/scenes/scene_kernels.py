@@ -4,8 +4,8 @@
 (:mod:`urdf2links.scenes.scene_arrays`) next to the tree's (:mod:`urdf2links.dynamics.tree_arrays`), without
 Python, so the compiled integration loops (:mod:`urdf2links.integration.loops`) call it directly. It computes
 exactly the terms the plan lists: flags switch off the base (no base factors, no ``-dL/dt``), G (zero
-gravity), Q (no wrench is added), tau, springs, dampers, actuators (MuJoCo's law, E52) and the
-computed torque (the scene's inverse dynamics at its reference, E54, one more O(n) pass). Without coupled coordinates ``q''`` is
+gravity), Q (no wrench is added), tau, springs, dampers, actuators (MuJoCo's law, E55) and the
+computed torque (the scene's inverse dynamics at its reference, E57, one more O(n) pass). Without coupled coordinates ``q''`` is
 solved in place by the tree-sparse factorization (:mod:`urdf2links.dynamics.factor`, E47); with them, by a
 dense Cholesky of ``C^T A C`` (E46).
 """
@@ -157,7 +157,7 @@ def _apply_loads(SI, SF, I, W, t):
 
 @njit(cache=True)
 def _actuators(SI, SF, t, y, iy, f, jf):
-    """Every actuator's generalized force (E52) at ``t``, ``q = y[iy:iy + n]``, ``q' = y[iy + n:]`` added to
+    """Every actuator's generalized force (E55) at ``t``, ``q = y[iy:iy + n]``, ``q' = y[iy + n:]`` added to
     ``f[jf:]``: MuJoCo's order (``mj_fwdActuation``): ctrl clamped to ctrlrange, ``gain c + (b0 + b1 gear q
     + b2 gear q')``, clamped to forcerange, times the gear (the joint transmission's moment)."""
     n = SI[0]
@@ -229,9 +229,9 @@ def ct_torque_at(n, nt):
 
 @njit(cache=True)
 def computed_torque(t, I, F, W, SI, SF, X):
-    """The computed torque at ``t`` (E54) into ``X[ct_torque_at(n, nt):]`` (n,): the inverse dynamics of
+    """The computed torque at ``t`` (E57) into ``X[ct_torque_at(n, nt):]`` (n,): the inverse dynamics of
     the scene at its reference ``(r, r', r'')(t)`` (every coordinate's ``ct_fn``): ``A r'' + e + G - Q``
-    (E51; the scene's base and loads at ``t``) minus every other force the scene applies there (torques,
+    (E54; the scene's base and loads at ``t``) minus every other force the scene applies there (torques,
     dampers, actuators, springs), so that ``q = r`` solves the scene when it starts on it. Overwrites the
     tree's scratch ``W`` and the start of ``X``."""
     n, nt = SI[0], SI[1]

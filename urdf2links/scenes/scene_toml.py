@@ -112,7 +112,7 @@ def _actuator_lines(actuators) -> list[str]:
     """``[[actuator]]`` blocks of actuators whose ctrl is a constant (``--hold``'s servos, or a scene's)."""
     out = []
     for a in actuators:
-        out.append("[[actuator]]" + ("  # --hold: critically damped on A_ii at q0 (E53)" if a.source == "hold" else ""))
+        out.append("[[actuator]]" + ("  # --hold: critically damped on A_ii at q0 (E56)" if a.source == "hold" else ""))
         out.append(f"name = {_value(a.name)}")
         if a.coordinate is not None:
             out += [f"coordinate = {_value(a.coordinate)}", f"kind = {_value(a.kind)}"]
