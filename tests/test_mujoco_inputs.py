@@ -24,7 +24,8 @@ ROBOTS = shipped_robots_dir()
 
 
 def _driven(scene) -> bool:
-    return scene.base is not None or bool(scene.torques) or bool(scene.loads)
+    return scene.base is not None or bool(scene.torques) or bool(scene.loads) or bool(scene.actuators) \
+        or bool(scene.computed_torque)
 
 
 def shipped_driven_scenes():

@@ -125,7 +125,7 @@ def test_named_effects_are_computed(tmp_path, monkeypatch):
     plan = compile_plan(scene, scene.model())
     assert plan.terms == ("A", "e", "base", "G", "Q", "tau", "spring", "damper")
     text = plan.describe()
-    assert "not computed (the scene does not call for them): nothing" in text
+    assert "not computed (the scene does not call for them): actuator, computed_torque" in text   # (issue 26's effects)
     counts = {"G": 0, "Q": 0}
     for name, attr in (("G", "gravity"), ("Q", "generalized_forces")):
         original = getattr(recursive.RecursivePlan, attr)

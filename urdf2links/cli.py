@@ -17,7 +17,7 @@ import numpy as np
 from .dynamics.transforms import PARAMETERS
 from .errors import DescriptionError, DynamicsError, IntegrationError, SceneError
 from .scenes.limits import LimitExcursion
-from .scenes.scene_toml import load_options_of, scene_from_args, write_scene_option, xacro_args_of
+from .scenes.scene_toml import hold_of, load_options_of, scene_from_args, write_scene_option, xacro_args_of
 
 __all__ = ["main", "build_parser", "format_tree", "scene_from_args", "xacro_args_of", "write_scene_option"]
 
@@ -103,7 +103,8 @@ def _inspect(args) -> int:
     from .scenes.scene_toml import scene_or_robot, scene_toml
 
     if args.scene or str(args.file).endswith(".toml"):
-        scene = scene_or_robot(args.file, q0=args.q0, seed=args.seed, t_end=args.t_end, load=load_options_of(args))
+        scene = scene_or_robot(args.file, q0=args.q0, seed=args.seed, t_end=args.t_end, load=load_options_of(args),
+                               hold=hold_of(args))
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             model = scene.model()
@@ -309,6 +310,9 @@ def _add_default_scene_options(p, *, seed: bool = True, write_scene: bool = True
                    "seeded random within the joint limits (default zero)")
     if seed:
         g.add_argument("--seed", type=int, default=0, help="seed of --q0 random (default 0)")
+    g.add_argument("--hold", action="store_true", help="hold the robot at q0: a position servo on every coordinate, "
+                   "critically damped at --hold-bandwidth, gains from the mass matrix at q0 (both engines)")
+    g.add_argument("--hold-bandwidth", type=float, metavar="HZ", help="the servos' bandwidth with --hold (default 2 Hz)")
     if write_scene:
         g.add_argument("--write-scene", metavar="FILE.toml", help="also write the default scene to FILE.toml, to "
                        "edit and run by name")

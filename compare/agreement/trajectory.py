@@ -65,8 +65,10 @@ from urdf2links.errors import IntegrationError
 from urdf2links.integration.simulate import TIMED_REGION as PROJECT_REGION
 from urdf2links.integration.simulate import Trajectory, simulate, warm_up
 from urdf2links.parsers.robot_file import is_mjcf_path
+from urdf2links.parsers.xacro_input import is_xacro_path
 from urdf2links.ranges import MAX_STEPS
 from urdf2links.scenes.limits import LimitExcursion
+from urdf2links.scenes.actuators import describe_actuator
 from urdf2links.scenes.plan import compile_plan
 from urdf2links.scenes.scene import Scene, load_scene, robot_label
 
@@ -74,6 +76,7 @@ from ..mujoco_side.mjcf import MjcfModel, mjcf_from_scene
 from ..mujoco_side.mujoco_mjcf import FILE_LABEL, file_route_inputs, file_terms, mujoco_from_mjcf, run_file
 from ..mujoco_side.mujoco_run import TIMED_REGION as MUJOCO_REGION
 from ..mujoco_side.mujoco_run import MujocoRun, energy_function, run_mujoco
+from .actuator_terms import file_actuators, merged, route1_actuators, route2_actuators
 from .scene_terms import ROUTE1_LABEL, route1_terms, route2_terms
 
 __all__ = [
@@ -273,6 +276,8 @@ class SceneComparison:
             "description": sc.description,
             "chaotic": bool(sc.chaotic),
             "effects": list(self.info["effects"]),
+            "actuators": [{"name": a.name, "coordinate": a.coordinate, "source": a.source, "law": describe_actuator(a)}
+                          for a in self.info.get("actuators", ())],
             "coordinates": list(self.coordinate_names),
             "route": ("route 2 (MuJoCo runs the MJCF file)" if self.info.get("trajectory_route") == FILE_LABEL
                       else "route 1 (the project's tree as MJCF)"),
@@ -348,6 +353,12 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     else:
         route2 = route2_terms(scene, states=states, seed=seed, model=model)
     terms = {"route1": route1_terms(mj, model, scene, states=states, seed=seed), "route2": route2}
+    if plan.actuator_set.actuators:     # the actuators' forces at identical states, on both routes
+        terms["route1"] = merged(terms["route1"], route1_actuators(plan, mj, states=states, seed=seed))
+        act2 = (file_actuators(plan, mf, states=states, seed=seed) if mf is not None else
+                route2_actuators(plan, scene.robot, states=states, seed=seed) if not is_xacro_path(scene.robot)
+                else {"label": "route 2", "skipped": "a xacro robot: route 2's actuators are checked on URDF files"})
+        terms["route2"] = merged(terms["route2"], act2)
 
     meth = method or scene.run.method
     warm = warm_up(plan, methods=(meth,))
@@ -364,7 +375,7 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     if max_wall is not None and time.perf_counter() - start > max_wall:
         raise IntegrationError(f"{scene.path or scene.name}: max_wall={max_wall:g} s spent before MuJoCo's run")
     say(f"MuJoCo: {mujoco_integrator} dt {mujoco_dt:g}, {int(round(T / mujoco_dt))} steps")
-    file_run = mf is not None and not file_route_inputs(scene)
+    file_run = mf is not None and not file_route_inputs(scene, plan)
     if file_run:
         run = run_file(mf, plan, t_end=T, samples=samples, reference=traj.q if len(traj.q) == samples else None)
     else:
@@ -384,11 +395,12 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
         notes += ([f"route 2 (the MJCF file in MuJoCo): {x}" for x in mf.notes]
                   + [f"import: {x}" for x in model.info.get("notes", [])])
         if not file_run:
-            notes.append(f"the scene's {', '.join(file_route_inputs(scene))} are time-dependent inputs that the run of the "
+            notes.append(f"the scene's {', '.join(file_route_inputs(scene, plan))} are inputs that the run of the "
                          "MJCF file does not take yet: MuJoCo's trajectory is route 1's (the project's tree as MJCF)")
     q0, qd0 = scene.initial_state(model)
     info.update({"trajectory_route": FILE_LABEL if file_run else ROUTE1_LABEL,
                  "t_end": T, "t_end_note": t_end_note, "effects": plan.terms, "warm_up": warm,
+                 "actuators": plan.actuator_set.actuators,
                  "q0": dict(zip(model.coordinate_names, q0.tolist())),
                  "qd0": dict(zip(model.coordinate_names, qd0.tolist())),
                  "total_s": time.perf_counter() - start})
@@ -423,7 +435,16 @@ def _run_notes(scene, plan, mj, run, traj, t_end_note, *, resampled: bool) -> li
         notes.append(f"the project re-charted the ZYX angles of {sorted({r['link'] for r in traj.stats['recharts']})} "
                      f"{traj.stats['n_recharts']} times near phi_y = +-pi/2 (urdf2links.integration.charts); its q are converted "
                      "back to the loaded model's coordinates, which MuJoCo integrates as hinges through the singularity")
-    notes += [f"scene: {x}" for x in plan.spring_set.notes]
+    notes += [f"scene: {x}" for x in (*plan.spring_set.notes, *plan.actuator_set.notes)]
+    clamps = [a.name for a in plan.actuator_set.actuators if a.ctrlrange is not None or a.forcerange is not None]
+    if clamps:
+        notes.append(f"the clamps of {', '.join(clamps[:6])} (ctrlrange, forcerange) make the right-hand side non-smooth "
+                     "where they engage: both integrators lose order across those instants (the project's error estimate "
+                     "too); the difference shrinks with MuJoCo's step and the project's rtol")
+    if plan.reference_funcs:
+        notes.append("computed torque: MuJoCo's side applies the project's own torque (the scene's inverse dynamics at "
+                     "the reference, E57) through qfrc_applied at every stage, evaluated by the compiled control callback; "
+                     "MuJoCo's mj_inverse is compared with the project's inverse dynamics in the tests (1e-10)")
     notes += [f"limits: {LimitExcursion(**x).text()} (urdf2links' trajectory)" for x in traj.stats["limit_excursions"]]
     return notes + [f"MJCF: {x}" for x in mj.notes] + [f"MuJoCo run: {x}" for x in run.notes]
 
@@ -446,7 +467,8 @@ def _project_at(traj, plan, t, T):
 def _energy_balances(scene, plan, mj, run, traj, EV_o, h_o, W) -> tuple[dict, dict]:
     """Both engines' balances ``h - h(0) - W`` (MuJoCo's without ``W`` when no work acts), the
     energy arrays for the report, and what the summary says about them."""
-    work_terms = any(term in plan.terms for term in ("Q", "tau", "damper", "base", "gravcomp"))
+    work_terms = any(term in plan.terms for term in ("Q", "tau", "damper", "base", "gravcomp", "actuator",
+                                                   "computed_torque"))
     EV_m = run.total_energy
     if scene.base is not None:
         h_m = energy_function(mj, run, plan)
@@ -459,7 +481,8 @@ def _energy_balances(scene, plan, mj, run, traj, EV_o, h_o, W) -> tuple[dict, di
         bal_m = h_m - h_m[0] - W
         what = [w for w, on in (("forces/moments", "Q" in plan.terms), ("joint torques", "tau" in plan.terms),
                                 ("dampers", "damper" in plan.terms), ("the moving base", "base" in plan.terms),
-                                ("gravcomp", "gravcomp" in plan.terms)) if on]
+                                ("gravcomp", "gravcomp" in plan.terms), ("actuators", "actuator" in plan.terms),
+                                ("the computed torque", "computed_torque" in plan.terms)) if on]
         note = (f"work terms present ({', '.join(what)}): both drifts use the project's work W "
                 f"(integrated along the project's trajectory): max |{sym} - {sym}(0) - W|")
         if scene.base is not None:

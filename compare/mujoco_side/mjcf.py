@@ -63,6 +63,7 @@ It has a small mass (``BASE_MASS_FRACTION`` of the robot's); its motion is presc
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from typing import Iterable
@@ -85,6 +86,7 @@ __all__ = [
     "TINY_MASS_FRACTION",
     "BASE_MASS_FRACTION",
     "route1_armature",
+    "body_gravcomp",
 ]
 
 
@@ -142,6 +144,10 @@ class MjcfModel:
     tiny_mass_links: tuple[str, ...] = ()
     base_body: int = -1
     notes: list[str] = field(default_factory=list)
+    actuators: tuple = ()
+    """The scene's actuators written as MuJoCo ``<general>`` actuators, in this order (E55)."""
+    gravcomp_in_bodies: bool = False
+    """The scene's gravcomp written as the bodies' own ``gravcomp`` (MuJoCo's ``qfrc_passive``), not as loads."""
 
     @property
     def n(self) -> int:
@@ -336,6 +342,7 @@ class _Bodies:
         self.notes: list[str] = []
         self.lines: list[str] = []
         self.armature, self.ball_armature = route1_armature(self.tree)
+        self.gravcomp: dict[int, float] = {}       # tree link -> its body's gravcomp
 
     def chain_of(self, p: int) -> list[int]:
         """Links whose factors make the body of non-folded link p, top first."""
@@ -365,7 +372,8 @@ class _Bodies:
         if bname != tree.link_names[p]:
             self.notes.append(f"link {tree.link_names[p]!r} is MuJoCo body {bname!r} (name taken)")
         self.body_name_of[p] = bname
-        lines.append(f'{indent}<body name={quoteattr(bname)} pos="{_vec(M[:3, 3])}" quat="{_vec(_quat(M[:3, :3]))}">')
+        gc = f' gravcomp="{_num(self.gravcomp[p])}"' if self.gravcomp.get(p) else ""
+        lines.append(f'{indent}<body name={quoteattr(bname)} pos="{_vec(M[:3, 3])}" quat="{_vec(_quat(M[:3, :3]))}"{gc}>')
         ind = indent + "  "
         if not self.massless[p]:
             m, com, I = inertial_from_pseudo(tree.H[p])
@@ -423,9 +431,32 @@ def route1_armature(tree) -> tuple[np.ndarray, list[str]]:
     return arm, balls
 
 
-def _document(model, body_lines, g, springs, timestep, integrator) -> tuple[str, str]:
-    """The whole MJCF text around the bodies (only the scene's physics enabled) and its note."""
-    has_spring = any(s.stiffness > 0 for s in springs)
+def _actuator_lines(actuators) -> list[str]:
+    """The scene's actuators (:mod:`urdf2links.scenes.actuators`) as MuJoCo ``general`` actuators on their
+    coordinates' joints: dynamics none, gain fixed, bias affine, the gear, and both clamps when given (E55)."""
+    if not actuators:
+        return []
+    out = ["  <actuator>"]
+    for a in actuators:
+        rng = ""
+        if a.ctrlrange is not None:
+            rng += f' ctrllimited="true" ctrlrange="{_vec(a.ctrlrange)}"'
+        else:
+            rng += ' ctrllimited="false"'
+        if a.forcerange is not None:
+            rng += f' forcelimited="true" forcerange="{_vec(a.forcerange)}"'
+        else:
+            rng += ' forcelimited="false"'
+        out.append(f'    <general name={quoteattr(a.name)} joint={quoteattr(a.coordinate)} dyntype="none" gaintype="fixed" '
+                   f'biastype="affine" gainprm="{_num(a.gain)}" biasprm="{_vec(a.bias)}" gear="{_num(a.gear)}"{rng}/>')
+    return out + ["  </actuator>"]
+
+
+def _document(model, body_lines, g, springs, timestep, integrator, actuators=(), gravcomp=False) -> tuple[str, str]:
+    """The whole MJCF text around the bodies (only the scene's physics enabled) and its note. With
+    ``gravcomp`` the spring flag stays on (every stiffness 0): MuJoCo's ``mj_passive``, which applies body
+    gravcomp, does nothing when springs and dampers are both disabled."""
+    has_spring = any(s.stiffness > 0 for s in springs) or gravcomp
     has_damper = any(s.damping > 0 for s in springs)
     flags = ['contact="disable"', 'limit="disable"', 'equality="disable"', 'frictionloss="disable"']
     if not has_spring:
@@ -445,12 +476,14 @@ def _document(model, body_lines, g, springs, timestep, integrator) -> tuple[str,
         "  </default>",
         "  <worldbody>",
     ]
-    xml = "\n".join(head + body_lines + ["  </worldbody>", "</mujoco>", ""])
+    xml = "\n".join(head + body_lines + ["  </worldbody>"] + _actuator_lines(actuators) + ["</mujoco>", ""])
     note = ("gravity " + ("off (0 0 0)" if g is None else f"{g.tolist()} m/s^2")
             + "; disabled: contact, limit, equality, frictionloss"
             + ("" if has_spring else ", spring") + ("" if has_damper else ", damper")
             + "; armature " + ("the model's (E49)" if model.tree.has_armature else "0")
-            + f"; no geoms; integrator {integrator}, timestep {timestep:g} s")
+            + f"; no geoms; integrator {integrator}, timestep {timestep:g} s"
+            + (f"; {len(actuators)} general actuator(s) on their coordinates' joints (MuJoCo's law, E55)" if actuators
+               else ""))
     return xml, note
 
 
@@ -518,7 +551,8 @@ def _fold_notes(tree, folded, too_many, tiny_links, tiny) -> list[str]:
 
 
 def mjcf_from_model(model, *, gravity=None, springs: Iterable = (), moving_base: bool = False,
-                    timestep: float = 1e-4, integrator: str = "RK4") -> MjcfModel:
+                    timestep: float = 1e-4, integrator: str = "RK4", actuators: Iterable = (),
+                    gravcomp: dict | None = None) -> MjcfModel:
     """The project's tree of ``model`` as an MJCF model compiled by MuJoCo (see module doc).
 
     Parameters
@@ -530,6 +564,9 @@ def mjcf_from_model(model, *, gravity=None, springs: Iterable = (), moving_base:
         only when some stiffness (damping) is positive.
     moving_base : add the ``base_A`` body carrying the six base parameters as joints.
     timestep, integrator : MuJoCo's ``<option>``; integrator one of :data:`INTEGRATORS`.
+    actuators : resolved actuators (:class:`urdf2links.scenes.actuators.Actuator`), written as ``<general>``
+        on their coordinates' joints, in order (MuJoCo's actuator ``k`` is ``actuators[k]``).
+    gravcomp : ``{tree link index: factor}`` written as the bodies' ``gravcomp`` (:func:`body_gravcomp`).
     """
     massless, check_notes = _check_model(model, integrator, timestep, moving_base)
     tree = model.tree
@@ -540,6 +577,11 @@ def mjcf_from_model(model, *, gravity=None, springs: Iterable = (), moving_base:
     folded, too_many = _fold(tree, massless)
     tiny = TINY_MASS_FRACTION * max(total_mass, 1.0)
     bodies = _Bodies(model, names, _spring_map(names, springs), folded, massless, tiny)
+    bodies.gravcomp = dict(gravcomp or {})
+    actuators = tuple(actuators)
+    for a in actuators:
+        if a.coordinate not in names:
+            raise KeyError(f"actuator {a.name!r} on unknown coordinate {a.coordinate!r}; coordinates are {list(names)}")
     base_joint_names: tuple[str, ...] = ()
     notes = bodies.notes
     bname = None
@@ -560,13 +602,14 @@ def mjcf_from_model(model, *, gravity=None, springs: Iterable = (), moving_base:
         notes.append("armature of the three angles of " + ", ".join(bodies.ball_armature) + " (on their angular "
                      "velocity, E49) left out: route 1 writes them as three hinges, where it has no equivalent; "
                      "route 1's terms are compared without it")
-    xml, note = _document(model, bodies.lines, g, springs, timestep, integrator)
+    xml, note = _document(model, bodies.lines, g, springs, timestep, integrator, actuators, bool(gravcomp))
     notes.append(note)
     try:
         mm = mujoco.MjModel.from_xml_string(xml)
     except ValueError as err:
         raise MjcfRefused(model.name, str(err).strip()) from None
-    return _compiled(mm, xml, model, names, base_joint_names, bname, bodies, folded, g, springs, notes)
+    out = _compiled(mm, xml, model, names, base_joint_names, bname, bodies, folded, g, springs, notes)
+    return dataclasses.replace(out, actuators=actuators, gravcomp_in_bodies=bool(gravcomp))
 
 
 def _compiled(mm, xml, model, names, base_joint_names, bname, bodies, folded, g, springs, notes) -> MjcfModel:
@@ -611,8 +654,42 @@ def mjcf_from_scene(scene, model, *, timestep: float | None = None, integrator: 
     the scene asks, :meth:`~urdf2links.scenes.scene.Scene.springs_for`) and base; ``timestep`` defaults to
     the scene's ``run.dt`` (else 1e-4 s), ``integrator`` to RK4 when the scene names none of
     MuJoCo's."""
+    from urdf2links.scenes.actuators import resolve_actuators
+
     scene.check_names(model)
     dt = timestep if timestep is not None else (scene.run.dt or 1e-4)
     integ = integrator if integrator is not None else (scene.run.method if scene.run.method in INTEGRATORS else "RK4")
-    return mjcf_from_model(model, gravity=scene.gravity, springs=scene.springs_for(model).springs,
-                           moving_base=scene.base is not None, timestep=dt, integrator=integ)
+    actuators = resolve_actuators(scene.actuators, model, where=str(scene.path or scene.name)).actuators
+    gravcomp, note = body_gravcomp(model, scene.gravcomp_table(model) if scene.gravity is not None else {})
+    mj = mjcf_from_model(model, gravity=scene.gravity, springs=scene.springs_for(model).springs,
+                         moving_base=scene.base is not None, timestep=dt, integrator=integ, actuators=actuators,
+                         gravcomp=gravcomp)
+    if note:
+        mj.notes.append(note)
+    return mj
+
+
+def body_gravcomp(model, table: dict) -> tuple[dict, str | None]:
+    """``({tree link index: factor}, note)``: a scene's gravcomp (``{body: factor}``, URDF links or MJCF
+    bodies) as route 1's bodies' own ``gravcomp`` (MuJoCo applies ``-gravcomp m g`` at each body's COM
+    through ``qfrc_passive``). A route-1 body is a tree link, the union of the bodies folded into it: its
+    own gravcomp is exact when every body of it with mass has the same factor (the parallel forces then
+    sum to ``-f M g`` at the union's COM). Otherwise none is written (empty dict) and the note says the
+    scene's gravcomp is applied as loads through the control callback instead."""
+    if not table:
+        return {}, None
+    frame_of = model.info.get("frame_of") or {}
+    masses = model.info.get("body_mass_com", {})
+    index = {nm: i for i, nm in enumerate(model.tree.link_names)}
+    factors: dict[int, set] = {}
+    for body, (m, _) in masses.items():
+        if m > 0.0 and body in frame_of:
+            factors.setdefault(index[frame_of[body][0]], set()).add(float(table.get(body, 0.0)))
+    mixed = [model.tree.link_names[t] for t, f in factors.items() if len(f) > 1]
+    if mixed:
+        return {}, (f"gravcomp: the bodies folded into tree link(s) {', '.join(mixed[:6])} have different factors, "
+                    "which no single MuJoCo body gravcomp represents: route 1 applies the scene's gravcomp as loads "
+                    "(xfrc_applied from the control callback)")
+    out = {t: f.pop() for t, f in factors.items()}
+    return {t: f for t, f in out.items() if f != 0.0}, ("gravcomp written as the bodies' own gravcomp (MuJoCo's "
+                                                        "qfrc_passive, as body gravcomp acts in MuJoCo)")

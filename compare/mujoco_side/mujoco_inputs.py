@@ -23,8 +23,15 @@ Here the same steps are numba code (:func:`control`), installed as a C function 
   ``mjdata.h`` in order) laid out by ``ctypes`` and checked at run time against the bindings
   (the pointer fields at their derived offsets must hold the arrays' addresses, ``time`` a written
   sentinel): a disagreement refuses the run with :class:`LayoutError`;
-* MuJoCo's ``mj_fullM``, ``mj_applyFT`` and ``mj_jac``, called through their addresses in the
-  bundled ``libmujoco`` (the library the bindings loaded).
+* MuJoCo's ``mj_fullM``, ``mj_applyFT``, ``mj_jac`` and ``mj_fwdActuation``, called through their
+  addresses in the bundled ``libmujoco`` (the library the bindings loaded).
+
+Since issue 26 it also writes the actuators' controls into ``d->ctrl`` (MuJoCo then clamps them and
+applies its own law after the callback; with a prescribed base it calls ``mj_fwdActuation`` first, so that
+``qfrc_actuator`` is current), adds the scene's computed torque (the project's compiled
+:func:`urdf2links.scenes.scene_kernels.computed_torque`, on the project's own arrays, into
+``qfrc_applied``) and, for MuJoCo running an MJCF file (:meth:`CompiledInputs.for_file`), the scene's
+actuators on ball and free joints' ZYX angles (:func:`_ball_servos`).
 
 The callback finds its run through one process-wide header (:data:`HEADER`, int64 slots) whose
 address the compiled code takes from an external symbol registered with LLVM's linker, so the
@@ -51,7 +58,7 @@ from numba.extending import intrinsic
 from urdf2links.dynamics.factor import cholesky, cholesky_solve
 from urdf2links.integration.simulate import Compilation, record_compilation
 from urdf2links.scenes.scene_arrays import scene_view
-from urdf2links.scenes.scene_kernels import fn_data_eval
+from urdf2links.scenes.scene_kernels import _actuators, computed_torque, ct_torque_at, fn_data_eval
 
 __all__ = ["CompiledInputs", "LayoutError", "mjdata_offsets", "check_offsets", "callback_pointer", "control",
            "HEADER_FIELDS"]
@@ -198,6 +205,12 @@ def _call_applyFT(typingctx, fn, m, d, force, torque, point, body, target):
 
 
 @intrinsic
+def _call_fwdActuation(typingctx, fn, m, d):
+    """``mj_fwdActuation(m, d)`` at address ``fn``."""
+    return _signature(2), _codegen("pp")
+
+
+@intrinsic
 def _call_jac(typingctx, fn, m, d, jacp, jacr, point, body):
     """``mj_jac(m, d, jacp, jacr, point, body)`` at address ``fn``."""
     return _signature(6), _codegen("pppppi")
@@ -211,7 +224,8 @@ def _libmujoco_functions() -> dict[str, int]:
     if not libs:
         raise LayoutError(f"no libmujoco shared library next to {mujoco.__file__}")
     lib = ctypes.CDLL(libs[0])
-    return {name: ctypes.cast(getattr(lib, name), ctypes.c_void_p).value for name in ("mj_fullM", "mj_applyFT", "mj_jac")}
+    return {name: ctypes.cast(getattr(lib, name), ctypes.c_void_p).value
+            for name in ("mj_fullM", "mj_applyFT", "mj_jac", "mj_fwdActuation")}
 
 
 # --------------------------------------------------------------------------- the header
@@ -219,9 +233,10 @@ def _libmujoco_functions() -> dict[str, int]:
 #: The run's integer data (one int64 array), section by section: its start offsets are header slots
 #: (a section ends where the next one starts; the slot after the last holds the total).
 INT_SECTIONS = ("body_of", "parent", "coord_q", "host", "dof", "bdof", "moving", "base_fn", "torque_dof", "torque_fn",
-                "load_link", "load_kind", "load_local", "load_fn", "fn_kind", "fn_ptr")
+                "load_link", "load_kind", "load_local", "load_fn", "fn_kind", "fn_ptr", "act_fn", "act_ctrl", "ball",
+                "coord_qpos", "coord_dof")
 #: The run's float data (one float64 array), likewise; ``scratch`` is the callback's work space.
-FLOAT_SECTIONS = ("params", "load_X", "load_point", "fn_data", "scratch")
+FLOAT_SECTIONS = ("params", "load_X", "load_point", "fn_data", "scratch", "ball_ref", "ystate", "fball")
 #: Slots of :data:`HEADER` (int64): the run the callback acts on.
 HEADER_FIELDS = (
     "active", "data", "time_offset", "nv", "nq", "nbody", "n", "L", "base_body", "prescribe",
@@ -229,16 +244,23 @@ HEADER_FIELDS = (
     "fullM", "applyFT", "jac", "I", "F",
     *(f"i_{k}" for k in INT_SECTIONS), "i_end", *(f"f_{k}" for k in FLOAT_SECTIONS), "f_end",
     "calls", "error", "error_count",
+    # actuators' controls and the computed torque (issue 26): d->ctrl, and the project's compiled scene
+    "ctrl", "nctrl", "fwdActuation", "qvel", "ct", "pTI", "nTI", "pTF", "nTF", "pW", "nW", "pSI", "nSI", "pSF", "nSF", "pX", "nX",
 )
 _H = {name: k for k, name in enumerate(HEADER_FIELDS)}
 (ACTIVE, DATA, TIME_OFF, NV, NQ, NBODY, NR, NL, BASE_BODY, PRESCRIBE, QFRC_APPLIED, XFRC_APPLIED, XPOS, XMAT, XIPOS,
  QFRC_PASSIVE, QFRC_ACTUATOR, QFRC_BIAS, QPOS, FN_FULLM, FN_APPLYFT, FN_JAC, A_I, A_F) = range(24)
 (I_BODY_OF, I_PARENT, I_COORD_Q, I_HOST, I_DOF, I_BDOF, I_MOVING, I_BASE_FN, I_TORQUE_DOF, I_TORQUE_FN, I_LOAD_LINK,
- I_LOAD_KIND, I_LOAD_LOCAL, I_LOAD_FN, I_FN_KIND, I_FN_PTR, I_END) = range(24, 24 + len(INT_SECTIONS) + 1)
-(F_PARAMS, F_LOAD_X, F_LOAD_POINT, F_FN_DATA, F_SCRATCH, F_END) = range(I_END + 1, I_END + 1 + len(FLOAT_SECTIONS) + 1)
+ I_LOAD_KIND, I_LOAD_LOCAL, I_LOAD_FN, I_FN_KIND, I_FN_PTR, I_ACT_FN, I_ACT_CTRL, I_BALL, I_COORD_QPOS, I_COORD_DOF,
+ I_END) = range(24, 24 + len(INT_SECTIONS) + 1)
+(F_PARAMS, F_LOAD_X, F_LOAD_POINT, F_FN_DATA, F_SCRATCH, F_BALL_REF, F_YSTATE, F_FBALL, F_END) = range(
+    I_END + 1, I_END + 1 + len(FLOAT_SECTIONS) + 1)
 CALLS, ERROR, ERROR_COUNT = F_END + 1, F_END + 2, F_END + 3
+(CTRL, NCTRL, FN_FWDACT, QVEL, CT, P_TI, N_TI, P_TF, N_TF, P_W, N_W, P_SI, N_SI, P_SF, N_SF, P_X, N_X) = range(
+    ERROR_COUNT + 1, ERROR_COUNT + 18)
 NHEADER = len(HEADER_FIELDS)
 assert HEADER_FIELDS[A_F] == "F" and HEADER_FIELDS[I_END] == "i_end" and HEADER_FIELDS[ERROR_COUNT] == "error_count"
+assert HEADER_FIELDS[CTRL] == "ctrl" and HEADER_FIELDS[N_X] == "nX" and NHEADER == N_X + 1
 
 #: The process-wide header the callback reads. Its address reaches the compiled code as the
 #: external symbol :data:`HEADER_SYMBOL`, registered with LLVM's dynamic linker before the callback
@@ -466,9 +488,86 @@ def _prescribe_base(m, d, H, I, F, t, xfrc, qfrc):
 
 
 @njit(cache=True)
+def _computed_torque(H, I, t, qfrc):
+    """The project's computed torque at ``t`` (:func:`urdf2links.scenes.scene_kernels.computed_torque`, on
+    the project's own compiled scene and tree arrays, with scratch of its own) into ``qfrc_applied``."""
+    TI = carray(_voidptr(H[P_TI]), H[N_TI], np.int64)
+    TF = carray(_voidptr(H[P_TF]), H[N_TF], np.float64)
+    W = carray(_voidptr(H[P_W]), H[N_W], np.float64)
+    SI = carray(_voidptr(H[P_SI]), H[N_SI], np.int64)
+    SF = carray(_voidptr(H[P_SF]), H[N_SF], np.float64)
+    X = carray(_voidptr(H[P_X]), H[N_X], np.float64)
+    computed_torque(t, TI, TF, W, SI, SF, X)
+    xt = ct_torque_at(SI[0], SI[1])
+    dof = _int(H, I, I_DOF)
+    for i in range(SI[0]):
+        qfrc[dof[i]] += X[xt + i]
+
+
+@njit(cache=True)
+def _ball_servos(H, I, F, t, qfrc):
+    """The scene's actuators on the ZYX angles of ball and free joints, for MuJoCo running an MJCF file
+    (whose joints carry no such actuator): the project's state from MuJoCo's (hinges and slides as they
+    are; a ball's quaternion to its ZYX angles by (E7), on the branch of the angles within pi of their
+    reference ``ball_ref`` (their initial value), and its rates ``E(phi)^-1 omega``, E43), the project's
+    law there (:func:`urdf2links.scenes.scene_kernels._actuators`, E55), and the torques ``tau`` of the
+    angles applied as MuJoCo's generalized forces ``f = E^-T tau`` (``tau = E^T f``: the same power,
+    E50); a free joint's translations as they are."""
+    SI = carray(_voidptr(H[P_SI]), H[N_SI], np.int64)
+    SF = carray(_voidptr(H[P_SF]), H[N_SF], np.float64)
+    n = SI[0]
+    qpos = carray(_voidptr(H[QPOS]), H[NQ], np.float64)
+    qvel = carray(_voidptr(H[QVEL]), H[NV], np.float64)
+    y, f, ref = _float(H, F, F_YSTATE), _float(H, F, F_FBALL), _float(H, F, F_BALL_REF)
+    cq, cd = _int(H, I, I_COORD_QPOS), _int(H, I, I_COORD_DOF)
+    balls = _int(H, I, I_BALL)
+    for i in range(n):
+        y[i] = qpos[cq[i]] if cq[i] >= 0 else 0.0
+        y[n + i] = qvel[cd[i]] if cd[i] >= 0 else 0.0
+        f[i] = 0.0
+    nb = balls.size // 4
+    for b in range(nb):
+        kind, qa, da, c0 = balls[4 * b], balls[4 * b + 1], balls[4 * b + 2], balls[4 * b + 3]
+        off = 3 if kind == 1 else 0
+        for k in range(off):
+            y[c0 + k] = qpos[qa + k]
+            y[n + c0 + k] = qvel[da + k]
+        w, x, yq, z = qpos[qa + off], qpos[qa + off + 1], qpos[qa + off + 2], qpos[qa + off + 3]
+        s = 1.0 / np.sqrt(w * w + x * x + yq * yq + z * z)
+        w, x, yq, z = w * s, x * s, yq * s, z * s
+        r00, r01, r02 = 1 - 2 * (yq * yq + z * z), 2 * (x * yq - w * z), 2 * (x * z + w * yq)
+        r12, r22 = 2 * (yq * z - w * x), 1 - 2 * (x * x + yq * yq)
+        py = np.arctan2(r02, np.sqrt(r00 * r00 + r01 * r01))
+        px, pz = np.arctan2(-r12, r22), np.arctan2(-r01, r00)
+        px += 2 * np.pi * np.round((ref[3 * b] - px) / (2 * np.pi))
+        pz += 2 * np.pi * np.round((ref[3 * b + 2] - pz) / (2 * np.pi))
+        cy, sy, cz, sz = np.cos(py), np.sin(py), np.cos(pz), np.sin(pz)
+        o1, o2, o3 = qvel[da + off], qvel[da + off + 1], qvel[da + off + 2]
+        dx = (cz * o1 - sz * o2) / cy
+        c = c0 + off
+        y[c], y[c + 1], y[c + 2] = px, py, pz
+        y[n + c], y[n + c + 1], y[n + c + 2] = dx, sz * o1 + cz * o2, o3 - sy * dx
+    _actuators(SI, SF, t, y, 0, f, 0)
+    for b in range(nb):
+        kind, qa, da, c0 = balls[4 * b], balls[4 * b + 1], balls[4 * b + 2], balls[4 * b + 3]
+        off = 3 if kind == 1 else 0
+        for k in range(off):
+            qfrc[da + k] += f[c0 + k]
+        c = c0 + off
+        py, pz = y[c + 1], y[c + 2]
+        cy, sy, cz, sz = np.cos(py), np.sin(py), np.cos(pz), np.sin(pz)
+        u = (f[c] - sy * f[c + 2]) / cy
+        v = f[c + 1]
+        qfrc[da + off] += cz * u + sz * v
+        qfrc[da + off + 1] += -sz * u + cz * v
+        qfrc[da + off + 2] += f[c + 2]
+
+
+@njit(cache=True)
 def control(m, d, header_address):
     """The control callback's work for ``mjData* d`` (see the module doc): clear ``qfrc_applied``
-    and ``xfrc_applied``, then joint torques, loads and the prescribed base at ``d->time``."""
+    and ``xfrc_applied``, then joint torques, the actuators' controls (``d->ctrl``), the computed torque,
+    loads and the prescribed base at ``d->time``."""
     H = carray(_voidptr(header_address), NHEADER, np.int64)
     if H[ACTIVE] == 0 or H[DATA] != _address(d):
         return
@@ -487,9 +586,20 @@ def control(m, d, header_address):
     torque_dof, torque_fn = _int(H, I, I_TORQUE_DOF), _int(H, I, I_TORQUE_FN)
     for j in range(torque_dof.size):
         qfrc[torque_dof[j]] += _fn(H, I, F, torque_fn[j], t, 0)
+    act_fn, act_ctrl = _int(H, I, I_ACT_FN), _int(H, I, I_ACT_CTRL)
+    if act_fn.size:     # the actuators' controls: MuJoCo clamps them and applies its own law
+        ctrl = carray(_voidptr(H[CTRL]), H[NCTRL], np.float64)
+        for k in range(act_fn.size):
+            ctrl[act_ctrl[k]] = _fn(H, I, F, act_fn[k], t, 0)
+    if H[CT]:
+        _computed_torque(H, I, t, qfrc)
+    if _int(H, I, I_BALL).size:
+        _ball_servos(H, I, F, t, qfrc)
     if _int(H, I, I_LOAD_LINK).size:
         _apply_loads(m, d, H, I, F, t, xfrc, qfrc)
     if H[PRESCRIBE]:
+        if act_fn.size:     # qfrc_actuator of these controls (MuJoCo computes it after this callback)
+            _call_fwdActuation(H[FN_FWDACT], _address(m), _address(d))
         _prescribe_base(m, d, H, I, F, t, xfrc, qfrc)
 
 
@@ -528,20 +638,70 @@ class CompiledInputs:
                     moving[p, mj.dof_index[c]] = 1
             moving[p, mj.base_dofs] = 1
         dof = np.asarray(mj.dof_index, np.int64)
+        nl = len(plan.loads) - (plan.n_gravcomp if getattr(mj, "gravcomp_in_bodies", False) else 0)
         ints = {"body_of": mj.body_of_link, "parent": [int(tree.parent[p]) for p in range(L)], "coord_q": coord_q,
                 "host": mj.host_body, "dof": dof, "bdof": mj.base_dofs if mj.moving_base else np.zeros(6),
                 "moving": moving, "base_fn": sc.base_fn if sc.has_base else np.full(6, -1),
-                "torque_dof": dof[sc.torque_idx], "torque_fn": sc.torque_fn, "load_link": sc.load_link,
-                "load_kind": sc.load_kind, "load_local": sc.load_local, "load_fn": sc.load_fn,
-                "fn_kind": sc.fn_kind, "fn_ptr": sc.fn_ptr}
-        floats = {"params": np.asarray(tree.params, float), "load_X": sc.load_X, "load_point": sc.load_point,
-                  "fn_data": sc.fn_data, "scratch": np.zeros(6 * nv + _LOAD_SCRATCH + nv * nv + 2 * nv + 2 * n + 2 * n * n + 6)}
+                "torque_dof": dof[sc.torque_idx], "torque_fn": sc.torque_fn, "load_link": sc.load_link[:nl],
+                "load_kind": sc.load_kind[:nl], "load_local": sc.load_local[:nl], "load_fn": sc.load_fn[:nl],
+                "fn_kind": sc.fn_kind, "fn_ptr": sc.fn_ptr, "act_fn": sc.act_fn,
+                "act_ctrl": [int(m.actuator_ctrladr[k]) for k in range(len(sc.act_fn))], "ball": np.zeros(0),
+                "coord_qpos": np.zeros(0), "coord_dof": np.zeros(0)}
+        floats = {"params": np.asarray(tree.params, float), "load_X": sc.load_X[:nl], "load_point": sc.load_point[:nl],
+                  "fn_data": sc.fn_data, "scratch": np.zeros(6 * nv + _LOAD_SCRATCH + nv * nv + 2 * nv + 2 * n + 2 * n * n + 6),
+                  "ball_ref": np.zeros(0), "ystate": np.zeros(0), "fball": np.zeros(0)}
+        if len(sc.act_fn) != m.nu:
+            raise ValueError(f"the MJCF model has {m.nu} actuators, the scene {len(sc.act_fn)}: build it with mjcf_from_scene")
+        self._build(plan, m, d, ints, floats, offsets, extra={
+            "nv": nv, "nq": m.nq, "nbody": m.nbody, "n": n, "L": L, "base_body": mj.base_body,
+            "prescribe": int(mj.moving_base)})
+
+    @classmethod
+    def for_file(cls, plan, m: mujoco.MjModel, d: mujoco.MjData, actuator_ids):
+        """The inputs of MuJoCo running an MJCF file itself (:mod:`urdf2links.compare.mujoco_side.mujoco_mjcf`):
+        the actuators' controls, the scene's actuator ``k`` being MuJoCo's actuator ``actuator_ids[k]``, and
+        for ``-1`` (an actuator on a ball's or free joint's angles, which no MuJoCo joint actuator carries)
+        the project's law applied through ``qfrc_applied`` (:func:`_ball_servos`). No torques, loads, computed
+        torque or base: that route does not take them."""
+        self = cls.__new__(cls)
+        self.mj, self.plan, self.m, self.d = None, plan, m, d
+        offsets = mjdata_offsets(d)
+        sc = scene_view(plan.rhs.SI, plan.rhs.SF)
+        carried = [k for k, a in enumerate(actuator_ids) if a >= 0]
+        ints = {k: np.zeros(0) for k in INT_SECTIONS}
+        ints.update({"base_fn": np.full(6, -1), "bdof": np.zeros(6), "fn_kind": sc.fn_kind, "fn_ptr": sc.fn_ptr,
+                     "act_fn": sc.act_fn[carried], "act_ctrl": [int(m.actuator_ctrladr[actuator_ids[k]]) for k in carried]})
+        floats = {"params": np.zeros(0), "load_X": np.zeros(0), "load_point": np.zeros(0), "fn_data": sc.fn_data,
+                  "scratch": np.zeros(6 * m.nv + _LOAD_SCRATCH), "ball_ref": np.zeros(0), "ystate": np.zeros(0),
+                  "fball": np.zeros(0)}
+        if len(carried) < len(actuator_ids):
+            model = plan.model
+            qmap = model.info["mujoco"]
+            q0, _ = plan.scene.initial_state(model)
+            need = {a.index for k, a in enumerate(plan.actuator_set.actuators) if actuator_ids[k] < 0}
+            balls = [j for j in qmap.joints if j.kind in ("ball", "free") and need & set(j.coordinates)]
+            cq, cd = np.full(model.n, -1), np.full(model.n, -1)
+            for j in qmap.joints:
+                if j.kind in ("hinge", "slide"):
+                    cq[j.coordinates[0]], cd[j.coordinates[0]] = j.qposadr, j.dofadr
+            ints.update({"ball": [[int(j.kind == "free"), j.qposadr, j.dofadr, j.coordinates[0]] for j in balls],
+                         "coord_qpos": cq, "coord_dof": cd})
+            floats.update({"ball_ref": [q0[list(j.coordinates)[-3:]] for j in balls], "ystate": np.zeros(2 * model.n),
+                           "fball": np.zeros(model.n)})
+        self._build(plan, m, d, ints, floats, offsets, extra={"nv": m.nv, "nq": m.nq, "nbody": m.nbody, "n": 0,
+                                                                "L": 0, "base_body": -1, "prescribe": 0}, file=True)
+        return self
+
+    def _build(self, plan, m, d, ints, floats, offsets, *, extra: dict, file: bool = False):
+        """The packed arrays and the header of this run (``extra``: its sizes)."""
         self.I, i_at = _packed([ints[k] for k in INT_SECTIONS], np.int64)
         self.F, f_at = _packed([floats[k] for k in FLOAT_SECTIONS], np.float64)
         fns = _libmujoco_functions()
+        # the computed torque runs the project's compiled scene in the callback, with scratch of its own
+        ct = bool(plan.reference_funcs) and not file
+        self.arrays = plan.rhs.fresh_args() if ct or len(ints["ball"]) else ()
         values = {
-            "active": 0, "data": d._address, "time_offset": offsets["time"], "nv": nv, "nq": m.nq, "nbody": m.nbody,
-            "n": n, "L": L, "base_body": mj.base_body, "prescribe": int(mj.moving_base),
+            "active": 0, "data": d._address, "time_offset": offsets["time"], **extra,
             "qfrc_applied": d.qfrc_applied.ctypes.data, "xfrc_applied": d.xfrc_applied.ctypes.data,
             "xpos": d.xpos.ctypes.data, "xmat": d.xmat.ctypes.data, "xipos": d.xipos.ctypes.data,
             "qfrc_passive": d.qfrc_passive.ctypes.data, "qfrc_actuator": d.qfrc_actuator.ctypes.data,
@@ -550,8 +710,12 @@ class CompiledInputs:
             **{f"i_{k}": v for k, v in zip(INT_SECTIONS + ("end",), i_at)},
             **{f"f_{k}": v for k, v in zip(FLOAT_SECTIONS + ("end",), f_at)},
             "calls": 0, "error": 0, "error_count": 0,
+            "ctrl": d.ctrl.ctypes.data if d.ctrl.size else 0, "nctrl": int(d.ctrl.size), "ct": int(ct),
+            "fwdActuation": fns["mj_fwdActuation"], "qvel": d.qvel.ctypes.data,
         }
-        self.header = np.array([values[k] for k in HEADER_FIELDS], dtype=np.int64)
+        for key, arr in zip(("TI", "TF", "W", "SI", "SF", "X"), self.arrays):
+            values[f"p{key}"], values[f"n{key}"] = arr.ctypes.data, arr.size
+        self.header = np.array([values.get(k, 0) for k in HEADER_FIELDS], dtype=np.int64)
         self.compilation = Compilation()
         self.calls = 0
 
@@ -565,7 +729,7 @@ class CompiledInputs:
             raise FloatingPointError(
                 f"MuJoCo control callback: the robot's block of mj_fullM is not positive definite (Cholesky pivot "
                 f"{int(self.header[ERROR]) - 1}, {int(self.header[ERROR_COUNT])} time(s)) while prescribing the base "
-                f"of {self.mj.source.name!r}")
+                f"of {self.plan.model.name!r}")
 
 
 def _packed(parts, dtype) -> tuple[np.ndarray, list[int]]:

@@ -4,12 +4,15 @@ Route 2 is "MuJoCo's own reading of the robot file": for a URDF, MuJoCo's URDF i
 (:mod:`urdf2links.compare.mujoco_side.mujoco_urdf`); for an MJCF file, the file itself, compiled by
 MuJoCo (:func:`mujoco_from_mjcf`). What the scene does not name is switched off so that both engines
 run the same physics (:data:`urdf2links.parsers.mjcf_notes.MUJOCO_OFF`): contacts, every constraint
-(equality, limits, friction loss), actuation; tendons' stiffness and damping, fluid forces
-(density, viscosity, wind) set to 0. The joints' springs and dampers are the scene's
+(equality, limits, friction loss), actuation unless the scene names actuators (then the file's actuators
+it names keep their law, its own ``[[actuator]]`` blocks are added to the file's joints through
+``MjSpec``, the others get zero gain and bias, and the controls come from the compiled control callback,
+:meth:`~urdf2links.compare.mujoco_side.mujoco_inputs.CompiledInputs.for_file`); tendons' stiffness and
+damping, fluid forces (density, viscosity, wind) set to 0. The joints' springs and dampers are the scene's
 (:meth:`~urdf2links.scenes.scene.Scene.springs_for`: the file's own in the default scene) written into
 ``jnt_stiffness``, ``qpos_spring`` and ``dof_damping`` of hinges and slides (0 elsewhere, ball and
-free joints included); ``body_gravcomp`` is kept only with ``[gravcomp] from_file``; gravity is the
-scene's (0 without ``[gravity]``). The armature is the file's (part of the model's inertia, E49).
+free joints included); ``body_gravcomp`` is the scene's ``[gravcomp]`` (the file's own with
+``from_file``); gravity is the scene's (0 without ``[gravity]``). The armature is the file's (part of the model's inertia, E49).
 
 States go through the model's own map (:meth:`~urdf2links.dynamics.model.Model.to_mujoco`), so
 MuJoCo's terms are compared in the project's coordinates (:func:`file_terms`): ``A`` against
@@ -21,6 +24,7 @@ own run when given). MuJoCo is timed as in route 1: ``mj_step(m, d, nstep=k)`` f
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import math
 import time
@@ -32,8 +36,11 @@ import numpy as np
 from urdf2links.parsers.mjcf import compile_mjcf
 from urdf2links.parsers.mjcf_notes import MUJOCO_OFF
 
+from urdf2links.integration.simulate import Compilation
+
 from .mjcf import INTEGRATORS
-from .mujoco_run import _INTEGRATOR_ENUM, MujocoRun, _blow_ups, instability_note
+from .mujoco_inputs import CompiledInputs
+from .mujoco_run import _INTEGRATOR_ENUM, MujocoRun, _blow_ups, implicit_note, instability_note
 
 __all__ = ["MujocoFile", "mujoco_from_mjcf", "file_terms", "run_file", "FILE_LABEL", "file_route_inputs"]
 
@@ -51,6 +58,9 @@ class MujocoFile:
     path: str
     notes: list[str] = field(default_factory=list)
     moving_base: bool = False
+    actuator_ids: tuple = ()
+    """MuJoCo's actuator id of each of the plan's actuators (the scene's own added after the file's), -1 for
+    those on a ball's or free joint's angles (applied through the control callback); empty: no actuators."""
 
     @property
     def n(self) -> int:
@@ -61,26 +71,130 @@ class MujocoFile:
         return self.source.coordinate_names
 
 
-def file_route_inputs(scene) -> list[str]:
-    """What of ``scene`` route 2 for an MJCF file does not run (time-dependent inputs): empty when it runs it."""
-    return [w for w, on in (("[base]", scene.base is not None), ("[[force]]/[[moment]]", bool(scene.loads)),
-                            ("[[torque]]", bool(scene.torques))) if on]
+def file_route_inputs(scene, plan=None) -> list[str]:
+    """What of ``scene`` route 2 for an MJCF file does not run (time-dependent inputs, and with ``plan``
+    the scene actuators on a hinge or slide the file leaves unnamed, which ``MjSpec`` cannot address):
+    empty when it runs it. Actuators on a ball's or free joint's angles run through the control callback
+    (:meth:`~urdf2links.compare.mujoco_side.mujoco_inputs.CompiledInputs.for_file`)."""
+    out = [w for w, on in (("[base]", scene.base is not None), ("[[force]]/[[moment]]", bool(scene.loads)),
+                           ("[[torque]]", bool(scene.torques)), ("[[computed_torque]]", bool(scene.computed_torque)))
+           if on]
+    if plan is not None:
+        bad = [a.name for a in plan.actuator_set.actuators if _carried(plan, a) is False]
+        if bad:
+            out.append(f"actuators on joints the file leaves unnamed ({', '.join(bad[:4])}" + (", ..." if len(bad) > 4
+                                                                                            else "") + ")")
+    return out
+
+
+def _carried(plan, a):
+    """How MuJoCo's run of the file carries the scene's actuator ``a``: True as a MuJoCo actuator (the file's
+    own, or the scene's on a named hinge or slide), None through the callback (a ball's or free joint's
+    coordinate), False not at all (a hinge or slide without a name in the file)."""
+    if a.source == "file":
+        return True
+    joint = {c: j for j in plan.model.info["mujoco"].joints for c in j.coordinates}[a.index]
+    if joint.kind in ("ball", "free"):
+        return None
+    return joint.name == plan.model.coordinate_names[a.index] or False
+
+
+def _edit(actuators, gravcomp: dict, notes: list[str]):
+    """An ``MjSpec`` edit: the scene's own actuators (not the file's) added on their joints, as route 1
+    writes them (``general``: dynamics none, gain fixed, bias affine, E55), and the scene's gravcomp on the
+    bodies (MuJoCo counts the bodies with gravcomp when it compiles: ``ngravcomp``; a gravcomp set
+    afterwards on a model compiled without any would not act)."""
+    import mujoco
+
+    def edit(spec):
+        for body, f in gravcomp.items():
+            b = spec.body(body)
+            if b is None:
+                notes.append(f"gravcomp of body {body!r} not written (the file does not name it)")
+                continue
+            b.gravcomp = f
+        for a in actuators:
+            kw = dict(name=a.name, target=a.joint, trntype=mujoco.mjtTrn.mjTRN_JOINT,
+                      dyntype=mujoco.mjtDyn.mjDYN_NONE, gaintype=mujoco.mjtGain.mjGAIN_FIXED,
+                      biastype=mujoco.mjtBias.mjBIAS_AFFINE, gainprm=[a.gain] + [0.0] * 9,
+                      biasprm=list(a.bias) + [0.0] * 7, gear=[a.gear, 0, 0, 0, 0, 0],
+                      ctrllimited=int(a.ctrlrange is not None), forcelimited=int(a.forcerange is not None))
+            if a.ctrlrange is not None:
+                kw["ctrlrange"] = list(a.ctrlrange)
+            if a.forcerange is not None:
+                kw["forcerange"] = list(a.forcerange)
+            spec.add_actuator(**kw)
+    return edit
+
+
+def _actuation(m, acts, notes) -> list[int]:
+    """Actuation for the scene's actuators only: the file's actuators the scene names keep MuJoCo's own
+    law; the others get zero gain and bias (no force: one by one, since MuJoCo switches actuation off
+    only as a whole); actuator-level damping (MuJoCo 4's, a passive force the tree does not read) is
+    zeroed. Returns MuJoCo's actuator id of each of the plan's actuators, in the plan's order."""
+    import mujoco
+
+    names = {a.name for a in acts}
+    ids, off = [], []
+    for a in acts:
+        ids.append(mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, a.name))
+    for k in range(m.nu):
+        name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_ACTUATOR, k) or f"#{k}"
+        if name in names:
+            continue
+        off.append(name)
+        m.actuator_gainprm[k, :] = 0.0
+        m.actuator_biasprm[k, :] = 0.0
+        if int(m.actuator_gaintype[k]) in (int(mujoco.mjtGain.mjGAIN_MUSCLE), int(mujoco.mjtGain.mjGAIN_AFFINE)):
+            m.actuator_gaintype[k] = int(mujoco.mjtGain.mjGAIN_FIXED)
+        if int(m.actuator_biastype[k]) == int(mujoco.mjtBias.mjBIAS_MUSCLE):
+            m.actuator_biastype[k] = int(mujoco.mjtBias.mjBIAS_NONE)
+        m.actuator_forcelimited[k] = 0
+    if np.any(m.jnt_actfrclimited):
+        notes.append("joints' actuatorfrcrange switched off (a scene's forcerange says what saturates; the file's "
+                     "actuators on such joints are refused by name)")
+        m.jnt_actfrclimited[:] = 0
+    damping = np.ravel(getattr(m, "actuator_damping", np.zeros(0)))
+    if np.any(damping):
+        notes.append("actuator damping (MuJoCo's passive damping of an actuator's joint) set to 0: the tree reads "
+                     "joint damping only")
+        damping[:] = 0.0
+    if off:
+        notes.append(f"actuation on for the scene's {len(acts)} actuator(s); the file's actuators it does not name get "
+                     f"zero gain and bias: {', '.join(off[:8])}" + (f", ... ({len(off)} in all)" if len(off) > 8 else ""))
+    return ids
 
 
 def mujoco_from_mjcf(plan, *, timestep: float | None = None, integrator: str | None = None) -> MujocoFile:
     """The scene's MJCF robot compiled by MuJoCo with only the scene's effects (module doc)."""
     scene, model = plan.scene, plan.model
     notes: list[str] = []
-    m, where = compile_mjcf(str(scene.robot), notes)
+    acts = plan.actuator_set.actuators
+    if acts and any(w.startswith("actuators on") for w in file_route_inputs(scene, plan)):
+        notes.append("the scene's actuators are not all carried by the file's joints: this model runs without them "
+                     "(its terms only; the trajectory is route 1's)")
+        acts = ()
+    via_callback = [a for a in acts if _carried(plan, a) is None]
+    if via_callback:
+        notes.append(f"actuators on ball or free joints' angles ({', '.join(a.name for a in via_callback[:6])}"
+                     + (", ..." if len(via_callback) > 6 else "") + "): no MuJoCo joint actuator acts on ZYX angles; "
+                     "the project's law is applied through qfrc_applied from the control callback (f = E^-T tau, E50)")
+    carried_acts = [a for a in acts if _carried(plan, a)]
+    own = [a for a in carried_acts if a.source != "file"]
+    table = scene.gravcomp_table(model)
+    m, where = compile_mjcf(str(scene.robot), notes, edit=_edit(own, table, notes) if own or table else None)
     g = np.zeros(3) if scene.gravity is None else np.asarray(scene.gravity, float)
     m.opt.gravity[:] = g
-    for name in ("mjDSBL_GRAVITY", "mjDSBL_SPRING", "mjDSBL_DAMPER"):    # the scene says (the file's flags notwithstanding)
-        m.opt.disableflags &= ~int(getattr(mujoco.mjtDisableBit, name))
-    for name in MUJOCO_OFF:
+    for name in ("mjDSBL_GRAVITY", "mjDSBL_SPRING", "mjDSBL_DAMPER", "mjDSBL_ACTUATION", "mjDSBL_CLAMPCTRL"):
+        m.opt.disableflags &= ~int(getattr(mujoco.mjtDisableBit, name))    # the scene says (the file's flags notwithstanding)
+    off_flags = [n for n in MUJOCO_OFF if not (acts and n == "mjDSBL_ACTUATION")]
+    for name in off_flags:
         m.opt.disableflags |= int(getattr(mujoco.mjtDisableBit, name))
+    ids = dict(zip((a.name for a in carried_acts), _actuation(m, carried_acts, notes))) if acts else {}
+    actuator_ids = [ids.get(a.name, -1) for a in acts]
     springs = plan.spring_set.springs
-    if not any(s.stiffness > 0 for s in springs):
-        m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_SPRING)
+    if not any(s.stiffness > 0 for s in springs) and not table:     # MuJoCo's mj_passive skips gravcomp too
+        m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_SPRING)   # when springs and dampers are both off
     if not any(s.damping > 0 for s in springs):
         m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_DAMPER)
     m.jnt_stiffness[:] = 0.0
@@ -104,9 +218,14 @@ def mujoco_from_mjcf(plan, *, timestep: float | None = None, integrator: str | N
     fluid = [k for k in ("density", "viscosity") if getattr(m.opt, k) != 0.0] + (["wind"] if np.any(m.opt.wind) else [])
     m.opt.density, m.opt.viscosity = 0.0, 0.0
     m.opt.wind[:] = 0.0
-    if not scene.gravcomp and np.any(m.body_gravcomp):
-        m.body_gravcomp[:] = 0.0
-        notes.append("gravcomp set to 0 (the scene does not ask: [gravcomp] from_file = true)")
+    before = np.array(m.body_gravcomp)
+    for b in range(1, m.nbody):
+        m.body_gravcomp[b] = table.get(mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, b) or f"body{b}", 0.0)
+    if not np.array_equal(before, m.body_gravcomp):
+        notes.append("body gravcomp set to the scene's [gravcomp]" + ("" if table else " (none: the scene does not ask)"))
+    if table and np.any(m.jnt_actgravcomp) and not acts:
+        notes.append("joints with actuatorgravcomp: MuJoCo routes their gravcomp through actuation, which this run "
+                     "switches off (the scene names no actuator): MuJoCo applies no gravcomp on them, the project does")
     if timestep is not None:
         m.opt.timestep = float(timestep)
     if integrator is not None:
@@ -114,13 +233,13 @@ def mujoco_from_mjcf(plan, *, timestep: float | None = None, integrator: str | N
             raise ValueError(f"integrator must be one of {INTEGRATORS}, got {integrator!r}")
         m.opt.integrator = int(_INTEGRATOR_ENUM[integrator])
     notes.append(f"the file compiled by MuJoCo {mujoco.__version__}; gravity {g.tolist()}; disabled: "
-                 + ", ".join(n.removeprefix("mjDSBL_").lower() for n in MUJOCO_OFF)
+                 + ", ".join(n.removeprefix("mjDSBL_").lower() for n in off_flags)
                  + "; joint stiffness, springref and damping set to the scene's springs and dampers ("
                  + (", ".join(f"{s.coordinate}: k {s.stiffness:g} rest {s.rest:g} c {s.damping:g}" for s in springs)
                     or "none") + ")"
                  + (f"; {', '.join(changed)} set to 0" if changed else "")
                  + (f"; fluid {', '.join(fluid)} set to 0" if fluid else ""))
-    return MujocoFile(model=m, source=model, gravity=g, path=where, notes=notes)
+    return MujocoFile(model=m, source=model, gravity=g, path=where, notes=notes, actuator_ids=tuple(actuator_ids))
 
 
 def _rel(ours, theirs, floor: float = 0.0) -> float:
@@ -194,17 +313,22 @@ def run_file(mf: MujocoFile, plan, *, t_end: float, samples: int, reference=None
     S = len(ks)
     qpos, qvel, ts = np.empty((S, m.nq)), np.empty((S, m.nv)), np.empty(S)
     engine, done = 0.0, 0
-    for j in range(S):
-        k = int(ks[j])
-        if k > done:
-            t0 = time.perf_counter()
-            mujoco.mj_step(m, d, nstep=k - done)
-            engine += time.perf_counter() - t0
-            done = k
-        ts[j], qpos[j], qvel[j] = d.time, d.qpos, d.qvel
+    inputs = CompiledInputs.for_file(plan, m, d, mf.actuator_ids) if mf.actuator_ids else None
+    with (inputs.installed() if inputs is not None else contextlib.nullcontext()):
+        for j in range(S):
+            k = int(ks[j])
+            if k > done:
+                t0 = time.perf_counter()
+                mujoco.mj_step(m, d, nstep=k - done)
+                engine += time.perf_counter() - t0
+                done = k
+            ts[j], qpos[j], qvel[j] = d.time, d.qpos, d.qvel
     blow = _blow_ups(d)
     integ = mujoco.mjtIntegrator(int(m.opt.integrator)).name.removeprefix("mjINT_")
     integ = {"EULER": "Euler", "RK4": "RK4", "IMPLICIT": "implicit", "IMPLICITFAST": "implicitfast"}.get(integ, integ)
+    note = implicit_note(integ, m)
+    if note:
+        notes.append(note)
     if blow:
         notes.append(instability_note(blow, integ, dt))
         ts = ks * dt
@@ -227,4 +351,6 @@ def run_file(mf: MujocoFile, plan, *, t_end: float, samples: int, reference=None
         energy[j] = de.energy[1], de.energy[0]
     return MujocoRun(t=ts, q=q, qd=qd, energy=energy, base_tracking_error=0.0, wall_time=engine, nsteps=int(ks[-1]),
                      timestep=dt, integrator=integ, coordinate_names=model.coordinate_names, notes=notes,
-                     harness_time=time.perf_counter() - start, inputs="none", blow_ups=blow)
+                     harness_time=time.perf_counter() - start, inputs="none" if inputs is None else "compiled",
+                     callback_calls=0 if inputs is None else int(inputs.calls), blow_ups=blow,
+                     compilation=inputs.compilation if inputs is not None else Compilation())

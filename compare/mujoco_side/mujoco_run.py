@@ -69,7 +69,7 @@ from .mjcf import INTEGRATORS, MjcfModel
 from .mujoco_inputs import CompiledInputs
 
 __all__ = ["MujocoRun", "run_mujoco", "mujoco_accelerations", "robot_energy", "energy_function", "ENERGY_COLUMNS",
-           "PythonInputs", "INPUTS", "TIMED_REGION", "instability_note"]
+           "PythonInputs", "INPUTS", "TIMED_REGION", "instability_note", "implicit_note"]
 
 ENERGY_COLUMNS = ("kinetic", "potential")
 #: The implementations of the control callback (see the module doc).
@@ -153,8 +153,9 @@ class PythonInputs:
     doc). ``base``, ``torques``, ``loads``: callables of ``t`` (see :func:`run_mujoco`)."""
 
     def __init__(self, mj: MjcfModel, m: mujoco.MjModel, d: mujoco.MjData, *, base=None, torques=None,
-                 loads=None):
+                 loads=None, ctrl=None):
         self.mj, self.m, self.d = mj, m, d
+        self.ctrl = ctrl
         self.base = _as_base_fn(base)
         if self.base is not None and not mj.moving_base:
             raise ValueError("a base motion was given but the MJCF model has no base_A body: build it "
@@ -178,7 +179,7 @@ class PythonInputs:
             self._moving_dofs.append(np.array(sorted(dofs), dtype=np.int64))
         b, r = mj.base_dofs, mj.dof_index
         self._rr, self._rb, self._bb, self._br = np.ix_(r, r), np.ix_(r, b), np.ix_(b, b), np.ix_(b, r)
-        self.active = bool(self.base is not None or torques is not None or loads is not None)
+        self.active = bool(self.base is not None or torques is not None or loads is not None or ctrl is not None)
         self.calls = 0
 
     def __call__(self, m, d):
@@ -201,9 +202,13 @@ class PythonInputs:
             if tau.shape != (self.n,):
                 raise ValueError(f"torques(t) must return shape ({self.n},), got {tau.shape}")
             d.qfrc_applied[mj.dof_index] += tau
+        if self.ctrl is not None:
+            d.ctrl[:] = np.asarray(self.ctrl(t), float)
         if self.loads is not None:
             self._apply_loads(d, t)
         if self.base is not None:
+            if self.ctrl is not None:       # MuJoCo computes qfrc_actuator after this callback: now, for the base
+                mujoco.mj_fwdActuation(self.m, d)
             self._prescribe_base(d, t)
 
     def _apply_loads(self, d, t) -> None:
@@ -321,7 +326,7 @@ def robot_energy(mj: MjcfModel, m, d) -> tuple[float, float]:
 def run_mujoco(mj: MjcfModel, scene=None, *, q0=None, qd0=None, t_end: float | None = None,
                timestep: float | None = None, integrator: str | None = None, samples: int | None = None,
                base=None, torques: Callable | None = None, loads: Callable | None = None,
-               inputs: str = "compiled") -> MujocoRun:
+               inputs: str = "compiled", ctrl: Callable | None = None) -> MujocoRun:
     """Integrate the route-1 model in MuJoCo and sample the trajectory (see module doc).
 
     Parameters
@@ -338,19 +343,21 @@ def run_mujoco(mj: MjcfModel, scene=None, *, q0=None, qd0=None, t_end: float | N
     base : BaseState or callable ``t -> BaseState`` of {A}; needs ``moving_base=True``.
     torques : callable ``t -> (n,)`` generalized joint forces.
     loads : callable ``t -> iterable`` of Wrench or ``(tree link index, force, moment, point, frame)``.
+    ctrl : callable ``t -> (nu,)``: the actuators' controls (``d.ctrl``; MuJoCo applies its own law).
     inputs : ``"compiled"`` (the scene's inputs from the compiled callback) or ``"python"`` (the
-        Python callback). Inputs given as callables (``base``, ``torques``, ``loads``) always run
-        the Python callback (``notes`` says so).
+        Python callback). Inputs given as callables (``base``, ``torques``, ``loads``, ``ctrl``) always run
+        the Python callback (``notes`` says so). A scene's computed torque (E57) is the project's, applied
+        through ``qfrc_applied`` at every stage (:mod:`urdf2links.compare.mujoco_side.mujoco_inputs`).
     """
     start = _time.perf_counter()
     if inputs not in INPUTS:
         raise ValueError(f"inputs must be one of {INPUTS}, got {inputs!r}")
     notes: list[str] = []
-    explicit = base is not None or torques is not None or loads is not None
+    explicit = base is not None or torques is not None or loads is not None or ctrl is not None
     plan = None
     if scene is not None:
-        plan, q0, qd0, t_end, samples, base, torques, loads = _scene_inputs(mj, scene, q0, qd0, t_end, samples,
-                                                                            base, torques, loads)
+        plan, q0, qd0, t_end, samples, base, torques, loads, ctrl = _scene_inputs(mj, scene, q0, qd0, t_end, samples,
+                                                                                  base, torques, loads, ctrl)
     n = mj.n
     q0 = np.zeros(n) if q0 is None else np.asarray(q0, float)
     qd0 = np.zeros(n) if qd0 is None else np.asarray(qd0, float)
@@ -375,7 +382,10 @@ def run_mujoco(mj: MjcfModel, scene=None, *, q0=None, qd0=None, t_end: float | N
     if mj.moving_base and integ not in ("RK4",):
         notes.append(f"integrator {integ}: the prescribed base is exact only when nothing changes the "
                      "acceleration after the control callback (RK4; Euler without dampers)")
-    driver = _inputs(mj, m, d, plan, inputs, explicit, base_fn, torques, loads, notes)
+    note = implicit_note(integ, m)
+    if note:
+        notes.append(note)
+    driver = _inputs(mj, m, d, plan, inputs, explicit, base_fn, torques, loads, ctrl, notes)
     rec, wall = _stepping(m, d, driver, ks)
     blow_ups = _blow_ups(d)
     if blow_ups:
@@ -393,17 +403,36 @@ def run_mujoco(mj: MjcfModel, scene=None, *, q0=None, qd0=None, t_end: float | N
                      compilation=driver.compilation if isinstance(driver, CompiledInputs) else Compilation())
 
 
-def _inputs(mj, m, d, plan, inputs, explicit, base_fn, torques, loads, notes):
+def implicit_note(integ: str, m) -> str | None:
+    """What MuJoCo's integrator ``integ`` treats implicitly in model ``m``, when that makes its trajectory
+    another discretization than the explicit ODE both engines share (None for RK4, or when nothing is):
+    Euler takes joint damping (``dof_damping``) implicitly; implicitfast and implicit take the derivative
+    of every velocity-dependent force (damping, and the actuators' ``b2 gear^2`` and velocity gains;
+    implicit also the Coriolis terms). Their step then converges to the ODE at first order in dt."""
+    damped = bool(np.any(m.dof_damping > 0)) and not (m.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_DAMPER))
+    actuated = m.nu > 0 and not (m.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_ACTUATION))
+    vel = actuated and bool(np.any(m.actuator_biasprm[:, 2] != 0) or np.any(m.actuator_gainprm[:, 2] != 0))
+    if integ == "Euler" and damped:
+        return ("MuJoCo's Euler integrates joint damping implicitly ((M + dt D) qacc = f, mj_EulerSkip): a first-order "
+                "discretization of the same ODE, converging as dt shrinks; the actuators' velocity terms stay explicit")
+    if integ in ("implicit", "implicitfast") and (damped or vel):
+        what = ", ".join(w for w, on in (("joint damping", damped), ("the actuators' velocity feedback (kv)", vel)) if on)
+        return (f"MuJoCo's {integ} integrates {what} implicitly ((M - dt dF/dqvel) qacc = f): a first-order "
+                "discretization of the same ODE, converging as dt shrinks")
+    return None
+
+
+def _inputs(mj, m, d, plan, inputs, explicit, base_fn, torques, loads, ctrl, notes):
     """The run's control callback: None without inputs, the compiled one for a scene's inputs,
     else the Python one."""
-    if base_fn is None and torques is None and loads is None:
+    if base_fn is None and torques is None and loads is None and ctrl is None:
         return None
     if inputs == "compiled" and plan is not None and not explicit:
         return CompiledInputs(mj, plan, m, d)
     if inputs == "compiled":
         notes.append("inputs given as Python callables: MuJoCo is driven from the Python control callback at every "
                      "stage (its wall time includes that harness)")
-    return PythonInputs(mj, m, d, base=base_fn, torques=torques, loads=loads)
+    return PythonInputs(mj, m, d, base=base_fn, torques=torques, loads=loads, ctrl=ctrl)
 
 
 #: MuJoCo's warnings that its state blew up (it then resets the state: ``mj_checkPos/Vel/Acc``).
@@ -425,9 +454,10 @@ def instability_note(blow_ups: dict, integ: str, dt: float) -> str:
             f"inertias); a smaller --mujoco-dt or --mujoco-integrator implicit would tell")
 
 
-def _scene_inputs(mj, scene, q0, qd0, t_end, samples, base, torques, loads):
+def _scene_inputs(mj, scene, q0, qd0, t_end, samples, base, torques, loads, ctrl):
     """The scene's plan, and what the scene supplies where the caller gave nothing: initial state,
-    run length, samples, base motion, joint torques and loads (through the scene's plan)."""
+    run length, samples, base motion, joint torques (with the computed torque), loads (without the
+    gravcomp route 1 wrote into its bodies) and the actuators' controls (through the scene's plan)."""
     from urdf2links.scenes.plan import Plan, compile_plan
 
     plan = scene if isinstance(scene, Plan) else None     # a compiled run passed down is not compiled again
@@ -442,11 +472,14 @@ def _scene_inputs(mj, scene, q0, qd0, t_end, samples, base, torques, loads):
     samples = scene.run.samples if samples is None else samples
     if base is None and scene.base is not None:
         base = plan.base_state
-    if torques is None and plan.torque_funcs:
-        torques = plan.torques
-    if loads is None and plan.loads:
-        loads = plan.wrenches
-    return plan, q0, qd0, t_end, samples, base, torques, loads
+    if torques is None and (plan.torque_funcs or plan.reference_funcs):
+        torques = (lambda t: plan.torques(t) + plan.computed_torque(t)) if plan.reference_funcs else plan.torques
+    nl = len(plan.loads) - (plan.n_gravcomp if mj.gravcomp_in_bodies else 0)
+    if loads is None and nl:
+        loads = plan.wrenches if nl == len(plan.loads) else (lambda t: plan.wrenches(t)[:nl])
+    if ctrl is None and plan.actuator_set.actuators:
+        ctrl = plan.ctrl
+    return plan, q0, qd0, t_end, samples, base, torques, loads, ctrl
 
 
 def _configured(mj, timestep, integrator, *, energy: bool):
@@ -526,6 +559,8 @@ def _check_scene(mj: MjcfModel, scene) -> None:
         raise ValueError("the scene's springs are not the MJCF model's: build it with mjcf_from_scene")
     if (scene.base is not None) and not mj.moving_base:
         raise ValueError("the scene moves the base but the MJCF model has no base_A: build it with mjcf_from_scene")
+    if [a.name for a in mj.actuators] != [a.name for a in scene.actuators]:
+        raise ValueError("the scene's actuators are not the MJCF model's: build it with mjcf_from_scene")
 
 
 def energy_function(mj: MjcfModel, run: MujocoRun, plan) -> np.ndarray:

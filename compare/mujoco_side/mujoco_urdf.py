@@ -230,13 +230,30 @@ def _mujoco_warnings(notes: list[str]):
                     notes.append(f"MuJoCo said: {line.strip()}")
 
 
-def _compile(text: str, source: str, floating_base: bool, notes: list[str]):
+def _compile(text: str, source: str, floating_base: bool, notes: list[str], actuators=()):
     """Run MuJoCo's URDF reader and compiler (warnings go to ``notes``)."""
     with _mujoco_warnings(notes):
-        return _compile_quiet(text, source, floating_base, notes)
+        return _compile_quiet(text, source, floating_base, notes, actuators)
 
 
-def _compile_quiet(text: str, source: str, floating_base: bool, notes: list[str]):
+def _add_actuators(spec, actuators) -> None:
+    """A scene's actuators added to MuJoCo's import as ``general`` actuators on the URDF joints of their
+    coordinates (the coordinates of revolute and prismatic joints are those joints' positions), as route 1
+    writes them (E55)."""
+    for a in actuators:
+        kw = dict(name=a.name, target=a.coordinate, trntype=mujoco.mjtTrn.mjTRN_JOINT,
+                  dyntype=mujoco.mjtDyn.mjDYN_NONE, gaintype=mujoco.mjtGain.mjGAIN_FIXED,
+                  biastype=mujoco.mjtBias.mjBIAS_AFFINE, gainprm=[a.gain] + [0.0] * 9,
+                  biasprm=list(a.bias) + [0.0] * 7, gear=[a.gear, 0, 0, 0, 0, 0],
+                  ctrllimited=int(a.ctrlrange is not None), forcelimited=int(a.forcerange is not None))
+        if a.ctrlrange is not None:
+            kw["ctrlrange"] = list(a.ctrlrange)
+        if a.forcerange is not None:
+            kw["forcerange"] = list(a.forcerange)
+        spec.add_actuator(**kw)
+
+
+def _compile_quiet(text: str, source: str, floating_base: bool, notes: list[str], actuators=()):
     """Run MuJoCo's URDF reader and compiler; add a free joint if asked."""
     try:
         spec = mujoco.MjSpec.from_string(text)
@@ -263,6 +280,9 @@ def _compile_quiet(text: str, source: str, floating_base: bool, notes: list[str]
         root_body = body.name
         notes.append(f"floating base: free joint {free_name!r} added to root body "
                      f"{root_body!r} (MuJoCo adds none to a URDF)")
+    if actuators:
+        _add_actuators(spec, actuators)
+        notes.append(f"{len(actuators)} actuator(s) of the scene added as MuJoCo general actuators on their joints")
     try:
         model = spec.compile()
     except ValueError as err:
@@ -295,10 +315,11 @@ def _restrict_physics(model: mujoco.MjModel, gravity, notes: list[str], *, dampi
 
 def mujoco_from_urdf(path_or_text, *, strip_meshes: bool = True, fusestatic: bool = True,
                      gravity=(0.0, 0.0, -9.81), floating_base: bool = False,
-                     repair_urdf_text: str | None = None, damping: bool = False) -> MujocoURDF:
+                     repair_urdf_text: str | None = None, damping: bool = False, actuators=()) -> MujocoURDF:
     """Compile a URDF with MuJoCo's own importer, restricted to the dynamics we compare.
 
     ``damping``: keep the joint damping MuJoCo read from ``<dynamics damping>`` (module doc).
+    ``actuators``: a scene's resolved actuators, added as ``general`` actuators on their joints.
     ``path_or_text``: a file path, or URDF text (anything starting with ``<``).
     ``repair_urdf_text``: if given, this text (the project's repaired inertias) is loaded
     INSTEAD of the original; ``notes`` records it and whether the original loads.
@@ -321,7 +342,7 @@ def mujoco_from_urdf(path_or_text, *, strip_meshes: bool = True, fusestatic: boo
         source = f"{source} (repaired text)"
 
     new_text, links = _prepare(text, source, notes=notes, **prep)
-    model, free_name, root_body = _compile(new_text, source, floating_base, notes)
+    model, free_name, root_body = _compile(new_text, source, floating_base, notes, tuple(actuators))
 
     bodies = {model.body(i).name for i in range(model.nbody)}
     fused = [ln for ln in links if ln not in bodies]
@@ -334,6 +355,13 @@ def mujoco_from_urdf(path_or_text, *, strip_meshes: bool = True, fusestatic: boo
                      f"their parents: {', '.join(fused)}")
 
     _restrict_physics(model, gravity, notes, damping=damping)
+    if np.any(model.jnt_actfrclimited):     # MuJoCo reads each <limit effort> as the joint's actuatorfrcrange
+        names = [model.joint(j).name for j in np.flatnonzero(model.jnt_actfrclimited)]
+        model.jnt_actfrclimited[:] = 0
+        if actuators:
+            notes.append(f"the URDF's effort limits (MuJoCo's actuatorfrcrange on joints {', '.join(names[:6])}"
+                         + (", ..." if len(names) > 6 else "") + ") switched off: a scene's forcerange says what "
+                         "saturates, on both engines")
     if model.nv == 0:
         notes.append("the compiled model has no degrees of freedom (no moving joint; "
                      f"{len(links)} URDF link(s))")

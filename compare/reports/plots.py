@@ -128,6 +128,10 @@ def plot_terms(summary) -> str:
         labels += [f"{tag}: A vs mj_fullM", f"{tag}: e+G vs qfrc_bias"]
         values += [r["max_rel_error_A"], r["max_rel_error_bias"]]
         colors += [col, col]
+        if r.get("max_rel_error_actuator") is not None:
+            labels.append(f"{tag}: actuators vs qfrc_actuator")
+            values.append(r["max_rel_error_actuator"])
+            colors.append(col)
     fig = figure(11, 0.42 * len(labels) + 1.2)
     ax = fig.subplots()
     y = np.arange(len(labels))[::-1]

@@ -125,6 +125,9 @@ def _top(s, check, index_link, index_label="all scenes") -> list[str]:
              ("route", e(s["route_description"])),
              ("initial state", "q = " + e(", ".join(f"{k} {v:g}" for k, v in s["initial"]["q"].items()))
               + "; qd = " + e(", ".join(f"{k} {v:g}" for k, v in s["initial"]["qd"].items())))]
+    if s.get("actuators"):
+        setup.append(("actuators", "<br>".join(f"<code>{e(a['name'])}</code> on {e(a['coordinate'])} ({e(a['source'])}): "
+                                               f"{e(a['law'])}" for a in s["actuators"])))
     parts.append(_rows(setup))
     return parts
 
@@ -150,6 +153,13 @@ def _terms_section(s, light=False) -> list[str]:
                      "<code>-c qd</code> against MuJoCo's <code>qfrc_damper</code> from its own reading of "
                      f"<code>&lt;dynamics damping&gt;</code>: max relative error "
                      f"<code>{r2['max_rel_error_damping']:.2e}</code> (included in route 2's max).</p>")
+    acts = [(tag, r["actuators"]) for tag, r in (("route 1", r1), ("route 2", r2)) if r.get("actuators")]
+    if acts:
+        parts.append("<p>The actuators' generalized forces too (MuJoCo's law, E55): the project's against MuJoCo's "
+                     "<code>qfrc_actuator</code> with <code>d.ctrl</code> at the same time, at seeded states "
+                     "(included in each route's max): "
+                     + "; ".join(f"{tag} " + (f"<code>{a['max_rel_error_actuator']:.2e}</code>" if "max_rel_error_actuator"
+                                              in a else e(a.get("skipped", "not compared"))) for tag, a in acts) + ".</p>")
     if r2.get("refusals"):
         parts.append("<p><b>MuJoCo refused the original file.</b> Attempts, in order:</p><ul class='notes'>")
         for ref in r2["refusals"]:

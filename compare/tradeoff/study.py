@@ -298,7 +298,8 @@ def _reference(st: _Study, check, log):
     st.ref, st.est_max = ref, est_max
     st.scale = max(float(np.abs(en["kinetic"]).max()), float(np.abs(en["potential"] - en["potential"][0]).max()),
                    float(np.abs(en["work"]).max()), 1e-300)
-    st.work_terms = any(t in st.plan.terms for t in ("Q", "tau", "damper", "base", "gravcomp"))
+    st.work_terms = any(t in st.plan.terms for t in ("Q", "tau", "damper", "base", "gravcomp", "actuator",
+                                                      "computed_torque"))
     return chk, est_final
 
 

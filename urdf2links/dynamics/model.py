@@ -354,6 +354,45 @@ class Model:
             return self._forward_oracle(method, q, qd, tau, list(loads), t, base, gravity)
         return self._forward_dynamics(q, qd, tau, list(loads), t, base, gravity)
 
+    def inverse_dynamics(self, q, qd, qdd, *, t=0.0, base=None, loads: Iterable[Wrench] = (), gravity: bool = True,
+                         method: str = "recursive") -> np.ndarray:
+        """tau (n,), or (B, n) for a batch: the generalized forces that give the state ``(q, q')`` the
+        accelerations ``q''``, ``tau = A q'' + e + G - Q`` (E54), the inverse of :meth:`forward_dynamics`
+        (``forward_dynamics(q, qd, tau, loads=...)`` returns ``qdd``).
+
+        Sign convention: ``loads`` (applied wrenches, the same for every row) act on the robot, so
+        their generalized forces ``Q`` (E23) are subtracted: ``tau`` is what the joints must add to
+        them. ``e`` includes the base terms of a moving ``base`` and the armature (E49);
+        ``gravity=False`` leaves ``G`` out. One compiled O(n) pass (E54) with ``method="recursive"``
+        (batches: one compiled call, parallel over rows, equal to the per-state calls to the bit);
+        ``"literal"`` and ``"numpy"`` evaluate ``A q'' + e + G - Q`` from the oracles' terms."""
+        if base is None and not loads and self._C is None and method == "recursive":    # the hot path
+            out = np.empty(self._nq)
+            if self._call("id_plain", self._g if gravity else self._g0, q, qd, qdd, out) == 0:
+                return out
+        loads = list(loads)
+        if method != "recursive":
+            self._check_method(method)
+            self._single(method, q, "inverse_dynamics")
+            terms = self._oracle(method, q, qd, t, base, self.wrenches(loads))
+            tau = self.reduce(terms["A"]) @ self.vector(qdd, "qdd") + self.reduce(terms["e"]) - self.reduce(terms["Q"])
+            return tau + self.reduce(terms["G"]) if gravity else tau
+        from . import inverse_kernels as IK
+
+        rows = self._rows([("q", q), ("qd", qd), ("qdd", qdd)])
+        Q, QD, QDD = rows.arrays
+        B = Q.shape[0]
+        BASE, has_base = self._common(base, t, B, rows.batched)
+        g = self._g if gravity else self._g0
+        LD = load_rows(self.tree, loads) if loads else NO_LOADS
+        OUT = np.empty_like(Q)
+        args = (has_base, g[0], g[1], g[2], LD, self._Ck, self._dk, self._C is not None)
+        if rows.batched:
+            IK.id_batch(self.compiled.TI, self.compiled.TF, Q, QD, QDD, BASE, *args, OUT, MK.chunks(B))
+            return OUT
+        IK.id_one(self.compiled.TI, self.compiled.TF, Q[0], QD[0], QDD[0], BASE[0], *args, OUT[0])
+        return OUT[0]
+
     def _call(self, name, *args):
         """The frozen hot entry ``name`` on this model's tree; -2 when the arguments are not float64
         vectors of the right sizes (the caller then takes the general path)."""

@@ -4,7 +4,8 @@ Each quantity has one row function (``fd_row``, ``terms_row``, ``energy_row``) t
 state into its outputs with a given scratch; the single-state entries (``*_one``) and the batched
 entries (``*_batch``, numba ``prange`` over chunks of rows, one scratch per chunk, threads from
 ``NUMBA_NUM_THREADS`` / ``numba.set_num_threads``) call the same row function, so a batch gives the
-per-state results to the last bit. ``fd_plain``, ``terms_plain``, ``forces_plain`` and ``energy_plain`` are the hot
+per-state results to the last bit. ``fd_plain``, ``terms_plain``, ``forces_plain``, ``energy_plain`` and
+``id_plain`` (inverse dynamics, :mod:`urdf2links.dynamics.inverse_kernels`) are the hot
 single-state paths of :class:`~urdf2links.dynamics.model.Model` (fixed base, no loads, no coupling):
 few arguments, since every array argument costs the dispatcher a fraction of a microsecond;
 :func:`frozen` gives each with its signatures compiled and compilation switched off, so that an
@@ -24,6 +25,7 @@ import numpy as np
 from numba import get_num_threads, njit, prange, types
 
 from .factor import cholesky, cholesky_solve, ltdl, ltdl_solve, unpack
+from .inverse_kernels import id_plain  # noqa: F401  (a hot entry: frozen() finds it here)
 from .kernels import add_wrench, clear_wrenches, dynamics, energies, kinematics, poses
 from .tree_arrays import I_ANCIDX, I_ANCPTR, W_A, W_B, W_Q, W_SIZE, nn
 
@@ -276,13 +278,14 @@ _PLAIN_SIGS = {
     "forces_plain": [types.int64(_I1, _F1, _F1, _F2, _F1)],
     "energy_plain": [types.int64(_I1, _F1, _F1, _F1, types.none, _F1),
                      types.int64(_I1, _F1, _F1, _F1, _F1, _F1)],
+    "id_plain": [types.int64(_I1, _F1, _F1, _F1, _F1, _F1, _F1)],
 }
 
 _FROZEN: dict = {}
 
 
 def frozen(name: str):
-    """The hot single-state entry ``name`` (``fd_plain``, ``terms_plain``, ``energy_plain``) compiled
+    """The hot single-state entry ``name`` (``fd_plain``, ``terms_plain``, ``energy_plain``, ``id_plain``) compiled
     (or loaded from the cache) for its :data:`_PLAIN_SIGS`, with further compilation switched off:
     an argument of another type raises TypeError (the caller then converts it) instead of compiling
     a new variant."""

@@ -410,7 +410,7 @@ def _singular(original: Model, chart, ln, t, y, *, recharting: bool, base_state)
 
     n = original.n
     why = ("re-charting is off" if not recharting else
-           "it is not re-charted because [[torque]] or [[spring]] acts on its angles")
+           "it is not re-charted because [[torque]], [[spring]], [[actuator]] or [[computed_torque]] acts on its angles")
     return DynamicsError(
         f"ZYX angles of link {ln.name!r} of model {original.name!r} reach the singularity of their chart at "
         f"t={t:.6g}: phi_y = {y[ln.angles[1]]:.6f}, |cos phi_y| = {abs(math.cos(y[ln.angles[1]])):.2e} < "

@@ -137,8 +137,11 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
     t_eval = np.linspace(0.0, run.t_end, max(run.samples, 2))
     started = time.perf_counter()
     bar = Progress(run.t_end, label=f"{scene.name} {run.method}", enabled=progress)
-    # torques and springs act on coordinates: their links keep their chart
-    exclude = {c for c, _ in scene.torques} | {sp.coordinate for sp in plan.spring_set.springs}
+    # torques, springs, actuators and a computed torque (its reference: every coordinate) act on coordinates:
+    # their links keep their chart
+    exclude = ({c for c, _ in scene.torques} | {sp.coordinate for sp in plan.spring_set.springs}
+               | {a.coordinate for a in plan.actuator_set.actuators}
+               | (set(model.coordinate_names) if plan.reference_funcs else set()))
     try:
         res = integrate_charted(model, lambda m: plan if m is model else compile_plan(scene, m), y0,
                                 (0.0, run.t_end), t_eval=t_eval, method=run.method, rtol=run.rtol, atol=run.atol,

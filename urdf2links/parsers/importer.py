@@ -375,7 +375,10 @@ class _Importer:
                 # URDF-link inertias after repair (link frame H (4, 4)), to write a repaired URDF for other tools
                 "repaired_H": {k: self.H_link[k].tolist() for k in repaired if k in self.H_link},
                 "frame_of": {
-            k: (tree.link_names[t], X.tolist()) for k, (t, X) in self.frame_of.items()}}
+            k: (tree.link_names[t], X.tolist()) for k, (t, X) in self.frame_of.items()},
+                # each URDF link's mass and centre of mass (link frame), for gravcomp (MuJoCo's body gravcomp)
+                "body_mass_com": {k: (float(H[3, 3]), (H[:3, 3] / H[3, 3] if H[3, 3] > 0 else np.zeros(3)).tolist())
+                                  for k, H in self.H_link.items()}}
         return Model(tree, coupling=coupling, name=self.desc.name, source=self.desc.source,
                      audit=self.records, info=info)
 

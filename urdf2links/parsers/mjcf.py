@@ -88,9 +88,10 @@ def _captured(notes: list[str]):
                     notes.append(f"MuJoCo said: {line.strip()}")
 
 
-def compile_mjcf(source, notes: list[str] | None = None):
+def compile_mjcf(source, notes: list[str] | None = None, *, edit=None):
     """``(MjModel, source name)`` of an MJCF file (or MJCF text) compiled by MuJoCo; :class:`MJCFError`
-    with MuJoCo's own words and the file when it refuses."""
+    with MuJoCo's own words and the file when it refuses. ``edit(spec)``, when given, changes the
+    ``MjSpec`` before it is compiled (MuJoCo's run of a file adds a scene's actuators that way)."""
     import mujoco
 
     notes = [] if notes is None else notes
@@ -104,6 +105,8 @@ def compile_mjcf(source, notes: list[str] | None = None):
         with _captured(notes), warnings.catch_warnings(record=True) as said:
             warnings.simplefilter("always")
             spec = mujoco.MjSpec.from_string(source) if text else mujoco.MjSpec.from_file(str(source))
+            if edit is not None:
+                edit(spec)
             m = spec.compile()
         notes += [f"MuJoCo said: {w.message}" for w in said]
     except (ValueError, RuntimeError, mujoco.FatalError) as err:
@@ -314,6 +317,47 @@ class _Builder:
                 "range_note": None if kind in ("hinge", "slide") or not limited else
                 f"{kind} joint: range is the largest rotation angle {hi:g} rad"}
 
+    def actuator_rows(self, kinds: dict, joint_coords: dict) -> list[dict]:
+        """One dict per ``<actuator>`` of the file, MuJoCo's compiled numbers (a scene names it to set
+        its ctrl: :mod:`urdf2links.scenes.actuators`): ``name``, the transmission (``trntype``, ``joint``,
+        ``joint_type``, ``coordinates``), the ``general`` law (``gain``, ``bias`` (3,), ``gear``,
+        ``ctrlrange``/``forcerange`` or None when not limited), its types, and what the law does not
+        model (``delay``, ``damping``, ``armature``, the joint's ``actuatorfrcrange``)."""
+        m, mj = self.m, self.mj
+        rows = []
+        for k in range(m.nu):
+            trn = mj.mjtTrn(int(m.actuator_trntype[k])).name.removeprefix("mjTRN_").lower()
+            j = int(m.actuator_trnid[k, 0])
+            joint = self.name("mjOBJ_JOINT", j, f"joint{j}") if trn in ("joint", "jointinparent") and j >= 0 else None
+            jtype = kinds.get(j) if joint else None
+            gain, bias = float(m.actuator_gainprm[k, 0]), [float(x) for x in m.actuator_biasprm[k, :3]]
+            gaintype = mj.mjtGain(int(m.actuator_gaintype[k])).name.removeprefix("mjGAIN_").lower()
+            biastype = mj.mjtBias(int(m.actuator_biastype[k])).name.removeprefix("mjBIAS_").lower()
+            if biastype == "none":
+                bias = [0.0, 0.0, 0.0]
+            kind, kp, kv = "general", None, None
+            if gain == 1.0 and bias == [0.0, 0.0, 0.0]:
+                kind = "motor"
+            elif bias[0] == 0.0 and bias[1] == -gain and bias[2] <= 0.0:
+                kind, kp, kv = "position", gain, -bias[2]
+            elif bias[:2] == [0.0, 0.0] and bias[2] == -gain:
+                kind, kv = "velocity", gain
+            pos = self.mj_joints[j][4] if joint and j < len(self.mj_joints) else []
+            rows.append({
+                "name": self.name("mjOBJ_ACTUATOR", k, ""), "trntype": trn, "joint": joint, "joint_type": jtype,
+                "coordinates": list(joint_coords.get(j, pos)) if joint else [], "kind": kind, "kp": kp, "kv": kv,
+                "gain": gain, "bias": bias, "gear": float(m.actuator_gear[k, 0]),
+                "ctrlrange": [float(x) for x in m.actuator_ctrlrange[k]] if m.actuator_ctrllimited[k] else None,
+                "forcerange": [float(x) for x in m.actuator_forcerange[k]] if m.actuator_forcelimited[k] else None,
+                "dyntype": mj.mjtDyn(int(m.actuator_dyntype[k])).name.removeprefix("mjDYN_").lower(),
+                "gaintype": gaintype, "biastype": biastype,
+                "delay": float(getattr(m, "actuator_delay", np.zeros(m.nu))[k]),
+                "damping": float(np.ravel(getattr(m, "actuator_damping", np.zeros(m.nu)))[k]),
+                "armature": float(np.ravel(getattr(m, "actuator_armature", np.zeros(m.nu)))[k]),
+                "joint_actfrcrange": ([float(x) for x in m.jnt_actfrcrange[j]] if joint and m.jnt_actfrclimited[j]
+                                      else None)})
+        return rows
+
     # -- bodies ---------------------------------------------------------------------------------
     def build(self):
         m = self.m
@@ -371,6 +415,8 @@ class _Builder:
                 for b in range(1, m.nbody)}
         info = {"format": "mjcf", "coordinates": self.coord_info, "notes": self.notes, "joints": self.joint_rows,
                 "frame_of": frame_of, "mujoco": qmap, "q0": q0, "gravcomp": gravcomp, "body_mass_com": coms,
+                "actuators": self.actuator_rows(kinds, {j: names for j, (_, _, _, _, names) in
+                                                        enumerate(self.mj_joints)}),
                 "option": {"gravity": gravity.tolist(), "timestep": float(m.opt.timestep), "integrator": integrator,
                            "disabled": disabled},
                 "source_file": None if self.where == "<string>" else str(Path(self.where).resolve())}

@@ -14,8 +14,9 @@ import numpy as np
 
 __all__ = ["inventory", "MUJOCO_OFF"]
 
-#: What MuJoCo's run of an MJCF file switches off, always (``mjtDisableBit`` names): contacts, every
-#: constraint (equality, limits, friction loss) and actuation.
+#: What MuJoCo's run of an MJCF file switches off (``mjtDisableBit`` names): contacts, every constraint
+#: (equality, limits, friction loss), and actuation unless the scene names actuators (then the ones it
+#: does not name are switched off one by one).
 MUJOCO_OFF = ("mjDSBL_CONTACT", "mjDSBL_CONSTRAINT", "mjDSBL_EQUALITY", "mjDSBL_LIMIT", "mjDSBL_FRICTIONLOSS",
               "mjDSBL_ACTUATION")
 
@@ -47,7 +48,8 @@ def inventory(m, joint_kinds: dict) -> list[str]:
     add(m.neq, f"{m.neq} equality constraint(s) ({_names(m, 'mjOBJ_EQUALITY', m.neq)})",
         "a tree of links has none: the joints stay independent coordinates, and MuJoCo's run disables them")
     add(m.nu, f"{m.nu} actuator(s) ({_names(m, 'mjOBJ_ACTUATOR', m.nu)})",
-        "not scene effects yet: no control acts, and MuJoCo's run disables actuation")
+        "scene effects when a scene names them ([[actuator]] name = '...', ctrl = ...: MuJoCo's law on both engines); "
+        "the others act on neither engine (MuJoCo's run switches them off)")
     add(m.nsensor, f"{m.nsensor} sensor(s)", "not used (they do not change the dynamics)")
     add(m.nsite, f"{m.nsite} site(s)", "not used (frames only)")
     add(m.ncam + m.nlight, f"{m.ncam} camera(s), {m.nlight} light(s)", "not used")

@@ -15,8 +15,12 @@ tau             joint torques ``[[torque]]``                        ``[[torque]]
 spring          ``-k (q - rest)`` (a potential)                     a ``[[spring]]`` with k > 0
 damper          ``-c qd`` (dissipation D)                           a ``[[spring]]`` with c > 0, or the
                                                                     file's damping with ``[dampers]``
-gravcomp        ``-gravcomp m g`` at a body's COM (a constant load) MJCF ``gravcomp`` with ``[gravcomp]
-                                                                    from_file`` and ``[gravity]``
+gravcomp        ``-gravcomp m g`` at a body's COM (a constant load) ``[gravcomp]`` (MJCF ``from_file``,
+                                                                    ``factor``, ``bodies``) and ``[gravity]``
+actuator        MuJoCo's actuator law (E55): ``gear (gain c +      ``[[actuator]]`` (or ``--hold``)
+                b0 + b1 gear q + b2 gear q')``, both clamps
+computed_torque the scene's inverse dynamics at a reference (E57): ``[[computed_torque]]``
+                one more O(n) pass
 ==============  ==================================================  ==============================
 
 Armature (MJCF) is part of ``A`` and ``e`` (docs/equations.md (E49)), like the links' inertia: always
@@ -35,6 +39,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..dynamics.transforms import BaseState
+from .actuators import actuator_forces, describe_actuator, resolve_actuators
+from .functions import Constant
 from .scene_kernels import CompiledScene
 
 __all__ = ["Plan", "compile_plan", "as_plan"]
@@ -70,15 +76,45 @@ class Plan:
         self.rest = np.array([s.rest for s in springs])
         self.damper_index = np.array([names.index(s.coordinate) for s in dampers], dtype=int)
         self.damping = np.array([s.damping for s in dampers])
+        self.actuator_set = resolve_actuators(scene.actuators, model, where=str(scene.path or scene.name))
+        """The scene's actuators on this model (:mod:`urdf2links.scenes.actuators`) and notes."""
+        self.reference_funcs = self._references(scene, model)
+        """``[[computed_torque]]``: the reference of every coordinate (n functions), or () without one."""
         self.terms = tuple(t for t, on in (
             ("A", True), ("e", True), ("base", self.base is not None), ("G", self.gravity_vector is not None),
             ("Q", bool(scene.loads)), ("tau", len(self.torque_funcs) > 0), ("spring", len(springs) > 0),
-            ("damper", len(dampers) > 0), ("gravcomp", self.n_gravcomp > 0)) if on)
+            ("damper", len(dampers) > 0), ("gravcomp", self.n_gravcomp > 0),
+            ("actuator", bool(self.actuator_set.actuators)), ("computed_torque", bool(self.reference_funcs))) if on)
         self.rhs = CompiledScene(self)
         """``y' = (qd, q'', P)`` for ``y = (q, qd, W)`` (2n + 1,): the compiled right-hand side
         (:mod:`urdf2links.scenes.scene_kernels`)."""
 
+    @staticmethod
+    def _references(scene, model) -> tuple:
+        """Every coordinate's reference for the computed torque: the scene's, else held at its initial value."""
+        if not scene.computed_torque:
+            return ()
+        given = dict(scene.computed_torque)
+        q0, _ = scene.initial_state(model)
+        return tuple(given.get(nm, Constant(float(q0[i]))) for i, nm in enumerate(model.coordinate_names))
+
     # -- the scene's inputs at a time --------------------------------------------------------------
+    def actuator_forces(self, t, q, qd) -> np.ndarray:
+        """The actuators' generalized forces (n,) at ``t``, ``q``, ``qd`` (E55), in numpy."""
+        return actuator_forces(self.actuator_set.actuators, t, q, qd, self.n)
+
+    def ctrl(self, t) -> np.ndarray:
+        """Every actuator's control at ``t`` (before MuJoCo's ctrlrange clamp), in the plan's order."""
+        return np.array([float(a.ctrl(t)) for a in self.actuator_set.actuators])
+
+    def reference(self, t, order: int = 0) -> np.ndarray:
+        """The computed torque's reference (n,) at ``t`` (``order`` 0, 1, 2: r, r', r'')."""
+        return np.array([float(f._at(t, order)) for f in self.reference_funcs])
+
+    def computed_torque(self, t) -> np.ndarray:
+        """The computed torque (n,) at ``t`` (E57), compiled (:func:`urdf2links.scenes.scene_kernels.computed_torque`)."""
+        return self.rhs.computed_torque(t)
+
     def base_state(self, t) -> BaseState | None:
         """Pose, rate and acceleration of {A} at ``t`` (:meth:`Scene.base_state`); None for a fixed base."""
         return self.scene.base_state(t)
@@ -115,7 +151,8 @@ class Plan:
         s, m = self.scene, self.model
         lines = [f"scene {s.name!r}: robot {m.name!r} ({m.n} coordinates, {m.tree.n_links} links)",
                  f"terms computed: {', '.join(self.terms)}"]
-        skipped = [t for t in ("base", "G", "Q", "tau", "spring", "damper", "gravcomp") if t not in self.terms]
+        skipped = [t for t in ("base", "G", "Q", "tau", "spring", "damper", "gravcomp", "actuator", "computed_torque")
+                   if t not in self.terms]
         if "gravcomp" in skipped and not m.info.get("gravcomp"):
             skipped.remove("gravcomp")
         lines.append(f"not computed (the scene does not call for them): {', '.join(skipped) or 'nothing'}")
@@ -138,7 +175,15 @@ class Plan:
             lines.append(f"  tau: {c}: {f.describe()}")
         for sp in self.spring_set.springs:
             lines.append(f"  spring/damper on {sp.coordinate}: k = {sp.stiffness:g}, rest = {sp.rest:g}, c = {sp.damping:g}")
-        lines += [f"  note: {n}" for n in (*self.spring_set.notes, *self.gravcomp_notes, *s.notes)]
+        for a in self.actuator_set.actuators:
+            lines.append(f"  actuator {a.name!r} on {a.coordinate} ({a.source}): {describe_actuator(a)}")
+        if self.reference_funcs:
+            named = dict(s.computed_torque)
+            lines.append("  computed_torque: inverse dynamics of the scene at the reference (one more O(n) pass): "
+                         + "; ".join(f"{c}: {f.describe()}" for c, f in named.items())
+                         + "; the other coordinates held at their initial value")
+        lines += [f"  note: {n}" for n in (*self.spring_set.notes, *self.gravcomp_notes, *self.actuator_set.notes,
+                                          *s.notes)]
         r = s.run
         lines.append(f"run: t_end {r.t_end:g} s, method {r.method}, rtol {r.rtol:g}, atol {r.atol:g}"
                      + (f", dt {r.dt:g}" if r.dt else "") + f", {r.samples} samples")

@@ -48,8 +48,9 @@ class PythonPlan:
             A, rhs = A + arm["A"], rhs - arm["e"]
         return model.reduce(A), model.reduce(rhs), kin
 
-    def generalized_forces(self, t, q, qd, kin=None) -> np.ndarray:
-        """Everything on the right of (E24) but ``-G - e``: Q of loads, tau, springs, dampers. (n,)"""
+    def generalized_forces(self, t, q, qd, kin=None, *, computed: bool = True) -> np.ndarray:
+        """Everything on the right of (E24) but ``-G - e``: Q of loads, tau, springs, dampers, actuators
+        (E55) and, with ``computed``, the computed torque (E57). (n,)"""
         plan, model = self.plan, self.model
         f = np.zeros(plan.n)
         if plan.loads:
@@ -57,6 +58,10 @@ class PythonPlan:
                 qt, _ = model.tree_state(q)
                 kin = self.rp.kinematics(qt, None, self._base_T(t))
             f += model.reduce(self.rp.generalized_forces(kin, plan.wrenches(t)))
+        if plan.actuator_set.actuators:
+            f += plan.actuator_forces(t, q, qd)
+        if computed and plan.reference_funcs:
+            f += self.computed_torque(t)
         if plan.torque_funcs:
             f[plan.torque_index] += [g(t) for g in plan.torque_funcs]
         if plan.spring_index.size:
@@ -64,6 +69,16 @@ class PythonPlan:
         if plan.damper_index.size:
             f[plan.damper_index] -= plan.damping * qd[plan.damper_index]
         return f
+
+    def computed_torque(self, t) -> np.ndarray:
+        """The computed torque (E57) in numpy: ``A r'' + e + G`` from this twin's own terms at the
+        reference ``(r, r', r'')`` minus every other force of the scene there (loads, torques, springs,
+        dampers, actuators)."""
+        plan, model = self.plan, self.model
+        r, rd, rdd = plan.reference(t, 0), plan.reference(t, 1), plan.reference(t, 2)
+        qt, qdt = model.tree_state(r, rd)
+        A, rhs, kin = self._equation(qt, qdt, self._base_T(t))
+        return A @ rdd - rhs - self.generalized_forces(t, r, rd, kin, computed=False)
 
     def accelerations(self, t, q, qd, *, with_power: bool = False):
         """q'' of (E24) with exactly the scene's terms; with ``with_power`` also the power of the
@@ -82,7 +97,7 @@ class PythonPlan:
     def _power(self, qd, q, f, kin, base_T) -> float:
         plan = self.plan
         P = 0.0
-        if any(term in plan.terms for term in ("Q", "tau", "damper", "gravcomp")):
+        if any(term in plan.terms for term in ("Q", "tau", "damper", "gravcomp", "actuator", "computed_torque")):
             f = f.copy()
             if plan.spring_index.size:  # springs are a potential, not work
                 f[plan.spring_index] += plan.stiffness * (q[plan.spring_index] - plan.rest)

@@ -39,8 +39,21 @@ not computed, see :mod:`urdf2links.scenes.plan`)::
                                             # from_file = true says the same
     [springs]
     from_file = true                        # MJCF: each hinge's and slide's stiffness, at its springref
-    [gravcomp]
-    from_file = true                        # MJCF: each body's gravcomp: -gravcomp m g at its COM
+    [gravcomp]                              # MuJoCo's body gravcomp: a force -gravcomp m g at each body's COM
+    from_file = true                        # MJCF: each body's own gravcomp
+    factor = 1.0                            # every body (URDF link or MJCF body) with mass
+    bodies = { upper_arm_link = 0.5 }       # these bodies (after factor and from_file)
+
+    [[actuator]]                            # MuJoCo's actuator law (urdf2links.scenes.actuators, E55)
+    coordinate = "elbow"; kind = "position" # motor | position | velocity | general
+    kp = 300.0; kv = 30.0; gear = 1.0       # general: gainprm = [k], biasprm = [b0, b1, b2]
+    ctrl = { sines = [[0.8, 1.0, 0.0]] }    # a function of time
+    ctrlrange = [-2.0, 2.0]; forcerange = [-20.0, 20.0]   # optional clamps
+    # name = "shoulder_motor"; ctrl = 0.3   # an MJCF robot's own actuator: the scene sets its ctrl
+
+    [[computed_torque]]                     # inverse dynamics of a reference (E57): q = reference exactly
+    coordinate = "elbow"                    # when the model matches; other coordinates held at [initial]
+    reference = { sines = [[0.5, 0.5]] }
 
     [initial]
     q = { shoulder = 1.2 }                  # by coordinate name; unnamed coordinates start at 0
@@ -69,6 +82,7 @@ from ..dynamics.transforms import PARAMETERS, BaseState
 from ..errors import SceneError
 from ..locations import example_robot_data_dir, shipped_robots_dir
 from ..ranges import MAX_SAMPLES, MAX_STEPS, METHODS, MIN_ATOL, MIN_T_END, RANGES, RTOL_FLOOR
+from .actuators import ActuatorSpec, hold_actuators, parse_actuators
 from .functions import Constant, SceneValueError, TimeFunction, VectorFunction, parse_function, vector_function
 
 __all__ = ["Scene", "AppliedLoad", "Spring", "SpringSet", "RunSettings", "load_scene", "shipped_robots_dir",
@@ -79,7 +93,7 @@ DEFAULT_SCENE_NAME = "default"
 Q0_CHOICES = ("zero", "random")
 
 _TOP = ("description", "chaotic", "robot", "gravity", "base", "force", "moment", "torque", "spring",
-        "dampers", "springs", "gravcomp", "initial", "run", "record")
+        "dampers", "springs", "gravcomp", "initial", "run", "record", "actuator", "computed_torque")
 _ROBOT = ("urdf", "mjcf", "shipped", "example_robot_data", "floating_base", "inertia", "mimic", "package_dirs",
           "strict", "xacro_args")
 #: Joint types whose damping (URDF or MJCF) becomes a damper on their one coordinate.
@@ -172,6 +186,12 @@ class Scene:
     gravcomp: bool = False
     notes: tuple[str, ...] = ()
     """What was changed from the scene file (loading options given on the command line, ...)."""
+    actuators: tuple[ActuatorSpec, ...] = ()
+    """``[[actuator]]`` blocks (and ``--hold``'s servos): :mod:`urdf2links.scenes.actuators`."""
+    computed_torque: tuple[tuple[str, TimeFunction], ...] = ()
+    """``[[computed_torque]]``: ``(coordinate, reference q_r(t))``."""
+    gravcomp_factor: float | None = None
+    gravcomp_bodies: tuple[tuple[str, float], ...] = ()
 
     def model(self):
         """Load the scene's robot with its options (a :class:`~urdf2links.dynamics.model.Model`)."""
@@ -193,9 +213,15 @@ class Scene:
             if link not in links:
                 raise SceneError(f"{where}: [record] link_poses names {link!r}, not a link of {model.name!r}"
                                  f"{_hint(link, links)}")
+        for body, _ in self.gravcomp_bodies:
+            if body not in links:
+                raise SceneError(f"{where}: [gravcomp] bodies names {body!r}, not a link (body) of {model.name!r}"
+                                 f"{_hint(body, links)}")
         names = model.coordinate_names
         for what, coord in ([("torque", c) for c, _ in self.torques] + [("spring", s.coordinate) for s in self.springs]
-                            + [("initial.q", c) for c in self.q0] + [("initial.qd", c) for c in self.qd0]):
+                            + [("initial.q", c) for c in self.q0] + [("initial.qd", c) for c in self.qd0]
+                            + [("actuator", a.coordinate) for a in self.actuators if a.coordinate is not None]
+                            + [("computed_torque", c) for c, _ in self.computed_torque]):
             if coord not in names:
                 raise SceneError(f"{where}: [{what}] coordinate {coord!r} is not a coordinate of robot {model.name!r}"
                                  f"{_hint(coord, names)}; coordinates are {list(names)}")
@@ -259,16 +285,26 @@ class Scene:
             notes.append(f"joint damping of the file not applied: {'; '.join(skipped)}")
         return SpringSet(tuple(springs), tuple(notes))
 
+    def gravcomp_table(self, model) -> dict:
+        """``{body: factor}`` of MuJoCo's body gravcomp acting in this scene: the MJCF file's own with
+        ``[gravcomp] from_file``, then ``factor`` on every body with mass, then ``bodies`` (zeros dropped).
+        A body is a URDF link or an MJCF body (``model.info['body_mass_com']``)."""
+        table = dict(model.info.get("gravcomp") or {}) if self.gravcomp else {}
+        if self.gravcomp_factor is not None:
+            masses = model.info.get("body_mass_com", {})
+            table.update({b: self.gravcomp_factor for b, (m, _) in masses.items() if m > 0.0})
+        table.update(dict(self.gravcomp_bodies))
+        return {b: f for b, f in table.items() if f != 0.0}
+
     def gravcomp_loads(self, model) -> tuple[tuple[AppliedLoad, ...], tuple[str, ...]]:
-        """With ``[gravcomp] from_file`` (MJCF ``gravcomp``): a constant world-frame force
-        ``-gravcomp m g`` at the COM of every body that has one (MuJoCo's ``qfrc_gravcomp``), for the
-        scene's gravity; and notes."""
-        table = model.info.get("gravcomp") or {}
+        """MuJoCo's gravity compensation (``[gravcomp]``, :meth:`gravcomp_table`): a constant world-frame
+        force ``-gravcomp m g`` at the COM of every body that has one (MuJoCo's ``qfrc_gravcomp``), for
+        the scene's gravity; and notes."""
+        table = self.gravcomp_table(model)
+        own = model.info.get("gravcomp") or {}
         if not table:
-            return (), ()
-        if not self.gravcomp:
-            return (), (f"gravcomp of bodies {', '.join(table)} not applied (the scene does not ask: [gravcomp] "
-                        "from_file = true)",)
+            return (), ((f"gravcomp of bodies {', '.join(own)} not applied (the scene does not ask: [gravcomp] "
+                         "from_file = true)",) if own and not self.gravcomp else ())
         if self.gravity is None:
             return (), ("gravcomp not applied: the scene has no gravity to compensate",)
         masses = model.info.get("body_mass_com", {})
@@ -278,17 +314,20 @@ class Scene:
             f = -frac * m * np.asarray(self.gravity, float)
             loads.append(AppliedLoad("force", body, "world", VectorFunction(tuple(Constant(float(x)) for x in f)),
                                      np.asarray(com, float)))
-        return tuple(loads), (f"gravcomp applied ([gravcomp] from_file = true): a force -gravcomp m g at the COM of "
+        how = "[gravcomp] from_file = true" if self.gravcomp and table == own else "[gravcomp]"
+        return tuple(loads), (f"gravcomp applied ({how}): a force -gravcomp m g at the COM of "
                               + ", ".join(f"{b} ({v:g})" for b, v in table.items()),)
 
     def initial_state(self, model) -> tuple[np.ndarray, np.ndarray]:
-        """``(q0, qd0)``: the scene's ``[initial]``; unnamed coordinates at rest and at 0, or for an MJCF
-        robot at MuJoCo's default ``qpos0`` (``model.info['q0']``)."""
+        """``(q0, qd0)``: the scene's ``[initial]``; unnamed coordinates on their ``[[computed_torque]]``
+        reference (its value and rate at t = 0), else at rest and at 0, or for an MJCF robot at MuJoCo's
+        default ``qpos0`` (``model.info['q0']``)."""
         names = model.coordinate_names
         base = model.info.get("q0")
         base = np.zeros(len(names)) if base is None else np.asarray(base, float)
-        q = np.array([float(self.q0.get(n, base[i])) for i, n in enumerate(names)])
-        qd = np.array([float(self.qd0.get(n, 0.0)) for n in names])
+        ref = dict(self.computed_torque)      # a computed torque's coordinate starts on its reference
+        q = np.array([float(self.q0.get(n, ref[n](0.0) if n in ref else base[i])) for i, n in enumerate(names)])
+        qd = np.array([float(self.qd0.get(n, ref[n].derivative(0.0) if n in ref else 0.0)) for n in names])
         return q, qd
 
 
@@ -419,7 +458,7 @@ def _random_q0(model, rng) -> dict:
 
 def default_scene(robot, *, floating: bool = False, q0: str = "zero", seed: int = 0, t_end: float = 1.0,
                   xacro_args=None, package_dirs=(), inertia: str = "audit", mimic: str = "independent",
-                  strict: bool = False, model=None) -> Scene:
+                  strict: bool = False, model=None, hold: float | None = None) -> Scene:
     """The scene ``urdf2links simulate|compare ROBOT.urdf`` runs when no scene file is given.
 
     Gravity (9.81 m/s^2 along -z); a fixed base, or with ``floating`` six coordinates for the root
@@ -427,7 +466,9 @@ def default_scene(robot, *, floating: bool = False, q0: str = "zero", seed: int 
     ``q0="zero"`` or ``"random"`` (:func:`_random_q0`, seeded by ``seed``); ``t_end`` seconds with the
     default integrator (``RunSettings``: DOP853, rtol 1e-10), 500 samples a second (at least 101).
     ``robot`` is a ``.urdf`` or ``.xacro`` path (with ``xacro_args``); ``model`` an already loaded model
-    of it (loaded here otherwise, to know its coordinates and limits). The scene is named
+    of it (loaded here otherwise, to know its coordinates and limits). ``hold`` (a bandwidth in Hz,
+    ``--hold``): a position servo on every coordinate holding the initial ``q``
+    (:func:`~urdf2links.scenes.actuators.hold_actuators`). The scene is named
     :data:`DEFAULT_SCENE_NAME`; :func:`urdf2links.scenes.scene_toml.write_scene` writes it as TOML to edit.
     """
     where = f"default scene of {robot}"
@@ -453,6 +494,13 @@ def default_scene(robot, *, floating: bool = False, q0: str = "zero", seed: int 
             warnings.simplefilter("ignore")  # the audit is in model.audit; inspect shows it
             model = load_robot(robot, **options)
     q_init = _random_q0(model, np.random.default_rng(seed)) if q0 == "random" else {}
+    held, held_text = (), ""
+    if hold is not None:
+        start = model.info.get("q0")
+        start = np.zeros(model.n) if start is None else np.asarray(start, float)
+        held = hold_actuators(model, [q_init.get(nm, start[i]) for i, nm in enumerate(model.coordinate_names)],
+                              bandwidth=hold)
+        held_text = f", held at q0 by position servos (critically damped at {hold:g} Hz)"
     run = RunSettings(t_end=t_end, samples=min(MAX_SAMPLES, max(101, int(round(500 * t_end)) + 1)))
     if mjcf:
         g = np.asarray(model.info["option"]["gravity"], float)
@@ -460,21 +508,22 @@ def default_scene(robot, *, floating: bool = False, q0: str = "zero", seed: int 
         state = "MuJoCo's qpos0" + (f", random within the limits (seed {seed})" if q0 == "random" else "")
         effects = [w for w, on in (("joint damping", "damper" not in off), ("stiffness (at springref)", "spring" not in off),
                                    ("gravcomp", True)) if on]
-        return Scene(name=default_scene_name(q0=q0, seed=seed, inertia=inertia), path=None, robot=Path(robot),
-                     load_options=options, description=f"default scene of an MJCF file: the file's gravity {g.tolist()}, its "
-                                 + ", ".join(effects) + "; at rest at " + state,
+        return Scene(name=default_scene_name(q0=q0, seed=seed, inertia=inertia, hold=hold), path=None,
+                     robot=Path(robot), load_options=options,
+                     description=f"default scene of an MJCF file: the file's gravity {g.tolist()}, its "
+                                 + ", ".join(effects) + "; at rest at " + state + held_text,
                      gravity=g if np.any(g) else None, q0=q_init, urdf_damping="damper" not in off,
-                     file_springs="spring" not in off, gravcomp=True, run=run)
+                     file_springs="spring" not in off, gravcomp=True, run=run, actuators=held)
     base = "floating base" if floating else "fixed base"
-    return Scene(name=default_scene_name(floating=floating, q0=q0, seed=seed, inertia=inertia, mimic=mimic),
+    return Scene(name=default_scene_name(floating=floating, q0=q0, seed=seed, inertia=inertia, mimic=mimic, hold=hold),
                  path=None, robot=Path(robot), load_options=options,
                  description=f"default scene: gravity, {base}, q0 {q0}" + (f" (seed {seed})" if q0 == "random" else "")
-                             + ", URDF damping, at rest",
-                 gravity=np.array([0.0, 0.0, -9.81]), q0=q_init, urdf_damping=True, run=run)
+                             + ", URDF damping, at rest" + held_text,
+                 gravity=np.array([0.0, 0.0, -9.81]), q0=q_init, urdf_damping=True, run=run, actuators=held)
 
 
 def default_scene_name(*, floating: bool = False, q0: str = "zero", seed: int = 0, inertia: str = "audit",
-                       mimic: str = "independent") -> str:
+                       mimic: str = "independent", hold: float | None = None) -> str:
     """:data:`DEFAULT_SCENE_NAME`, with what differs from the plain default scene appended
     (``default-floating-random-seed3-repair``), so that reports of one robot in other settings do not
     replace each other."""
@@ -482,6 +531,7 @@ def default_scene_name(*, floating: bool = False, q0: str = "zero", seed: int = 
                                                                           else [])
     parts += [inertia] if inertia != "audit" else []
     parts += [mimic] if mimic != "independent" else []
+    parts += [] if hold is None else ["hold" if hold == 2.0 else f"hold{hold:g}hz"]
     return "-".join(parts)
 
 
@@ -513,7 +563,9 @@ def scene_from_dict(data: dict, *, where: str = "<scene>", directory: Path | Non
     loads, torques, springs = _loads(r, data), _torques(r, data), _springs(r, data)
     (q0, qd0), run, link_poses = _initial(r, data), _run(r, data), _record(r, data)
     urdf_damping = _dampers(r, data)
-    file_springs, gravcomp = _from_file(r, data, "springs"), _from_file(r, data, "gravcomp")
+    file_springs = _from_file(r, data, "springs")
+    gravcomp, gravcomp_factor, gravcomp_bodies = _gravcomp(r, data)
+    actuators, computed = parse_actuators(r, data), _computed_torque(r, data)
     description = data.get("description", "")
     chaotic = data.get("chaotic", False)
     if not isinstance(description, str):
@@ -523,7 +575,40 @@ def scene_from_dict(data: dict, *, where: str = "<scene>", directory: Path | Non
     return Scene(name=name, path=path, robot=robot, load_options=options, description=description,
                  chaotic=chaotic, gravity=gravity, base=base, loads=loads, torques=torques, springs=springs,
                  q0=q0, qd0=qd0, run=run, link_poses=link_poses, urdf_damping=urdf_damping,
-                 file_springs=file_springs, gravcomp=gravcomp)
+                 file_springs=file_springs, gravcomp=gravcomp, actuators=actuators, computed_torque=computed,
+                 gravcomp_factor=gravcomp_factor, gravcomp_bodies=gravcomp_bodies)
+
+
+def _gravcomp(r: _Reader, data: dict) -> tuple[bool, float | None, tuple]:
+    """``[gravcomp]``: ``from_file`` (MJCF), ``factor`` (every body), ``bodies`` ({name: factor})."""
+    if "gravcomp" not in data:
+        return False, None, ()
+    t = data["gravcomp"]
+    r.keys(t, ("from_file", "factor", "bodies"), "gravcomp")
+    from_file = t.get("from_file", False)
+    if not isinstance(from_file, bool):
+        r.fail("gravcomp.from_file", f"must be true or false, got {from_file!r}")
+    factor = r.number(t["factor"], "gravcomp.factor", quantity="scale") if "factor" in t else None
+    bodies = t.get("bodies", {})
+    r.keys(bodies, tuple(bodies) if isinstance(bodies, dict) else (), "gravcomp.bodies")
+    return from_file, factor, tuple((str(b), r.number(v, f"gravcomp.bodies.{b}", quantity="scale"))
+                                    for b, v in bodies.items())
+
+
+def _computed_torque(r: _Reader, data: dict) -> tuple:
+    """``[[computed_torque]]`` blocks: ``(coordinate, reference function of time)``, each coordinate once."""
+    out, seen = [], set()
+    for i, item in enumerate(r.items(data, "computed_torque")):
+        key = f"computed_torque[{i}]"
+        r.keys(item, ("coordinate", "reference"), key)
+        if not isinstance(item.get("coordinate"), str) or "reference" not in item:
+            r.fail(key, "needs coordinate = 'name' and reference = a function of time (its value, rate and "
+                        "acceleration are the reference's)")
+        if item["coordinate"] in seen:
+            r.fail(f"{key}.coordinate", f"{item['coordinate']!r} has a reference already")
+        seen.add(item["coordinate"])
+        out.append((item["coordinate"], r.function(item["reference"], f"{key}.reference")))
+    return tuple(out)
 
 
 def _dampers(r: _Reader, data: dict) -> bool:

@@ -21,14 +21,20 @@ from scipy.interpolate import BSpline, PPoly
 
 from .functions import Constant, Sines, Table
 
-__all__ = ["SceneArrays", "compile_scene", "scene_view", "function_data", "scratch_size", "SHEAD"]
+__all__ = ["SceneArrays", "compile_scene", "scene_view", "function_data", "scratch_size", "ct_offset", "SHEAD", "KA"]
 
-# SI header: sizes, then the offsets of the blocks of SI and SF
+# SI header: sizes, then the offsets of the blocks of SI and SF; the actuators' and the computed
+# torque's (issue 26) after the first ones, so that the earlier offsets stay where they were
 (S_N, S_NT, S_BASE, S_G, S_COUPLED, S_K, S_M, S_NS, S_ND, S_NF) = range(10)
 (S_BASE_FN, S_LOAD_LINK, S_LOAD_KIND, S_LOAD_LOCAL, S_LOAD_FN, S_TORQUE_IDX, S_TORQUE_FN, S_SPRING_IDX,
  S_DAMPER_IDX, S_FN_KIND, S_FN_PTR) = range(10, 21)
 (S_LOAD_X, S_LOAD_POINT, S_STIFFNESS, S_REST, S_DAMPING, S_GRAV, S_C, S_D, S_FN_DATA) = range(21, 30)
-SHEAD = 30
+(S_NA, S_CT) = range(30, 32)                        # actuators; 1 with a computed torque
+(S_ACT_IDX, S_ACT_FN, S_ACT_FLAGS, S_CT_FN) = range(32, 36)
+S_ACT_PRM = 36                                      # per actuator: gain, b0, b1, b2, gear, cmin, cmax, fmin, fmax
+SHEAD = 37
+KA = 9                                              # floats per actuator
+ACT_CTRL_LIMITED, ACT_FORCE_LIMITED = 1, 2          # act_flags bits
 
 SceneArrays = namedtuple("SceneArrays", [
     "n", "nt", "has_base", "has_g", "coupled",
@@ -42,6 +48,8 @@ SceneArrays = namedtuple("SceneArrays", [
     "g",                             # (3,)
     "C", "d",                        # (nt, n), (nt,) coupling q_tree = C q + d
     "fn_data",
+    "na", "act_idx", "act_fn", "act_flags", "act_prm",   # actuators: (na,) x 3, (na, KA)
+    "ct", "ct_fn",                   # computed torque: 1 or 0; (n,) reference function of every coordinate
 ])
 
 
@@ -70,7 +78,14 @@ def function_data(fn) -> tuple[int, np.ndarray]:
 
 def scratch_size(n: int, nt: int) -> int:
     """The right-hand side's scratch: q_tree, q'_tree (nt,), the base values (18,), and for coupled
-    coordinates the model's A and its factor (n, n), Q and the applied forces (n,)."""
+    coordinates the model's A and its factor (n, n), Q and the applied forces (n,); then the computed
+    torque's (:func:`ct_offset`): the reference ``(r, r')`` (2n,), ``r''`` (n,), the tree's ``r''`` (nt,),
+    the torque (n,) and the other forces at the reference (n,)."""
+    return 2 * nt + 18 + 2 * n * n + 2 * n + 5 * n + nt
+
+
+def ct_offset(n: int, nt: int) -> int:
+    """Where the computed torque's part of the scratch starts (:func:`scratch_size`)."""
     return 2 * nt + 18 + 2 * n * n + 2 * n
 
 
@@ -94,6 +109,12 @@ def _blocks(plan):
         X.append(np.asarray(Xl, float)[:3, :4])
         point.append(np.asarray(load.point, float))
     torque_fn = [fid(f) for f in plan.torque_funcs]
+    acts = plan.actuator_set.actuators
+    act_fn = [fid(a.ctrl) for a in acts]
+    act_flags = [(ACT_CTRL_LIMITED if a.ctrlrange is not None else 0) | (ACT_FORCE_LIMITED if a.forcerange is not None
+                                                                         else 0) for a in acts]
+    act_prm = [[a.gain, *a.bias, a.gear, *(a.ctrlrange or (0.0, 0.0)), *(a.forcerange or (0.0, 0.0))] for a in acts]
+    ct_fn = [fid(f) for f in plan.reference_funcs] if plan.reference_funcs else []
     coupled = model.coupling is not None
     C, d = model.coupling if coupled else (np.zeros((0, 0)), np.zeros(0))
     g = np.zeros(3) if plan.gravity_vector is None else np.asarray(plan.gravity_vector, float)
@@ -105,18 +126,26 @@ def _blocks(plan):
             plan.damper_index, [k for k, _ in fns], ptr]
     floats = [np.reshape(X, (-1,)), np.reshape(point, (-1,)), plan.stiffness, plan.rest, plan.damping, g,
               np.ravel(C), np.ravel(d), data]
-    return sizes, ints, floats
+    more_sizes = [len(acts), int(bool(ct_fn))]
+    more_ints = [[a.index for a in acts], act_fn, act_flags, ct_fn]
+    more_floats = [np.reshape(act_prm, (-1,))]
+    return sizes, ints, floats, more_sizes, more_ints, more_floats
 
 
 def compile_scene(plan) -> tuple[np.ndarray, np.ndarray]:
     """``(SI, SF)`` of a :class:`~urdf2links.scenes.plan.Plan` (see the module doc)."""
-    sizes, ints, floats = _blocks(plan)
-    ints = [np.asarray(a, dtype=np.int64).ravel() for a in ints]
-    floats = [np.asarray(a, dtype=float).ravel() for a in floats]
+    sizes, ints, floats, more_sizes, more_ints, more_floats = _blocks(plan)
+    ints = [np.asarray(a, dtype=np.int64).ravel() for a in ints + more_ints]
+    floats = [np.asarray(a, dtype=float).ravel() for a in floats + more_floats]
     head = np.zeros(SHEAD, np.int64)
     head[:10] = sizes
-    head[S_BASE_FN:S_FN_PTR + 1] = SHEAD + np.cumsum([0] + [a.size for a in ints[:-1]])
-    head[S_LOAD_X:S_FN_DATA + 1] = np.cumsum([0] + [a.size for a in floats[:-1]])
+    head[S_NA:S_CT + 1] = more_sizes
+    at_i = SHEAD + np.cumsum([0] + [a.size for a in ints[:-1]])
+    at_f = np.cumsum([0] + [a.size for a in floats[:-1]])
+    head[S_BASE_FN:S_FN_PTR + 1] = at_i[:11]
+    head[S_ACT_IDX:S_CT_FN + 1] = at_i[11:]
+    head[S_LOAD_X:S_FN_DATA + 1] = at_f[:9]
+    head[S_ACT_PRM] = at_f[9]
     return np.concatenate([head] + ints), np.concatenate(floats)
 
 
@@ -128,7 +157,11 @@ def scene_view(SI, SF) -> SceneArrays:
     vi[4] = vi[4].reshape(k, 3)
     nc = nt * n if coupled else 0
     lens_f = [12 * k, 3 * k, ns, ns, nd, 3, nc, nt if coupled else 0]
-    vf = [SF[SI[S_LOAD_X + j]:SI[S_LOAD_X + j] + lens_f[j]] for j in range(8)] + [SF[SI[S_FN_DATA]:]]
+    vf = [SF[SI[S_LOAD_X + j]:SI[S_LOAD_X + j] + lens_f[j]] for j in range(8)] + [SF[SI[S_FN_DATA]:SI[S_ACT_PRM]]]
     vf[0], vf[1] = vf[0].reshape(k, 3, 4), vf[1].reshape(k, 3)
     vf[6] = vf[6].reshape((nt, n) if coupled else (0, 0))
-    return SceneArrays(n, nt, has_base, has_g, coupled, *vi, *vf)
+    na, ct = int(SI[S_NA]), int(SI[S_CT])
+    va = [SI[SI[S_ACT_IDX + j]:SI[S_ACT_IDX + j] + na] for j in range(3)]
+    prm = SF[SI[S_ACT_PRM]:SI[S_ACT_PRM] + KA * na].reshape(na, KA)
+    ct_fn = SI[SI[S_CT_FN]:SI[S_CT_FN] + (n if ct else 0)]
+    return SceneArrays(n, nt, has_base, has_g, coupled, *vi, *vf, na, *va, prm, ct, ct_fn)

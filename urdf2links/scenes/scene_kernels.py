@@ -4,7 +4,8 @@
 (:mod:`urdf2links.scenes.scene_arrays`) next to the tree's (:mod:`urdf2links.dynamics.tree_arrays`), without
 Python, so the compiled integration loops (:mod:`urdf2links.integration.loops`) call it directly. It computes
 exactly the terms the plan lists: flags switch off the base (no base factors, no ``-dL/dt``), G (zero
-gravity), Q (no wrench is added), tau, springs and dampers. Without coupled coordinates ``q''`` is
+gravity), Q (no wrench is added), tau, springs, dampers, actuators (MuJoCo's law, E55) and the
+computed torque (the scene's inverse dynamics at its reference, E57, one more O(n) pass). Without coupled coordinates ``q''`` is
 solved in place by the tree-sparse factorization (:mod:`urdf2links.dynamics.factor`, E47); with them, by a
 dense Cholesky of ``C^T A C`` (E46).
 """
@@ -15,11 +16,20 @@ import numpy as np
 from numba import njit
 
 from ..dynamics.factor import cholesky, cholesky_solve, ltdl, ltdl_solve
+from ..dynamics.inverse_kernels import kinematics_acc, own_armature
 from ..dynamics.kernels import add_wrench, base_power, clear_wrenches, dynamics, energies, kinematics
 from ..dynamics.model_kernels import reduce_mass, reduce_vector
 from ..dynamics.tree_arrays import W_B, W_Q, W_SIZE, nn
 from .scene_arrays import (
+    KA,
+    S_ACT_FLAGS,
+    S_ACT_FN,
+    S_ACT_IDX,
+    S_ACT_PRM,
     S_BASE_FN,
+    S_CT,
+    S_CT_FN,
+    S_NA,
     S_C,
     S_D,
     S_DAMPER_IDX,
@@ -43,7 +53,7 @@ from .scene_arrays import (
     scratch_size,
 )
 
-__all__ = ["CompiledScene", "scene_rhs", "scene_energies", "fn_eval", "fn_data_eval"]
+__all__ = ["CompiledScene", "scene_rhs", "scene_energies", "fn_eval", "fn_data_eval", "computed_torque", "ct_torque_at"]
 
 
 @njit(cache=True)
@@ -146,28 +156,141 @@ def _apply_loads(SI, SF, I, W, t):
 
 
 @njit(cache=True)
-def _applied(SI, SF, t, y, Q, iQ, f, jf):
-    """``f[jf:jf + n]``: every generalized force the scene applies besides ``-(e + G)``: Q of the
-    loads (``Q[iQ:]``, when there are loads), joint torques, dampers ``-c q'`` and springs
-    ``-k (q - rest)``. Returns the power ``q' . f`` of the non-potential ones (springs excluded)."""
+def _actuators(SI, SF, t, y, iy, f, jf):
+    """Every actuator's generalized force (E55) at ``t``, ``q = y[iy:iy + n]``, ``q' = y[iy + n:]`` added to
+    ``f[jf:]``: MuJoCo's order (``mj_fwdActuation``): ctrl clamped to ctrlrange, ``gain c + (b0 + b1 gear q
+    + b2 gear q')``, clamped to forcerange, times the gear (the joint transmission's moment)."""
     n = SI[0]
-    for i in range(n):
-        f[jf + i] = Q[iQ + i] if SI[5] > 0 else 0.0
+    ai, af, fl, pr = SI[S_ACT_IDX], SI[S_ACT_FN], SI[S_ACT_FLAGS], SI[S_ACT_PRM]
+    for j in range(SI[S_NA]):
+        i = SI[ai + j]
+        p = pr + KA * j
+        c = fn_eval(SI, SF, SI[af + j], t, 0)
+        flags = SI[fl + j]
+        if flags & 1:
+            c = min(max(c, SF[p + 5]), SF[p + 6])
+        gear = SF[p + 4]
+        a = SF[p] * c + (SF[p + 1] + SF[p + 2] * (y[iy + i] * gear) + SF[p + 3] * (y[iy + n + i] * gear))
+        if flags & 2:
+            a = min(max(a, SF[p + 7]), SF[p + 8])
+        f[jf + i] += gear * a
+
+
+@njit(cache=True)
+def _inputs(SI, SF, t, y, iy, f, jf):
+    """Joint torques, dampers ``-c q'`` and actuators at ``(t, q = y[iy:], q' = y[iy + n:])`` added to ``f[jf:]``."""
+    n = SI[0]
     ti, tf = SI[S_TORQUE_IDX], SI[S_TORQUE_FN]
     for j in range(SI[6]):
         f[jf + SI[ti + j]] += fn_eval(SI, SF, SI[tf + j], t, 0)
     di, dc = SI[S_DAMPER_IDX], SI[S_DAMPING]
     for j in range(SI[8]):
         i = SI[di + j]
-        f[jf + i] -= SF[dc + j] * y[n + i]
-    P = 0.0
-    for i in range(n):
-        P += y[n + i] * f[jf + i]
+        f[jf + i] -= SF[dc + j] * y[iy + n + i]
+    if SI[S_NA] > 0:
+        _actuators(SI, SF, t, y, iy, f, jf)
+
+
+@njit(cache=True)
+def _springs(SI, SF, y, iy, f, jf):
+    """Springs ``-k (q - rest)`` at ``q = y[iy:]`` added to ``f[jf:]``."""
     si, k, rest = SI[S_SPRING_IDX], SI[S_STIFFNESS], SI[S_REST]
     for j in range(SI[7]):
         i = SI[si + j]
-        f[jf + i] -= SF[k + j] * (y[i] - SF[rest + j])
+        f[jf + i] -= SF[k + j] * (y[iy + i] - SF[rest + j])
+
+
+@njit(cache=True)
+def _applied(SI, SF, t, y, Q, iQ, f, jf, X):
+    """``f[jf:jf + n]``: every generalized force the scene applies besides ``-(e + G)``: Q of the
+    loads (``Q[iQ:]``, when there are loads), joint torques, dampers ``-c q'``, actuators, the computed
+    torque (already in ``X``, :func:`computed_torque`) and springs ``-k (q - rest)``. Returns the power
+    ``q' . f`` of the non-potential ones (springs excluded)."""
+    n = SI[0]
+    for i in range(n):
+        f[jf + i] = Q[iQ + i] if SI[5] > 0 else 0.0
+    _inputs(SI, SF, t, y, 0, f, jf)
+    if SI[S_CT] > 0:
+        xt = ct_torque_at(n, SI[1])
+        for i in range(n):
+            f[jf + i] += X[xt + i]
+    P = 0.0
+    for i in range(n):
+        P += y[n + i] * f[jf + i]
+    _springs(SI, SF, y, 0, f, jf)
     return P
+
+
+@njit(cache=True)
+def ct_torque_at(n, nt):
+    """Where :func:`computed_torque` leaves the torque in the scene's scratch (scene_arrays.scratch_size)."""
+    return 2 * nt + 18 + 2 * n * n + 2 * n + 3 * n + nt
+
+
+@njit(cache=True)
+def computed_torque(t, I, F, W, SI, SF, X):
+    """The computed torque at ``t`` (E57) into ``X[ct_torque_at(n, nt):]`` (n,): the inverse dynamics of
+    the scene at its reference ``(r, r', r'')(t)`` (every coordinate's ``ct_fn``): ``A r'' + e + G - Q``
+    (E54; the scene's base and loads at ``t``) minus every other force the scene applies there (torques,
+    dampers, actuators, springs), so that ``q = r`` solves the scene when it starts on it. Overwrites the
+    tree's scratch ``W`` and the start of ``X``."""
+    n, nt = SI[0], SI[1]
+    has_base, coupled, loads = SI[2] != 0, SI[4] != 0, SI[5] > 0
+    g = SI[S_GRAV]
+    gx, gy, gz = SF[g], SF[g + 1], SF[g + 2]
+    xb = 2 * nt
+    xr = 2 * nt + 18 + 2 * n * n + 2 * n
+    xa = xr + 2 * n
+    xq = xa + n
+    xt = xq + nt
+    xo = xt + n
+    cf = SI[S_CT_FN]
+    for i in range(n):
+        j = SI[cf + i]
+        X[xr + i] = fn_eval(SI, SF, j, t, 0)
+        X[xr + n + i] = fn_eval(SI, SF, j, t, 1)
+        X[xa + i] = fn_eval(SI, SF, j, t, 2)
+    if has_base:
+        _base_values(SI, SF, t, X, xb)
+    if coupled:
+        C = SI[S_C]
+        _tree_state(SI, SF, X, xr, X, xr + n, 1.0, X)
+        for a in range(nt):
+            s = 0.0
+            for j in range(n):
+                s += SF[C + a * n + j] * X[xa + j]
+            X[xq + a] = s
+        kinematics_acc(I, F, W, X, 0, X, nt, X, xq, X, xb, has_base, gx, gy, gz)
+    else:
+        kinematics_acc(I, F, W, X, xr, X, xr + n, X, xa, X, xb, has_base, gx, gy, gz)
+    if loads:
+        clear_wrenches(I, W)
+        _apply_loads(SI, SF, I, W, t)
+    dynamics(I, F, W, False, loads, False)
+    own_armature(I, F, W, X, xq if coupled else xa)
+    wb, wq = nn(I[W_B]), nn(I[W_Q])
+    if coupled:
+        C = SI[S_C]
+        for i in range(n):
+            s = 0.0
+            for a in range(nt):
+                v = -W[wb + a]
+                if loads:
+                    v -= W[wq + a]
+                s += SF[C + a * n + i] * v
+            X[xt + i] = s
+    else:
+        for i in range(n):
+            v = -W[wb + i]
+            if loads:
+                v -= W[wq + i]
+            X[xt + i] = v
+    for i in range(n):
+        X[xo + i] = 0.0
+    _inputs(SI, SF, t, X, xr, X, xo)
+    _springs(SI, SF, X, xr, X, xo)
+    for i in range(n):
+        X[xt + i] -= X[xo + i]
 
 
 @njit(cache=True)
@@ -181,7 +304,7 @@ def _coupled_solve(SI, SF, I, W, X, t, y, out):
     xf = xl + n * n
     if SI[5] > 0:
         reduce_vector(C, W, I[W_Q], X, xf + n, 1.0)
-    P = _applied(SI, SF, t, y, X, xf + n, X, xf)
+    P = _applied(SI, SF, t, y, X, xf + n, X, xf, X)
     reduce_vector(C, W, I[W_B], out, n, 1.0)
     for i in range(n):
         out[n + i] += X[xf + i]
@@ -197,14 +320,16 @@ def scene_rhs(t, y, out, I, F, W, SI, SF, X):
     """``out = (q', q'', P)`` (2n + 1,) at ``(t, y = (q, q', W))``; ``W`` the tree's scratch, ``X``
     the scene's (:func:`~urdf2links.scenes.scene_arrays.scratch_size`). Returns -1, or the index of the
     failing pivot (then ``out`` is NaN). ``P`` is the power of the non-potential forces
-    ``q' . (Q + tau - c q')`` minus the explicit rate ``dE/dt - dV/dt`` of a moving base (see
-    :mod:`urdf2links.scenes.plan`)."""
+    ``q' . (Q + tau - c q' + actuators + computed torque)`` minus the explicit rate ``dE/dt - dV/dt`` of a
+    moving base (see :mod:`urdf2links.scenes.plan`)."""
     n, nt = SI[0], SI[1]
     has_base, coupled, loads = SI[2] != 0, SI[4] != 0, SI[5] > 0
-    applied = loads or SI[6] > 0 or SI[7] > 0 or SI[8] > 0
+    applied = loads or SI[6] > 0 or SI[7] > 0 or SI[8] > 0 or SI[S_NA] > 0 or SI[S_CT] > 0
     g = SI[S_GRAV]
     gx, gy, gz = SF[g], SF[g + 1], SF[g + 2]
     xb = 2 * nt
+    if SI[S_CT] > 0:            # first: it uses the tree's scratch for its own pass
+        computed_torque(t, I, F, W, SI, SF, X)
     if has_base:
         _base_values(SI, SF, t, X, xb)
     if coupled:
@@ -225,7 +350,7 @@ def scene_rhs(t, y, out, I, F, W, SI, SF, X):
         wb = nn(I[W_B])
         if applied:
             xf = 2 * nt + 18
-            P = _applied(SI, SF, t, y, W, I[W_Q], X, xf)
+            P = _applied(SI, SF, t, y, W, I[W_Q], X, xf, X)
             for i in range(n):
                 out[n + i] = W[wb + i] + X[xf + i]
         else:
@@ -313,6 +438,16 @@ class CompiledScene:
         if pivot >= 0:
             self.failure(t, y)
         return out
+
+    def computed_torque(self, t) -> np.ndarray:
+        """The computed torque (n,) at ``t`` (:func:`computed_torque`; zeros without one)."""
+        n = self.plan.n
+        if self.SI[S_CT] == 0:
+            return np.zeros(n)
+        I, F, W, SI, SF, X = self.fresh_args()
+        computed_torque(float(t), I, F, W, SI, SF, X)
+        xt = ct_torque_at(n, int(SI[1]))
+        return X[xt:xt + n].copy()
 
     def energies(self, t, Q, QD):
         """``(E, V, h)``, each (m,), at sample times ``t`` (m,) and states ``Q``, ``QD`` (m, n)."""

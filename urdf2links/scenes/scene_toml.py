@@ -20,7 +20,8 @@ from ..errors import SceneError, URDFError
 from ..parsers.xacro_input import parse_xacro_arg
 from .scene import RunSettings, Scene, default_scene, load_scene
 
-__all__ = ["scene_toml", "write_scene", "scene_or_robot", "scene_from_args", "write_scene_option", "xacro_args_of"]
+__all__ = ["scene_toml", "write_scene", "scene_or_robot", "scene_from_args", "write_scene_option", "xacro_args_of",
+           "hold_of"]
 
 
 def _value(v) -> str:
@@ -67,8 +68,12 @@ def _run_lines(run: RunSettings) -> list[str]:
 def scene_toml(scene: Scene, *, folder=None) -> str:
     """``scene`` as TOML text (robot path relative to ``folder`` when given). SceneError for a scene
     with time functions (base motion, loads, torques), which this writer does not spell."""
+    from .functions import Constant
+
     functions = [w for w, on in (("[base]", scene.base is not None), ("[[force]]/[[moment]]", bool(scene.loads)),
-                                 ("[[torque]]", bool(scene.torques))) if on]
+                                 ("[[torque]]", bool(scene.torques)), ("[[computed_torque]]", bool(scene.computed_torque)),
+                                 ("[[actuator]] ctrl", any(not isinstance(a.ctrl, Constant) for a in scene.actuators)))
+                 if on]
     if functions:
         raise SceneError(f"scene {scene.name!r}: {', '.join(functions)} hold functions of time, which cannot be "
                          "written back as TOML; copy the scene file instead")
@@ -88,14 +93,40 @@ def scene_toml(scene: Scene, *, folder=None) -> str:
             f"from_urdf = {_value(scene.urdf_damping)}", ""]
     if scene.file_springs:
         out += ["[springs]", "# each MJCF hinge's and slide's stiffness as a spring at its springref", "from_file = true", ""]
-    if scene.gravcomp:
-        out += ["[gravcomp]", "# each MJCF body's gravcomp: a force -gravcomp m g at its COM", "from_file = true", ""]
+    if scene.gravcomp or scene.gravcomp_factor is not None or scene.gravcomp_bodies:
+        out += ["[gravcomp]", "# MuJoCo's body gravcomp: a force -gravcomp m g at each body's COM"]
+        out += ["from_file = true"] if scene.gravcomp else []
+        out += [f"factor = {_value(float(scene.gravcomp_factor))}"] if scene.gravcomp_factor is not None else []
+        out += [f"bodies = {_value({b: float(f) for b, f in scene.gravcomp_bodies})}"] if scene.gravcomp_bodies else []
+        out += [""]
+    out += _actuator_lines(scene.actuators)
     out += ["[initial]", f"q = {_value({k: float(v) for k, v in scene.q0.items()})}",
             f"qd = {_value({k: float(v) for k, v in scene.qd0.items()})}", ""]
     out += _run_lines(scene.run) + [""]
     if scene.link_poses:
         out += ["[record]", f"link_poses = {_value(list(scene.link_poses))}", ""]
     return "\n".join(out)
+
+
+def _actuator_lines(actuators) -> list[str]:
+    """``[[actuator]]`` blocks of actuators whose ctrl is a constant (``--hold``'s servos, or a scene's)."""
+    out = []
+    for a in actuators:
+        out.append("[[actuator]]" + ("  # --hold: critically damped on A_ii at q0 (E56)" if a.source == "hold" else ""))
+        out.append(f"name = {_value(a.name)}")
+        if a.coordinate is not None:
+            out += [f"coordinate = {_value(a.coordinate)}", f"kind = {_value(a.kind)}"]
+            if a.kind == "position":
+                out += [f"kp = {_value(float(a.kp))}", f"kv = {_value(float(a.kv))}"]
+            elif a.kind == "velocity":
+                out += [f"kv = {_value(float(a.kv))}"]
+            elif a.kind == "general":
+                out += [f"gainprm = {_value([float(a.gain)])}", f"biasprm = {_value([float(b) for b in a.bias])}"]
+            out.append(f"gear = {_value(float(a.gear))}")
+            out += [f"ctrlrange = {_value(list(map(float, a.ctrlrange)))}"] if a.ctrlrange is not None else []
+            out += [f"forcerange = {_value(list(map(float, a.forcerange)))}"] if a.forcerange is not None else []
+        out += [f"ctrl = {_value(float(a.ctrl.value))}", ""]
+    return out
 
 
 def write_scene(scene: Scene, path) -> Path:
@@ -113,13 +144,14 @@ LOAD_OPTIONS = ("floating_base", "inertia", "mimic", "strict", "package_dirs", "
 
 
 def scene_or_robot(path, *, floating: bool = False, q0: str = "zero", seed: int = 0, t_end: float | None = None,
-                   xacro_args=None, package_dirs=(), load: dict | None = None) -> Scene:
+                   xacro_args=None, package_dirs=(), load: dict | None = None, hold: float | None = None) -> Scene:
     """A scene file (``.toml``), or the default scene of a robot file (``.urdf``, ``.xacro``, ...) with
     these options (``t_end`` default 1 s). ``load``: loading options given on the command line
     (``inertia``, ``mimic``, ``strict``, ``package_dirs``, ``xacro_args``; :func:`load_options_of`);
     for a scene file they replace those of its ``[robot]`` (:func:`override_loading` says so). The
     default scene's options (``--floating``, ``--q0``) are refused for a scene file, which says its own
-    robot and initial state."""
+    robot and initial state; so is ``hold`` (``--hold``: the default scene's servos; a scene file names its
+    actuators)."""
     path = Path(path)
     load = dict(load or {})
     if xacro_args:
@@ -128,15 +160,15 @@ def scene_or_robot(path, *, floating: bool = False, q0: str = "zero", seed: int 
         load["package_dirs"] = tuple(package_dirs)
     if path.suffix == ".toml":
         given = [o for o, on in (("--floating", floating or load.pop("floating_base", False)),
-                                 ("--q0", q0 != "zero")) if on]
+                                 ("--q0", q0 != "zero"), ("--hold", hold is not None)) if on]
         if given:
             raise SceneError(f"{path}: {', '.join(given)} apply to a robot file run in its default scene; a scene "
-                             "file names its robot and initial state in [robot] and [initial]")
+                             "file names its robot, initial state and actuators in [robot], [initial] and [[actuator]]")
         return override_loading(load_scene(path), load)
     opts = {k: v for k, v in load.items() if k in ("inertia", "mimic", "strict")}
     return default_scene(path, floating=floating or bool(load.get("floating_base")), q0=q0, seed=seed,
                          t_end=1.0 if t_end is None else t_end, xacro_args=load.get("xacro_args"),
-                         package_dirs=load.get("package_dirs", ()), **opts)
+                         package_dirs=load.get("package_dirs", ()), hold=hold, **opts)
 
 
 def override_loading(scene: Scene, load: dict) -> Scene:
@@ -171,12 +203,25 @@ def load_options_of(args) -> dict:
     return {k: v for k, v in out.items() if v not in (None, (), {}, False)}
 
 
+def hold_of(args) -> float | None:
+    """``--hold`` (with ``--hold-bandwidth``): the servos' bandwidth in Hz, or None; a SceneError for a
+    bandwidth given without ``--hold``."""
+    from .actuators import HOLD_BANDWIDTH_HZ
+
+    bandwidth = getattr(args, "hold_bandwidth", None)
+    if not getattr(args, "hold", False):
+        if bandwidth is not None:
+            raise SceneError("--hold-bandwidth sets the servos of --hold: give --hold too")
+        return None
+    return HOLD_BANDWIDTH_HZ if bandwidth is None else bandwidth
+
+
 def scene_from_args(args):
     """The scene a ``simulate``/``compare``/``sweep``/``tradeoff`` command runs: ``args.scene`` as a scene
     file (with the loading options given), or a robot file in its default scene with ``--floating``,
-    ``--q0``, ``--seed``, ``--t-end`` and the loading options."""
+    ``--q0``, ``--seed``, ``--t-end``, ``--hold`` and the loading options."""
     return scene_or_robot(args.scene, q0=getattr(args, "q0", "zero"), seed=getattr(args, "seed", 0),
-                          t_end=getattr(args, "t_end", None), load=load_options_of(args))
+                          t_end=getattr(args, "t_end", None), load=load_options_of(args), hold=hold_of(args))
 
 
 def write_scene_option(args, scene) -> None:
