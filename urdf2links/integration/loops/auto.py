@@ -16,7 +16,7 @@ import numpy as np
 from ..dense import DenseOutput
 from .erk import TABLEAUX
 from .radau import R_HNEW, R_HOLD, R_RATE_D, R_RATE_I, R_RHO, R_RHO0, R_T
-from .stiffness import BACKOFF, E_HLAMB, E_HSUM, E_IASTI, STIFF_HLAMBDA, STIFF_TESTS
+from .stiffness import BACKOFF, E_HLAMB, E_HSUM, E_IASTI, E_RATIO, RATIO_HLAMBDA, STIFF_HLAMBDA, STIFF_RATIO, STIFF_TESTS
 
 __all__ = ["drive_auto", "ENDS"]
 
@@ -28,13 +28,14 @@ ENDS = {1: "t_end", 2: "angle guard", 4: "stiff", 5: "non-stiff", 0: "budget", -
 def _stiff_reason(out, tests: int, record: dict) -> tuple[str, dict]:
     st, ts = out.st, out.t
     h = float(ts[-1] - ts[-2]) if ts.size > 1 else float(st[1])
-    hl = float(st[E_HLAMB])
+    hl, ratio = float(st[E_HLAMB]), float(st[E_RATIO])
     mean = float(st[E_HSUM] / max(st[E_IASTI], 1.0))
     per_step = record["nfev"] / max(record["steps"], 1)        # evaluations per accepted step, rejections included
-    figures = {"h_lambda": hl, "mean_h_lambda": mean, "lambda": hl / h if h > 0 else float("inf"), "h": h,
-               "tests": tests, "evals_per_step": per_step}
-    text = (f"stiff at t={float(ts[-1]):.6g}: DOP853's step was held by a stiff mode, h|lambda| > {STIFF_HLAMBDA:g} at "
-            f"{tests} tests (mean {mean:.3g}; last {hl:.3g}: |lambda| ~ {figures['lambda']:.3g} /s at h = {h:.3g} s)")
+    figures = {"h_lambda": hl, "mean_h_lambda": mean, "stiffness_ratio": ratio, "lambda": hl / h if h > 0 else
+               float("inf"), "h": h, "tests": tests, "evals_per_step": per_step}
+    text = (f"stiff at t={float(ts[-1]):.6g}: DOP853's step was held by a stiff mode at {tests} tests (h|lambda| > "
+            f"{STIFF_HLAMBDA:g}, or > {RATIO_HLAMBDA:g} with a stiffness ratio > {STIFF_RATIO:g}; last h|lambda| = {hl:.3g}, "
+            f"ratio {ratio:.3g}: |lambda| ~ {figures['lambda']:.3g} /s at h = {h:.3g} s)")
     return text, figures
 
 

@@ -226,7 +226,7 @@ def erk_chunk(tab, ctl, state, store, guard, counters, chunk, args):
         status, t_new, h, h_abs = _attempt(tab, ctl, t, h_abs, y, f, K, work, args, counters)
         if status != 0:
             break
-        stiff = detect and explicit_stiff(st, h, y_new, f_new, ystage, K[tab.stages - 1])
+        stiff = detect and explicit_stiff(st, h, y_new, f_new, f, ystage, K[tab.stages - 1])
         if dense and not _dense_row(tab, t, h, y, y_new, f_new, K, ystage, dens[stored], args, counters):
             status = -2
             break

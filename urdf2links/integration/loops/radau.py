@@ -8,15 +8,16 @@ and one complex linear system of the size of the problem (the constants ``T``, `
 error weights ``E`` and the dense-output matrix ``P`` are scipy's, :mod:`scipy.integrate._ivp.radau`).
 Hairer's strategies, not scipy's, are followed where they differ:
 
-* the user's tolerances are mapped to ``rtol' = 0.1 rtol^(2/3)``, ``atol' = atol rtol' / rtol``
-  (the embedded error estimate is of order 3; with this map the global error comes out near
-  ``rtol``, as DOP853's does at the same ``rtol``);
+* the error estimate (of order 3) is held to ``rtol' = rtol^(5/6)``, ``atol' = atol rtol' / rtol``
+  (:func:`radau_tolerances`: the global error then comes out near ``rtol``, as DOP853's does at the
+  same ``rtol``; RADAU5's own map ``0.1 rtol^(2/3)`` aims at the local error and left the global
+  error 3-6x larger on the shipped scenes);
 * the Newton iteration stops once ``faccon |dW| <= fnewt`` with the contraction factor ``faccon``
   carried over from the previous step, so a good predictor converges in one iteration;
 * the Jacobian is kept across steps and recomputed only after a step whose iteration contracted
-  slower than ``thet`` (:data:`THET`), after a rejection made with a stale one, and (``auto``) every
-  :data:`~urdf2links.integration.loops.stiffness.JAC_REFRESH` steps; the factorisations are kept while
-  the step size changes by less than 20 %% (``1 <= h_new / h <= 1.2`` keeps ``h``);
+  slower than :data:`THET` (RADAU5's 0.001), after a rejection made with a stale one, and (``auto``)
+  every :data:`~urdf2links.integration.loops.stiffness.JAC_REFRESH` steps; the factorisations are
+  kept while the step size changes by less than 20 % (``1 <= h_new / h <= 1.2`` keeps ``h``);
 * the predictive (Gustafsson) step-size controller, the error estimate refined with one more
   evaluation after a rejection, the first step cut by 10 when rejected.
 
@@ -61,13 +62,16 @@ MU_COMPLEX = complex(_sr.MU_COMPLEX)
 
 #: Newton iterations per attempt before the step is halved (RADAU5: 7).
 NIT = 7
-#: Contraction factor above which the Jacobian is recomputed after the step (RADAU5's ``thet``:
-#: 0.001; larger for costly Jacobians: ours costs 2n evaluations). Measured on the Allegro hands at
-#: rtol 1e-10: 0.001 -> (steps, evaluations) ... see docs/accuracy.md (the implicit loop).
+#: Contraction factor above which the Jacobian is recomputed after the step: RADAU5's default. Its
+#: manual suggests 0.1 when Jacobians are costly (ours costs 2n evaluations); measured at rtol 1e-10,
+#: 0.1 saves evaluations on iCub's original inertias (n = 32: 12 735 -> 5 814) and TIAGo without hand
+#: (5 516 -> 3 752), but on the stiff spring arm, whose stiff mode oscillates (-44 +- 2017i /s), the
+#: stale Jacobian's error estimate let the global error grow from 8 to 65 x rtol (1e-10; 3 -> 54 x at
+#: 1e-9): accuracy first.
 THET = 0.001
 SAFE, FACL, FACR, QUOT1, QUOT2 = 0.9, 5.0, 0.125, 1.0, 1.2
-import os as _os
-TOL_FACTOR, TOL_EXP = (float(v) for v in _os.environ.get("U2L_RADAU_MAP", "1,0.8333333333333334").split(","))
+#: The tolerance map ``rtol' = TOL_FACTOR rtol^TOL_EXP`` (:func:`radau_tolerances`).
+TOL_FACTOR, TOL_EXP = 1.0, 5.0 / 6.0
 CFAC = SAFE * (2 * NIT + 1)
 
 # st: the loop's state between steps and chunks
@@ -80,9 +84,14 @@ R_SIZE = 34
 
 
 def radau_tolerances(rtol: float, atol):
-    """RADAU5's map of the user's tolerances: ``(rtol', atol')`` with ``rtol' = 0.1 rtol^(2/3)``,
-    ``atol' = atol rtol' / rtol``; and the Newton tolerance ``fnewt = max(10 eps / rtol',
-    min(0.03, rtol'^0.5))``."""
+    """The tolerances the error estimate is held to: ``(rtol', atol', fnewt)`` with ``rtol' =
+    rtol^(5/6)``, ``atol' = atol rtol' / rtol`` and RADAU5's Newton tolerance ``fnewt = max(10 eps /
+    rtol', min(0.03, rtol'^0.5))``. The estimate is of order 3 (``~h^4``) for a method of order 5:
+    holding it at ``rtol^(5/6)`` makes the steps ``~rtol^(5/24)`` long and the global error (``~h^5``)
+    come out near ``rtol^(25/24)``, i.e. near ``rtol``, as DOP853's does at the same ``rtol``. RADAU5
+    itself maps ``rtol`` to ``0.1 rtol^(2/3)`` (for the local error): measured on the shipped spring arm
+    at rtol 1e-10 (against DOP853 at 1e-13) that gives a global error of 3.8e-10 where DOP853 gives
+    6.4e-11 and this map 1.0e-10; on the stiff spring arm 3.3e-9 against 7.7e-10 (docs/accuracy.md)."""
     r = TOL_FACTOR * rtol ** TOL_EXP
     a = np.asarray(atol, float) * (r / rtol)
     return r, a, max(10.0 * EPS / r, min(0.03, r ** 0.5))
@@ -175,7 +184,7 @@ def _predict(st, h, Z, Q, prev):
 
 
 @njit(cache=True)
-def _newton(t, h, y, scal, fnewt, st, arrays, lin, args, counters):
+def _newton(t, h, y, scal, fnewt, thet, st, arrays, lin, args, counters):
     """Simplified Newton iterations on the stage system from ``Z`` (RADAU5). Returns ``(code,
     iterations)``: 0 converged (``Z`` the stages), 1 divergence predicted (``st[R_HHFAC]`` the step
     factor), 2 too many iterations or no contraction, 3 the right-hand side failed at a stage."""
@@ -189,7 +198,7 @@ def _newton(t, h, y, scal, fnewt, st, arrays, lin, args, counters):
         for k in range(3):
             W[k, i] = TI[k, 0] * Z[0, i] + TI[k, 1] * Z[1, i] + TI[k, 2] * Z[2, i]
     faccon = max(st[R_FACCON], EPS) ** 0.8
-    theta = THET
+    theta = thet
     newt = 0
     code = 2
     while newt < NIT:
@@ -351,10 +360,10 @@ def _accept(t, h, last, err, quot, y, f0, ctl, st, arrays, dense3, args, counter
         st[R_REJECT] = 0.0
     st[R_HNEW] = hnew
     qt = hnew / h
-    if st[R_THETA] <= THET and QUOT1 <= qt <= QUOT2:
+    if st[R_THETA] <= ctl[6] and QUOT1 <= qt <= QUOT2:
         return True                          # same h, same factorisations
     st[R_H] = hnew
-    if st[R_THETA] > THET:
+    if st[R_THETA] > ctl[6]:
         st[R_NEED_JAC] = 1.0
     return True
 
@@ -386,7 +395,7 @@ def _step(ctl, st, y, f0, scal, arrays, dense3, lin, args, counters):
             cnt[2] += 1
             continue
         _predict(st, h, Z, Q, prev)
-        code, newt = _newton(t, h, y, scal, fnewt, st, arrays, lin, args, counters)
+        code, newt = _newton(t, h, y, scal, fnewt, ctl[6], st, arrays, lin, args, counters)
         err = 0.0
         if code == 0:
             err = _error(t, h, y, f0, scal, st[R_FIRST] != 0.0 or st[R_REJECT] != 0.0, st, arrays, lin, args,
@@ -421,7 +430,7 @@ def _step(ctl, st, y, f0, scal, arrays, dense3, lin, args, counters):
 def radau_chunk(ctl, state, store, guard, counters, chunk, args):
     """Up to ``chunk`` accepted steps of Radau IIA (5).
 
-    ``ctl = (t_end, rtol', atol' (d,), max_step, dense, fnewt)`` (tolerances mapped by
+    ``ctl = (t_end, rtol', atol' (d,), max_step, dense, fnewt, thet)`` (tolerances mapped by
     :func:`radau_tolerances`); ``state = (st, y, f0, arrays, dense3, lin)``: ``st`` (:data:`R_SIZE`,)
     the loop's state (``R_*``), ``y``, ``f0`` (d,) the state and its slope, ``arrays = (Z, W, F
     (3, d), ystage, fr (d,), fc (d,) complex, tmpr (nv,), tmpc (nv,) complex)``, ``dense3 = (Q (3, d),
