@@ -15,7 +15,7 @@ import numpy as np
 
 from ..dense import DenseOutput
 from .erk import TABLEAUX
-from .radau import R_HNEW, R_HOLD, R_RATE_D, R_RATE_I, R_RHO, R_RHO0, R_T
+from .radau import R_HDOP, R_HNEW, R_HOLD, R_RATE_D, R_RATE_I, R_RHO, R_RHO0, R_T
 from .stiffness import BACKOFF, E_HLAMB, E_HSUM, E_IASTI, E_RATIO, RATIO_HLAMBDA, STIFF_HLAMBDA, STIFF_RATIO, STIFF_TESTS
 
 __all__ = ["drive_auto", "ENDS"]
