@@ -1,7 +1,6 @@
 """method = "auto" (urdf2links.integration.loops.auto): DOP853 while a run is not stiff, Radau5 while it
-is, switching both ways; the record of its stretches; the default of scenes; on every shipped scene it
-is today's default (DOP853) to the bit, so at least as accurate; the explicit loop's rejection of
-non-finite trial steps."""
+is, switching both ways; the record of its stretches; the default of scenes; on every shipped scene at
+least as accurate as today's default (DOP853); the explicit loop's rejection of non-finite trial steps."""
 
 from __future__ import annotations
 
@@ -85,19 +84,24 @@ def _shipped_dop853_scenes():
 
 
 @pytest.mark.parametrize("name", _shipped_dop853_scenes())
-def test_auto_is_dop853_to_the_bit_on_every_shipped_scene(name):
-    """On every shipped scene that runs DOP853 (none is stiff: the stiffness test never calls it
-    stiff at its rtol) auto takes DOP853's steps and returns its states to the bit over the first
-    second: it is exactly as accurate as today's default at the same rtol. (The stiff hard case,
-    which runs Radau, switches: test_auto_records_its_stretches_in_simulate.)"""
+def test_auto_is_at_least_as_accurate_as_dop853_on_every_shipped_scene(name):
+    """Every shipped scene that runs DOP853, over its whole run at its own rtol: auto takes DOP853's steps
+    to the bit where the stiffness test never calls the run stiff (all but one), so it is exactly as
+    accurate. spring_arm_torques slows under its dampers and auto hands over to Radau5 at t = 4.29 s
+    (stiffness ratio 127, 15 % fewer evaluations): there its largest error against DOP853 at rtol 1e-13
+    must not exceed DOP853's (both 9.7e-11, reached before the switch; after it Radau5's 5e-11 against
+    DOP853's 5e-13, which is far below the rtol of 1e-10 asked)."""
     plan = as_plan(load_scene(shipped_robots_dir() / f"{name}.toml"))
-    T = min(plan.scene.run.t_end, 1.0)
-    auto = simulate(plan, t_end=T, method="auto", progress=False)
-    dop = simulate(plan, t_end=T, method="DOP853", progress=False)
-    assert auto.stats["methods_used"] == "DOP853"
-    assert auto.stats["nfev"] == dop.stats["nfev"] and auto.stats["nsteps"] == dop.stats["nsteps"]
-    np.testing.assert_array_equal(auto.q, dop.q)
-    np.testing.assert_array_equal(auto.qd, dop.qd)
+    auto = simulate(plan, method="auto", progress=False)
+    dop = simulate(plan, method="DOP853", progress=False)
+    if np.array_equal(auto.q, dop.q) and np.array_equal(auto.qd, dop.qd):
+        assert auto.stats["methods_used"] == "DOP853" and auto.stats["nfev"] == dop.stats["nfev"]
+        return
+    assert name == "spring_arm_torques", (name, auto.stats["methods_used"])      # the one that switches today
+    ref = simulate(plan, method="DOP853", rtol=1e-13, atol=1e-14, progress=False)
+    err_auto, err_dop = np.abs(auto.q - ref.q).max(), np.abs(dop.q - ref.q).max()
+    assert err_auto <= err_dop * (1 + 1e-9), (err_auto, err_dop)
+    assert err_auto <= 10 * plan.scene.run.rtol
 
 
 @needs_corpus

@@ -211,7 +211,7 @@ def run_radau(drv, loops, args, f0, t0, t1, y0, rtol, atol, dt, need_dense, stru
     y = y0.copy()
     f = f0.copy()
     state = (st, y, f, arrays, (np.zeros((3, d)), np.zeros(d)), lin)
-    ctl = (float(t1), r, a, max_step, need_dense, fnewt, radau.THET)
+    ctl = (float(t1), r, a, max_step, need_dense, fnewt, *radau.strategy_for(nq + nv))
     cap = 256
     ts, ys, dens = np.empty(cap), np.empty((cap, d)), np.empty((cap if need_dense else 0, 3, d))
     ts[0], ys[0] = t0, y0

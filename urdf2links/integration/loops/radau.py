@@ -20,9 +20,11 @@ Hairer's strategies, not scipy's, are followed where they differ:
   took a 1.1 s step to an error of 0.12 at rtol 1e-8; the second iteration costs the Allegro hand
   13 % more evaluations in ``auto``);
 * the Jacobian is kept across steps and recomputed only after a step whose iteration contracted
-  slower than :data:`THET` (RADAU5's 0.001), after a rejection made with a stale one, and (``auto``)
+  slower than ``thet`` (:func:`strategy_for`: RADAU5's 0.001, or its 0.1 for costly Jacobians beyond
+  20 differenced columns), after a rejection made with a stale one, and (``auto``)
   every :data:`~urdf2links.integration.loops.stiffness.JAC_REFRESH` steps; the factorisations are
-  kept while the step size changes by less than 20 % (``1 <= h_new / h <= 1.2`` keeps ``h``);
+  kept while the step size would change by less than 20 % (``1 <= h_new / h <= 1.2`` keeps ``h``;
+  for a large system ``0.99 .. 2``, RADAU5's advice: the factorisations cost ``n^3``);
 * the predictive (Gustafsson) step-size controller, the error estimate refined with one more
   evaluation after a rejection, the first step cut by 10 when rejected.
 
@@ -56,7 +58,7 @@ from .common import EPS, evaluate, guard_fires
 from .lu import lu_factor, lu_solve
 from .stiffness import JAC_REFRESH, MIN_IMPLICIT_STEPS, explicit_cheaper, spectral_radius
 
-__all__ = ["radau_chunk", "radau_jacobian", "radau_tolerances", "R_SIZE", "NIT", "THET", "C", "P",
+__all__ = ["radau_chunk", "radau_jacobian", "radau_tolerances", "strategy_for", "R_SIZE", "NIT", "THET", "THET_COSTLY", "C", "P",
            "R_T", "R_H", "R_STORED", "R_NQ", "R_NV", "R_DETECT", "R_RHO", "R_NJEV", "R_NLU", "R_NFEV0", "R_STEPS",
            "R_RATE_D", "R_RATE_I", "R_HNEW", "R_FIRST", "R_NEED_JAC", "R_RHO0", "R_HDOP", "R_EDOP"]
 
@@ -72,17 +74,38 @@ MU_COMPLEX = complex(_sr.MU_COMPLEX)
 
 #: Newton iterations per attempt before the step is halved (RADAU5: 7).
 NIT = 7
-#: Contraction factor above which the Jacobian is recomputed after the step: RADAU5's default. Its
-#: manual suggests 0.1 when Jacobians are costly (ours costs 2n evaluations); measured at rtol 1e-10,
-#: 0.1 saves evaluations on iCub's original inertias (n = 32: 12 735 -> 5 814) and TIAGo without hand
-#: (5 516 -> 3 752), but on the stiff spring arm, whose stiff mode oscillates (-44 +- 2017i /s), the
-#: stale Jacobian's error estimate let the global error grow from 8 to 65 x rtol (1e-10; 3 -> 54 x at
-#: 1e-9): accuracy first.
+#: Contraction factor above which the Jacobian is recomputed after the step, for a cheap Jacobian
+#: (:func:`strategy_for`): RADAU5's default.
 THET = 0.001
-SAFE, FACL, FACR, QUOT1, QUOT2 = 0.9, 5.0, 0.125, 1.0, 1.2
+#: ... and for a costly one (RADAU5's manual: "increase to 0.1 when Jacobian evaluations are costly").
+THET_COSTLY = 0.1
+#: Jacobian columns (differenced components) above which a Jacobian counts as costly: 20 evaluations,
+#: about three steps' worth (a step takes ~7).
+COSTLY_COLUMNS = 20
+
+
+def strategy_for(columns: int) -> tuple[float, float, float]:
+    """``(thet, quot1, quot2)`` of a system whose Jacobian differences ``columns`` components: RADAU5's
+    defaults (:data:`THET`, :data:`QUOT1`, :data:`QUOT2`) up to :data:`COSTLY_COLUMNS`, its settings for
+    costly Jacobians and large systems (:data:`THET_COSTLY`, :data:`QUOT_COSTLY`) beyond. Measured at
+    rtol 1e-10 (evaluations, 0.001 -> 0.1, and the error against DOP853 at 1e-13): TIAGo dual (2n =
+    202) 16 231 -> 3 557, 1.5e-10 -> 7.8e-11; TALOS full (2n = 88) 17 402 -> 7 816, 1.8e-9 -> 9.1e-10.
+    On the stiff spring arm (2n = 6, whose stiff mode oscillates: -44 +- 2017i /s) 0.1 let the stale
+    Jacobian's error estimate pass steps whose global error grew from 8 to 65 x rtol: a cheap Jacobian
+    is kept fresh."""
+    if columns <= COSTLY_COLUMNS:
+        return THET, QUOT1, QUOT2
+    return (THET_COSTLY, *QUOT_COSTLY)
+
+
+SAFE, FACL, FACR = 0.9, 5.0, 0.125
+CFAC = SAFE * (2 * NIT + 1)
+#: The step is kept (and with it the factorisations) while ``QUOT1 <= h_new / h <= QUOT2`` (RADAU5's
+#: defaults), ``QUOT_COSTLY`` for large systems (its manual: "for large full systems 0.99 and 2").
+QUOT1, QUOT2 = 1.0, 1.2
+QUOT_COSTLY = (0.99, 2.0)
 #: The tolerance map ``rtol' = TOL_FACTOR rtol^TOL_EXP`` (:func:`radau_tolerances`).
 TOL_FACTOR, TOL_EXP = 1.0, 5.0 / 6.0
-CFAC = SAFE * (2 * NIT + 1)
 
 # st: the loop's state between steps and chunks
 R_T, R_H, R_STORED, R_HOLD, R_FIRST, R_REJECT, R_FACCON, R_THETA = 0, 1, 2, 3, 4, 5, 6, 7
@@ -371,7 +394,7 @@ def _accept(t, h, last, err, quot, y, f0, ctl, st, arrays, dense3, args, counter
         st[R_REJECT] = 0.0
     st[R_HNEW] = hnew
     qt = hnew / h
-    if st[R_THETA] <= ctl[6] and QUOT1 <= qt <= QUOT2:
+    if st[R_THETA] <= ctl[6] and ctl[7] <= qt <= ctl[8]:
         return True                          # same h, same factorisations
     st[R_H] = hnew
     if st[R_THETA] > ctl[6]:
@@ -441,7 +464,7 @@ def _step(ctl, st, y, f0, scal, arrays, dense3, lin, args, counters):
 def radau_chunk(ctl, state, store, guard, counters, chunk, args):
     """Up to ``chunk`` accepted steps of Radau IIA (5).
 
-    ``ctl = (t_end, rtol', atol' (d,), max_step, dense, fnewt, thet)`` (tolerances mapped by
+    ``ctl = (t_end, rtol', atol' (d,), max_step, dense, fnewt, thet, quot1, quot2)`` (tolerances mapped by
     :func:`radau_tolerances`); ``state = (st, y, f0, arrays, dense3, lin)``: ``st`` (:data:`R_SIZE`,)
     the loop's state (``R_*``), ``y``, ``f0`` (d,) the state and its slope, ``arrays = (Z, W, F
     (3, d), ystage, fr (d,), fc (d,) complex, tmpr (nv,), tmpc (nv,) complex)``, ``dense3 = (Q (3, d),
