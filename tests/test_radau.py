@@ -1,5 +1,5 @@
 """Radau5, the compiled implicit loop (urdf2links.integration.loops.radau), and its pieces: the LU
-factorisation, the structured Jacobian and solves (E52, E53), the order of the method, stiff
+factorisation, the structured Jacobian and solves (E59, E60), the order of the method, stiff
 problems with known solutions, the dense output, the compiled loop against its interpreted twin
 and against scipy's Radau, the angle guard and the budgets."""
 
@@ -61,7 +61,7 @@ def _structured_jacobian(rng, n, nw=1):
 
 @pytest.mark.parametrize("h", [1e-3, 0.1, 10.0])
 def test_reduced_solves_equal_the_full_systems(h):
-    """(E53): eliminating x_q and x_w leaves an n x n system; its solution must be the full
+    """(E60): eliminating x_q and x_w leaves an n x n system; its solution must be the full
     (g - J) x = r solution, for the real and the complex g of Radau IIA, at short and long steps
     (to 1e-11 relative: the full systems' condition is ~1e3 here)."""
     rng = np.random.default_rng(7)
@@ -178,7 +178,7 @@ def test_radau5_dense_output_is_the_collocation_polynomial():
 def test_compiled_loop_equals_interpreted_and_general_solves(name):
     """The compiled loop against the same source interpreted on the compiled right-hand side wrapped
     in a lambda (same arithmetic in the rhs): the same steps and states to 1e-12 (the loops' own
-    rounding); and against the interpreted loop without the structure (full (2n + 1)-systems, E52
+    rounding); and against the interpreted loop without the structure (full (2n + 1)-systems, E59
     unused): the same steps (within 2), the final states to 1e-7 of each component's size. The
     reduced and the full solves round differently, and a Newton iteration stops anywhere within its
     tolerance fnewt scal ~ 1e-10 |y| (rtol 1e-8): over ~230 steps the two may drift ~2e-8 apart."""

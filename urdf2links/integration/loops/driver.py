@@ -178,7 +178,7 @@ def run_erk(drv, loops, tab, args, f0, t0, t1, y0, rtol, atol, dt, need_dense, *
 
 
 def structure_of(rhs, d: int) -> tuple[int, int]:
-    """``(nq, nv)`` of the system Radau5 solves: a scene's ``y = (q, q', W)`` (``nq = nv = n``, E52)
+    """``(nq, nv)`` of the system Radau5 solves: a scene's ``y = (q, q', W)`` (``nq = nv = n``, E59)
     for a compiled scene, else ``(0, d)`` (no structure known: full systems)."""
     if isinstance(rhs, CompiledScene) and d % 2 == 1:
         return (d - 1) // 2, (d - 1) // 2

@@ -30,10 +30,10 @@ Hairer's strategies, not scipy's, are followed where they differ:
 
 **The Jacobian** is forward differences of the compiled right-hand side inside the loop, and the
 linear algebra uses the structure of a scene's system ``y = (q, v, W)``, ``y' = (v, a(t, q, v),
-P(t, q, v))`` (E52): ``dq'/dq = 0``, ``dq'/dv = 1``, nothing depends on ``W``; only the ``2n`` columns
+P(t, q, v))`` (E59): ``dq'/dq = 0``, ``dq'/dv = 1``, nothing depends on ``W``; only the ``2n`` columns
 of ``q`` and ``v`` are differenced (``2n`` evaluations), and ``(g - J) x = r`` is solved by
 eliminating ``x_q = (r_q + x_v) / g`` and ``x_W``: one ``n x n`` system
-``(g - J_v - J_q / g) x_v = r_v + J_q r_q / g`` (E53), for ``g`` real and complex. A system without
+``(g - J_v - J_q / g) x_v = r_v + J_q r_q / g`` (E60), for ``g`` real and complex. A system without
 that structure (a Python right-hand side) runs with ``nq = 0``: the full ``d x d`` systems.
 
 **Dense output**: the collocation polynomial of each step (cubic, ``y_old + sum_k Q_k x^k``,
@@ -135,7 +135,7 @@ def radau_tolerances(rtol: float, atol):
 def radau_jacobian(t, y, f, Jl, nq, nv, yp, fp, args, counters):
     """Forward differences (RADAU5's increments ``sqrt(eps max(1e-5, |y_j|))``, backward when the
     forward evaluation fails) of the right-hand side around ``(t, y)`` (``f = F(t, y)``) into
-    ``Jl`` (nv + nw, nq + nv): the rows of ``v'`` and ``w'``, the columns of ``q`` and ``v`` (E52).
+    ``Jl`` (nv + nw, nq + nv): the rows of ``v'`` and ``w'``, the columns of ``q`` and ``v`` (E59).
     False when no difference can be evaluated."""
     d = y.size
     for i in range(d):
@@ -156,7 +156,7 @@ def radau_jacobian(t, y, f, Jl, nq, nv, yp, fp, args, counters):
 
 @njit(cache=True)
 def _factor(h, Jl, nq, nv, E1, p1, E2, p2):
-    """The reduced iteration matrices ``g - J_v - J_q / g`` (E53) for ``g = MU_REAL / h`` (real) and
+    """The reduced iteration matrices ``g - J_v - J_q / g`` (E60) for ``g = MU_REAL / h`` (real) and
     ``MU_COMPLEX / h`` (complex), factored; False when one is singular."""
     g1 = MU_REAL / h
     g2 = MU_COMPLEX / h
@@ -175,7 +175,7 @@ def _factor(h, Jl, nq, nv, E1, p1, E2, p2):
 
 @njit(cache=True)
 def _solve(g, Jl, nq, nv, E, piv, r, tmp):
-    """``r`` (d,) <- ``(g - J)^-1 r`` with the factors of :func:`_factor` (E53): ``x_v`` from the
+    """``r`` (d,) <- ``(g - J)^-1 r`` with the factors of :func:`_factor` (E60): ``x_v`` from the
     reduced system, then ``x_q = (r_q + x_v) / g``, ``x_w = (r_w + J_w (x_q, x_v)) / g``."""
     d = r.size
     ig = 1.0 / g

@@ -5,7 +5,7 @@ modes, and when the implicit loop's step is long enough that DOP853 would be che
 ``dop853.f``): after an accepted step of length ``h``, the last stage (at ``t + h``, argument
 ``y_12``) and the new solution give a Rayleigh-like estimate of the dominant eigenvalue's size,
 
-    h |lambda| ~ h ||F(t + h, y_new) - F(t + h, y_12)|| / ||y_new - y_12||          (E51)
+    h |lambda| ~ h ||F(t + h, y_new) - F(t + h, y_12)|| / ||y_new - y_12||          (E58)
 
 (over the components that feed back: ``q`` and ``q'``, not the work ``W``). A step set by accuracy
 keeps ``h |lambda|`` small; a step held by a stiff mode sits near the edge of DOP853's stability
@@ -18,7 +18,7 @@ damped at 100 N m s/rad on the spring arm, rtol 1e-10: median 0.73; the shipped 
 and DOP853 still pays for the stiff mode (15x the evaluations of the undamped arm). What tells them
 apart is how slowly the solution moves compared with ``|lambda|``, the stiffness ratio
 
-    S = |lambda| / (|F(t + h) - F(t)| / (h |F(t + h)|))                               (E51)
+    S = |lambda| / (|F(t + h) - F(t)| / (h |F(t + h)|))                               (E58)
 
 (median 93 on that damped arm, 930 at 1000 N m s/rad; at most 25 on the shipped scenes, their 90th
 percentile at most 70). A test is stiff when ``h |lambda| >`` :data:`STIFF_HLAMBDA` = 3.0, or when
@@ -75,10 +75,10 @@ E_SIZE = 12
 
 @njit(cache=True)
 def explicit_stiff(st, h, y_new, f_new, f_old, y_last, k_last):
-    """Hairer's stiffness test (E51) after an accepted explicit step ``h`` from a state of slope
+    """Hairer's stiffness test (E58) after an accepted explicit step ``h`` from a state of slope
     ``f_old`` to ``y_new`` of slope ``f_new``: ``y_last``, ``k_last`` the argument and slope of the
     last stage (at ``t + h``). A test is stiff when ``h |lambda|`` exceeds :data:`STIFF_HLAMBDA`, or
-    exceeds :data:`RATIO_HLAMBDA` with a stiffness ratio (E51) above :data:`STIFF_RATIO`. Updates the
+    exceeds :data:`RATIO_HLAMBDA` with a stiffness ratio (E58) above :data:`STIFF_RATIO`. Updates the
     counts in ``st`` (``E_*``); True when the run is stiff."""
     nd = int(st[E_ND])
     num = 0.0
