@@ -23,7 +23,7 @@ SCRIPTS = ROOT / "benchmarks"
 FIXTURES = Path(__file__).resolve().parent / "fixtures" / "benchmarks"
 COMMITTED = ROOT / "reports" / "benchmarks"
 BENCHMARKS = ("eval_cost", "solver_cost", "sweeps", "mujoco_harness", "corpus_wall", "loop_cost", "batch_cost",
-              "animation_cost")
+              "animation_cost", "stiff_cost")
 #: formats each script renders (benchmarking.run_benchmark's ``accepts``)
 ACCEPTS = {"corpus_wall": (1, 2)}
 
@@ -266,3 +266,19 @@ def test_corpus_wall_and_solver_cost_state_their_comparisons():
     for data in _sources("solver_cost"):
         for s in data["sweeps"]:
             assert s["batch_vs_single"] == compare(s["batch_s"], s["single_s"]) and s["max_difference"] < 1e-6
+
+
+def test_stiff_cost_states_each_hands_ratio_to_the_ur5_and_the_bound(tmp_path):
+    """stiff_cost: every robot with every method (evaluations, Jacobians, what auto ran), and each hand's
+    auto time over the UR5's with the tie rule and the issue's 10x bound, recomputed from the rows by the
+    render (a row edited in the JSON changes the verdict)."""
+    data = copy.deepcopy(fixture("stiff_cost"))
+    assert {(r["robot"], r["method"]) for r in data["rows"]} == {
+        (rb, m) for rb in ("ur5", "allegro_left", "allegro_right") for m in ("auto", "Radau5", "DOP853")}
+    hand = next(r for r in data["rows"] if r["robot"] == "allegro_left" and r["method"] == "auto")
+    assert hand["methods_used"] == "DOP853 then Radau5" and hand["njev"] >= 1
+    ur5 = next(r for r in data["rows"] if r["robot"] == "ur5" and r["method"] == "auto")
+    ur5["wall_s"] = {"median": 1.0, "min": 1.0, "max": 1.0, "rounds": 2}
+    hand["wall_s"] = {"median": 3.0, "min": 2.9, "max": 3.1, "rounds": 2}
+    md = render("stiff_cost", data, tmp_path)
+    assert "| allegro_left | 3.00 (min 2.90) slower |" in md and line_of(md, "allegro_left", "yes")

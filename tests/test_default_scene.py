@@ -58,7 +58,7 @@ def test_default_scene_contents(arm):
     assert s.name == "default" and s.path is None and s.urdf_damping
     np.testing.assert_array_equal(s.gravity, [0.0, 0.0, -9.81])
     assert s.base is None and not s.loads and not s.torques and s.q0 == {} and s.qd0 == {}
-    assert s.run.t_end == 1.0 and s.run.method == "DOP853"
+    assert s.run.t_end == 1.0 and s.run.method == "auto"
     assert s.load_options["floating_base"] is False
     floating = default_scene(arm, floating=True, t_end=0.5)
     assert floating.load_options["floating_base"] and floating.run.t_end == 0.5

@@ -30,6 +30,7 @@ EPS = np.finfo(float).eps
 # The bound each case is held to (the assertions below), for the generated table of figures (--figures).
 LONG_CHAINS, MASS_RATIOS, STIFF, SPIN = "1. long chains", "2. extreme mass ratios", "3. stiff joints", "4. fast spin"
 HUMANOID, DEGENERATE_MODELS, LONG_HORIZON = "6. free-floating humanoid", "7. degenerate models", "8. long horizon"
+LADDER = "9. stiffness ladder"
 FIGURE_BOUNDS = {
     LONG_CHAINS: "drift of E + V < 1e-8 (relative), DOP853 rtol 1e-12; 1e4 < max cond(A) < 1e10",
     MASS_RATIOS: "per coordinate: error <= 100 eps cond(DAD) in units of D_ii max|q''_j / D_jj| "
@@ -46,6 +47,9 @@ FIGURE_BOUNDS = {
                        "balance < 1e-8",
     LONG_HORIZON: "midpoint: energy error < 1e-2 of the scale; last 100 s <= 1.5x the first; least-squares "
                   "trend < 0.5 max|e|; RK4 at the same step: trend > 0.8 max|e| and last 100 s > 3x the first",
+    LADDER: "damper 1 .. 1e5 N m s/rad (10x per rung), rtol 1e-10: auto's evaluations within 6x of each other "
+            "(within 2x on the stiff rungs) while DOP853's grow > 1000x; auto = DOP853 to the bit where not stiff; "
+            "auto within 1e-8 rad of the reference on every rung",
 }
 FIGURE_NOTE = ("\"wall s\" is the integrator's own time for the run (`Trajectory.stats['wall_time']`), on a warm "
                "kernel cache; wall times are not bounded by the tests. Case 5 (the ZYX angle singularity) is "
@@ -241,6 +245,50 @@ def test_stiff_spring_with_too_long_fixed_steps_fails_cleanly(method, dt, error,
     assert traj.stats["success"] and traj.t[-1] == pytest.approx(scene.run.t_end)
     assert np.all(np.isfinite(traj.q)) and np.all(np.isfinite(traj.qd))
     assert traj.energy_error < 1e-2
+
+
+# ============================================================== 9. stiffness ladder
+
+
+def test_stiffness_ladder_auto_cost_stays_flat_while_dop853_grows(record_figure):
+    """The spring arm of case 3 with its servo replaced by a damper on j2 alone, c = 1 .. 1e5 N m s/rad
+    (10x per rung: the damped mode's eigenvalue ~ c / 0.12 kg m^2, from ~8 to ~8e5 /s), 1 s at the
+    scenes' rtol 1e-10. DOP853's evaluations grow with the stiffness (measured 1 373, 2 768, 18 182,
+    68 723, 264 530, 2 112 278: 1540x); auto's stay nearly flat (1 373, 2 768, 6 300, 6 648, 5 545,
+    4 720): DOP853 itself on the two rungs that are not stiff (to the bit), Radau5 from c = 100 on,
+    where the stiffness test calls the run stiff after a few milliseconds. Bounds on evaluations
+    (deterministic, not wall time): auto's within 6x of each other over the ladder and within 2x over
+    the stiff rungs, DOP853's last rung > 1000x its first; auto within 1e-8 rad of Radau5 at rtol 1e-13
+    on every rung (measured <= 1.4e-9) and its energy balance within 1e-7 of the energy scale."""
+    base = load_scene(HARD / "stiff_spring_arm.toml")
+    model = base.model()
+    rungs = (1e0, 1e1, 1e2, 1e3, 1e4, 1e5)
+    auto, dop = {}, {}
+    for c in rungs:
+        scene = dataclasses.replace(base, springs=tuple(
+            dataclasses.replace(sp, stiffness=0.0, damping=c) if sp.coordinate == "j2" else sp for sp in base.springs))
+        plan = compile_plan(scene, model)
+        auto[c] = simulate(plan, t_end=1.0, method="auto", rtol=1e-10, atol=1e-12, progress=False)
+        dop[c] = simulate(plan, t_end=1.0, method="DOP853", rtol=1e-10, atol=1e-12, progress=False)
+        ref = simulate(plan, t_end=1.0, method="Radau5", rtol=1e-13, atol=1e-15, progress=False)
+        err = np.abs(auto[c].q - ref.q).max()
+        record_figure(LADDER, f"c = {c:g}: evaluations DOP853 / auto", f"{dop[c].stats['nfev']} / {auto[c].stats['nfev']} "
+                      f"({auto[c].stats['methods_used']}); auto's error {err:.0e} rad")
+        assert err < 1e-8, (c, err)
+        assert auto[c].energy_error < 1e-7, (c, auto[c].energy_error)
+    a = np.array([auto[c].stats["nfev"] for c in rungs])
+    d = np.array([dop[c].stats["nfev"] for c in rungs])
+    print("ladder evaluations DOP853:", d.tolist(), "auto:", a.tolist())
+    record_figure(LADDER, "DOP853 last / first rung", d[-1] / d[0], "{:.0f}x")
+    record_figure(LADDER, "auto max / min over the ladder", a.max() / a.min(), "{:.1f}x")
+    for c in rungs[:2]:                       # not stiff: auto is DOP853
+        assert auto[c].stats["methods_used"] == "DOP853"
+        np.testing.assert_array_equal(auto[c].q, dop[c].q)
+    for c in rungs[2:]:
+        assert auto[c].stats["methods_used"] == "DOP853 then Radau5", c
+    assert a.max() < 6 * a.min()
+    assert a[2:].max() < 2 * a[2:].min()
+    assert d[-1] > 1000 * d[0]
 
 
 # ============================================================== 4. fast spin

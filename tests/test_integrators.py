@@ -221,11 +221,18 @@ def test_counters_and_callback(method):
         # linear problem: the first Newton correction is exact, the second confirms it;
         # plus the initial F, the FD Jacobian columns and F(t_end) for the interpolant
         assert res.nfev == 1 + 2 * res.nsteps + d * res.njev + 1 and res.njev == 1
-    elif method in ("RK45", "DOP853"):
+    elif method in ("RK45", "DOP853", "auto"):
+        # auto on the (non-stiff) oscillator is DOP853 throughout: one stretch
         stages = 6 if method == "RK45" else 12
-        extra = 3 * res.nsteps if method == "DOP853" else 0   # DOP853 dense: 3 more stages
+        extra = 3 * res.nsteps if method != "RK45" else 0   # DOP853 dense: 3 more stages
         attempts = res.nsteps + res.nrejected
         assert 0 <= res.nfev - extra - stages * attempts <= 4
+        assert method != "auto" or [s["method"] for s in res.stretches] == ["DOP853"]
+    elif method == "Radau5":
+        # the initial F, scipy's initial step (1), the Jacobian's d columns, three stages per Newton
+        # iteration (at least one per attempt), F at each accepted state but the last
+        assert res.njev >= 1 and res.nrejected >= 0
+        assert res.nfev >= 1 + d * res.njev + 3 * (res.nsteps + res.nrejected) + res.nsteps - 1
     else:
         assert res.nrejected is None and res.nfev >= res.nsteps
 
@@ -313,7 +320,7 @@ def test_last_fixed_step_shortened_to_land_on_t_end():
 # ------------------------------------------------------------------------------- errors
 
 @pytest.mark.parametrize("kwargs, match", [
-    (dict(method="RK5"), r"method='RK5'.*RK45, DOP853, Radau, BDF, LSODA, RK4, midpoint"),
+    (dict(method="RK5"), r"method='RK5'.*auto, RK45, DOP853, Radau5, Radau, BDF, LSODA, RK4, midpoint"),
     (dict(t_span=(1.0, 0.0)), r"t_span.*\(1\.0, 0\.0\)"),
     (dict(t_span=(0.0, math.nan)), r"t_span"),
     (dict(t_span=(0.0,)), r"t_span"),

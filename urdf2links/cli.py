@@ -139,7 +139,7 @@ def _list(args) -> int:
 def _simulate(args) -> int:
     from pathlib import Path
 
-    from .integration.simulate import simulate
+    from .integration.simulate import describe_stretches, simulate
     from .scenes.scene import robot_label
 
     scene = scene_from_args(args)
@@ -159,6 +159,10 @@ def _simulate(args) -> int:
           f" (rtol {s['rtol']:g}" + (f", dt {s['dt']:g}" if s["dt"] else "") + f"): {s['nsteps']} steps, "
           f"{s['nfev']} evaluations, {s['wall_time']:.3f} s wall")
     print(f"  terms: {', '.join(s['terms'])}; energy balance error {traj.energy_error:.2e} (relative)")
+    if s["stretches"]:
+        print(f"  methods: {s['methods_used']}")
+        for line in describe_stretches(s["stretches"]):
+            print(f"    {line}")
     for note in s["spring_notes"]:
         print(f"  note: {note}")
     for e in s["limit_excursions"]:
@@ -348,7 +352,8 @@ def _simulate_parser(sub) -> None:
     _add_load_options(p)
     _add_default_scene_options(p)
     p.add_argument("--t-end", type=float, help="override [run] t_end (s)")
-    p.add_argument("--method", help="RK45, DOP853, Radau, BDF, LSODA, RK4 or midpoint")
+    p.add_argument("--method", help="auto (the default: DOP853, Radau5 while stiff), RK45, DOP853, Radau5, Radau, "
+                                    "BDF, LSODA, RK4 or midpoint")
     p.add_argument("--rtol", type=float)
     p.add_argument("--dt", type=float, help="step for RK4 and midpoint (s)")
     p.add_argument("--out", default="out", help="folder for .npz, .csv and .png (default: out)")

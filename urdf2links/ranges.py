@@ -38,8 +38,9 @@ import math
 __all__ = ["RANGES", "out_of_range", "MIN_T_END", "MIN_ATOL", "MAX_SAMPLES", "MAX_STEPS", "MAX_TABLE_SAMPLES", "RTOL_FLOOR",
            "METHODS"]
 
-#: The integration methods a scene or ``integrate()`` may name (:mod:`urdf2links.integration.integrators`).
-METHODS = ("RK45", "DOP853", "Radau", "BDF", "LSODA", "RK4", "midpoint")
+#: The integration methods a scene or ``integrate()`` may name (:mod:`urdf2links.integration.integrators`);
+#: ``auto`` (DOP853, Radau5 while the scene is stiff) is the default of scenes.
+METHODS = ("auto", "RK45", "DOP853", "Radau5", "Radau", "BDF", "LSODA", "RK4", "midpoint")
 
 #: quantity -> (largest absolute value, unit) (module doc).
 RANGES: dict[str, tuple[float, str]] = {

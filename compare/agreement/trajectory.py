@@ -76,6 +76,7 @@ from ..mujoco_side.mjcf import MjcfModel, mjcf_from_scene
 from ..mujoco_side.mujoco_mjcf import FILE_LABEL, file_route_inputs, file_terms, mujoco_from_mjcf, run_file
 from ..mujoco_side.mujoco_run import TIMED_REGION as MUJOCO_REGION
 from ..mujoco_side.mujoco_run import MujocoRun, energy_function, run_mujoco
+from ..mujoco_side.stable_run import stable_run
 from .actuator_terms import file_actuators, merged, route1_actuators, route2_actuators
 from .scene_terms import ROUTE1_LABEL, route1_terms, route2_terms
 
@@ -290,9 +291,10 @@ class SceneComparison:
             "initial": {"q": self.info["q0"], "qd": self.info["qd0"]},
             "project": {"method": traj.stats["method"], "rtol": traj.stats["rtol"], "atol": traj.stats["atol"],
                         "dt": traj.stats["dt"], "nsteps": int(traj.stats["nsteps"]), "nfev": int(traj.stats["nfev"]),
-                        "terms": list(traj.stats["terms"])},
+                        "njev": int(traj.stats.get("njev", 0)), "methods_used": traj.stats.get("methods_used"),
+                        "stretches": list(traj.stats.get("stretches", [])), "terms": list(traj.stats["terms"])},
             "mujoco": {"integrator": run.integrator, "timestep": float(run.timestep), "nsteps": int(run.nsteps),
-                       "blow_ups": dict(run.blow_ups),
+                       "blow_ups": dict(run.blow_ups), "fallback": self.info.get("mujoco_fallback"),
                        "version": mujoco.__version__, "folded_links": list(self.mj.folded_links),
                        "tiny_mass_links": list(self.mj.tiny_mass_links), "notes": list(run.notes)},
             "terms": {"max_rel_error": float(term_max),
@@ -314,7 +316,7 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
                   samples: int | None = None, states: int = 8, seed: int = 0,
                   threshold: float = DIVERGENCE_THRESHOLD, t_end_note: str | None = None,
                   progress: bool | None = None, log: Callable[[str], None] | None = None,
-                  max_wall: float | None = None, model=None) -> SceneComparison:
+                  max_wall: float | None = None, model=None, mujoco_fallback: bool = True) -> SceneComparison:
     """Run ``scene`` (a :class:`~urdf2links.scenes.scene.Scene` or a path to its TOML) with the project's
     integrator (the scene's ``[run]`` unless ``method``/``rtol``/``atol`` say otherwise) and with
     MuJoCo (``mujoco_integrator``, ``mujoco_dt``) over ``t_end`` (default the scene's) and compare
@@ -325,7 +327,9 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     not started once it is spent: :class:`~urdf2links.errors.IntegrationError` says so. ``model``: the
     scene's robot when the caller has already loaded it (with the scene's options). The scene is
     loaded once and compiled once (its :class:`~urdf2links.scenes.plan.Plan`); the warm-up, the
-    project's run and MuJoCo's inputs all take that plan."""
+    project's run and MuJoCo's inputs all take that plan. When MuJoCo's run blows up (a stiff model),
+    ``mujoco_fallback`` runs a stable setting instead and shows its convergence
+    (:func:`urdf2links.compare.mujoco_side.stable_run.stable_run`; ``summary()["mujoco"]["fallback"]``)."""
     start = time.perf_counter()
     say = log or (lambda _m: None)
     if isinstance(scene, (str, Path)):
@@ -376,10 +380,14 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
         raise IntegrationError(f"{scene.path or scene.name}: max_wall={max_wall:g} s spent before MuJoCo's run")
     say(f"MuJoCo: {mujoco_integrator} dt {mujoco_dt:g}, {int(round(T / mujoco_dt))} steps")
     file_run = mf is not None and not file_route_inputs(scene, plan)
+    fallback = None
     if file_run:
         run = run_file(mf, plan, t_end=T, samples=samples, reference=traj.q if len(traj.q) == samples else None)
     else:
-        run = run_mujoco(mj, plan, t_end=T, samples=samples)
+        run, fallback = stable_run(mj, plan, t_end=T, samples=samples, integrator=mujoco_integrator,
+                                   timestep=mujoco_dt, fallback=mujoco_fallback)
+        if fallback is not None:
+            say(fallback["note"])
     if run.compilation.happened:
         say(run.compilation.describe("MuJoCo's control callback"))
 
@@ -398,7 +406,7 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
             notes.append(f"the scene's {', '.join(file_route_inputs(scene, plan))} are inputs that the run of the "
                          "MJCF file does not take yet: MuJoCo's trajectory is route 1's (the project's tree as MJCF)")
     q0, qd0 = scene.initial_state(model)
-    info.update({"trajectory_route": FILE_LABEL if file_run else ROUTE1_LABEL,
+    info.update({"trajectory_route": FILE_LABEL if file_run else ROUTE1_LABEL, "mujoco_fallback": fallback,
                  "t_end": T, "t_end_note": t_end_note, "effects": plan.terms, "warm_up": warm,
                  "actuators": plan.actuator_set.actuators,
                  "q0": dict(zip(model.coordinate_names, q0.tolist())),
@@ -431,6 +439,11 @@ def _run_notes(scene, plan, mj, run, traj, t_end_note, *, resampled: bool) -> li
     if resampled:
         notes.append("MuJoCo's sample times differ from the project's: the project's dense output was "
                      "evaluated at MuJoCo's times")
+    if traj.stats.get("stretches") and len(traj.stats["stretches"]) > 1:
+        from urdf2links.integration.simulate import describe_stretches
+
+        notes.append(f"urdf2links' auto method ran {traj.stats['methods_used']}: "
+                     + "; ".join(describe_stretches(traj.stats["stretches"])))
     if traj.stats.get("n_recharts"):
         notes.append(f"the project re-charted the ZYX angles of {sorted({r['link'] for r in traj.stats['recharts']})} "
                      f"{traj.stats['n_recharts']} times near phi_y = +-pi/2 (urdf2links.integration.charts); its q are converted "

@@ -42,6 +42,7 @@ from urdf2links.scenes.scene import default_scene
 from ..formatting import json_ready
 from ..mujoco_side.mjcf import MjcfRefused
 from ..mujoco_side.mujoco_run import instability_note
+from ..mujoco_side.stable_run import fallback_note
 from ..reports.baselines import check_baseline
 
 __all__ = ["RobotFile", "CorpusSettings", "RobotResult", "find_robots", "evaluate_robot", "failed_result",
@@ -277,9 +278,14 @@ def _compared_row(row: dict, s: dict) -> None:
     row["limit_excursions"] = len(s.get("limit_excursions", []))
     row["mujoco_notes"] = list(s["mujoco"].get("notes", []))
     row["mujoco_blow_ups"] = dict(s["mujoco"]["blow_ups"])
+    fallback = s["mujoco"].get("fallback")
     if row["mujoco_blow_ups"]:   # the index's note column says it: the difference is MuJoCo's blow-up
         note = instability_note(row["mujoco_blow_ups"], s["mujoco"]["integrator"], s["mujoco"]["timestep"])
         row["reason"] = note + (f"; {row['reason']}" if row.get("reason") else "")
+    elif fallback:               # ... or the stable setting the harness chose instead, and its convergence
+        row["mujoco_fallback"] = fallback
+        row["reason"] = fallback_note(fallback) + (f"; {row['reason']}" if row.get("reason") else "")
+    row["project_methods"] = s["project"].get("methods_used")
     row["worst"] = worst_ratio(row["terms"], row["trajectory"])
 
 

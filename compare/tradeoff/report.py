@@ -31,8 +31,8 @@ __all__ = ["write_study", "render_markdown", "plot_work_precision", "plot_energy
 BEGIN = "<!-- tradeoff:begin -->"
 END = "<!-- tradeoff:end -->"
 
-_PROJECT_COLOURS = {"RK45": "#08306b", "DOP853": "#2171b5", "Radau": "#17becf", "BDF": "#238b45",
-                    "LSODA": "#74c476", "RK4": "#6a51a3", "midpoint": "#9e9ac8"}
+_PROJECT_COLOURS = {"auto": "#000000", "RK45": "#08306b", "DOP853": "#2171b5", "Radau5": "#00a087",
+                    "Radau": "#17becf", "BDF": "#238b45", "LSODA": "#74c476", "RK4": "#6a51a3", "midpoint": "#9e9ac8"}
 _MUJOCO_COLOURS = {"Euler": "#cb181d", "implicitfast": "#fd8d3c", "RK4": "#8c2d04", "implicit": "#e7298a"}
 
 
@@ -43,7 +43,8 @@ def style(engine: str, method: str) -> dict:
                 "lw": 1.8, "label": f"MuJoCo {method} (dt ladder)"}
     fixed = method in ("RK4", "midpoint")
     return {"color": _PROJECT_COLOURS.get(method, "#3182bd"), "ls": "-", "marker": "D" if fixed else "o", "ms": 5,
-            "lw": 1.8, "label": f"urdf2links {method} ({'dt' if fixed else 'rtol'} ladder)"}
+            "lw": 2.6 if method == "auto" else 1.8,    # the default method stands out
+            "label": f"urdf2links {method} ({'dt' if fixed else 'rtol'} ladder)" + (" (default)" if method == "auto" else "")}
 
 
 def _series(data, key):

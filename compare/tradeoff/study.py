@@ -11,7 +11,7 @@
    over a ladder of rtol (``atol = 1e-2 rtol``; a decade costs DOP853 about 1.25-1.35x more
    evaluations), ``RK4`` and ``midpoint`` (Newton tolerance rtol 1e-10, atol 1e-12) over the
    ladder of steps :data:`DTS`;
-3. **MuJoCo's** ``Euler``, ``implicitfast`` and ``RK4`` over the ladder of timesteps
+3. **MuJoCo's** ``Euler``, ``implicitfast``, ``implicit`` and ``RK4`` over the ladder of timesteps
    :data:`MUJOCO_DTS` (route 1: the project's tree as MJCF,
    :func:`urdf2links.compare.mujoco_side.mjcf.mjcf_from_scene`, run by
    :func:`urdf2links.compare.mujoco_side.mujoco_run.run_mujoco`). Both step ladders are ``0.01 s / j``
@@ -24,7 +24,7 @@ reference's dense output at MuJoCo's actual sample times); the energy drift, ``m
 over the reference's energy scale (project: its own power balance; MuJoCo: ``h`` from its own
 energies as :mod:`urdf2links.compare.agreement.trajectory` does, ``W`` the reference's work when work acts); the wall
 time; the dynamics evaluations (project: every call of the right-hand side, Jacobian differences
-included; MuJoCo: steps x stages, Euler 1, implicitfast 1, RK4 4).
+included; MuJoCo: steps x stages, Euler 1, implicitfast 1, implicit 1, RK4 4).
 
 **Timing.** Every run is first made once, with samples, for its errors (not timed). Then
 ``repeats`` rounds run every configuration that succeeded once more each, from t = 0 to T with
@@ -86,7 +86,7 @@ __all__ = ["run_study", "crossover", "STAGES", "MUJOCO_INTEGRATORS", "ADAPTIVE",
 
 ADAPTIVE = tuple(m for m in METHODS if m not in ("RK4", "midpoint"))
 FIXED = ("RK4", "midpoint")
-MUJOCO_INTEGRATORS = ("Euler", "implicitfast", "RK4")
+MUJOCO_INTEGRATORS = ("Euler", "implicitfast", "implicit", "RK4")
 #: Dynamics evaluations per MuJoCo step.
 STAGES = {"Euler": 1, "implicitfast": 1, "implicit": 1, "RK4": 4}
 
@@ -179,6 +179,9 @@ def _mujoco(st: "_Study", cfg: Config, samples: int):
 def _mujoco_failure(run, T) -> str | None:
     if not (np.all(np.isfinite(run.q)) and np.all(np.isfinite(run.qd))):
         return "MuJoCo's state became non-finite"
+    if run.blow_ups:       # MuJoCo reset its state (and its time): the samples after it are no solution
+        return ("MuJoCo reset the simulation (unstable: "
+                + ", ".join(f"{w} x{k}" for w, k in run.blow_ups.items()) + ")")
     if np.any(np.diff(run.t) < 0) or abs(run.t[-1] - run.nsteps * run.timestep) > 1e-6 * max(T, 1.0):
         return "MuJoCo reset the simulation (unstable: bad acceleration)"
     return None
@@ -484,7 +487,7 @@ def _study_record(st: _Study, rows, reference, *, quick, budget, repeats, t_note
         "cost": {"project_eval_us": st.cost["project_eval_s"] * 1e6,
                  "mujoco_step_us": {k: v * 1e6 for k, v in st.cost["mujoco_step_s"].items()}},
         "evaluations": "project: calls of the right-hand side (Jacobian differences included); MuJoCo: steps x "
-                       "stages (Euler 1, implicitfast 1, RK4 4)",
+                       "stages (Euler 1, implicitfast 1, implicit 1, RK4 4)",
         "rows": rows,
         "machine": machine_info(),
         "total_s": None,

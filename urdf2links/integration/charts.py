@@ -313,7 +313,8 @@ class ChartedRun:
     link, ``phi_y`` and ``|cos phi_y|`` where the guard fired, condition of the angle block before
     and after); ``sol`` the dense output (original coordinates); counts summed; ``wall_time`` the
     segments' integrations (:attr:`IntegrationResult.wall_time`) and the chart switches, not the
-    sampling."""
+    sampling; ``njev`` Jacobians; ``stretches`` (``auto``) every segment's stretches in order, each
+    with its ``segment``."""
 
     t: np.ndarray
     y: np.ndarray
@@ -327,6 +328,8 @@ class ChartedRun:
     wall_time: float
     success: bool
     message: str
+    njev: int = 0
+    stretches: tuple = ()
 
 
 def integrate_charted(original: Model, make_plan, y0, t_span, *, t_eval, method, rtol, atol, dt=None,
@@ -352,8 +355,8 @@ def integrate_charted(original: Model, make_plan, y0, t_span, *, t_eval, method,
     guards = [AngleGuard([ln.angles[1] for ln in group], c) for group, c in ((movable, cos_min),
                                                                              (fixed, SINGULAR_COS_MIN)) if group]
     guard = None if not guards else guards[0] if len(guards) == 1 else guards[0] | guards[1]
-    segments, recharts, pieces = [], [], []
-    nfev = nsteps = 0
+    segments, recharts, pieces, stretches = [], [], [], []
+    nfev = nsteps = njev = 0
     success, message = True, "reached t_end"
     t = t0
     while True:
@@ -376,7 +379,8 @@ def integrate_charted(original: Model, make_plan, y0, t_span, *, t_eval, method,
                   "max_wall": None if max_wall is None else max(1e-3, max_wall - (time.perf_counter() - run_start))}
         res = integrate(plan.rhs, (t, t1), y, method=method, rtol=rtol, atol=atol, dt=dt, t_eval=te,
                         dense=True, callback=callback, stop=guard, **budget)
-        nfev, nsteps, busy = nfev + res.nfev, nsteps + res.nsteps, busy + res.wall_time
+        nfev, nsteps, njev, busy = nfev + res.nfev, nsteps + res.nsteps, njev + res.njev, busy + res.wall_time
+        stretches += [{"segment": len(segments), **x} for x in res.stretches]
         seg = Segment(chart, plan, t, float(res.sol.t_max), res)
         segments.append(seg)
         pieces.append((np.asarray(res.t), np.asarray(res.y)))
@@ -401,7 +405,7 @@ def integrate_charted(original: Model, make_plan, y0, t_span, *, t_eval, method,
     return ChartedRun(t=np.array(ts), y=np.array(ys).reshape(-1, dim), y_chart=np.array(yc).reshape(-1, dim),
                       segment_of=np.array(seg_of, dtype=int), segments=segments, recharts=recharts, sol=sol,
                       nfev=nfev, nsteps=nsteps, wall_time=busy, success=success,
-                      message=message)
+                      message=message, njev=njev, stretches=tuple(stretches))
 
 
 def _singular(original: Model, chart, ln, t, y, *, recharting: bool, base_state):

@@ -1,9 +1,10 @@
 """Dense output: the continuous solution ``t -> y`` between the steps of an integration.
 
-:class:`DenseOutput` evaluates, on ``[t_min, t_max]``, one of three interpolants: a cubic Hermite
+:class:`DenseOutput` evaluates, on ``[t_min, t_max]``, one of four interpolants: a cubic Hermite
 on states and slopes at the steps (RK4, the implicit midpoint), the compiled loops' polynomial
-rows (DOP853's seventh-degree form, RK45's quartic, as scipy computes them) or a wrapped scipy
-``OdeSolution``. Shapes: scalar ``t`` -> ``(dim,)``, times ``(k,)`` -> ``(k, dim)``.
+rows (DOP853's seventh-degree form, RK45's quartic, as scipy computes them; Radau5's cubic
+collocation polynomial), a wrapped scipy ``OdeSolution``, or pieces of those joined end to end (the
+stretches of ``auto``). Shapes: scalar ``t`` -> ``(dim,)``, times ``(k,)`` -> ``(k, dim)``.
 """
 
 from __future__ import annotations
@@ -17,13 +18,16 @@ __all__ = ["DenseOutput", "midpoint_dense"]
 class DenseOutput:
     """Continuous solution ``t -> y`` on ``[t_min, t_max]``: scalar ``t`` -> ``(dim,)``,
     times of shape ``(k,)`` -> ``(k, dim)``. Cubic Hermite from ``(ts, ys, fs)``, the compiled
-    loops' polynomial rows ``poly = (method, coefficients (m, r, dim))``, or a wrapped scipy
-    ``OdeSolution``."""
+    loops' polynomial rows ``poly = (method, coefficients (m, r, dim))``, a wrapped scipy
+    ``OdeSolution``, or ``pieces``: DenseOutputs of consecutive intervals (each ``t`` is read from
+    the last piece that starts at or before it)."""
 
-    __slots__ = ("t_min", "t_max", "_ts", "_ys", "_fs", "_ode", "_poly")
+    __slots__ = ("t_min", "t_max", "_ts", "_ys", "_fs", "_ode", "_poly", "_pieces", "_starts")
 
-    def __init__(self, ts, ys=None, fs=None, ode: OdeSolution | None = None, poly=None):
+    def __init__(self, ts, ys=None, fs=None, ode: OdeSolution | None = None, poly=None, pieces=None):
         self._ts, self._ys, self._fs, self._ode, self._poly = ts, ys, fs, ode, poly
+        self._pieces = list(pieces) if pieces else None
+        self._starts = np.array([p.t_min for p in self._pieces]) if self._pieces else None
         self.t_min, self.t_max = float(ts[0]), float(ts[-1])
 
     def __call__(self, t):
@@ -38,13 +42,24 @@ class DenseOutput:
             raise ValueError(f"t={t!r} outside the interpolated interval "
                              f"[{self.t_min!r}, {self.t_max!r}]")
         tt = np.clip(tt, self.t_min, self.t_max)
-        if self._ode is not None:
+        if self._pieces is not None:
+            out = self._joined(tt)
+        elif self._ode is not None:
             out = self._ode(tt).T
         elif self._poly is not None:
             out = self._poly_eval(tt)
         else:
             out = self._hermite(tt)
         return out[0] if scalar else out
+
+    def _joined(self, tt):
+        k = np.clip(np.searchsorted(self._starts, tt, side="right") - 1, 0, len(self._pieces) - 1)
+        out = np.empty((tt.size, self._ys.shape[1]))
+        for j in np.unique(k):
+            piece = self._pieces[j]
+            at = k == j
+            out[at] = piece(np.clip(tt[at], piece.t_min, piece.t_max)).reshape(-1, out.shape[1])
+        return out
 
     def _hermite(self, tt):
         ts = self._ts
@@ -58,7 +73,7 @@ class DenseOutput:
 
     def _poly_eval(self, tt):
         """Row ``i + 1`` of the coefficients belongs to the step from ``ts[i]``: DOP853's
-        seventh-degree form or RK45's quartic (scipy's)."""
+        seventh-degree form, RK45's quartic (scipy's) or Radau5's cubic ``y_i + sum_k Q_k x^k``."""
         method, C = self._poly
         ts, ys = self._ts, self._ys
         i = np.clip(np.searchsorted(ts, tt, side="right") - 1, 0, ts.size - 2)
@@ -76,7 +91,7 @@ class DenseOutput:
         for r in range(rows.shape[1]):
             p = p * x
             y += rows[:, r] * p
-        return ys[i] + h * y
+        return ys[i] + (y if method == "Radau5" else h * y)
 
 
 def midpoint_dense(ts, ys, ks, f0, f_end) -> DenseOutput:

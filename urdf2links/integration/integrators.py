@@ -5,6 +5,15 @@ about robots and only takes the callable ``rhs(t, y) -> (dim,)`` (it must not mo
 
 Methods (:data:`METHODS`):
 
+* ``auto`` (the default of scenes): DOP853 while the system is not stiff, Radau5 while it is, with
+  Hairer's stiffness test in DOP853 and a cost comparison back (:mod:`urdf2links.integration.loops.auto`);
+  the stretches are in ``result.stretches``.
+* ``Radau5``: Radau IIA of order 5 with Hairer & Wanner's RADAU5 strategies, compiled
+  (:mod:`urdf2links.integration.loops.radau`): L-stable, for stiff scenes; a finite-difference
+  Jacobian kept over steps (or the user's ``jac``), and the structure ``y = (q, q', W)`` of a
+  compiled scene used to solve ``n x n`` systems. ``rtol`` means about the global error DOP853
+  gives at the same ``rtol`` (RADAU5's map ``0.1 rtol^(2/3)`` of its error estimate's tolerance).
+  ``auto`` and ``Radau5`` run interpreted (the same loops) on a Python right-hand side.
 * ``RK45``, ``DOP853``, ``Radau``, ``BDF``, ``LSODA``: scipy's adaptive ``OdeSolver`` classes,
   stepped one accepted step at a time (for ``callback`` and counting) with ``rtol``/``atol``;
   ``dt``, if given, is the maximum step; ``jac`` goes to the implicit ones. For a compiled
@@ -30,9 +39,9 @@ Methods (:data:`METHODS`):
   :data:`~urdf2links.integration.loops.MAX_HALVINGS` times, then :class:`IntegrationError` is raised.
 
 Dispatch, explicit: a compiled scene's right-hand side runs in the compiled loops of
-:mod:`urdf2links.integration.loops` (RK45, DOP853, RK4, midpoint; with no ``jac`` and ``stop`` None or an
-:class:`AngleGuard`); any other callable runs in scipy's solvers, or for RK4 and the midpoint rule
-in the same loops interpreted.
+:mod:`urdf2links.integration.loops` (auto, RK45, DOP853, Radau5, RK4, midpoint; with no ``jac`` and
+``stop`` None or an :class:`AngleGuard`); any other callable runs in scipy's solvers, or for RK4,
+the midpoint rule, Radau5 and auto in the same loops interpreted.
 
 Shapes are time first: ``result.y`` is ``(m, dim)``; ``result.sol(t)`` is ``(dim,)`` for a
 scalar ``t`` and ``(k, dim)`` for ``k`` times. Fixed-step methods get a cubic Hermite
@@ -67,7 +76,9 @@ from .loops import AngleGuard
 __all__ = ["METHODS", "IntegrationError", "IntegrationResult", "DenseOutput", "AngleGuard", "integrate"]
 
 _SCIPY = {"RK45": RK45, "DOP853": DOP853, "Radau": Radau, "BDF": BDF, "LSODA": LSODA}
-_USES_JAC = ("Radau", "BDF", "LSODA", "midpoint")
+_USES_JAC = ("Radau", "BDF", "LSODA", "midpoint", "Radau5")
+#: The methods of the compiled loops (interpreted around a Python right-hand side).
+_LOOPS = ("RK4", "midpoint", "Radau5", "auto")
 _FIXED = ("RK4", "midpoint")
 
 
@@ -76,6 +87,8 @@ class IntegrationResult:
     """Outcome of :func:`integrate` (time-first shapes).
 
     ``t`` (m,), ``y`` (m, dim): the solver's steps (including ``t0``) or ``t_eval``.
+    ``stretches`` (``auto``): one dict per stretch run by one method (``method``, ``t0``, ``t1``,
+    ``steps``, ``nfev``, ``njev``, ``rejected``, ``started``/``ended`` and their figures).
     ``nfev`` counts every call of ``rhs`` (Jacobian finite differences and the initial
     shape check included), ``njev`` Jacobian evaluations (finite-difference or user's),
     ``nsteps`` accepted steps, ``nrejected`` rejected attempts (``None`` where unknown:
@@ -100,6 +113,7 @@ class IntegrationResult:
     success: bool
     message: str
     stopped: bool = False
+    stretches: tuple = ()
 
 
 class _Counted:
@@ -209,7 +223,9 @@ def integrate(rhs: Callable, t_span, y0, *, method: str = "DOP853", rtol: float 
     if not np.all(np.isfinite(f0)):
         raise ValueError(f"rhs(t0, y0) is not finite at t0={t0!r}: {f0!r}")
     compiled = isinstance(rhs, CompiledScene) and jac is None and (stop is None or isinstance(stop, AngleGuard))
-    if method in _FIXED or (compiled and method in loops.TABLEAUX):
+    if method in _LOOPS or (compiled and method in loops.TABLEAUX):
+        if method == "Radau5" and jac is not None and not callable(jac):
+            jac = (lambda J: (lambda t, y: J))(np.array(jac, dtype=float))
         out = loops.run(method, rhs if compiled else fun.fun, f0, t0, t1, y0, rtol=float(rtol), atol=atol, dt=dt,
                         grid=_grid(t0, t1, dt) if method in _FIXED else None, callback=callback,
                         max_steps=max_steps, need_dense=need_dense, stop=stop, jac=jac, wall=wall)
@@ -227,7 +243,8 @@ def integrate(rhs: Callable, t_span, y0, *, method: str = "DOP853", rtol: float 
     return IntegrationResult(t=ts, y=ys, method=method, rtol=float(rtol), atol=atol, dt=dt, nfev=nfev,
                              njev=int(out.njev), nsteps=nsteps, nrejected=out.nrejected,
                              wall_time=wall, sol=out.sol if dense else None,
-                             success=out.success, message=out.message, stopped=out.stopped)
+                             success=out.success, message=out.message, stopped=out.stopped,
+                             stretches=tuple(out.stretches))
 
 
 def _run_scipy(cls, fun, t0, t1, y0, rtol, atol, dt, jac, callback, stop, max_steps, need_dense,

@@ -30,7 +30,8 @@ from ..scenes.plan import Plan, as_plan, compile_plan
 from ..scenes.scene import RunSettings, Scene, check_run
 from .charts import integrate_charted, link_poses
 
-__all__ = ["Trajectory", "simulate", "Progress", "warm_up", "record_compilation", "Compilation", "TIMED_REGION"]
+__all__ = ["Trajectory", "simulate", "Progress", "warm_up", "record_compilation", "Compilation", "TIMED_REGION",
+           "describe_stretches", "methods_used"]
 
 #: What ``Trajectory.stats["wall_time"]`` contains.
 TIMED_REGION = ("urdf2links' integrator: the integration loop from the first evaluation of the compiled right-hand "
@@ -46,8 +47,9 @@ class Trajectory:
     ``t`` (m,), ``q`` and ``qd`` (m, n) with columns ``coordinate_names``; ``energy`` dict of (m,)
     arrays: ``kinetic`` E, ``potential`` V (gravity and springs), ``work`` W (non-potential forces
     and base), ``function`` h (E + V for a fixed base), ``error`` ``h - h(0) - W``;
-    ``poses`` dict link -> (m, 4, 4); ``stats`` (method, rtol, atol, dt, nfev, nsteps, ``wall_time`` the
-    integration (:data:`TIMED_REGION`), ``run_s`` the whole :func:`simulate` call,
+    ``poses`` dict link -> (m, 4, 4); ``stats`` (method, rtol, atol, dt, nfev, nsteps, njev, ``wall_time`` the
+    integration (:data:`TIMED_REGION`), ``run_s`` the whole :func:`simulate` call, ``stretches``
+    (``auto``: which method ran when, and why; :func:`describe_stretches`), ``methods_used``,
     ``limit_excursions``: :class:`~urdf2links.scenes.limits.LimitExcursion` dicts, ``spring_notes``);
     ``sol`` the integrator's dense interpolant ``t -> (q, qd, W)`` or None; ``charts`` the
     :class:`~urdf2links.integration.charts.ChartedRun` (segments, states in each chart) when floating links were
@@ -161,7 +163,8 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
     recorded = list(dict.fromkeys([*scene.link_poses, *(r["link"] for r in res.recharts)]))
     poses = _record_poses(res, n, recorded, started=started, max_wall=max_wall, where=scene.path or scene.name)
     stats = {"method": run.method, "rtol": run.rtol, "atol": run.atol, "dt": run.dt, "nfev": res.nfev,
-             "nsteps": res.nsteps, "wall_time": res.wall_time, "terms": plan.terms, "success": res.success,
+             "nsteps": res.nsteps, "njev": res.njev, "stretches": list(res.stretches),
+             "methods_used": methods_used(run.method, res.stretches), "wall_time": res.wall_time, "terms": plan.terms, "success": res.success,
              "message": res.message, "recharting": run.recharting, "n_recharts": len(res.recharts),
              "recharts": res.recharts, "segments": len(res.segments),
              "limit_excursions": [e.as_dict() for e in limit_excursions(model, t, qs)],
@@ -170,6 +173,26 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
                       energy={"kinetic": E, "potential": V, "work": W, "function": h, "error": h - h[0] - W},
                       poses=poses, stats=stats, scene=scene.name, robot=model.name, sol=res.sol,
                       charts=res if res.recharts else None)
+
+
+def methods_used(method: str, stretches) -> str:
+    """``"DOP853"``, ``"DOP853 then Radau5"``, ... for ``auto``'s stretches in order (``method`` itself
+    for the other methods)."""
+    names = [s["method"] for s in stretches]
+    if not names:
+        return method
+    return " then ".join(n for i, n in enumerate(names) if i == 0 or n != names[i - 1])
+
+
+def describe_stretches(stretches) -> list[str]:
+    """One line per stretch of an ``auto`` run: method, interval, steps, evaluations, Jacobians, why it
+    started (the stiffness test's or the cost comparison's figures)."""
+    out = []
+    for s in stretches:
+        seg = f" (chart segment {s['segment']})" if s.get("segment") else ""
+        out.append(f"{s['method']} t = {s['t0']:.6g}..{s['t1']:.6g} s{seg}: {s['steps']} steps, {s['nfev']} evaluations"
+                   + (f", {s['njev']} Jacobians" if s["njev"] else "") + f"; {s['started']}")
+    return out
 
 
 def _scene_and_model(scene_or_model, model: Model | None) -> tuple[Scene, Model, Plan | None]:
@@ -259,15 +282,19 @@ def record_compilation():
     out.functions.extend(sorted(set(names)))
 
 
-def warm_up(scene, *, model: Model | None = None, methods=("DOP853",), t_end: float | None = None) -> Compilation:
+def warm_up(scene, *, model: Model | None = None, methods=None, t_end: float | None = None) -> Compilation:
     """Run ``scene`` (a Scene, its compiled :class:`~urdf2links.scenes.plan.Plan`, or a scene file) once with each of ``methods`` over a few steps, so that every compiled function
-    a run of it calls is compiled (or loaded from numba's cache) here and not inside a timed run.
+    a run of it calls is compiled (or loaded from numba's cache) here and not inside a timed run
+    (``methods`` default: the scene's own; ``auto`` warms Radau5 too).
     ``t_end`` defaults to the shorter of the scene's and 0.01 s. Returns the
     :class:`Compilation` of the whole warm-up. A method that fails here is left to fail (and be
     reported) in the real run."""
     plan = as_plan(scene, model=model)
     scene = plan.scene
     T = min(scene.run.t_end, 0.01) if t_end is None else float(t_end)
+    methods = (scene.run.method,) if methods is None else tuple(methods)
+    if "auto" in methods:           # auto calls Radau5's loop once the scene turns stiff: compiled here too
+        methods = tuple(dict.fromkeys((*methods, "Radau5")))
     with record_compilation() as rec:
         for m in methods:
             kw = {"dt": T / 4} if m in ("RK4", "midpoint") else {"rtol": 1e-6, "atol": 1e-8}

@@ -60,7 +60,9 @@ not computed, see :mod:`urdf2links.scenes.plan`)::
     qd = {}
 
     [run]
-    t_end = 10.0; method = "DOP853"; rtol = 1e-10; atol = 1e-12; dt = 1e-3; samples = 1001
+    t_end = 10.0; method = "auto"; rtol = 1e-10; atol = 1e-12; dt = 1e-3; samples = 1001
+                                            # method: auto (default: DOP853, Radau5 while stiff), RK45, DOP853,
+                                            # Radau5, Radau, BDF, LSODA, RK4, midpoint
     recharting = true                       # floating links pass phi_y = +-pi/2 (urdf2links.integration.charts)
 
     [record]
@@ -154,7 +156,7 @@ class SpringSet:
 @dataclass(frozen=True)
 class RunSettings:
     t_end: float = 5.0
-    method: str = "DOP853"
+    method: str = "auto"
     rtol: float = 1e-10
     atol: float = 1e-12
     dt: float | None = None
@@ -464,7 +466,8 @@ def default_scene(robot, *, floating: bool = False, q0: str = "zero", seed: int 
     Gravity (9.81 m/s^2 along -z); a fixed base, or with ``floating`` six coordinates for the root
     link; the URDF's joint damping as dampers (``[dampers] from_urdf = true``); initial state at rest,
     ``q0="zero"`` or ``"random"`` (:func:`_random_q0`, seeded by ``seed``); ``t_end`` seconds with the
-    default integrator (``RunSettings``: DOP853, rtol 1e-10), 500 samples a second (at least 101).
+    default integrator (``RunSettings``: auto, i.e. DOP853 and Radau5 while the
+    scene is stiff, rtol 1e-10), 500 samples a second (at least 101).
     ``robot`` is a ``.urdf`` or ``.xacro`` path (with ``xacro_args``); ``model`` an already loaded model
     of it (loaded here otherwise, to know its coordinates and limits). ``hold`` (a bandwidth in Hz,
     ``--hold``): a position servo on every coordinate holding the initial ``q``

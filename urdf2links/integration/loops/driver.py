@@ -5,8 +5,10 @@
 (:func:`_interpreted`) around any Python callable. Loops run in chunks: they return after
 ``chunk`` steps (or when their storage is full) so that the driver shows progress, grows the
 storage and asks a Python ``stop``, then resume from the state they left. Status codes: 0 running,
-1 reached ``t_end``, 2 stopped by the angle guard, 3 storage full, -1 step size too small, -2 the
-right-hand side failed (non-finite, or A not positive definite), -3 Newton failed.
+1 reached ``t_end``, 2 stopped by the angle guard, 3 storage full, 4 stiff (DOP853 in ``auto``),
+5 non-stiff (Radau5 in ``auto``), -1 step size too small, -2 the right-hand side failed
+(non-finite, or A not positive definite), -3 Newton failed, -4 Radau5's iteration matrix singular.
+``auto`` alternates the explicit and the implicit loop in stretches (:mod:`.auto`).
 """
 
 from __future__ import annotations
@@ -20,15 +22,16 @@ import numpy as np
 from ...errors import IntegrationError
 from ...scenes.scene_kernels import CompiledScene
 from ..dense import DenseOutput, midpoint_dense
-from . import fixed
+from . import erk, fixed, radau
 from .common import AngleGuard
-from .erk import TABLEAUX, erk_chunk, initial_step
+from .erk import TABLEAUX
 from .fixed import MAX_HALVINGS
+from .radau import R_FIRST, R_NEED_JAC, R_NQ, R_NV, R_SIZE, R_STORED, R_T, radau_tolerances
+from .stiffness import E_DETECT, E_ND, E_NEEDED, E_SIZE
 
-__all__ = ["Outcome", "run", "CHUNK", "wall_message"]
+__all__ = ["Outcome", "run", "CHUNK", "wall_message", "Stretch", "run_erk", "run_radau", "structure_of"]
 
 CHUNK = 2000              # steps per call of a compiled loop between two returns to Python
-
 
 # -- the interpreter's copy -------------------------------------------------------------------------
 def _python_evaluate(t, y, out, args, counters):
@@ -49,24 +52,56 @@ def _python_jacobian(t, y, f, J, args, counters):
     return bool(np.all(np.isfinite(J)))
 
 
-def _interpreted(*, user_jac: bool) -> dict:
-    """The fixed-step loops as plain Python functions: each compiled function's source (its
-    ``py_func``) rebound to one namespace in which ``evaluate`` calls a Python right-hand side
-    (``args = (rhs, jac)``). The same code as the compiled loops, so the two cannot drift."""
-    ns = dict(vars(fixed))
-    for fn in (fixed.rk4_chunk, fixed.midpoint_chunk, fixed._newton, fixed._jacobian):
-        py = fn.py_func
-        ns[py.__name__] = types.FunctionType(py.__code__, ns, py.__name__, py.__defaults__, py.__closure__)
-    ns["evaluate"] = _python_evaluate
-    if user_jac:
-        ns["_jacobian"] = _python_jacobian
+def _python_radau_jacobian(t, y, f, Jl, nq, nv, yp, fp, args, counters):
+    """The user's ``jac(t, y)`` (d, d) in place of Radau5's differences: its rows of ``v'`` and
+    ``w'``, columns of ``q`` and ``v``."""
+    J = np.asarray(args[1](t, y), dtype=float)
+    Jl[:, :] = J[nq:, :nq + nv]
+    return bool(np.all(np.isfinite(Jl)))
+
+
+def _rebound(module, ns: dict) -> dict:
+    """Every numba function defined in ``module``, its source (``py_func``) rebound to ``ns``."""
+    for name, obj in vars(module).items():
+        py = getattr(obj, "py_func", None)
+        if py is not None and py.__module__ == module.__name__:
+            ns[name] = types.FunctionType(py.__code__, ns, py.__name__, py.__defaults__, py.__closure__)
     return ns
 
 
+def _interpreted(*, user_jac: bool) -> dict:
+    """The loops as plain Python functions: each compiled function's source rebound to a copy of its
+    module's namespace in which ``evaluate`` calls a Python right-hand side (``args = (rhs, jac)``).
+    The same code as the compiled loops, so the two cannot drift."""
+    loops = {}
+    for module in (fixed, erk, radau):
+        ns = dict(vars(module))
+        ns["evaluate"] = _python_evaluate
+        _rebound(module, ns)
+        if user_jac and module is fixed:
+            ns["_jacobian"] = _python_jacobian
+        if user_jac and module is radau:
+            ns["radau_jacobian"] = _python_radau_jacobian
+        loops.update({k: v for k, v in ns.items() if k.endswith("_chunk") or k == "initial_step"})
+    return loops
+
+
+def _compiled() -> dict:
+    return {"rk4_chunk": fixed.rk4_chunk, "midpoint_chunk": fixed.midpoint_chunk, "erk_chunk": erk.erk_chunk,
+            "initial_step": erk.initial_step, "radau_chunk": radau.radau_chunk}
+
+
 # -- drivers (Python): chunks, storage, progress, results -------------------------------------------
-Outcome = namedtuple("Outcome", ["t", "y", "sol", "nfev", "njev", "nrejected", "success", "message", "stopped"])
+Outcome = namedtuple("Outcome", ["t", "y", "sol", "nfev", "njev", "nrejected", "success", "message", "stopped",
+                                 "stretches"], defaults=((),))
 """What :func:`run` returns: steps ``t`` (m,), ``y`` (m, d), the dense output or None, counters,
-``success``, ``message`` and whether the stop test ended the run."""
+``success``, ``message``, whether the stop test ended the run, and (``auto``) the stretches: one
+dict per method used in turn (:func:`urdf2links.integration.loops.auto.drive_auto`)."""
+
+Stretch = namedtuple("Stretch", ["status", "t", "y", "sol", "st", "f", "njev"])
+"""One loop's run from a state until its status says stop: ``t`` (m,), ``y`` (m, d) its steps (the
+first the starting state), ``sol`` its dense output (or None), ``st`` its state array (``h``,
+counters and stiffness figures), ``f`` the slope at the last state, ``njev`` Jacobians."""
 
 
 def wall_message(max_wall: float, t: float, steps: int) -> str:
@@ -82,7 +117,7 @@ class _Driver:
     def __init__(self, rhs, d, *, callback, max_steps, stop, chunk, wall=None):
         self.compiled = isinstance(rhs, CompiledScene)
         self.cnt = np.zeros(4, np.int64)
-        self.counters = (self.cnt, np.zeros(d + 1))
+        self.counters = (self.cnt, np.full(d + 1, np.nan))     # fail: where the right-hand side failed
         self.budget = np.inf if max_steps is None else int(max_steps)
         self.callback, self.stop, self.chunk = callback, stop, chunk
         self.wall, self.out_of_time = wall, False
@@ -111,18 +146,26 @@ def _grow(arrays, extra):
     return tuple(np.concatenate([a, np.empty((extra,) + a.shape[1:])]) for a in arrays)
 
 
-def _drive_erk(drv, tab, args, f0, t0, t1, y0, rtol, atol, dt, need_dense):
+def run_erk(drv, loops, tab, args, f0, t0, t1, y0, rtol, atol, dt, need_dense, *, h0=None, stiff_tests=0,
+            nd=0) -> Stretch:
+    """An explicit pair from ``(t0, y0)`` (slope ``f0``) until its status says stop; ``h0`` the first
+    step (default: scipy's initial step); ``stiff_tests`` > 0 turns on the stiffness test over the
+    first ``nd`` components, which ends the stretch (status 4) after that many stiff verdicts."""
     d = y0.size
     max_step = np.inf if dt is None else float(dt)
-    h_abs = initial_step(t0, y0, f0, t1, max_step, tab.order, rtol, atol, args, drv.counters)
+    h_abs = loops["initial_step"](t0, y0, f0, t1, max_step, tab.order, rtol, atol, args, drv.counters) if h0 is None \
+        else min(float(h0), max_step)
     cap = 256
     ts, ys, dens = np.empty(cap), np.empty((cap, d)), np.empty((cap if need_dense else 0, tab.n_dense, d))
     ts[0], ys[0] = t0, y0
-    st = np.array([t0, h_abs, 1.0])
+    st = np.zeros(E_SIZE if stiff_tests else 3)
+    st[:3] = t0, h_abs, 1.0
+    if stiff_tests:
+        st[E_DETECT], st[E_NEEDED], st[E_ND] = 1.0, float(stiff_tests), float(nd)
     state = (st, y0.copy(), f0.copy(), np.zeros((16, d)))
     ctl = (float(t1), rtol, atol, max_step, need_dense)
     while True:
-        status = erk_chunk(tab, ctl, state, (ts, ys, dens), drv.guard, drv.counters, drv.size(), args)
+        status = loops["erk_chunk"](tab, ctl, state, (ts, ys, dens), drv.guard, drv.counters, drv.size(), args)
         if drv.after_chunk(status, st[0], state[1]):
             break
         if int(st[2]) >= ts.size:
@@ -131,7 +174,58 @@ def _drive_erk(drv, tab, args, f0, t0, t1, y0, rtol, atol, dt, need_dense):
                 (dens,) = _grow((dens,), dens.shape[0])
     m = int(st[2])
     sol = DenseOutput(ts[:m], ys[:m], poly=("DOP853" if tab.dop else "RK45", dens[:m])) if need_dense and m > 1 else None
-    return status, ts[:m], ys[:m], sol, 0
+    return Stretch(status, ts[:m], ys[:m], sol, st, state[2], 0)
+
+
+def structure_of(rhs, d: int) -> tuple[int, int]:
+    """``(nq, nv)`` of the system Radau5 solves: a scene's ``y = (q, q', W)`` (``nq = nv = n``, E59)
+    for a compiled scene, else ``(0, d)`` (no structure known: full systems)."""
+    if isinstance(rhs, CompiledScene) and d % 2 == 1:
+        return (d - 1) // 2, (d - 1) // 2
+    return 0, d
+
+
+def run_radau(drv, loops, args, f0, t0, t1, y0, rtol, atol, dt, need_dense, structure, *, h0=None,
+              detect=None) -> Stretch:
+    """Radau5 (:mod:`.radau`) from ``(t0, y0)`` until its status says stop; ``structure = (nq, nv)``;
+    ``h0`` the first step (default: scipy's initial step for an error of order 3 at the mapped
+    tolerances); ``detect = (h_D, e_D)`` (``auto``: DOP853's last step and evaluations per step when
+    it handed over) ends the stretch (status 5) when DOP853 would be cheaper."""
+    d = y0.size
+    nq, nv = structure
+    r, a, fnewt = radau_tolerances(rtol, atol)
+    max_step = np.inf if dt is None else float(dt)
+    if h0 is None:
+        h0 = loops["initial_step"](t0, y0, f0, t1, max_step, 3, r, a, args, drv.counters)
+    st = np.zeros(R_SIZE)
+    st[R_T], st[1], st[R_STORED], st[R_FIRST], st[R_NEED_JAC] = t0, min(float(h0), max_step), 1.0, 1.0, 1.0
+    st[radau.R_FACCON], st[radau.R_ERRACC], st[R_NQ], st[R_NV] = 1.0, 0.01, nq, nv
+    st[radau.R_DETECT], st[radau.R_RHO], st[radau.R_RHO0] = float(detect is not None), -1.0, -1.0
+    st[radau.R_NFEV0] = float(drv.cnt[0])
+    if detect is not None:
+        st[radau.R_HDOP], st[radau.R_EDOP] = detect
+    arrays = (np.zeros((3, d)), np.zeros((3, d)), np.zeros((3, d)), np.empty(d), np.empty(d),
+              np.empty(d, np.complex128), np.empty(nv), np.empty(nv, np.complex128))
+    lin = (np.zeros((d - nq, nq + nv)), np.empty((nv, nv)), np.zeros(nv, np.int64),
+           np.empty((nv, nv), np.complex128), np.zeros(nv, np.int64))
+    y = y0.copy()
+    f = f0.copy()
+    state = (st, y, f, arrays, (np.zeros((3, d)), np.zeros(d)), lin)
+    ctl = (float(t1), r, a, max_step, need_dense, fnewt, *radau.strategy_for(nq + nv))
+    cap = 256
+    ts, ys, dens = np.empty(cap), np.empty((cap, d)), np.empty((cap if need_dense else 0, 3, d))
+    ts[0], ys[0] = t0, y0
+    while True:
+        status = loops["radau_chunk"](ctl, state, (ts, ys, dens), drv.guard, drv.counters, drv.size(), args)
+        if drv.after_chunk(status, st[R_T], y):
+            break
+        if int(st[R_STORED]) >= ts.size:
+            ts, ys = _grow((ts, ys), ts.size)
+            if need_dense:
+                (dens,) = _grow((dens,), dens.shape[0])
+    m = int(st[R_STORED])
+    sol = DenseOutput(ts[:m], ys[:m], poly=("Radau5", dens[:m])) if need_dense and m > 1 else None
+    return Stretch(status, ts[:m], ys[:m], sol, st, f, int(st[radau.R_NJEV]))
 
 
 def _drive_rk4(drv, loops, args, f0, y0, grid, need_dense):
@@ -178,57 +272,72 @@ def _drive_midpoint(drv, loops, args, f0, t0, y0, rtol, atol, grid, need_dense, 
 
 
 def run(method, rhs, f0, t0, t1, y0, *, rtol, atol, dt, grid, callback=None, max_steps=None,
-        need_dense=False, stop=None, jac=None, wall=None) -> Outcome:
+        need_dense=False, stop=None, jac=None, wall=None, structure=None) -> Outcome:
     """Integrate with one of the loops: compiled when ``rhs`` is a
     :class:`~urdf2links.scenes.scene_kernels.CompiledScene` (and ``stop`` None or an angle guard),
     interpreted otherwise (then ``callback`` and ``stop`` are asked after every step, ``jac`` is
-    the midpoint's Jacobian: callable, constant matrix or None for finite differences; ``wall`` None
-    or ``(deadline, max_wall)``: past the deadline the run ends unsuccessfully, saying so).
-    ``f0 = rhs(t0, y0)``; ``atol`` (d,); ``grid`` the fixed-step methods' step times. RK45 and
-    DOP853 run compiled only."""
+    the midpoint's or Radau5's Jacobian: callable, constant matrix (midpoint) or None for finite
+    differences; ``wall`` None or ``(deadline, max_wall)``: past the deadline the run ends
+    unsuccessfully, saying so). ``f0 = rhs(t0, y0)``; ``atol`` (d,); ``grid`` the fixed-step methods'
+    step times; ``structure`` Radau5's ``(nq, nv)`` (default :func:`structure_of`). RK45 and DOP853
+    run compiled only (``auto`` runs DOP853 interpreted on a Python right-hand side)."""
     d = y0.size
     atol = np.ascontiguousarray(np.broadcast_to(np.asarray(atol, float), (d,)))
     drv = _Driver(rhs, d, callback=callback, max_steps=max_steps, stop=stop, chunk=CHUNK, wall=wall)
     compiled = drv.compiled and jac is None and drv.stop is None
     if compiled:
-        loops, args = vars(fixed), rhs.args
+        loops, args = _compiled(), rhs.args
     else:
         drv.chunk = 1
         loops, args = _interpreted(user_jac=callable(jac)), (rhs, jac)
+    structure = structure_of(rhs, d) if structure is None else tuple(int(k) for k in structure)
 
     def slope_at_end(t, y):
         drv.cnt[0] += 1
         return rhs(t, y)
 
+    stretches = ()
     if method in TABLEAUX:
         if not compiled:
             raise ValueError(f"{method} runs compiled only (scipy's {method} serves Python right-hand sides)")
-        status, ts, ys, sol, njev = _drive_erk(drv, TABLEAUX[method], args, f0, t0, t1, y0, rtol, atol, dt,
-                                               need_dense)
+        out = run_erk(drv, loops, TABLEAUX[method], args, f0, t0, t1, y0, rtol, atol, dt, need_dense)
+        status, ts, ys, sol, njev = out.status, out.t, out.y, out.sol, 0
+    elif method == "Radau5":
+        out = run_radau(drv, loops, args, f0, t0, t1, y0, rtol, atol, dt, need_dense, structure)
+        status, ts, ys, sol, njev = out.status, out.t, out.y, out.sol, out.njev
+    elif method == "auto":
+        from .auto import drive_auto
+
+        status, ts, ys, sol, njev, stretches = drive_auto(drv, loops, args, f0, t0, t1, y0, rtol, atol, dt,
+                                                          need_dense, structure)
     elif method == "RK4":
         status, ts, ys, sol, njev = _drive_rk4(drv, loops, args, f0, y0, grid, need_dense)
     else:
         status, ts, ys, sol, njev = _drive_midpoint(drv, loops, args, f0, t0, y0, rtol, atol, grid, need_dense,
                                                     jac, slope_at_end)
-    return _outcome(method, rhs, drv, status, ts, ys, sol, njev, dt, max_steps)
+    return _outcome(method, rhs, drv, status, ts, ys, sol, njev, dt, max_steps, stretches)
 
 
-def _outcome(method, rhs, drv, status, ts, ys, sol, njev, dt, max_steps) -> Outcome:
+def _outcome(method, rhs, drv, status, ts, ys, sol, njev, dt, max_steps, stretches=()) -> Outcome:
     cnt, fail = drv.counters
+    failed_at = float(fail[0])       # NaN unless the right-hand side failed somewhere
+    if status in (-2, -1, -4) and drv.compiled and np.isfinite(failed_at):
+        rhs.check(failed_at, fail[1:])      # raises the model's named error (A not positive definite) if it is one
     if status == -2:
-        if drv.compiled:
-            rhs.check(float(fail[0]), fail[1:])      # raises the model's named error if there is one
-        raise IntegrationError(f"{method}: non-finite state or right-hand side at t={float(fail[0])!r}"
+        raise IntegrationError(f"{method}: non-finite state or right-hand side at t={failed_at!r}"
                                + (f" (dt={dt!r})" if dt else ""))
     stopped = status == 2 or drv.stopped
     success, message = True, "reached t_end"
-    if status == -1:
-        success, message = False, (f"{method} failed at t={float(ts[-1])!r}: Required step size is less than "
-                                   "spacing between numbers.")
+    if status in (-1, -4):
+        why = ("Required step size is less than spacing between numbers." if status == -1 else
+               "Radau5's iteration matrix stayed singular over five halvings of the step.")
+        if np.isfinite(failed_at):
+            why += f" (The right-hand side was not finite at t={failed_at!r}.)"
+        success, message = False, f"{method} failed at t={float(ts[-1])!r}: {why}"
     elif status == 0 and not stopped and drv.out_of_time:
         success, message = False, wall_message(drv.wall[1], float(ts[-1]), int(cnt[1]))
     elif status == 0 and not stopped and cnt[1] >= drv.budget:
         success, message = False, f"max_steps={max_steps} reached at t={float(ts[-1])!r}"
     elif stopped:
         message = f"stopped by stop(t, y) at t={float(ts[-1])!r}"
-    return Outcome(ts, ys, sol, int(cnt[0]), njev, int(cnt[2]), success, message, stopped)
+    return Outcome(ts, ys, sol, int(cnt[0]), njev, int(cnt[2]), success, message, stopped, tuple(stretches))

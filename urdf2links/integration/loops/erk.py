@@ -15,6 +15,7 @@ from scipy.integrate._ivp import dop853_coefficients as _dop
 from scipy.integrate._ivp.rk import RK45 as _RK45
 
 from .common import evaluate, guard_fires, rms
+from .stiffness import E_DETECT, explicit_stiff
 
 __all__ = ["Tableau", "TABLEAUX", "initial_step", "erk_chunk"]
 
@@ -145,8 +146,11 @@ def _attempt(tab, ctl, t, h_abs, y, f, K, work, args, counters):
                     acc += K[j, i] * tab.B[j]
                 y_new[i] = y[i] + h * acc
             ok = evaluate(t + h, y_new, f_new, args, counters)
-        if not ok:
-            return -2, t, h, h_abs
+        if not ok:               # a trial step through a non-finite stage (an unstable step size on a stiff
+            h_abs *= MIN_FACTOR  # scene): rejected with the smallest factor, as scipy's NaN error norm does
+            rejected = True
+            cnt[2] += 1
+            continue
         for i in range(d):
             K[tab.stages, i] = f_new[i]
             scale[i] = atol[i] + max(abs(y[i]), abs(y_new[i])) * rtol
@@ -199,7 +203,9 @@ def erk_chunk(tab, ctl, state, store, guard, counters, chunk, args):
     slope, ``K`` (16, d) the stages (all in/out); ``store = (ts (cap,), ys (cap, d), dens (cap,
     n_dense, d))`` the accepted steps and the dense-output rows of the step ending there;
     ``guard = (indices, thresholds)``; ``counters = (cnt, fail)`` with ``cnt = [nfev, nsteps,
-    nrejected, status]``. Returns the status."""
+    nrejected, status]``. With ``st`` longer than three and ``st[E_DETECT]`` set (``auto``), Hairer's
+    stiffness test runs after every accepted step (:func:`~urdf2links.integration.loops.stiffness.explicit_stiff`)
+    and a stiff verdict ends the chunk with status 4 after storing the step. Returns the status."""
     max_step, dense = ctl[3], ctl[4]
     st, y, f, K = state
     ts, ys, dens = store
@@ -208,6 +214,7 @@ def erk_chunk(tab, ctl, state, store, guard, counters, chunk, args):
     work = (np.empty(d), np.empty(d), np.empty(d), np.empty(d), np.empty(d), np.empty(d))
     y_new, f_new, ystage = work[0], work[1], work[2]
     t, h_abs, stored = st[0], st[1], int(st[2])
+    detect = st.size > E_DETECT and st[E_DETECT] != 0.0
     taken = 0
     status = 0
     while taken < chunk and stored < ts.size:
@@ -219,6 +226,7 @@ def erk_chunk(tab, ctl, state, store, guard, counters, chunk, args):
         status, t_new, h, h_abs = _attempt(tab, ctl, t, h_abs, y, f, K, work, args, counters)
         if status != 0:
             break
+        stiff = detect and explicit_stiff(st, h, y_new, f_new, f, ystage, K[tab.stages - 1])
         if dense and not _dense_row(tab, t, h, y, y_new, f_new, K, ystage, dens[stored], args, counters):
             status = -2
             break
@@ -236,6 +244,9 @@ def erk_chunk(tab, ctl, state, store, guard, counters, chunk, args):
             break
         if guard_fires(y, guard):
             status = 2
+            break
+        if stiff:
+            status = 4
             break
     st[0], st[1], st[2] = t, h_abs, stored
     cnt[3] = status
