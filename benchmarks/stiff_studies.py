@@ -24,6 +24,7 @@ ROOT = Path(__file__).resolve().parent.parent
 STUDIES = {
     "allegro_left": ("example-robot-data", "allegro_hand_description/urdf/allegro_left_hand.urdf"),
     "allegro_right": ("example-robot-data", "allegro_hand_description/urdf/allegro_right_hand.urdf"),
+    "ur5_stiff_servo": ("shipped", "ur5_stiff_servo.toml"),
 }
 
 
