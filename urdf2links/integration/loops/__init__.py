@@ -1,8 +1,11 @@
-"""The integration loops: RK45, DOP853, RK4 and the implicit midpoint rule, compiled with numba.
+"""The integration loops: RK45, DOP853, RK4, the implicit midpoint rule and Radau5, compiled with numba,
+and ``auto``, which switches between DOP853 and Radau5.
 
 ``common`` (the evaluation of a compiled scene, the angle guard), ``erk`` (scipy's explicit pairs,
-step for step), ``fixed`` (RK4, the implicit midpoint), ``driver`` (:func:`run`: chunks, storage,
-results; compiled around a compiled scene, interpreted around a Python callable).
+step for step, with auto's stiffness test), ``fixed`` (RK4, the implicit midpoint), ``radau`` (Radau IIA
+of order 5 for stiff scenes, E59, E60) with ``lu`` (its factorisations), ``stiffness`` (auto's tests,
+E58), ``auto`` (the stretches), ``driver`` (:func:`run`: chunks, storage, results; compiled around a
+compiled scene, interpreted around a Python callable).
 """
 
 from .common import AngleGuard, evaluate
