@@ -202,7 +202,11 @@ def test_eval_cost_times_every_public_model_call(tmp_path):
             assert all(f"{k}_s" in r for k in (*public, "mj_forward", "mj_inverse", "pin_rnea"))
             assert r["vs_mj_forward"]["bias"] == compare(r["bias_s"], r["mj_forward_s"])
             assert r["vs_inverse_peers"]["pin_rnea"] == compare(r["inverse_dynamics_s"], r["pin_rnea_s"])
-            assert r["inverse_agreement"]["mj_inverse"] < 1e-9      # the timed calls compute the same torques
+            # the timed calls compute the same torques: an absolute difference (N m), and a chain's torques
+            # grow like n^3 (max |tau| 66, 8.5e3 and 1.1e6 N m at n = 8, 32, 128 at a seeded state), so the
+            # bound is 1e-9 N m up to n = 32 and scales with (n / 32)^3 beyond: about 1e-14 of the torques
+            # (measured: 3.3e-9 N m on chain128, 4e-14 on the real robots)
+            assert r["inverse_agreement"]["mj_inverse"] < 1e-9 * max(1.0, (r["n"] / 32) ** 3)
     md = render("eval_cost", fixture("eval_cost"), tmp_path)
     for k in public:
         assert f" {k} / mj_forward |" in md
