@@ -20,6 +20,8 @@ import math
 import platform
 from pathlib import Path
 
+from urdf2links.scenes.scene import RunSettings
+
 from ..figures import figure, save_png
 from ..formatting import fmt, fmt_md
 from .rows import TERMS_TOLERANCE
@@ -226,6 +228,10 @@ def _row_html(r: dict, order: int, *, thumbs: bool, checks: bool) -> str:
             + "".join(cells) + "</tr>")
 
 
+#: what the project runs in a default scene: ``auto`` (DOP853, Radau5 while the run is stiff) at the scenes' rtol
+_PROJECT_RUN = f"{RunSettings.method} (DOP853, Radau5 while stiff) rtol {RunSettings.rtol:g}"
+
+
 def render_index(data: dict, *, figure_file: str | None = "corpus.png") -> str:
     """``index.html`` of a corpus (``data`` as :func:`corpus_data` makes it)."""
     e = html.escape
@@ -244,7 +250,8 @@ def render_index(data: dict, *, figure_file: str | None = "corpus.png") -> str:
                + f" {TERMS_TOLERANCE:g}).")
     setup = (f"Each robot in its default scene ({e(st['scene'])}), t = 0..{st['t_end']:g} s, seed {st['seed']}; terms "
              f"at {st['states']} seeded states; MuJoCo {e(st['mujoco_integrator'])} dt {st['mujoco_dt']:g} s against "
-             f"urdf2links DOP853 rtol 1e-10. Ran {e(run.get('how', ''))} in {run.get('wall_s', 0):.0f} s.")
+             f"urdf2links {e(_PROJECT_RUN)} (the methods each robot's run used are in its page). "
+             f"Ran {e(run.get('how', ''))} in {run.get('wall_s', 0):.0f} s.")
     parts = [f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>urdf2links corpus against MuJoCo"
              f"</title><style>{_CSS}</style></head><body>",
              "<p class='small'><a href='../index.html'>&larr; all reports</a></p>" if data.get("nested") else "",
