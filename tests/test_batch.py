@@ -118,3 +118,15 @@ def test_sweep_command(tmp_path):
     data = np.load(tmp_path / "double_pendulum_chaos_sweep.npz")
     assert data["q"].shape == (5, 5, 2) and data["q0"].shape == (5, 2)
     np.testing.assert_array_equal(data["q"][:, 0, :], data["q0"])
+    assert "no batch loop" not in out.stdout        # the scene names DOP853: nothing replaced
+
+
+def test_a_sweep_of_an_auto_scene_says_it_runs_dop853(tmp_path):
+    """auto (the default method) has no batch loop: the sweep runs DOP853 and says so, not silently."""
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-m", "urdf2links.cli", "sweep", "ur5_stiff_servo", "--count", "2",
+                          "--t-end", "0.01", "--samples", "3", "--out", str(tmp_path)], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    assert "the scene's method 'auto' has no batch loop; the sweep ran DOP853" in out.stdout, out.stdout
