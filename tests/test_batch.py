@@ -130,3 +130,5 @@ def test_a_sweep_of_an_auto_scene_says_it_runs_dop853(tmp_path):
                           "--t-end", "0.01", "--samples", "3", "--out", str(tmp_path)], capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     assert "the scene's method 'auto' has no batch loop; the sweep ran DOP853" in out.stdout, out.stdout
+    res = simulate_batch(shipped_robots_dir() / "ur5_stiff_servo.toml", np.zeros((1, 6)), t_end=0.01, samples=3)
+    assert res.method == "DOP853" and "has no batch loop" in res.notes[0]        # the API says it too

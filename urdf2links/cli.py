@@ -237,9 +237,8 @@ def _sweep(args) -> int:
     where = f"on {len(res.chunks)} chunks at {args.scheduler}" if client is not None else "on this machine"
     if res.compilation is not None and res.compilation.happened:
         print(res.compilation.describe("urdf2links sweep"))
-    if args.method is None and scene.run.method != res.method:
-        print(f"note: the scene's method {scene.run.method!r} has no batch loop; the sweep ran {res.method} (explicit: "
-              "a stiff scene costs its steps; `urdf2links simulate` runs one state with the scene's method)")
+    for note in res.notes:
+        print(f"note: {note}")
     print(f"{scene.name}: {model.name}, {args.count} initial states (seed {args.seed}, spread {args.spread:g}), "
           f"t = 0..{res.t[-1]:g} s, {res.method}, {where}: {int(np.sum(res.status == 1))} reached the end, "
           f"{res.wall_time:.2f} s wall, {int(res.nfev.sum())} evaluations")

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import time
 import uuid
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numba import njit, prange
@@ -50,6 +50,8 @@ class BatchResult:
     compilation: object = None
     """:class:`~urdf2links.integration.simulate.Compilation` of the warm-up call before the timed one
     (numba's compilation, or loading from its cache, kept out of ``wall_time``); None on a cluster."""
+    notes: tuple = ()
+    """What the sweep did differently from the scene: its method when the scene's has no batch loop."""
 
     @property
     def success(self) -> bool:
@@ -155,6 +157,10 @@ def simulate_batch(scene, q0, qd0=None, *, t_end: float | None = None, samples: 
     plan = as_plan(scene, model=model)        # compiled once; a Plan passed in is used as it is
     scene, model = plan.scene, plan.model
     run = scene.run
+    notes = ()
+    if method is None and run.method not in TABLEAUX:
+        notes = (f"the scene's method {run.method!r} has no batch loop; the sweep ran DOP853 (explicit: a stiff "
+                 "scene costs its steps; `urdf2links simulate` runs one state with the scene's method)",)
     method = method or (run.method if run.method in TABLEAUX else "DOP853")
     if method not in TABLEAUX:
         raise ValueError(f"method must be one of {tuple(TABLEAUX)} for a batch, got {method!r}")
@@ -167,7 +173,7 @@ def simulate_batch(scene, q0, qd0=None, *, t_end: float | None = None, samples: 
         raise ValueError(f"qd0 must have the shape of q0 {Q0.shape}; got {QD0.shape}")
     if client is not None:
         options = {"t_end": t_end, "samples": samples, "method": method, "rtol": rtol, "atol": atol}
-        return _on_cluster(client, scene, model, Q0, QD0, chunks, options)
+        return replace(_on_cluster(client, scene, model, Q0, QD0, chunks, options), notes=notes)
     nb, d = Q0.shape[0], 2 * n + 1
     Y0 = np.ascontiguousarray(np.hstack([Q0, QD0, np.zeros((nb, 1))]))
     T = run.t_end if t_end is None else float(t_end)
@@ -190,4 +196,4 @@ def simulate_batch(scene, q0, qd0=None, *, t_end: float | None = None, samples: 
     wall = time.perf_counter() - start
     return BatchResult(t=ts, q=out[:, :, :n], qd=out[:, :, n:2 * n], work=out[:, :, 2 * n], nfev=nfev,
                        status=status, wall_time=wall, method=method, coordinate_names=model.coordinate_names,
-                       compilation=comp)
+                       compilation=comp, notes=notes)
