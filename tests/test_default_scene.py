@@ -4,11 +4,11 @@ joint-limit excursions, and the CLI forms ``simulate|compare ROBOT.urdf`` and ``
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
+
+from cli_runner import run_cli
 
 from urdf2links import load_urdf
 from urdf2links.errors import SceneError
@@ -50,7 +50,7 @@ def arm(tmp_path):
 
 
 def cli(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "urdf2links.cli", *args], capture_output=True, text=True, cwd=cwd)
+    return run_cli(*args, cwd=cwd)  # in this process, as a subprocess would show it (tests/cli_runner.py)
 
 
 def test_default_scene_contents(arm):

@@ -10,12 +10,12 @@ from __future__ import annotations
 
 import json
 import os
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+
+from cli_runner import run_cli
 
 from urdf2links import load_urdf, load_urdf_string
 from urdf2links.cli import build_parser, main
@@ -38,9 +38,8 @@ KUKA_LIKE = """<robot name="lbr_like">
 
 
 def run(*args, cwd, env=None):
-    """The command line as a user types it, in a subprocess (stdout, stderr, exit status)."""
-    return subprocess.run([sys.executable, "-m", "urdf2links.cli", *args], cwd=cwd, capture_output=True, text=True,
-                          env=env)
+    """The command line as a user types it (stdout, stderr, exit status), in this process (tests/cli_runner.py)."""
+    return run_cli(*args, cwd=cwd, env=env)
 
 
 # -- 2. shipped robots and scenes by name ---------------------------------------------------------
