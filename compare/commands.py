@@ -97,7 +97,7 @@ def _print_headline(s: dict, stream=sys.stdout) -> None:
 
 def _compare_cmd(args) -> str:
     parts = ["urdf2links compare", shown_path(args.scene)]
-    parts += [f for f, on in (("--floating", args.floating), (f"--q0 {args.q0}", args.q0 != "zero"),
+    parts += [f for f, on in (("--floating", args.floating), (f"--q0 {args.q0}", args.q0 != "excite"),
                               (f"--inertia {args.inertia}", args.inertia), (f"--mimic {args.mimic}", args.mimic),
                               ("--strict", args.strict)) if on]
     parts += [f"--package-dir {shown_path(d)}" for d in args.package_dir] + [f"--xacro-arg {a}" for a in args.xacro_arg]

@@ -17,6 +17,7 @@ import numpy as np
 from .dynamics.transforms import PARAMETERS
 from .errors import DescriptionError, DynamicsError, IntegrationError, SceneError
 from .scenes.limits import LimitExcursion
+from .scenes.scene import Q0_CHOICES
 from .scenes.scene_toml import hold_of, load_options_of, scene_from_args, write_scene_option, xacro_args_of
 
 __all__ = ["main", "build_parser", "format_tree", "scene_from_args", "xacro_args_of", "write_scene_option"]
@@ -312,10 +313,12 @@ def _add_load_options(p) -> None:
 def _add_default_scene_options(p, *, seed: bool = True, write_scene: bool = True) -> None:
     """Options of a robot file run in its default scene."""
     g = p.add_argument_group("a robot file's default scene")
-    g.add_argument("--q0", choices=("zero", "random"), default="zero", help="initial configuration: zero, or "
-                   "seeded random within the joint limits (default zero)")
+    g.add_argument("--q0", choices=Q0_CHOICES, default="excite", help="initial state: excite (default: q0 and q' "
+                   "random, every coordinate moving a good part of its range in the run, a floating base with a "
+                   "random twist), random (q0 random within the joint limits, at rest), rest (q = 0 at rest; zero "
+                   "is its old name)")
     if seed:
-        g.add_argument("--seed", type=int, default=0, help="seed of --q0 random (default 0)")
+        g.add_argument("--seed", type=int, default=0, help="seed of --q0 excite and random (default 0)")
     g.add_argument("--hold", action="store_true", help="hold the robot at q0: a position servo on every coordinate, "
                    "critically damped at --hold-bandwidth, gains from the mass matrix at q0 (both engines)")
     g.add_argument("--hold-bandwidth", type=float, metavar="HZ", help="the servos' bandwidth with --hold (default 2 Hz)")
