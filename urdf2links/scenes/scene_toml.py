@@ -67,11 +67,12 @@ def _run_lines(run: RunSettings) -> list[str]:
 
 def scene_toml(scene: Scene, *, folder=None) -> str:
     """``scene`` as TOML text (robot path relative to ``folder`` when given). SceneError for a scene
-    with time functions (base motion, loads, torques), which this writer does not spell."""
+    with time functions (base motion, loads, torques that are not constant), which this writer does not spell."""
     from .functions import Constant
 
     functions = [w for w, on in (("[base]", scene.base is not None), ("[[force]]/[[moment]]", bool(scene.loads)),
-                                 ("[[torque]]", bool(scene.torques)), ("[[computed_torque]]", bool(scene.computed_torque)),
+                                 ("[[torque]]", any(not isinstance(f, Constant) for _, f in scene.torques)),
+                                 ("[[computed_torque]]", bool(scene.computed_torque)),
                                  ("[[actuator]] ctrl", any(not isinstance(a.ctrl, Constant) for a in scene.actuators)))
                  if on]
     if functions:
@@ -99,6 +100,8 @@ def scene_toml(scene: Scene, *, folder=None) -> str:
         out += [f"factor = {_value(float(scene.gravcomp_factor))}"] if scene.gravcomp_factor is not None else []
         out += [f"bodies = {_value({b: float(f) for b, f in scene.gravcomp_bodies})}"] if scene.gravcomp_bodies else []
         out += [""]
+    for coord, f in scene.torques:       # constant ones (the default scene's damper torques, E65)
+        out += ["[[torque]]", f"coordinate = {_value(coord)}", f"value = {_value(float(f.value))}", ""]
     out += _actuator_lines(scene.actuators)
     out += ["[initial]", f"q = {_value({k: float(v) for k, v in scene.q0.items()})}",
             f"qd = {_value({k: float(v) for k, v in scene.qd0.items()})}", ""]
