@@ -97,8 +97,8 @@ def file_torques(scene, plan=None) -> dict | None:
     as a constant ``qfrc_applied``. None when one is not (then the run is route 1's); needs ``plan``."""
     from urdf2links.scenes.functions import Constant
 
-    if plan is None:
-        return None
+    if plan is None or any(_carried(plan, a) is None for a in plan.actuator_set.actuators):
+        return None     # the control callback writes qfrc_applied (actuators on ball or free joints' angles)
     joints = {plan.model.coordinate_names[j.coordinates[0]]: j for j in plan.model.info["mujoco"].joints
               if j.kind in ("hinge", "slide")}
     out = {}
