@@ -403,8 +403,8 @@ def _report_parser(sub) -> None:
                                       "reports and an index page",
                        description="Run `compare` on every shipped scene (robots/*.toml, or the scenes given) and "
                                    "write reports/<robot>/<scene>/ and reports/index.html. With --corpus: every robot "
-                                   "file found there in its default scene (gravity, fixed base, seeded random q0, 0.5 "
-                                   "s), in parallel processes (--jobs) or on a Dask cluster (--scheduler); writes "
+                                   "file found there in its default scene (gravity, fixed base, every coordinate moving "
+                                   "from a seeded random q0 and qd0, 0.5 s), in parallel processes (--jobs) or on a Dask cluster (--scheduler); writes "
                                    "index.html, corpus.json, corpus.md and a page per robot into reports/corpus/. "
                                    "Progress on stderr.")
     p.add_argument("scenes", nargs="*", help="scene files or names of shipped scenes (default: every shipped scene; "
@@ -422,7 +422,7 @@ def _report_parser(sub) -> None:
     p.add_argument("--scheduler", metavar="ADDRESS", help="--corpus: run the robots on the Dask cluster whose "
                    "scheduler is at ADDRESS (tcp://host:8786; `dask scheduler` prints it); needs "
                    "pip install 'urdf2links[distributed]'")
-    p.add_argument("--seed", type=int, default=0, help="--corpus: seed of each robot's random q0 and of the "
+    p.add_argument("--seed", type=int, default=0, help="--corpus: seed of each robot's random q0 and qd0 and of the "
                    "terms' states (default 0)")
     _add_load_options(p)
     p.add_argument("--no-thumbnails", action="store_true", help="--corpus: no picture of each robot in the index "

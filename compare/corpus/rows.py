@@ -7,8 +7,8 @@ and, when asked, its light report page. It never raises for a robot: every outco
 ``status`` says what happened (:data:`STATUSES`):
 
 * ``compared``: imported, run in its default scene (:func:`urdf2links.scenes.scene.default_scene`: gravity,
-  fixed base, seeded random ``q0`` within the joint limits, at rest, the URDF's damping; ``t_end``
-  0.5 s) by both engines and compared (:func:`urdf2links.compare.agreement.trajectory.compare_scene`: terms at
+  fixed base, every coordinate moving from a seeded random ``q0`` within the joint limits and ``q'``
+  (E65), the URDF's damping; ``t_end`` 0.5 s) by both engines and compared (:func:`urdf2links.compare.agreement.trajectory.compare_scene`: terms at
   seeded states on route 1 and route 2, trajectories, energies). MuJoCo refusing the file on route 2
   is part of a comparison, not a failure: ``terms.route2_status`` says ``repaired`` (or ``refused``)
   and ``terms.route2_reason`` gives MuJoCo's reason, as in the scene reports;
