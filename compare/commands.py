@@ -86,6 +86,10 @@ def _print_headline(s: dict, stream=sys.stdout) -> None:
           file=stream)
     if s["base"]["moving"]:
         print(f"  base       tracking error {s['base']['tracking_error']:.2e}", file=stream)
+    if s.get("coverage"):
+        print(f"  coverage   {s['coverage']['text']}", file=stream)
+    if s.get("verdict"):
+        print(f"  verdict    {s['verdict']['text']}", file=stream)
     print(f"  wall time  urdf2links {wt['project_s']:.3g} s (integrator), MuJoCo {wt['mujoco_s']:.3g} s (engine, "
           f"mj_step nstep); whole calls {wt['project_run_s']:.3g} s / {wt['mujoco_harness_s']:.3g} s", file=stream)
     if wt["project_compiled"]:
