@@ -143,16 +143,22 @@ def _mujoco_run(plan, *, t_end, samples, timestep, integrator, reference):
     return _mujoco_urdf_run(plan, t_end=t_end, samples=samples, timestep=timestep, integrator=integrator)
 
 
-def _mapped_initial(scene_m, model_u, model_m, q0_u, qd0_u, cmap) -> object:
+def _mapped_initial(scene_m, model_u, model_m, q0_u, qd0_u, cmap, torques_u=()) -> object:
+    """The second description's scene started at the first one's state, mapped (E52); the first one's
+    constant torques (the excited default scene's damper torques, E65) mapped onto it too."""
+    from urdf2links.scenes.functions import Constant
+
     q = np.asarray(model_m.info.get("q0", np.zeros(model_m.n)), float).copy()
     qd = np.zeros(model_m.n)
     iu = {n: i for i, n in enumerate(model_u.coordinate_names)}
     im = {n: i for i, n in enumerate(model_m.coordinate_names)}
+    to_m = {a: (b, s) for a, b, s, c in cmap}
     for a, b, s, c in cmap:
         q[im[b]] = s * q0_u[iu[a]] + c
         qd[im[b]] = s * qd0_u[iu[a]]
+    torques = tuple((to_m[a][0], Constant(to_m[a][1] * f.value)) for a, f in torques_u if a in to_m)
     return dataclasses.replace(scene_m, q0=dict(zip(model_m.coordinate_names, q.tolist())),
-                               qd0=dict(zip(model_m.coordinate_names, qd.tolist())))
+                               qd0=dict(zip(model_m.coordinate_names, qd.tolist())), torques=torques)
 
 
 def run_pair_motion(pair, *, q0: str = "zero", seed: int = 0, t_end: float = 1.0, load: dict | None = None,
@@ -167,11 +173,11 @@ def run_pair_motion(pair, *, q0: str = "zero", seed: int = 0, t_end: float = 1.0
         scene_u = default_scene(pair.urdf_path, q0=q0, seed=seed, t_end=t_end, floating=bool(opts_u.pop("floating_base",
                                 False)), **opts_u)
         model_u = scene_u.model()
-        scene_m = default_scene(pair.mjcf_path, t_end=t_end)
+        scene_m = default_scene(pair.mjcf_path, t_end=t_end, q0="rest")   # its state: the first one's, mapped
         model_m = scene_m.model()
     cmap = coordinate_map(pair.urdf, pair.mjcf, pair.mapping)
     q0u, qd0u = scene_u.initial_state(model_u)
-    scene_m = _mapped_initial(scene_m, model_u, model_m, q0u, qd0u, cmap)
+    scene_m = _mapped_initial(scene_m, model_u, model_m, q0u, qd0u, cmap, scene_u.torques)
     plans = (as_plan(scene_u, model=model_u), as_plan(scene_m, model=model_m))
     samples = scene_u.run.samples
     runs, notes = [], []
