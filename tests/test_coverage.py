@@ -26,6 +26,7 @@ UR5 = shipped_robots_dir() / "ur5_like.urdf"
 #: A closed mechanism written as an open tree plus what closes it: two hinges tied by a joint equality
 #: and a fixed tendon (both dropped on both sides: the tree has none, MuJoCo's run disables them).
 CLOSED_MJCF = """<mujoco model="closed_pair">
+  <compiler angle="radian"/>
   <option gravity="0 0 -9.81"/>
   <worldbody>
     <body name="a" pos="0 0 1">
@@ -60,6 +61,22 @@ def test_excited_state_travels_a_good_part_of_every_range_within_the_limits():
         assert np.all(q[r.root] == 0.0) and np.all(qd[r.root] != 0.0) and r.root.sum() == (3 if floating else 0)
         assert excited_state(model, seed=4, t_end=0.5) == ex != excited_state(model, seed=5, t_end=0.5)
         assert "seed 4" in ex.text
+
+
+def test_an_mjcf_robot_is_excited_around_its_home_keyframe(tmp_path):
+    """With <key name="home">, q0 falls within a quarter of each range on either side of the keyframe (and
+    within the limits), and the scene's description says where it started."""
+    from urdf2links.parsers.mjcf import load_mjcf
+
+    f = tmp_path / "homed.xml"
+    f.write_text(CLOSED_MJCF.replace("</mujoco>", '<keyframe><key name="home" qpos="0.8 -0.3"/></keyframe></mujoco>'))
+    model = load_mjcf(f)
+    r = coordinate_ranges(model)
+    assert r.home and r.start.tolist() == pytest.approx([0.8, -0.3])
+    for seed in range(8):
+        q = np.array(list(excited_state(model, seed=seed, t_end=0.5).q0.values()))
+        assert np.all(np.abs(q - r.start) <= r.width / 4 + 1e-12) and np.all((q >= r.lower) & (q <= r.upper))
+    assert "around the file's home keyframe" in default_scene(f, t_end=0.5).description
 
 
 def test_coverage_measures_traversal_rates_and_the_energy_shares():

@@ -103,10 +103,9 @@ def excited_state(model, *, seed: int, t_end: float) -> ExcitedState:
     r = coordinate_ranges(model)
     rng = np.random.default_rng(seed)
     width = r.width
-    if r.home:      # around the home keyframe: a quarter of the range on each side, within the limits
-        lo = np.maximum(r.lower, r.start - width / 4)
-        hi = np.minimum(r.upper, r.start + width / 4)
-        lo, hi = np.minimum(lo, hi), np.maximum(lo, hi)
+    if r.home:      # around the home keyframe (held within the limits): a quarter of the range on each side
+        home = np.clip(r.start, r.lower, r.upper)
+        lo, hi = np.maximum(r.lower, home - width / 4), np.minimum(r.upper, home + width / 4)
     else:
         lo, hi = r.lower, r.upper
     q = rng.uniform(lo, hi)
