@@ -33,15 +33,17 @@ from urdf2links.integration.simulate import simulate, warm_up
 from urdf2links.dynamics.rotations import matrix_to_xyz_angles, xyz_angles_to_matrix
 from urdf2links.parsers.mjcf_state import _nearest, matrix_to_quat, quat_to_matrix, rate_matrix
 from urdf2links.parsers.robot_file import is_mjcf_path
+from urdf2links.scenes.functions import Constant
 from urdf2links.scenes.plan import as_plan
 from urdf2links.scenes.scene import default_scene
 from urdf2links.view.animation import DEFAULT_FPS, Motion, Panel, render_animation
 from urdf2links.view.visuals import scene_shapes
 
 from ..agreement.trajectory import DIVERGENCE_THRESHOLD, divergence_time
-from ..mujoco_side.mujoco_mjcf import mujoco_from_mjcf, run_file
+from ..mujoco_side.mujoco_mjcf import file_runner, mujoco_from_mjcf
 from ..mujoco_side.mujoco_run import _INTEGRATOR_ENUM
 from ..mujoco_side.mujoco_urdf import MujocoRefused, mujoco_from_urdf
+from ..mujoco_side.stable_run import stable_run
 from .mapping import coordinate_map
 
 __all__ = ["PairMotion", "run_pair_motion", "pair_animation"]
@@ -113,6 +115,9 @@ def _mujoco_urdf_run(plan, *, t_end, samples, timestep, integrator) -> tuple[np.
     q0, qd0 = scene.initial_state(model)
     d = mujoco.MjData(m)
     d.qpos[adr], d.qvel[dof] = q0[joints], qd0[joints]
+    for coord, f in scene.torques:      # constant joint torques (the excited default scene's damper torques, E65)
+        if isinstance(f, Constant) and coord in mj.dof_of_joint:
+            d.qfrc_applied[mj.dof_of_joint[coord]] += float(f.value)
     if floating:
         a, f = mj.free_qpos, list(mj.free_dofs)
         phi = q0[root[3:]]
@@ -136,9 +141,10 @@ def _mujoco_urdf_run(plan, *, t_end, samples, timestep, integrator) -> tuple[np.
 
 
 def _mujoco_run(plan, *, t_end, samples, timestep, integrator, reference):
-    if is_mjcf_path(plan.scene.robot):
+    if is_mjcf_path(plan.scene.robot):     # a blow-up falls back to a stable setting, as in compare_scene
         mf = mujoco_from_mjcf(plan, timestep=timestep, integrator=integrator)
-        run = run_file(mf, plan, t_end=t_end, samples=samples, reference=reference)
+        run, _ = stable_run(None, plan, t_end=t_end, samples=samples, integrator=integrator, timestep=timestep,
+                            runner=file_runner(mf, plan, t_end=t_end, samples=samples, reference=reference))
         return run.q, [f"MuJoCo runs the MJCF file: {n}" for n in mf.notes + run.notes]
     return _mujoco_urdf_run(plan, t_end=t_end, samples=samples, timestep=timestep, integrator=integrator)
 
