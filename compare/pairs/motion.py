@@ -163,8 +163,10 @@ def _mapped_initial(scene_m, model_u, model_m, q0_u, qd0_u, cmap, torques_u=()) 
         q[im[b]] = s * q0_u[iu[a]] + c
         qd[im[b]] = s * qd0_u[iu[a]]
     torques = tuple((to_m[a][0], Constant(to_m[a][1] * f.value)) for a, f in torques_u if a in to_m)
+    head = scene_m.description.split("; at rest at")[0]
     return dataclasses.replace(scene_m, q0=dict(zip(model_m.coordinate_names, q.tolist())),
-                               qd0=dict(zip(model_m.coordinate_names, qd.tolist())), torques=torques)
+                               qd0=dict(zip(model_m.coordinate_names, qd.tolist())), torques=torques,
+                               description=head + "; the first description's initial state and constant torques, mapped")
 
 
 def run_pair_motion(pair, *, q0: str = "zero", seed: int = 0, t_end: float = 1.0, load: dict | None = None,
