@@ -17,6 +17,7 @@ import numpy as np
 from .dynamics.transforms import PARAMETERS
 from .errors import DescriptionError, DynamicsError, IntegrationError, SceneError
 from .scenes.limits import LimitExcursion
+from .scenes.scene import Q0_CHOICES
 from .scenes.scene_toml import hold_of, load_options_of, scene_from_args, write_scene_option, xacro_args_of
 
 __all__ = ["main", "build_parser", "format_tree", "scene_from_args", "xacro_args_of", "write_scene_option"]
@@ -312,10 +313,12 @@ def _add_load_options(p) -> None:
 def _add_default_scene_options(p, *, seed: bool = True, write_scene: bool = True) -> None:
     """Options of a robot file run in its default scene."""
     g = p.add_argument_group("a robot file's default scene")
-    g.add_argument("--q0", choices=("zero", "random"), default="zero", help="initial configuration: zero, or "
-                   "seeded random within the joint limits (default zero)")
+    g.add_argument("--q0", choices=Q0_CHOICES, default="excite", help="initial state: excite (default: q0 and q' "
+                   "random, every coordinate moving a good part of its range in the run, a floating base with a "
+                   "random twist), random (q0 random within the joint limits, at rest), rest (q = 0 at rest; zero "
+                   "is its old name)")
     if seed:
-        g.add_argument("--seed", type=int, default=0, help="seed of --q0 random (default 0)")
+        g.add_argument("--seed", type=int, default=0, help="seed of --q0 excite and random (default 0)")
     g.add_argument("--hold", action="store_true", help="hold the robot at q0: a position servo on every coordinate, "
                    "critically damped at --hold-bandwidth, gains from the mass matrix at q0 (both engines)")
     g.add_argument("--hold-bandwidth", type=float, metavar="HZ", help="the servos' bandwidth with --hold (default 2 Hz)")
@@ -400,8 +403,8 @@ def _report_parser(sub) -> None:
                                       "reports and an index page",
                        description="Run `compare` on every shipped scene (robots/*.toml, or the scenes given) and "
                                    "write reports/<robot>/<scene>/ and reports/index.html. With --corpus: every robot "
-                                   "file found there in its default scene (gravity, fixed base, seeded random q0, 0.5 "
-                                   "s), in parallel processes (--jobs) or on a Dask cluster (--scheduler); writes "
+                                   "file found there in its default scene (gravity, fixed base, every coordinate moving "
+                                   "from a seeded random q0 and qd0, 0.5 s), in parallel processes (--jobs) or on a Dask cluster (--scheduler); writes "
                                    "index.html, corpus.json, corpus.md and a page per robot into reports/corpus/. "
                                    "Progress on stderr.")
     p.add_argument("scenes", nargs="*", help="scene files or names of shipped scenes (default: every shipped scene; "
@@ -419,7 +422,7 @@ def _report_parser(sub) -> None:
     p.add_argument("--scheduler", metavar="ADDRESS", help="--corpus: run the robots on the Dask cluster whose "
                    "scheduler is at ADDRESS (tcp://host:8786; `dask scheduler` prints it); needs "
                    "pip install 'urdf2links[distributed]'")
-    p.add_argument("--seed", type=int, default=0, help="--corpus: seed of each robot's random q0 and of the "
+    p.add_argument("--seed", type=int, default=0, help="--corpus: seed of each robot's random q0 and qd0 and of the "
                    "terms' states (default 0)")
     _add_load_options(p)
     p.add_argument("--no-thumbnails", action="store_true", help="--corpus: no picture of each robot in the index "
