@@ -1,7 +1,8 @@
 """Command line: ``urdf2links inspect FILE.urdf|FILE.xacro|FILE.xml|SCENE.toml``, ``urdf2links simulate
 SCENE.toml|ROBOT.urdf``, ``urdf2links sweep SCENE.toml|ROBOT.urdf``, ``urdf2links compare
-SCENE.toml|ROBOT.urdf``, ``urdf2links report [--corpus DIR ...]`` and ``urdf2links tradeoff SCENE.toml``
-(the MuJoCo comparison and the work-precision study: the handlers import the ``compare`` package,
+SCENE.toml|ROBOT.urdf``, ``urdf2links report [--corpus DIR ...]``, ``urdf2links tradeoff SCENE.toml`` and
+``urdf2links check [PATH]`` (the MuJoCo comparison, the work-precision study and a repository's model regression
+check, docs/ci.md: the handlers import the ``compare`` package,
 and with it MuJoCo, only when they run). A robot file given to
 ``simulate`` or ``compare`` runs in its default scene (:func:`urdf2links.scenes.scene.default_scene`)."""
 
