@@ -29,7 +29,7 @@ def exit_status(results: list[CaseResult]) -> int:
 def ordered(results: list[CaseResult]) -> list[CaseResult]:
     """The cases that did not pass, largest problem first: errors, then by value over tolerance."""
     bad = [r for r in results if r.status != "pass"]
-    return sorted(bad, key=lambda r: (r.status != "error", -r.worst if math.isfinite(r.worst) else -math.inf))
+    return sorted(bad, key=lambda r: (r.status != "error", -r.worst))
 
 
 def verdict(results: list[CaseResult]) -> str:
