@@ -39,7 +39,8 @@ def verdict(results: list[CaseResult]) -> str:
     errors = sum(r.status == "error" for r in results)
     what = ", ".join(f"{n} {k}{'s' if n != 1 else ''}" for k, n in kinds.items())
     if not failed and not errors:
-        return f"urdf2links check: all {len(results)} checks hold ({what})"
+        return (f"urdf2links check: all {len(results)} checks hold ({what})" if len(results) != 1
+                else f"urdf2links check: the one check holds ({what})")
     return (f"urdf2links check: {failed} failed, {errors} could not run, {len(results) - failed - errors} passed "
             f"({what})")
 
