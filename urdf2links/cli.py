@@ -1,7 +1,8 @@
 """Command line: ``urdf2links inspect FILE.urdf|FILE.xacro|FILE.xml|SCENE.toml``, ``urdf2links simulate
 SCENE.toml|ROBOT.urdf``, ``urdf2links sweep SCENE.toml|ROBOT.urdf``, ``urdf2links compare
-SCENE.toml|ROBOT.urdf``, ``urdf2links report [--corpus DIR ...]`` and ``urdf2links tradeoff SCENE.toml``
-(the MuJoCo comparison and the work-precision study: the handlers import the ``compare`` package,
+SCENE.toml|ROBOT.urdf``, ``urdf2links report [--corpus DIR ...]``, ``urdf2links tradeoff SCENE.toml`` and
+``urdf2links check [PATH]`` (the MuJoCo comparison, the work-precision study and a repository's model regression
+check, docs/ci.md: the handlers import the ``compare`` package,
 and with it MuJoCo, only when they run). A robot file given to
 ``simulate`` or ``compare`` runs in its default scene (:func:`urdf2links.scenes.scene.default_scene`)."""
 
@@ -195,6 +196,12 @@ def _report(args) -> int:
     from .compare.commands import report_command
 
     return report_command(args)
+
+
+def _check(args) -> int:
+    from .compare.check.command import check_command
+
+    return check_command(args)
 
 
 def _sweep(args) -> int:
@@ -490,13 +497,40 @@ def _tradeoff_parser(sub) -> None:
     p.set_defaults(func=_tradeoff)
 
 
+def _check_parser(sub) -> None:
+    """The ``check`` command's options."""
+    p = sub.add_parser("check", help="check a repository's robots, pairs and scenes (urdf2links.toml or "
+                                     "[tool.urdf2links]) for CI: exit 0, 1 when a check falls short, 2 when unusable",
+                       description="Read the configuration ([tool.urdf2links] of pyproject.toml, or urdf2links.toml, "
+                                   "in PATH or above): load every robot (a load error or an inertia finding not "
+                                   "allowed fails), compare every pair part by part against its tolerances, run every "
+                                   "scene with urdf2links and MuJoCo against its baselines. Exit 0 when all hold, 1 "
+                                   "when a check falls short, 2 when the configuration or a file cannot be used "
+                                   "(docs/ci.md).")
+    p.add_argument("path", nargs="?", default=".", help="the repository's folder, or its configuration file "
+                   "(default: here)")
+    p.add_argument("--junit", metavar="FILE", help="also write JUnit XML: one test case per robot, pair and scene")
+    p.add_argument("--markdown", metavar="FILE", help="also write a Markdown summary, largest problems first (a pull "
+                   "request comment, $GITHUB_STEP_SUMMARY)")
+    p.add_argument("--changed-since", metavar="GIT_REF", help="check only what depends on files changed since this "
+                   "commit (the robot files, their meshes and xacro includes, scene files)")
+    p.add_argument("--jobs", type=int, help="run the checks in N processes (default 1: here)")
+    p.add_argument("--write-baselines", action="store_true", help="accept this run's scene figures as the baselines")
+    p.add_argument("--init", action="store_true", help="write urdf2links.toml for PATH: every robot found, pairs "
+                   "guessed by robot name, the current state accepted (baselines written)")
+    p.add_argument("--write-workflow", nargs="?", const=True, metavar="FILE", help="write the CI workflow (docs/ci.md) "
+                   "to .github/workflows/urdf2links-check.yml (or FILE)")
+    p.add_argument("--quiet", action="store_true", help="no line per check while it runs")
+    p.set_defaults(func=_check)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``urdf2links`` command line: one sub-command per handler above."""
     parser = argparse.ArgumentParser(prog="urdf2links", description="URDF robots as trees of links of the trace "
                                      "method, simulated, and compared with MuJoCo.")
     sub = parser.add_subparsers(dest="command", required=True)
     for add in (_list_parser, _inspect_parser, _simulate_parser, _compare_parser, _report_parser, _sweep_parser,
-                _tradeoff_parser):
+                _tradeoff_parser, _check_parser):
         add(sub)
     return parser
 
