@@ -50,6 +50,8 @@ class ConstraintSpec:
     coefficients: tuple = (0.0, 1.0, 0.0, 0.0, 0.0)
     reference: tuple = (0.0, 0.0)
     source: str = "scene"
+    frames: tuple = ()
+    """A weld's two frame rotations (3, 3) in the links' axes, instead of ``rpy`` (an MJCF weld's ``relpose``)."""
 
 
 def constraint_options(r, data: dict) -> dict:
@@ -186,7 +188,7 @@ def _resolve(spec: ConstraintSpec, model, q0, where, k) -> Constraint:
         r2 = world if l2 == WORLD else (np.linalg.inv(T[l2]) @ np.r_[world, 1.0])[:3]
     else:
         r2 = X2[:3, :3] @ (np.zeros(3) if pts[1] is None else pts[1]) + X2[:3, 3]
-    R1, R2 = (rpy_to_matrix(v) for v in spec.rpy) if spec.rpy else (np.eye(3), np.eye(3))
+    R1, R2 = spec.frames or ((rpy_to_matrix(v) for v in spec.rpy) if spec.rpy else (np.eye(3), np.eye(3)))
     return Constraint(spec.name, spec.kind, link1=l1, link2=l2, point1=r1, point2=r2, frame1=X1[:3, :3] @ R1,
                       frame2=X2[:3, :3] @ R2, source=spec.source)
 
@@ -209,17 +211,19 @@ def scene_constraints(scene, model, specs=None) -> SceneConstraints | None:
 def plan_constraints(scene, model) -> SceneConstraints | None:
     """The scene's ``[[constraint]]`` blocks and, with ``[constraints] from_file``, the file's equalities and
     fixed tendons (:mod:`urdf2links.scenes.file_constraints`), on ``model``; None without any."""
-    specs, tendons = list(scene.constraints), []
+    specs, tendons, notes = list(scene.constraints), [], []
+    where = str(scene.path or scene.name)
     if getattr(scene, "mimic_constraints", False):
-        specs = mimic_specs(model, str(scene.path or scene.name)) + specs
+        specs = mimic_specs(model, where) + specs
     if getattr(scene, "file_constraints", False):
         from .file_constraints import file_constraints
 
-        fs, tendons = file_constraints(model, where=str(scene.path or scene.name))
+        fs, tendons, notes = file_constraints(model, scene, where)
         specs = fs + specs
     sc = scene_constraints(scene, model, specs)
-    if tendons:
-        sc = SceneConstraints(ConstraintSet(model, [] if sc is None else sc.cset.constraints), tuple(tendons))
+    if tendons or notes:
+        sc = SceneConstraints(ConstraintSet(model, [] if sc is None else sc.cset.constraints), tuple(tendons),
+                              list(notes))
     return sc
 
 
@@ -241,6 +245,7 @@ def describe_constraints(sc: SceneConstraints | None, model) -> list[str]:
                          f", {3 if c.kind == 'connect' else 6} rows")
     for td in sc.tendons:
         lines.append(f"  tendon {td.describe()}")
+    lines += [f"  note: {n}" for n in sc.notes]
     lines.append("  constraints: solved with multipliers (E72), projected after every step (E74); the run takes the "
                  "interpreted path (DOP853 + projection, urdf2links.integration.constrained)")
     return lines
