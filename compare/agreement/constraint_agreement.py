@@ -30,10 +30,10 @@ from urdf2links.scenes import as_plan
 from ..figures import figure, save_png
 from ..formatting import json_ready
 from ..mujoco_side.mjcf import mjcf_from_scene
-from ..mujoco_side.mujoco_constraints import SOLIMP, equality_rows, with_constraints
+from ..mujoco_side.mujoco_constraints import COMPARE_SOLREF, SOLIMP, equality_rows, with_constraints
 from ..mujoco_side.mujoco_run import run_mujoco
 
-__all__ = ["constraint_terms", "solref_study", "constraint_report", "TAUS"]
+__all__ = ["constraint_terms", "solref_study", "constraint_report", "run_notes", "TAUS"]
 
 TAUS = (1e-2, 1e-3, 1e-4)       # solref time constants (s) of the study
 STUDY_DT = 1e-5                 # MuJoCo's RK4 step in the study: tau / dt >= 10 at the smallest tau
@@ -119,6 +119,21 @@ def solref_study(plan, traj, *, taus=TAUS, timestep=STUDY_DT, solimp=SOLIMP, rou
             "runs": rows,
             "rates": rates, "ratios": ratios, "t": traj.t,
             "holds": bool(all(r >= 5.0 for r in ratios))}      # the taus are a decade apart
+
+
+def run_notes(plan, traj) -> list[str]:
+    """A comparison's notes on a constrained run (``compare_scene``): the project's residual and forces, and
+    MuJoCo's softness."""
+    c = traj.stats.get("constraints")
+    if c is None:
+        return []
+    return ([f"constraints ({', '.join(c['rows'])}): solved with multipliers and projected after every step "
+             f"(E72-E74, DOP853 + projection); max |Phi| {c['max_residual']:.2e} at the samples, "
+             f"{c['max_step_drift']:.2e} before any projection; lambda {c['lambda'].min():.4g} .. "
+             f"{c['lambda'].max():.4g}", c["initial"]["note"]] + list(c["initial"]["redundant"])
+            + [f"MuJoCo's constraints are soft (solref {list(COMPARE_SOLREF)}, solimp {SOLIMP[0]:g}): how its run "
+               "approaches the exact one as solref's time constant shrinks: python -m "
+               "urdf2links.compare.agreement.constraint_agreement SCENE (reports/loops/)"])
 
 
 def _states(traj, k=4):

@@ -73,6 +73,8 @@ from urdf2links.scenes.plan import compile_plan
 from urdf2links.scenes.scene import Scene, load_scene, robot_label
 
 from ..mujoco_side.mjcf import MjcfModel, mjcf_from_scene
+from ..mujoco_side.mujoco_constraints import with_constraints
+from .constraint_agreement import run_notes as constraint_run_notes
 from ..mujoco_side.mujoco_mjcf import FILE_LABEL, file_route_inputs, file_terms, mujoco_from_mjcf, run_file
 from ..mujoco_side.mujoco_run import TIMED_REGION as MUJOCO_REGION
 from ..mujoco_side.mujoco_run import MujocoRun, energy_function, run_mujoco
@@ -350,6 +352,8 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     say(f"terms at {states} seeded states (route 1" + (", route 2)" if not scene.load_options.get("floating_base")
                                                        else ")"))
     mj = mjcf_from_scene(scene, model, timestep=mujoco_dt, integrator=mujoco_integrator)
+    if plan.constraints is not None:    # issue 36: the scene's constraints and tendons as MuJoCo equalities
+        mj = with_constraints(mj, plan.constraints)
     mf = None
     if is_mjcf_path(scene.robot):       # route 2: MuJoCo runs the file itself
         mf = mujoco_from_mjcf(plan, timestep=mujoco_dt, integrator=mujoco_integrator)
@@ -399,6 +403,7 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     growth = growth_fit(t, err_max, end_time=div) if scene.chaotic else None
     energy, info = _energy_balances(scene, plan, mj, run, traj, EV_o, h_o, W)
     notes = _run_notes(scene, plan, mj, run, traj, t_end_note, resampled=resampled)
+    notes += constraint_run_notes(plan, traj)       # issue 36: closed loops, couplings, tendons
     if mf is not None:
         notes += ([f"route 2 (the MJCF file in MuJoCo): {x}" for x in mf.notes]
                   + [f"import: {x}" for x in model.info.get("notes", [])])

@@ -16,8 +16,8 @@ with ``solref`` and ``solimp`` given, and the equality flag switched on. MuJoCo'
 regularizer ``(1 - d) / d`` times the diagonal of ``J M^-1 J^T``): its run approaches the exact one as
 ``tau`` shrinks and ``d`` tends to 1 (:mod:`urdf2links.compare.agreement.constraint_agreement`).
 
-An MJCF file's own equalities run in MuJoCo as written (route 2): :func:`file_with_constraints` switches its
-equality flag on and sets the same ``solref``/``solimp`` on every equality.
+An MJCF file's own equalities run in MuJoCo as written (route 2): :func:`route2_constraints` switches its
+equality flag on, restores its fixed tendons and sets the same ``solref``/``solimp`` on every equality.
 """
 
 from __future__ import annotations
@@ -32,11 +32,14 @@ from urdf2links.dynamics.constraints import WORLD
 
 from .mjcf import MjcfModel
 
-__all__ = ["with_constraints", "shifted_polycoef", "equality_rows", "file_with_constraints", "route2_constraints",
-           "SOLIMP"]
+__all__ = ["with_constraints", "shifted_polycoef", "equality_rows", "route2_constraints",
+           "SOLIMP", "COMPARE_SOLREF"]
 
 #: MuJoCo's largest impedance: the regularizer (1 - d) / d is 1e-4 of the constraint's own inertia.
 SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
+#: solref of a comparison (``urdf2links compare``): 10 steps of its RK4 at 1e-4 s per time constant; the solref
+#: study (:mod:`urdf2links.compare.agreement.constraint_agreement`) shows how far that is from the exact run.
+COMPARE_SOLREF = (1e-3, 1.0)
 
 
 def _quat(R) -> np.ndarray:
@@ -69,7 +72,7 @@ def _site(spec, mj: MjcfModel, d, p, point, frame, name):
     return body.add_site(name=name, pos=X[:3, :3] @ point + X[:3, 3], quat=_quat(X[:3, :3] @ frame))
 
 
-def with_constraints(mj: MjcfModel, closure, *, solref=(0.02, 1.0), solimp=SOLIMP) -> MjcfModel:
+def with_constraints(mj: MjcfModel, closure, *, solref=COMPARE_SOLREF, solimp=SOLIMP) -> MjcfModel:
     """Route 1 (``mj``) with the plan's constraints and tendons (``closure``:
     :class:`~urdf2links.scenes.constraints.SceneConstraints`) as MuJoCo equalities and tendons (module doc)."""
     spec = mujoco.MjSpec.from_string(mj.xml)
@@ -125,18 +128,7 @@ def equality_rows(m, d, eq: int) -> np.ndarray:
                       & (np.asarray(d.efc_id) == eq))[0]
 
 
-def file_with_constraints(m, *, solref=(0.02, 1.0), solimp=SOLIMP):
-    """A copy of the file's compiled model with its equalities on and every ``solref``/``solimp`` set (route 2)."""
-    import copy
-
-    m = copy.deepcopy(m)
-    m.opt.disableflags &= ~int(mujoco.mjtDisableBit.mjDSBL_EQUALITY)
-    m.eq_solref[:] = solref
-    m.eq_solimp[:] = solimp
-    return m
-
-
-def route2_constraints(m, plan, tendons, notes, *, solref=None, solimp=None) -> list[str]:
+def route2_constraints(m, plan, tendons, notes, *, solref=COMPARE_SOLREF, solimp=SOLIMP) -> list[str]:
     """Route 2 of a scene with ``[constraints] from_file``: the file's equalities on (those the plan models;
     the others off), its fixed tendons' stiffness and damping back (``tendons``: the file's arrays), the
     constraint flags on; ``solref``/``solimp`` set when given. Returns what stays zeroed (spatial tendons)."""
@@ -156,5 +148,6 @@ def route2_constraints(m, plan, tendons, notes, *, solref=None, solimp=None) -> 
             + (("mjDSBL_DAMPER",) if np.any(m.tendon_damping) else ()):
         m.opt.disableflags &= ~int(getattr(mujoco.mjtDisableBit, flag))
     notes.append(f"the file's equalities act ({', '.join(n for n in names if n in modelled) or 'none'}; "
-                 f"[constraints] from_file) and its fixed tendons ({', '.join(sorted(fixed)) or 'none'})")
+                 f"[constraints] from_file; solref {list(solref)}, solimp {list(solimp)}) and its fixed tendons "
+                 f"({', '.join(sorted(fixed)) or 'none'})")
     return [] if fixed else ["tendon_stiffness", "tendon_damping"]

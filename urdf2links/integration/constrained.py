@@ -188,7 +188,7 @@ def _trajectory(Trajectory, plan, rhs, run, t, Y, steps, drift, initial, wall, s
     info = {"rows": list(rhs.cset.rows), "solved_rows": rhs.kept_rows, "residual": res, "rate_residual": rate,
             "max_residual": float(res.max()), "max_step_drift": float(drift), "lambda": lam, "forces": gen,
             "initial": initial, "method": "DOP853 + projection after every step (E74), interpreted path"}
-    stats = {"method": run.method, "integrator": "DOP853+projection", "rtol": run.rtol, "atol": run.atol,
+    stats = {"method": "DOP853", "scene_method": run.method, "integrator": "DOP853+projection", "rtol": run.rtol, "atol": run.atol,
              "dt": run.dt, "nfev": rhs.nfev, "nsteps": steps, "njev": 0, "stretches": [], "methods_used":
              "DOP853 with projection", "wall_time": wall, "terms": plan.terms, "success": True, "message": "",
              "recharting": False, "n_recharts": 0, "recharts": [], "segments": 1, "limit_excursions": [],
