@@ -186,3 +186,17 @@ def test_projection_keeps_the_drift_of_one_step():
     tr = simulate(as_plan(LOOPS / "four_bar_crank.toml"), progress=False, t_end=2.0, samples=11, rtol=1e-9, atol=1e-9)
     c = tr.stats["constraints"]
     assert c["max_step_drift"] < 1.5e-10 and c["max_residual"] < 1e-12
+
+
+def test_change_point_hard_case():
+    """The hard case (robots/loops/closed_leg_change_point.toml): thrown through its parallelogram's change
+    point (hip = pi/2), the loop's rows lose independence; the harness stops with a DynamicsError naming the row,
+    the time and the configuration instead of integrating undetermined multipliers. Thrown a little slower
+    (5 rad/s: hip reaches 1.53 rad) it passes near it with the residual and the energy at rounding level."""
+    scene = load_scene(LOOPS / "closed_leg_change_point.toml")
+    with pytest.raises(DynamicsError, match=r"q = \[1\.5708.*knee_loop\.x are not independent"):
+        simulate(scene, progress=False, t_end=0.1, samples=3)
+    near = dataclasses.replace(scene, qd0={"hip": 5.0, "rod_hip": 5.0, "knee": -5.0, "ankle": -2.5})
+    tr = simulate(near, progress=False, t_end=0.15, samples=16)
+    c = tr.stats["constraints"]
+    assert tr.q[:, 0].max() > 1.5 and c["max_residual"] < 1e-9 and tr.energy_error < 1e-9

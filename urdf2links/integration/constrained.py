@@ -47,6 +47,8 @@ class ConstrainedRHS:
         self.cset = self.closure.cset
         self.where = str(plan.scene.path or plan.scene.name)
         self.nfev = 0
+        self.min_pivot = (np.inf, 0.0)
+        """The smallest eigenvalue of J A^-1 J^T scaled to a unit diagonal over every solve, and its time."""
         self.keep = np.arange(self.cset.m)
         self.selection = None
         if q0 is not None:
@@ -87,7 +89,14 @@ class ConstrainedRHS:
         f, out = self.free_forces(t, y, A)
         T = self.cset.terms(q, qd, t=t, base=self.plan.base_state(t))
         k = self.keep
-        qdd, lam, _ = kkt_solve(A, f, T.J[k], T.gamma[k], rows=self.kept_rows, where=f"{self.where}: t = {t:.6g} s")
+        qdd, lam, Ls = kkt_solve(A, f, T.J[k], T.gamma[k], rows=self.kept_rows,
+                                where=f"{self.where}: t = {t:.6g} s, q = {np.round(q, 6).tolist()}")
+        if Ls is not None:      # how close the rows came to dependence (E72): the smallest eigenvalue of
+            S = Ls @ Ls.T       # J A^-1 J^T scaled to a unit diagonal (rows of different units compare)
+            d = 1.0 / np.sqrt(np.diag(S))
+            pivot = float(np.linalg.eigvalsh(S * d[:, None] * d[None, :])[0])
+            if pivot < self.min_pivot[0]:
+                self.min_pivot = (pivot, float(t))
         out[n:2 * n] = qdd
         return out, lam, T
 
@@ -187,7 +196,8 @@ def _trajectory(Trajectory, plan, rhs, run, t, Y, steps, drift, initial, wall, s
         res[i], rate[i] = np.max(np.abs(T.phi)), np.max(np.abs(T.rate))
     info = {"rows": list(rhs.cset.rows), "solved_rows": rhs.kept_rows, "residual": res, "rate_residual": rate,
             "max_residual": float(res.max()), "max_step_drift": float(drift), "lambda": lam, "forces": gen,
-            "initial": initial, "method": "DOP853 + projection after every step (E74), interpreted path"}
+            "initial": initial, "method": "DOP853 + projection after every step (E74), interpreted path",
+            "min_schur_pivot": rhs.min_pivot[0], "min_schur_pivot_t": rhs.min_pivot[1]}
     stats = {"method": "DOP853", "scene_method": run.method, "integrator": "DOP853+projection", "rtol": run.rtol, "atol": run.atol,
              "dt": run.dt, "nfev": rhs.nfev, "nsteps": steps, "njev": 0, "stretches": [], "methods_used":
              "DOP853 with projection", "wall_time": wall, "terms": plan.terms, "success": True, "message": "",
