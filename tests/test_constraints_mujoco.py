@@ -134,6 +134,10 @@ def test_mjcf_equalities_and_tendons_are_read():
     (t,) = model.info["tendons"]
     assert t["fixed"] and t["joints"] == [("hip", 1.0), ("rod_hip", 1.0)] and t["stiffness"] == 4.0
     assert any("connect, weld and joint are read" in n for n in model.info["notes"])
+    from urdf2links.cli import format_tree
+
+    table = format_tree(model)
+    assert "knee_loop          connect  rod / shank" in table and "hip_spring  fixed  1 hip + 1 rod_hip" in table
     text = as_plan(LOOPS / "closed_leg_swing.toml").describe()
     assert "constraint 'knee_loop' (connect, MJCF <connect>" in text and "tendon 'hip_spring'" in text
 

@@ -23,7 +23,7 @@ import numpy as np
 
 from .mjcf_state import quat_to_matrix
 
-__all__ = ["equality_rows", "tendon_rows"]
+__all__ = ["equality_rows", "tendon_rows", "inspect_rows"]
 
 
 def _eq_type(b, i) -> str:
@@ -99,3 +99,28 @@ def tendon_rows(b) -> tuple[list[dict], list[str]]:
                 "friction loss", row["frictionloss"])) if on) + " are not modelled (MuJoCo's run disables them)")
         rows.append(row)
     return rows, notes
+
+
+def inspect_rows(info: dict) -> tuple[list[tuple], list[tuple]]:
+    """``urdf2links inspect``'s tables of a model's equalities and tendons (header rows first; empty without)."""
+    eq = [("equality", "kind", "between", "numbers", "active", "read")]
+    for r in info.get("equalities", []):
+        if r["kind"] in ("connect", "weld") and "body1" in r:
+            between = f"{r['body1']} / {r['body2']}"
+            nums = f"anchor1 {np.round(r['anchor1'], 6).tolist()}, anchor2 {np.round(r['anchor2'], 6).tolist()}"
+        elif r["kind"] == "joint":
+            between = f"{r['joint1']} / {r['joint2'] or '-'}"
+            nums = f"polycoef {np.round(r['polycoef'], 6).tolist()}"
+        else:
+            between, nums = "-", "-"
+        eq.append((r["name"], r["kind"], between, nums, "yes" if r["active"] else "no",
+                   "yes" if r["supported"] else f"no: {r['why']}"))
+    td = [("tendon", "kind", "length", "stiffness", "damping", "spring length", "actuators", "not modelled")]
+    for r in info.get("tendons", []):
+        length = " + ".join(f"{c:g} {j}" for j, c in r["joints"]) if r["fixed"] else "(wraps sites/geoms)"
+        nm = [w for w, on in (("limits", r["limited"]), ("friction loss", r["frictionloss"]),
+                              ("spatial", not r["fixed"])) if on]
+        td.append((r["name"], "fixed" if r["fixed"] else "spatial", length, f"{r['stiffness']:g}", f"{r['damping']:g}",
+                   " .. ".join(f"{x:g}" for x in dict.fromkeys(r["lengthspring"])), ", ".join(r["actuators"]) or "-",
+                   ", ".join(nm) or "-"))
+    return (eq if len(eq) > 1 else []), (td if len(td) > 1 else [])
