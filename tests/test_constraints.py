@@ -200,3 +200,17 @@ def test_change_point_hard_case():
     tr = simulate(near, progress=False, t_end=0.15, samples=16)
     c = tr.stats["constraints"]
     assert tr.q[:, 0].max() > 1.5 and c["max_residual"] < 1e-9 and tr.energy_error < 1e-9
+
+
+def test_paths_without_constraints_refuse_and_poses_are_recorded():
+    """A sweep (and the work-precision study) has no constraint solve: it refuses a constrained scene by
+    name instead of running the open tree; a constrained run records the poses [record] asks for (the
+    rocker's tip stays on the ground pivot)."""
+    from urdf2links.integration import simulate_batch
+
+    scene = load_scene(LOOPS / "four_bar_crank.toml")
+    with pytest.raises(SceneError, match="simulate_batch .* does not carry constraints"):
+        simulate_batch(as_plan(scene), np.zeros((2, 3)), np.zeros((2, 3)), t_end=0.1)
+    tr = simulate(dataclasses.replace(scene, link_poses=("rocker",)), t_end=0.1, samples=5, progress=False)
+    tips = tr.poses["rocker"] @ np.array([0.25, 0.0, 0.0, 1.0])
+    assert np.abs(tips[:, :3] - [0.3, 0.0, 0.0]).max() < 1e-12

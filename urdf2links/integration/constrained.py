@@ -34,7 +34,17 @@ from ..console import Progress
 from ..dynamics.constrained import independent_rows, kkt_solve, project_position, project_velocity
 from ..errors import IntegrationError
 
-__all__ = ["ConstrainedRHS", "simulate_constrained"]
+__all__ = ["ConstrainedRHS", "simulate_constrained", "refuse_constrained"]
+
+
+def refuse_constrained(plan, what: str) -> None:
+    """A clear error where a constrained plan would run on a path that does not carry its constraints."""
+    if getattr(plan, "constraints", None) is not None:
+        from ..errors import SceneError
+
+        raise SceneError(f"{plan.scene.path or plan.scene.name}: {what} does not carry constraints or fixed tendons "
+                         f"yet (the scene's {', '.join(t for t in plan.terms if t in ('constraint', 'tendon'))}); "
+                         "run it with urdf2links simulate or compare (docs/constraints.md)")
 
 
 class ConstrainedRHS:
@@ -204,6 +214,15 @@ def _trajectory(Trajectory, plan, rhs, run, t, Y, steps, drift, initial, wall, s
              "recharting": False, "n_recharts": 0, "recharts": [], "segments": 1, "limit_excursions": [],
              "spring_notes": list(plan.spring_set.notes), "constraints": info,
              "run_s": time.perf_counter() - started}
+    poses = {}
+    if plan.scene.link_poses:       # [record] link_poses
+        from .charts import link_poses
+
+        poses = {link: np.empty((t.size, 4, 4)) for link in plan.scene.link_poses}
+        for i in range(t.size):
+            P = link_poses(model, list(poses), qs[i], t=t[i], base=plan.base_state(t[i]))
+            for link in poses:
+                poses[link][i] = P[link]
     return Trajectory(t=t, q=qs, qd=qds, coordinate_names=model.coordinate_names,
                       energy={"kinetic": E, "potential": V, "work": W, "function": h, "error": h - h[0] - W},
-                      poses={}, stats=stats, scene=plan.scene.name, robot=model.name)
+                      poses=poses, stats=stats, scene=plan.scene.name, robot=model.name)
