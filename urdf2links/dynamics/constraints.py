@@ -32,7 +32,8 @@ from numba import njit
 
 from .model_kernels import _state, coupled_size
 from .rows import base_rows
-from .tree_arrays import AC, KL, O_, W_COORD, W_LINK, W_SIZE, WV, nn
+from .kernels import poses
+from .tree_arrays import AC, KL, W_COORD, W_LINK, W_SIZE, WV, nn
 
 __all__ = ["Constraint", "ConstraintSet", "ConstraintTerms", "KINDS", "ROWS", "link_motion"]
 
@@ -49,13 +50,10 @@ def link_motion(TI, TF, q, qd, base, has_base, C, d, coupled, R, o, V, Acc, S):
     W = np.empty(TI[W_SIZE])
     X = np.empty(coupled_size(C.shape[0], C.shape[1]) if coupled else 0)
     _state(TI, TF, W, X, q, qd, True, base, has_base, 0.0, 0.0, 0.0, C, d, coupled)
+    poses(TI, W, R, o)
     wl, wc, nt = nn(TI[W_LINK]), nn(TI[W_COORD]), nn(TI[1])
     for p in range(TI[0]):
         a = wl + KL * p
-        for r in range(3):
-            o[p, r] = W[a + O_ + r]
-            for c in range(3):
-                R[p, r, c] = W[a + 3 * r + c]
         for j in range(6):
             V[p, j] = W[a + WV + j]
             Acc[p, j] = W[a + AC + j]

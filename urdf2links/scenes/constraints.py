@@ -247,5 +247,6 @@ def describe_constraints(sc: SceneConstraints | None, model) -> list[str]:
         lines.append(f"  tendon {td.describe()}")
     lines += [f"  note: {n}" for n in sc.notes]
     lines.append("  constraints: solved with multipliers (E72), projected after every step (E74); the run takes the "
-                 "interpreted path (DOP853 + projection, urdf2links.integration.constrained)")
+                 "interpreted path (DOP853 + projection, urdf2links.integration.constrained); points in the tree "
+                 "links' axes (urdf2links inspect ROBOT shows them)")
     return lines
