@@ -214,3 +214,13 @@ def test_paths_without_constraints_refuse_and_poses_are_recorded():
     tr = simulate(dataclasses.replace(scene, link_poses=("rocker",)), t_end=0.1, samples=5, progress=False)
     tips = tr.poses["rocker"] @ np.array([0.25, 0.0, 0.0, 1.0])
     assert np.abs(tips[:, :3] - [0.3, 0.0, 0.0]).max() < 1e-12
+
+
+@pytest.mark.parametrize("name", ["four_bar_crank", "mimic_gripper_swing", "closed_leg_swing"])
+def test_constrained_scenes_round_trip_as_toml(name, tmp_path):
+    """--write-scene keeps [[constraint]] and [constraints]: the written scene's plan has the same rows."""
+    from urdf2links.scenes.scene_toml import write_scene
+
+    scene = load_scene(LOOPS / f"{name}.toml")
+    again = load_scene(write_scene(scene, tmp_path / f"{name}.toml"))
+    assert as_plan(again).constraints.cset.rows == as_plan(scene).constraints.cset.rows

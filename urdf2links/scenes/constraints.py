@@ -31,7 +31,7 @@ from ..dynamics.rotations import rpy_to_matrix
 from ..errors import SceneError
 
 __all__ = ["ConstraintSpec", "parse_constraints", "SceneConstraints", "scene_constraints", "describe_constraints",
-           "plan_constraints"]
+           "plan_constraints", "constraint_toml"]
 
 _KEYS = {"connect": ("name", "kind", "links", "points"), "weld": ("name", "kind", "links", "points", "rpy"),
          "joint": ("name", "kind", "coordinates", "coefficients", "reference")}
@@ -250,3 +250,26 @@ def describe_constraints(sc: SceneConstraints | None, model) -> list[str]:
                  "interpreted path (DOP853 + projection, urdf2links.integration.constrained); points in the tree "
                  "links' axes (urdf2links inspect ROBOT shows them)")
     return lines
+
+
+def constraint_toml(scene, value) -> list[str]:
+    """The scene's ``[constraints]`` options and ``[[constraint]]`` blocks as TOML lines (``value`` formats a
+    value), for :func:`~urdf2links.scenes.scene_toml.scene_toml`."""
+    out = []
+    if getattr(scene, "file_constraints", False) or getattr(scene, "mimic_constraints", False):
+        out += ["[constraints]", f"from_file = {value(scene.file_constraints)}",
+                f"mimic = {value(scene.mimic_constraints)}", ""]
+    for c in scene.constraints:
+        out += ["[[constraint]]", f"name = {value(c.name)}", f"kind = {value(c.kind)}"]
+        if c.kind == "joint":
+            out += [f"coordinates = {value(list(c.coordinates))}",
+                    f"coefficients = {value([float(x) for x in c.coefficients])}",
+                    f"reference = {value([float(x) for x in c.reference])}"]
+        else:
+            out += [f"links = {value(list(c.links))}"]
+            if c.points:
+                out += [f"points = {value([[float(x) for x in p] for p in c.points])}"]
+            if c.rpy:
+                out += [f"rpy = {value([[float(x) for x in r] for r in c.rpy])}"]
+        out += [""]
+    return out
