@@ -114,13 +114,21 @@ def solref_study(plan, traj, *, taus=TAUS, timestep=STUDY_DT, solimp=SOLIMP, rou
             "holds": bool(all(r >= 5.0 for r in ratios))}      # the taus are a decade apart
 
 
-def run_notes(plan, traj) -> list[str]:
-    """A comparison's notes on a constrained run (``compare_scene``): the project's residual and forces, and
-    MuJoCo's softness."""
+def run_notes(plan, traj, mj=None) -> list[str]:
+    """A comparison's notes on a constrained run (``compare_scene``): the project's residual and forces,
+    the terms at identical states against MuJoCo's (route 1 ``mj``, at four samples of the run), and MuJoCo's
+    softness."""
     c = traj.stats.get("constraints")
     if c is None:
         return []
-    return ([f"constraints ({', '.join(c['rows'])}): solved with multipliers and projected after every step "
+    terms = []
+    if mj is not None and plan.constraints.cset.m and len(traj.t) >= 6:
+        t = constraint_terms(plan, mj, states_of(traj))
+        terms = [f"constraint terms at {t['states']} states of the run: Phi_q against MuJoCo's efc_J rows "
+                 f"{t['jacobian']['max_abs']:.2e} (of {t['jacobian']['scale']:.3g}); lambda against efc_force "
+                 f"{t['force']['max_abs']:.2e} (of {t['force']['scale']:.3g}); J^T lambda against qfrc_constraint "
+                 f"{t['generalized_force']['max_abs']:.2e} (of {t['generalized_force']['scale']:.3g})"]
+    return terms + ([f"constraints ({', '.join(c['rows'])}): solved with multipliers and projected after every step "
              f"(E72-E74, DOP853 + projection); max |Phi| {c['max_residual']:.2e} at the samples, "
              f"{c['max_step_drift']:.2e} before any projection; lambda {c['lambda'].min():.4g} .. "
              f"{c['lambda'].max():.4g}", c["initial"]["note"]] + list(c["initial"]["redundant"])

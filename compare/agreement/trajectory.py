@@ -403,7 +403,7 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     growth = growth_fit(t, err_max, end_time=div) if scene.chaotic else None
     energy, info = _energy_balances(scene, plan, mj, run, traj, EV_o, h_o, W)
     notes = _run_notes(scene, plan, mj, run, traj, t_end_note, resampled=resampled)
-    notes += constraint_run_notes(plan, traj)       # issue 36: closed loops, couplings, tendons
+    notes += constraint_run_notes(plan, traj, mj)   # issue 36: closed loops, couplings, tendons
     if mf is not None:
         notes += ([f"route 2 (the MJCF file in MuJoCo): {x}" for x in mf.notes]
                   + [f"import: {x}" for x in model.info.get("notes", [])])

@@ -117,8 +117,9 @@ def with_constraints(mj: MjcfModel, closure, *, solref=COMPARE_SOLREF, solimp=SO
     if any(td.damping for td in closure.tendons):
         spec.option.disableflags &= ~int(mujoco.mjtDisableBit.mjDSBL_DAMPER)
     m = spec.compile()
-    note = (f"constraints as MuJoCo equalities (site semantic), solref {list(solref)}, solimp {list(solimp)}; "
-            f"{len(closure.tendons)} fixed tendon(s)")
+    note = (f"equality switched back on: the scene's constraints as MuJoCo equalities (site semantic), solref "
+            f"{list(solref)}, solimp {list(solimp)}; {len(closure.tendons)} fixed tendon(s)"
+            + (" (spring/damper back on for them)" if closure.tendons else ""))
     return dataclasses.replace(mj, xml=spec.to_xml(), model=m, notes=[*mj.notes, note])
 
 
@@ -147,7 +148,7 @@ def route2_constraints(m, plan, tendons, notes, *, solref=COMPARE_SOLREF, solimp
     for flag in ("mjDSBL_EQUALITY", "mjDSBL_CONSTRAINT") + (("mjDSBL_SPRING",) if np.any(m.tendon_stiffness) else ()) \
             + (("mjDSBL_DAMPER",) if np.any(m.tendon_damping) else ()):
         m.opt.disableflags &= ~int(getattr(mujoco.mjtDisableBit, flag))
-    notes.append(f"the file's equalities act ({', '.join(n for n in names if n in modelled) or 'none'}; "
+    notes.append(f"equality and constraint switched back on: the file's equalities act ({', '.join(n for n in names if n in modelled) or 'none'}; "
                  f"[constraints] from_file; solref {list(solref)}, solimp {list(solimp)}) and its fixed tendons "
                  f"({', '.join(sorted(fixed)) or 'none'})")
     return [] if fixed else ["tendon_stiffness", "tendon_damping"]
