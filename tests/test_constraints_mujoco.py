@@ -159,3 +159,19 @@ def test_gymnasium_humanoid_tendons():
     scene = scene_from_dict({"robot": {"mjcf": str(path)}, "constraints": {"from_file": True}}, where="h.toml")
     plan = as_plan(scene, model=model)
     assert plan.constraints is None     # nothing acts: the plan says so by not listing them
+
+
+def test_pairs_report_a_loop_closed_on_one_side(tmp_path):
+    """Kind ``constraint`` of a pair: the leg without its <connect> is another mechanism (3 rows), and a
+    moved anchor is a difference in m; the parts themselves are the same."""
+    import re
+
+    from urdf2links.compare.pairs.pair import compare_descriptions_of
+
+    src = (LOOPS / "closed_leg.xml").read_text()
+    (tmp_path / "open.xml").write_text(re.sub(r"<connect[^>]*/>", "", src))
+    (tmp_path / "moved.xml").write_text(src.replace('anchor="0 0 -0.4"', 'anchor="0 0 -0.39"'))
+    (d,) = compare_descriptions_of(LOOPS / "closed_leg.xml", tmp_path / "open.xml", states=2).differences
+    assert (d.kind, d.urdf, d.mjcf, d.difference) == ("constraint", "knee_loop", None, 3.0)
+    (d,) = compare_descriptions_of(LOOPS / "closed_leg.xml", tmp_path / "moved.xml", states=2).differences
+    assert d.kind == "constraint" and abs(d.difference - 0.01) < 1e-12 and d.unit == "m"
