@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from urdf2links.parsers.mjcf import is_mjcf_path
-from urdf2links.parsers.robot_file import load_robot
+from urdf2links.parsers.mjcf_constraints import file_equalities
 
 from .differences import Difference
 
@@ -23,22 +23,19 @@ __all__ = ["constraint_differences", "ANCHOR_ROUNDING"]
 ANCHOR_ROUNDING = 1e-5      # m: MuJoCo's XML writer prints 6 significant digits
 
 
-def _loops(path, load) -> list[dict]:
+def _loops(path) -> list[dict]:
     if not is_mjcf_path(path):
         return []
-    model = load_robot(path, **{k: v for k, v in load.items() if k in ("package_dirs",)})
-    return [r for r in model.info.get("equalities", [])
-            if r["kind"] in ("connect", "weld") and r["supported"] and r["active"]]
+    return [r for r in file_equalities(path) if r["kind"] in ("connect", "weld") and r["supported"] and r["active"]]
 
 
 def _key(r):
     return r["kind"], frozenset((r["body1"], r["body2"]))
 
 
-def constraint_differences(first, second, *, load=None) -> list[Difference]:
+def constraint_differences(first, second) -> list[Difference]:
     """The ``constraint`` differences between the robot files ``first`` and ``second`` (module doc)."""
-    load = dict(load or {})
-    a, b = _loops(first, load), _loops(second, load)
+    a, b = _loops(first), _loops(second)
     out = []
     byb = {_key(r): r for r in b}
     for r in a:

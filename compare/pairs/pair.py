@@ -126,7 +126,7 @@ def compare_descriptions_of(urdf, mjcf, *, explicit_map: dict | None = None, loa
     M = robot_parts(mjcf, **{k: v for k, v in load.items() if k != "floating_base"})
     mapping = map_joints(U, M, explicit=explicit_map)
     diffs, below = compare_descriptions(U, M, mapping)
-    diffs += constraint_differences(urdf, mjcf, load=load)      # issue 36: loops closed on one side only
+    diffs += constraint_differences(urdf, mjcf)      # issue 36: loops closed on one side only
     explain(diffs, U, M)
     effects = evaluate_effects(U, M, mapping, diffs, states=states, seed=seed)
     ordered = order_differences(diffs, effects)

@@ -23,7 +23,7 @@ import numpy as np
 
 from .mjcf_state import quat_to_matrix
 
-__all__ = ["equality_rows", "tendon_rows", "inspect_rows"]
+__all__ = ["equality_rows", "tendon_rows", "inspect_rows", "file_equalities"]
 
 
 def _eq_type(b, i) -> str:
@@ -124,3 +124,23 @@ def inspect_rows(info: dict) -> tuple[list[tuple], list[tuple]]:
                    " .. ".join(f"{x:g}" for x in dict.fromkeys(r["lengthspring"])), ", ".join(r["actuators"]) or "-",
                    ", ".join(nm) or "-"))
     return (eq if len(eq) > 1 else []), (td if len(td) > 1 else [])
+
+
+class _Compiled:
+    """What :func:`equality_rows` needs of a builder: the compiled model, MuJoCo, names."""
+
+    def __init__(self, m):
+        import mujoco
+
+        self.m, self.mj = m, mujoco
+
+    def name(self, obj: str, i: int, fallback: str) -> str:
+        return self.mj.mj_id2name(self.m, getattr(self.mj.mjtObj, obj), i) or fallback
+
+
+def file_equalities(path) -> list[dict]:
+    """:func:`equality_rows` of an MJCF file compiled by MuJoCo alone (no tree built: a pair's files)."""
+    from .mjcf import compile_mjcf
+
+    m, _ = compile_mjcf(path)
+    return equality_rows(_Compiled(m))[0]
