@@ -393,6 +393,8 @@ class _Builder:
                        for n, kind, qa, da, names in self.mj_joints)
         qmap = MujocoMap(joints=joints, n=tree.n, nq=int(m.nq), nv=int(m.nv), qpos0=np.array(m.qpos0, float))
         q0, _ = qmap.from_mujoco(m.qpos0, None)
+        keys = [k for k in range(m.nkey) if mj.mj_id2name(m, mj.mjtObj.mjOBJ_KEY, k) == "home"]
+        home = qmap.from_mujoco(np.array(m.key_qpos[keys[0]], float), None, reference=q0)[0] if keys else None
         kinds = {j: _KINDS[int(m.jnt_type[j])] for j in range(m.njnt)}
         welded = [self.name("mjOBJ_BODY", b, f"body{b}") for b in range(1, m.nbody) if m.body_jntnum[b] == 0]
         if welded:
@@ -418,7 +420,8 @@ class _Builder:
         coms = {self.name("mjOBJ_BODY", b, f"body{b}"): (float(m.body_mass[b]), np.array(m.body_ipos[b]).tolist())
                 for b in range(1, m.nbody)}
         info = {"format": "mjcf", "coordinates": self.coord_info, "notes": self.notes, "joints": self.joint_rows,
-                "frame_of": frame_of, "equalities": equalities, "tendons": tendons, "mujoco": qmap, "q0": q0, "gravcomp": gravcomp, "body_mass_com": coms,
+                "frame_of": frame_of, "equalities": equalities, "tendons": tendons, "mujoco": qmap, "q0": q0, "home": home,
+                "closed": {"equalities": int(m.neq), "tendons": int(m.ntendon)}, "gravcomp": gravcomp, "body_mass_com": coms,
                 "actuators": self.actuator_rows(kinds, {j: names for j, (_, _, _, _, names) in
                                                         enumerate(self.mj_joints)}),
                 "option": {"gravity": gravity.tolist(), "timestep": float(m.opt.timestep), "integrator": integrator,
