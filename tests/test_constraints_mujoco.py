@@ -175,3 +175,18 @@ def test_pairs_report_a_loop_closed_on_one_side(tmp_path):
     assert (d.kind, d.urdf, d.mjcf, d.difference) == ("constraint", "knee_loop", None, 3.0)
     (d,) = compare_descriptions_of(LOOPS / "closed_leg.xml", tmp_path / "moved.xml", states=2).differences
     assert d.kind == "constraint" and abs(d.difference - 0.01) < 1e-12 and d.unit == "m"
+
+
+def test_verdict_scope_counts_what_the_plan_models():
+    """The verdict's scope (issue 35's cut_scope) no longer calls a run 'the open tree of a closed mechanism'
+    when the scene's constraints model the file's equalities and tendons, or the URDF's mimic."""
+    from urdf2links.compare.agreement.verdict import FULL_SCOPE, cut_scope
+    from urdf2links.scenes import load_scene
+
+    plan = as_plan(LOOPS / "closed_leg_swing.toml")
+    assert cut_scope(plan.model, {}, plan)["text"] == FULL_SCOPE
+    assert "2 constraints, 1 tendon dropped" in cut_scope(plan.model, {})["text"]
+    g = as_plan(LOOPS / "mimic_gripper_swing.toml")
+    scene = load_scene(LOOPS / "mimic_gripper_swing.toml")
+    assert cut_scope(g.model, scene.load_options, g)["text"] == FULL_SCOPE
+    assert "mimic" in cut_scope(g.model, scene.load_options)["text"]

@@ -437,7 +437,7 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     q0, qd0 = scene.initial_state(model)
     cov = coverage(q_o, qd_o, model=model)
     info.update({"trajectory_route": FILE_LABEL if file_run else ROUTE1_LABEL, "mujoco_fallback": fallback,
-                 "coverage": cov, "scope": cut_scope(model, scene.load_options),
+                 "coverage": cov, "scope": cut_scope(model, scene.load_options, plan),
                  "t_end": T, "t_end_note": t_end_note, "effects": plan.terms, "warm_up": warm,
                  "actuators": plan.actuator_set.actuators,
                  "q0": dict(zip(model.coordinate_names, q0.tolist())),
