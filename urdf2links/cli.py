@@ -47,12 +47,27 @@ def format_tree(model) -> str:
     lines = _table(rows)
     out = [f"robot {model.name!r} from {model.source}: {tree.n_links} links, {model.n} coordinates", ""] + lines
     out += _joint_lines(model.info.get("joints", []))
+    out += _constraint_lines(model.info)
     out += ["", f"inertia audit: {len(model.audit)} finding(s)"]
     out += [f"  - {r}" for r in model.audit]
     notes = model.info.get("notes", [])
     if notes:
         out += ["", "import notes:"] + [f"  - {n}" for n in notes]
     return "\n".join(out)
+
+
+def _constraint_lines(info) -> list[str]:
+    """An MJCF model's equalities and tendons (issue 36): read, and acting in scenes with ``[constraints]
+    from_file = true`` (docs/constraints.md)."""
+    from .parsers.mjcf_constraints import inspect_rows
+
+    eq, td = inspect_rows(info)
+    out = []
+    if eq:
+        out += ["", "equalities (read; constraints of scenes with [constraints] from_file = true, E68-E70):"] + _table(eq)
+    if td:
+        out += ["", "tendons (fixed ones act in scenes with [constraints] from_file = true, E76):"] + _table(td)
+    return out
 
 
 def _table(rows) -> list[str]:

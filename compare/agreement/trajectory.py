@@ -81,6 +81,8 @@ from urdf2links.scenes.scene import Scene, load_scene, robot_label
 
 from ..mujoco_side.mjcf import MjcfModel, mjcf_from_scene
 from ..mujoco_side.mujoco_mjcf import FILE_LABEL, file_route_inputs, file_runner, file_terms, mujoco_from_mjcf
+from ..mujoco_side.mujoco_constraints import with_constraints
+from .constraint_agreement import run_notes as constraint_run_notes
 from ..mujoco_side.mujoco_run import TIMED_REGION as MUJOCO_REGION
 from ..mujoco_side.mujoco_run import MujocoRun, energy_function, run_mujoco
 from ..mujoco_side.stable_run import stable_run
@@ -375,6 +377,8 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     say(f"terms at {states} seeded states (route 1" + (", route 2)" if not scene.load_options.get("floating_base")
                                                        else ")"))
     mj = mjcf_from_scene(scene, model, timestep=mujoco_dt, integrator=mujoco_integrator)
+    if plan.constraints is not None:    # issue 36: the scene's constraints and tendons as MuJoCo equalities
+        mj = with_constraints(mj, plan.constraints)
     mf = None
     if is_mjcf_path(scene.robot):       # route 2: MuJoCo runs the file itself
         mf = mujoco_from_mjcf(plan, timestep=mujoco_dt, integrator=mujoco_integrator)
@@ -423,6 +427,7 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     growth = growth_fit(t, err_max, end_time=div) if scene.chaotic else None
     energy, info = _energy_balances(scene, plan, mj, run, traj, EV_o, h_o, W)
     notes = _run_notes(scene, plan, mj, run, traj, t_end_note, resampled=resampled)
+    notes += constraint_run_notes(plan, traj, mj)   # issue 36: closed loops, couplings, tendons
     if mf is not None:
         notes += ([f"route 2 (the MJCF file in MuJoCo): {x}" for x in mf.notes]
                   + [f"import: {x}" for x in model.info.get("notes", [])])
@@ -432,7 +437,7 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     q0, qd0 = scene.initial_state(model)
     cov = coverage(q_o, qd_o, model=model)
     info.update({"trajectory_route": FILE_LABEL if file_run else ROUTE1_LABEL, "mujoco_fallback": fallback,
-                 "coverage": cov, "scope": cut_scope(model, scene.load_options),
+                 "coverage": cov, "scope": cut_scope(model, scene.load_options, plan),
                  "t_end": T, "t_end_note": t_end_note, "effects": plan.terms, "warm_up": warm,
                  "actuators": plan.actuator_set.actuators,
                  "q0": dict(zip(model.coordinate_names, q0.tolist())),

@@ -25,15 +25,26 @@ __all__ = ["cut_scope", "comparison_verdict", "FULL_SCOPE"]
 FULL_SCOPE = "the whole model"
 
 
-def cut_scope(model, load_options: dict | None = None) -> dict:
+def cut_scope(model, load_options: dict | None = None, plan=None) -> dict:
     """What of ``model``'s mechanism both engines leave out: ``equalities`` and ``tendons`` of an MJCF
     file (MuJoCo's run disables them; the tree has none), ``mimic`` couplings of a URDF loaded with
     ``mimic="independent"``; ``text`` is :data:`FULL_SCOPE` when nothing was cut, else
-    "open tree of a closed mechanism (N constraints, M tendons dropped)"."""
+    "open tree of a closed mechanism (N constraints, M tendons dropped)". With ``plan``, what its
+    constraints model is not cut (issue 36: ``[constraints] from_file``, ``mimic``): the file's equalities it
+    solves, its fixed tendons, and every fixed tendon that carries no force (nothing to drop)."""
     closed = model.info.get("closed") or {}
     eq, tendons = int(closed.get("equalities", 0)), int(closed.get("tendons", 0))
     coupled = (load_options or {}).get("mimic", "independent") == "independent"
     mimic = sum(1 for j in model.info.get("joints", []) if j.get("mimic")) if coupled else 0
+    scene = getattr(plan, "scene", None)
+    if scene is not None and getattr(scene, "file_constraints", False):
+        cons = plan.constraints
+        eq -= 0 if cons is None else sum(1 for c in cons.cset.constraints if c.source.startswith("MJCF"))
+        inert = [t for t in model.info.get("tendons", []) if t["fixed"] and not (t["stiffness"] or t["damping"]
+                                                                                  or t["actuators"] or t["limited"])]
+        tendons -= (0 if cons is None else len(cons.tendons)) + len(inert)
+    if scene is not None and getattr(scene, "mimic_constraints", False):
+        mimic = 0
     out = {"equalities": eq, "tendons": tendons, "mimic": mimic, "cut": bool(eq or tendons or mimic)}
     if eq or tendons:
         out["text"] = (f"open tree of a closed mechanism ({eq} constraint{'s' * (eq != 1)}, {tendons} "

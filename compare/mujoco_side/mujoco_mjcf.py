@@ -41,6 +41,7 @@ from urdf2links.scenes.excitation import coordinate_ranges
 from urdf2links.integration.simulate import Compilation
 
 from .mjcf import INTEGRATORS
+from .mujoco_constraints import route2_constraints
 from .mujoco_inputs import CompiledInputs
 from .mujoco_run import _INTEGRATOR_ENUM, MujocoRun, _blow_ups, implicit_note, instability_note
 
@@ -235,8 +236,11 @@ def mujoco_from_mjcf(plan, *, timestep: float | None = None, integrator: str | N
         m.qpos_spring[j.qposadr] = s.rest
         m.dof_damping[j.dofadr] = s.damping
     changed = [a for a in ("tendon_stiffness", "tendon_damping") if np.any(getattr(m, a))]
+    tendons = m.tendon_stiffness.copy(), m.tendon_damping.copy()
     m.tendon_stiffness[:] = 0.0
     m.tendon_damping[:] = 0.0
+    if plan.constraints is not None and plan.scene.file_constraints:    # issue 36: the file's equalities and
+        changed = route2_constraints(m, plan, tendons, notes)          # fixed tendons act, as written
     fluid = [k for k in ("density", "viscosity") if getattr(m.opt, k) != 0.0] + (["wind"] if np.any(m.opt.wind) else [])
     m.opt.density, m.opt.viscosity = 0.0, 0.0
     m.opt.wind[:] = 0.0

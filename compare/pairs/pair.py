@@ -23,6 +23,7 @@ import numpy as np
 from urdf2links.console import shown_path
 from urdf2links.parsers.parts import RobotParts, robot_parts
 
+from .constraints import constraint_differences
 from .differences import KINDS, ROUNDING, Difference, compare_descriptions
 from .effects import evaluate_effects, order_differences
 from .explanations import explain
@@ -136,6 +137,7 @@ def compare_descriptions_of(urdf, mjcf, *, explicit_map: dict | None = None, loa
     M = robot_parts(mjcf, **{k: v for k, v in load.items() if k != "floating_base"})
     mapping = map_joints(U, M, explicit=explicit_map)
     diffs, below = compare_descriptions(U, M, mapping)
+    diffs += constraint_differences(urdf, mjcf)      # issue 36: loops closed on one side only
     explain(diffs, U, M)
     effects = evaluate_effects(U, M, mapping, diffs, states=states, seed=seed)
     ordered = order_differences(diffs, effects)

@@ -47,6 +47,7 @@ from ..dynamics.transforms import PARAMETERS
 from ..dynamics.tree import LinkSpec, build_tree
 from ..errors import MJCFError
 from ..ranges import out_of_range
+from .mjcf_constraints import equality_rows, tendon_rows
 from .mjcf_notes import inventory
 from .mjcf_state import MujocoJoint, MujocoMap, quat_to_matrix
 
@@ -413,10 +414,13 @@ class _Builder:
         gravcomp = {self.name("mjOBJ_BODY", b, f"body{b}"): float(m.body_gravcomp[b])
                     for b in range(1, m.nbody) if m.body_gravcomp[b] != 0.0}
         frame_of = {k: (tree.link_names[t], X.tolist()) for k, (t, X) in self.frame_of.items()}
+        equalities, eq_notes = equality_rows(self)      # issue 36: read, not dropped (scenes/file_constraints.py)
+        tendons, tendon_notes = tendon_rows(self)
+        self.notes += eq_notes + tendon_notes
         coms = {self.name("mjOBJ_BODY", b, f"body{b}"): (float(m.body_mass[b]), np.array(m.body_ipos[b]).tolist())
                 for b in range(1, m.nbody)}
         info = {"format": "mjcf", "coordinates": self.coord_info, "notes": self.notes, "joints": self.joint_rows,
-                "frame_of": frame_of, "mujoco": qmap, "q0": q0, "home": home,
+                "frame_of": frame_of, "equalities": equalities, "tendons": tendons, "mujoco": qmap, "q0": q0, "home": home,
                 "closed": {"equalities": int(m.neq), "tendons": int(m.ntendon)}, "gravcomp": gravcomp, "body_mass_com": coms,
                 "actuators": self.actuator_rows(kinds, {j: names for j, (_, _, _, _, names) in
                                                         enumerate(self.mj_joints)}),

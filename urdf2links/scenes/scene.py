@@ -86,6 +86,7 @@ from ..errors import SceneError
 from ..locations import example_robot_data_dir, shipped_robots_dir
 from ..ranges import MAX_SAMPLES, MAX_STEPS, METHODS, MIN_ATOL, MIN_T_END, RANGES, RTOL_FLOOR
 from .actuators import ActuatorSpec, hold_actuators, parse_actuators
+from .constraints import constraint_options, parse_constraints
 from .excitation import DAMPER_TORQUE_TEXT, coordinate_ranges, damper_torques, excited_state
 from .functions import Constant, SceneValueError, TimeFunction, VectorFunction, parse_function, vector_function
 
@@ -99,7 +100,8 @@ DEFAULT_SCENE_NAME = "default"
 Q0_CHOICES = ("excite", "random", "rest", "zero")
 
 _TOP = ("description", "chaotic", "robot", "gravity", "base", "force", "moment", "torque", "spring",
-        "dampers", "springs", "gravcomp", "initial", "run", "record", "actuator", "computed_torque")
+        "dampers", "springs", "gravcomp", "initial", "run", "record", "actuator", "computed_torque",
+        "constraint", "constraints")   # issue 36: [[constraint]], [constraints] from_file
 _ROBOT = ("urdf", "mjcf", "shipped", "example_robot_data", "floating_base", "inertia", "mimic", "package_dirs",
           "strict", "xacro_args")
 #: Joint types whose damping (URDF or MJCF) becomes a damper on their one coordinate.
@@ -198,6 +200,12 @@ class Scene:
     """``[[computed_torque]]``: ``(coordinate, reference q_r(t))``."""
     gravcomp_factor: float | None = None
     gravcomp_bodies: tuple[tuple[str, float], ...] = ()
+    constraints: tuple = ()
+    """``[[constraint]]`` blocks (:mod:`urdf2links.scenes.constraints`; issue 36)."""
+    file_constraints: bool = False
+    """``[constraints] from_file``: an MJCF file's own equalities and fixed tendons act."""
+    mimic_constraints: bool = False
+    """``[constraints] mimic``: a URDF's ``<mimic>`` joints as exact joint constraints (E70)."""
 
     def model(self):
         """Load the scene's robot with its options (a :class:`~urdf2links.dynamics.model.Model`)."""
@@ -595,7 +603,8 @@ def scene_from_dict(data: dict, *, where: str = "<scene>", directory: Path | Non
                  chaotic=chaotic, gravity=gravity, base=base, loads=loads, torques=torques, springs=springs,
                  q0=q0, qd0=qd0, run=run, link_poses=link_poses, urdf_damping=urdf_damping,
                  file_springs=file_springs, gravcomp=gravcomp, actuators=actuators, computed_torque=computed,
-                 gravcomp_factor=gravcomp_factor, gravcomp_bodies=gravcomp_bodies)
+                 gravcomp_factor=gravcomp_factor, gravcomp_bodies=gravcomp_bodies,
+                 constraints=parse_constraints(r, data), **constraint_options(r, data))
 
 
 def _gravcomp(r: _Reader, data: dict) -> tuple[bool, float | None, tuple]:

@@ -18,6 +18,7 @@ from pathlib import Path
 
 from ..errors import SceneError, URDFError
 from ..parsers.xacro_input import parse_xacro_arg
+from .constraints import constraint_toml
 from .scene import RunSettings, Scene, default_scene, load_scene
 
 __all__ = ["scene_toml", "write_scene", "scene_or_robot", "scene_from_args", "write_scene_option", "xacro_args_of",
@@ -103,6 +104,7 @@ def scene_toml(scene: Scene, *, folder=None) -> str:
     for coord, f in scene.torques:       # constant ones (the default scene's damper torques, E65)
         out += ["[[torque]]", f"coordinate = {_value(coord)}", f"value = {_value(float(f.value))}", ""]
     out += _actuator_lines(scene.actuators)
+    out += constraint_toml(scene, _value)       # issue 36: [constraints], [[constraint]]
     out += ["[initial]", f"q = {_value({k: float(v) for k, v in scene.q0.items()})}",
             f"qd = {_value({k: float(v) for k, v in scene.qd0.items()})}", ""]
     out += _run_lines(scene.run) + [""]
