@@ -84,3 +84,8 @@ def out_of_range(value: float, quantity: str) -> str | None:
     if math.isfinite(value) and abs(value) <= bound:
         return None
     return f"{value:g} is outside the physical range |{quantity}| <= {bound:g}{(' ' + unit) if unit else ''}"
+
+#: How a robot's inconsistent inertias are treated, and how mimic joints are read (the loaders' options;
+#: here, in the base layer, so that the command line can offer them without loading the importer).
+INERTIA_POLICIES = ("audit", "strict", "repair")
+MIMIC_POLICIES = ("independent", "coupled")

@@ -11,6 +11,8 @@ from collections import namedtuple
 
 import numpy as np
 from numba import njit
+
+from ...compilation import one_signature
 from scipy.integrate._ivp import dop853_coefficients as _dop
 from scipy.integrate._ivp.rk import RK45 as _RK45
 
@@ -48,6 +50,7 @@ def _tableau_dop853() -> Tableau:
 TABLEAUX = {"RK45": _tableau_rk45(), "DOP853": _tableau_dop853()}
 
 
+@one_signature
 @njit(cache=True)
 def initial_step(t0, y0, f0, t_end, max_step, order, rtol, atol, args, counters):
     """scipy's ``select_initial_step`` (Hairer, Norsett, Wanner I, II.4)."""
@@ -72,6 +75,7 @@ def initial_step(t0, y0, f0, t_end, max_step, order, rtol, atol, args, counters)
 
 
 # -- RK45 / DOP853 ----------------------------------------------------------------------------------
+@one_signature
 @njit(cache=True)
 def _stages(tab, first, last, t, h, y, K, ystage, args, counters):
     """Stages ``first .. last - 1``: ``K[s] = F(t + C_s h, y + h sum_j A_sj K[j])``."""
@@ -87,6 +91,7 @@ def _stages(tab, first, last, t, h, y, K, ystage, args, counters):
     return True
 
 
+@one_signature
 @njit(cache=True)
 def _error_norm(tab, h, K, scale, err5, err3):
     """The pair's error estimate in units of ``scale`` (scipy's norms: RK45 rms, DOP853's
@@ -117,6 +122,7 @@ def _error_norm(tab, h, K, scale, err5, err3):
     return rms(err5, scale)
 
 
+@one_signature
 @njit(cache=True)
 def _attempt(tab, ctl, t, h_abs, y, f, K, work, args, counters):
     """Steps from ``t`` until one is accepted: returns ``(status, t_new, h, h_abs)`` with the next
@@ -165,6 +171,7 @@ def _attempt(tab, ctl, t, h_abs, y, f, K, work, args, counters):
         cnt[2] += 1
 
 
+@one_signature
 @njit(cache=True)
 def _dense_row(tab, t, h, y, y_new, f_new, K, ystage, row, args, counters):
     """The dense-output coefficients (n_dense, d) of the accepted step into ``row`` (DOP853's three
@@ -194,6 +201,7 @@ def _dense_row(tab, t, h, y, y_new, f_new, K, ystage, row, args, counters):
     return True
 
 
+@one_signature
 @njit(cache=True)
 def erk_chunk(tab, ctl, state, store, guard, counters, chunk, args):
     """Up to ``chunk`` accepted steps of an explicit pair.
