@@ -40,30 +40,39 @@ def test_import_and_help_load_nothing_heavy():
 
 
 _PENDULUM = """
-import json, sys
-from urdf2links import compilation
+import json, numpy as np
+from numba import njit
+from urdf2links import load_robot
+from urdf2links.integration.loops import radau, lu
 from urdf2links.integration.simulate import simulate
-tr = simulate("robots/pendulum.urdf", t_end=0.5, method="auto", progress=False)
-print(json.dumps({"functions": compilation.functions(), "wall": tr.stats["wall_time"], "run": tr.stats["run_s"],
-                  "compile": tr.stats["compile_s"], "methods": tr.stats["methods_used"]}))
+from urdf2links.scenes import scene_kernels as SK
+from urdf2links.dynamics import kernels, model_kernels as MK
+tr = simulate(load_robot("robots/pendulum.urdf"), t_end=0.5, method="auto", progress=False)
+from urdf2links.scenes.plan import compile_plan
+from urdf2links.integration.simulate import _scene_and_model
+scene, model, _ = _scene_and_model(load_robot("robots/pendulum.urdf"), None)
+rhs = compile_plan(scene, model).rhs
+fresh = njit(SK._rhs.py_func)          # typed anew here: every callee it reaches is compiled or loaded now
+y = np.zeros(rhs.dim)
+fresh(0.0, y, np.empty(rhs.dim), *rhs.args[:6], *rhs.FX)
+used = {f.__name__: len(f.overloads) for f in (SK.computed_torque, SK._actuators, SK._apply_loads, SK._coupled_solve,
+        radau.radau_chunk, lu.lu_factor, MK.fd_batch, kernels.kinematics)}
+print(json.dumps({"used": used, "wall": tr.stats["wall_time"], "methods": tr.stats["methods_used"]}))
 """
 
 
-def test_a_pendulum_compiles_only_what_it_runs(tmp_path):
-    """A pendulum's ``auto`` run in an empty cache compiles its right-hand side and DOP853's loop,
-    none of the computed torque, actuators, loads, coupled solve, Radau5 or its LU, and no batch
-    kernel; its reported times leave the compilation out (measured: wall 0.002-0.004 s against
-    15-25 s of compilation on the shared 2-core machine; bound: 1% of the compilation)."""
-    out = _python(_PENDULUM, env={"URDF2LINKS_CACHE_DIR": str(tmp_path / "cache")})
+def test_a_pendulum_compiles_only_what_it_runs():
+    """A pendulum's right-hand side reaches none of the computed torque, actuators, loads or coupled
+    solve (typed anew in a fresh process: a callee it reaches gets a compiled variant), its ``auto`` run
+    neither Radau5 nor its LU, nor a batch kernel; and its reported wall time leaves out the loading of
+    the compiled loops from the cache (measured 0.002-0.004 s; it was 0.3 s when that load was timed;
+    the issue's bound 0.05 s)."""
+    out = _python(_PENDULUM)
     assert out.returncode == 0, out.stderr
     got = json.loads(out.stdout.strip().splitlines()[-1])
-    names = {f.rsplit(".", 1)[-1] for f in got["functions"]}
-    assert {"scene_rhs", "erk_chunk"} <= names and got["methods"] == "DOP853"
-    unused = {"computed_torque", "_actuators", "_apply_loads", "_coupled_solve", "radau_chunk", "lu_factor",
-              "fd_batch", "terms_batch", "_sweep_erk", "rk4_chunk"}
-    assert not names & unused, f"compiled without being used: {sorted(names & unused)}"
-    assert got["compile"] > 1.0
-    assert got["wall"] < 0.01 * got["compile"] and got["run"] < 0.05 * got["compile"], got
+    assert got["used"].pop("kinematics") >= 1 and got["methods"] == "DOP853"
+    assert not any(got["used"].values()), f"compiled without being used: {got['used']}"
+    assert got["wall"] < 0.05, got
 
 
 def test_clock_stands_still_while_numba_compiles():

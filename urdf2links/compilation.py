@@ -13,7 +13,9 @@ code it times. This module watches numba's ``numba:compile`` events (numba's pub
 - :func:`seconds` and :func:`functions` say how much was compiled in this process; :func:`summary`
   is the one line the command prints ("compiling the solver for this machine, first run only:
   14 s"), and :func:`show_progress` turns on a line on stderr that counts the seconds while numba
-  compiles (the command line turns it on; the library stays silent).
+  compiles (the command line turns it on; the library stays silent); :func:`per_function` the
+  seconds of each function (``URDF2LINKS_COMPILE_LOG=FILE`` writes them at exit);
+- :func:`one_signature` compiles a kernel once whatever constants its callers pass.
 
 Nothing here imports numba until a compiled function is about to be used (:func:`watch`, called by
 :mod:`urdf2links.numba_cache` when it installs the cache): ``import urdf2links`` stays fast.
@@ -25,7 +27,8 @@ import sys
 import threading
 import time
 
-__all__ = ["clock", "ensure", "seconds", "functions", "summary", "show_progress", "watch", "WHAT"]
+__all__ = ["clock", "ensure", "seconds", "functions", "per_function", "summary", "show_progress", "watch", "WHAT",
+           "one_signature"]
 
 #: How the command line names what is compiled.
 WHAT = "compiling the solver for this machine, first run only"
@@ -41,6 +44,8 @@ class _Tracker:
         self.since = 0.0            # perf_counter() when the outermost compilation (or ensure) started
         self.total = 0.0            # seconds of finished compilations
         self.names: list[str] = []
+        self.stack: list = []       # [name, start, seconds of nested compilations] per open compilation
+        self.per_function: dict = {}    # name -> [seconds of its own, seconds with its callees, compilations]
         self.progress = None        # the stream of the progress line, or None
         self.ticker = None
         self.shown = False          # a progress line is on the screen
@@ -52,6 +57,7 @@ class _Tracker:
             self.depth += 1
             if name:
                 self.names.append(name)
+            self.stack.append([name, time.perf_counter(), 0.0])
             if self.progress is not None and self.ticker is None:
                 self.ticker = threading.Thread(target=self._tick, name="urdf2links-compiling", daemon=True)
                 self.ticker.start()
@@ -59,6 +65,16 @@ class _Tracker:
     def end(self):
         with self.lock:
             self.depth -= 1
+            if self.stack:
+                name, start, nested = self.stack.pop()
+                took = time.perf_counter() - start
+                if self.stack:
+                    self.stack[-1][2] += took
+                if name:
+                    rec = self.per_function.setdefault(name, [0.0, 0.0, 0])
+                    rec[0] += took - nested
+                    rec[1] += took
+                    rec[2] += 1
             if self.depth == 0:
                 self.total += time.perf_counter() - self.since
                 self._clear()
@@ -118,6 +134,9 @@ def watch() -> None:
 
     listener = Listener()
     event.register("numba:compile", listener)
+    import atexit
+
+    atexit.register(_write_log)
     _WATCHING.append(listener)
 
 
@@ -150,6 +169,25 @@ def ensure(dispatcher, args) -> None:
         dispatcher.compile(sig)
     finally:
         _T.end()
+
+
+def per_function() -> dict:
+    """``{name: {"own_s", "with_callees_s", "compilations"}}`` of every function numba compiled in this
+    process: its own seconds (its callees' compilations, nested in it, left out), with them, and how
+    many variants (docs/speed.md's table of compile times per kernel)."""
+    with _T.lock:
+        return {k: {"own_s": v[0], "with_callees_s": v[1], "compilations": v[2]} for k, v in _T.per_function.items()}
+
+
+def _write_log() -> None:
+    """At exit, when ``URDF2LINKS_COMPILE_LOG`` names a file: :func:`per_function` as JSON there."""
+    import json
+    import os
+
+    path = os.environ.get("URDF2LINKS_COMPILE_LOG")
+    if path and _T.per_function:
+        with open(path, "w", encoding="utf-8") as fh:
+            json.dump({"seconds": seconds(), "functions": per_function()}, fh, indent=1)
 
 
 def summary(cache_folder=None) -> str | None:

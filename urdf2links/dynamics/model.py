@@ -27,7 +27,6 @@ from collections import namedtuple
 from typing import Iterable, Sequence
 
 import numpy as np
-import scipy.linalg
 
 from ..errors import DynamicsError
 from . import model_kernels as MK
@@ -448,6 +447,8 @@ class Model:
     def solve_mass_matrix(self, A: np.ndarray, rhs: np.ndarray, *, q=None) -> np.ndarray:
         """``A^{-1} rhs`` by Cholesky; a matrix that is not positive definite raises DynamicsError."""
         try:
+            import scipy.linalg     # here: the oracles alone need it (a slow import)
+
             c, low = scipy.linalg.cho_factor(A, lower=True, check_finite=True)
         except (np.linalg.LinAlgError, ValueError) as err:
             raise self.not_positive_definite(A, q) from err

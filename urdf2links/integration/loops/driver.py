@@ -23,11 +23,10 @@ from ... import compilation
 from ...errors import IntegrationError
 from ...scenes.scene_kernels import CompiledScene
 from ..dense import DenseOutput, midpoint_dense
-from . import erk, fixed, radau
+from . import erk, fixed
 from .common import AngleGuard
 from .erk import TABLEAUX
 from .fixed import MAX_HALVINGS
-from .radau import R_FIRST, R_NEED_JAC, R_NQ, R_NV, R_SIZE, R_STORED, R_T, radau_tolerances
 from .stiffness import E_DETECT, E_ND, E_NEEDED, E_SIZE
 
 __all__ = ["Outcome", "run", "CHUNK", "wall_message", "Stretch", "run_erk", "run_radau", "structure_of"]
@@ -74,6 +73,8 @@ def _interpreted(*, user_jac: bool) -> dict:
     """The loops as plain Python functions: each compiled function's source rebound to a copy of its
     module's namespace in which ``evaluate`` calls a Python right-hand side (``args = (rhs, jac)``).
     The same code as the compiled loops, so the two cannot drift."""
+    from . import radau
+
     loops = {}
     for module in (fixed, erk, radau):
         ns = dict(vars(module))
@@ -87,9 +88,22 @@ def _interpreted(*, user_jac: bool) -> dict:
     return loops
 
 
+class _CompiledLoops(dict):
+    """The compiled loops by name; Radau5's module (and scipy's coefficients it reads) is imported
+    at its first use: a run that never turns stiff does not load it."""
+
+    def __missing__(self, name):
+        if name != "radau_chunk":
+            raise KeyError(name)
+        from .radau import radau_chunk
+
+        self[name] = radau_chunk
+        return radau_chunk
+
+
 def _compiled() -> dict:
-    return {"rk4_chunk": fixed.rk4_chunk, "midpoint_chunk": fixed.midpoint_chunk, "erk_chunk": erk.erk_chunk,
-            "initial_step": erk.initial_step, "radau_chunk": radau.radau_chunk}
+    return _CompiledLoops(rk4_chunk=fixed.rk4_chunk, midpoint_chunk=fixed.midpoint_chunk, erk_chunk=erk.erk_chunk,
+                          initial_step=erk.initial_step)
 
 
 # -- drivers (Python): chunks, storage, progress, results -------------------------------------------
@@ -203,6 +217,9 @@ def run_radau(drv, loops, args, f0, t0, t1, y0, rtol, atol, dt, need_dense, stru
     ``h0`` the first step (default: scipy's initial step for an error of order 3 at the mapped
     tolerances); ``detect = (h_D, e_D)`` (``auto``: DOP853's last step and evaluations per step when
     it handed over) ends the stretch (status 5) when DOP853 would be cheaper."""
+    from . import radau
+    from .radau import R_FIRST, R_NEED_JAC, R_NQ, R_NV, R_SIZE, R_STORED, R_T, radau_tolerances
+
     d = y0.size
     nq, nv = structure
     r, a, fnewt = radau_tolerances(rtol, atol)
