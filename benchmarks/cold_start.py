@@ -19,6 +19,7 @@ The machine's load average is recorded with every run: on a shared machine the s
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import shutil
@@ -26,6 +27,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from pathlib import Path
 
 from benchmarking import ROOT, fmt_spread, markdown_table, run_benchmark, spread
 
@@ -48,7 +50,10 @@ _WALL = re.compile(r"evaluations, ([0-9.]+) s wall")
 
 
 def _run(name: str, cache: str, out: str) -> dict:
-    env = dict(os.environ, URDF2LINKS_CACHE_DIR=cache)
+    log_file = os.path.join(out, "compile_log.json")
+    if os.path.exists(log_file):
+        os.remove(log_file)
+    env = dict(os.environ, URDF2LINKS_CACHE_DIR=cache, URDF2LINKS_COMPILE_LOG=log_file)
     env.pop("NUMBA_CACHE_DIR", None)
     argv = [sys.executable, *[a.replace("{out}", out) for a in COMMANDS[name]]]
     load = os.getloadavg()[0]
@@ -60,8 +65,10 @@ def _run(name: str, cache: str, out: str) -> dict:
     text = res.stdout + res.stderr
     compiled = _COMPILED.search(text)
     reported = _WALL.search(res.stdout)
+    functions = json.loads(Path(log_file).read_text())["functions"] if os.path.exists(log_file) else {}
     return {"wall": wall, "load": load, "compile_s": float(compiled.group(1)) if compiled else 0.0,
-            "reported_wall": float(reported.group(1)) if reported else None}
+            "reported_wall": float(reported.group(1)) if reported else None,
+            "functions": {k.replace("urdf2links.", ""): round(v["own_s"], 4) for k, v in functions.items()}}
 
 
 def _measure(args, log):
@@ -127,7 +134,36 @@ def _render(data):
     if rep:
         md += ["", f"`{REPORTED_TARGET[0]}`'s reported wall time, cold: {fmt_spread(rep, digits=2)} s against "
                f"{REPORTED_TARGET[1]:g} s: {verdict(rep, REPORTED_TARGET[1])}."]
+    md += ["", _kernel_table(rows)]
     return "\n".join(md), None
+
+
+#: The commands whose cold runs give the table of compile times per function.
+KERNEL_COMMANDS = ("simulate pendulum", "report")
+
+
+def _kernel_table(rows) -> str:
+    """Seconds numba spent compiling each function itself (its callees' compilation left out: each
+    callee has its row), median over the cold rounds, in the cold runs of :data:`KERNEL_COMMANDS`."""
+    import statistics
+
+    cols = [c for c in KERNEL_COMMANDS if c in rows]
+    own = {}
+    for c in cols:
+        for run in rows[c]["cold"]["runs"]:
+            for f, secs in run.get("functions", {}).items():
+                own.setdefault(f, {}).setdefault(c, []).append(secs)
+    med = {f: {c: statistics.median(v[c]) for c in v} for f, v in own.items()}
+    order = sorted(med, key=lambda f: -max(med[f].values()))
+    table = [[f"`{f}`", *(f"{med[f][c]:.2f}" if c in med[f] else "-" for c in cols)] for f in order[:40]]
+    rest = order[40:]
+    if rest:
+        table.append([f"{len(rest)} others", *(f"{sum(med[f].get(c, 0.0) for f in rest):.2f}" for c in cols)])
+    table.append(["**all**", *(f"{sum(med[f].get(c, 0.0) for f in med):.2f}" for c in cols)])
+    return ("Compile time per function (s), cold: numba's own time for each (its callees' compilation, nested "
+            "in it, is on their rows), median over the rounds; `-`: not compiled by that command. From "
+            "`URDF2LINKS_COMPILE_LOG` (`urdf2links.compilation.per_function`).\n\n"
+            + markdown_table(["function", *(f"`{c}`" for c in cols)], table))
 
 
 def _options(p):
