@@ -22,6 +22,7 @@ from __future__ import annotations
 import json
 import os
 import re
+import resource
 import shutil
 import subprocess
 import sys
@@ -57,16 +58,19 @@ def _run(name: str, cache: str, out: str) -> dict:
     env.pop("NUMBA_CACHE_DIR", None)
     argv = [sys.executable, *[a.replace("{out}", out) for a in COMMANDS[name]]]
     load = os.getloadavg()[0]
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     res = subprocess.run(argv, env=env, cwd=out, capture_output=True, text=True, timeout=3600)
     wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
     if res.returncode not in (0, 1):      # report exits 1 when a scene misses its baseline: still timed
         raise SystemExit(f"{name}: exit {res.returncode}\n{res.stderr[-3000:]}")
     text = res.stdout + res.stderr
     compiled = _COMPILED.search(text)
     reported = _WALL.search(res.stdout)
     functions = json.loads(Path(log_file).read_text())["functions"] if os.path.exists(log_file) else {}
-    return {"wall": wall, "load": load, "compile_s": float(compiled.group(1)) if compiled else 0.0,
+    return {"wall": wall, "cpu": cpu, "load": load, "compile_s": float(compiled.group(1)) if compiled else 0.0,
             "reported_wall": float(reported.group(1)) if reported else None,
             "functions": {k.replace("urdf2links.", ""): round(v["own_s"], 4) for k, v in functions.items()}}
 
@@ -84,7 +88,8 @@ def _measure(args, log):
                 for kind in ("cold", "warm"):
                     got = _run(name, cache, out)
                     runs[name][kind].append(got)
-                    log(f"  round {r + 1}/{args.rounds} {name} {kind}: {got['wall']:.2f} s (load {got['load']:.1f}, "
+                    log(f"  round {r + 1}/{args.rounds} {name} {kind}: {got['wall']:.2f} s (cpu {got['cpu']:.2f} s, "
+                        f"load {got['load']:.1f}, "
                         f"compiled {got['compile_s']:.1f} s"
                         + (f", reported {got['reported_wall']:.3f} s" if got["reported_wall"] is not None else "")
                         + ")")
@@ -96,7 +101,8 @@ def _measure(args, log):
         rows[name] = {}
         for kind in ("cold", "warm"):
             xs = runs[name][kind]
-            rows[name][kind] = {"wall": spread([x["wall"] for x in xs]), "runs": xs,
+            rows[name][kind] = {"wall": spread([x["wall"] for x in xs]), "cpu": spread([x["cpu"] for x in xs]),
+                                "runs": xs,
                                 "compile_s": spread([x["compile_s"] for x in xs]),
                                 "load": spread([x["load"] for x in xs])}
             rep = [x["reported_wall"] for x in xs if x["reported_wall"] is not None]
@@ -118,7 +124,8 @@ def _render(data):
             x = r[kind]
             target = data["targets"].get(f"{name} ({kind})")
             rep = x.get("reported_wall")
-            table.append([f"`{name}`", kind, fmt_spread(x["wall"], digits=3), fmt_spread(x["compile_s"], digits=3),
+            table.append([f"`{name}`", kind, fmt_spread(x["wall"], digits=3), fmt_spread(x["cpu"], digits=3),
+                          fmt_spread(x["compile_s"], digits=3),
                           fmt_spread(rep, digits=2) if rep else "-",
                           f"{target:g} s: {verdict(x['wall'], target)}" if target else "-",
                           fmt_spread(x["load"], digits=2)])
@@ -127,8 +134,10 @@ def _render(data):
           f"{data['rounds']} rounds; *compiled*: the seconds the command reported on its line 'compiling the solver "
           "for this machine, first run only'; *reported*: the wall time `simulate` prints (compilation left out). "
           "Targets (issue 32) under the tie rule: met when the slowest round is within, missed when the fastest is "
-          f"not. The load average (1 min) of the machine ({data['cpu_count']} cores, shared) at each start.", "",
-          markdown_table(["command", "cache", "process wall (s)", "compiled (s)", "reported wall (s)", "target",
+          f"not. The load average (1 min) of the machine ({data['cpu_count']} cores, shared) at each start; *process CPU*: "
+          "the user + system seconds of the process and its threads (numba compiles on one thread: on an idle "
+          "machine the wall time of a cold run is close to its CPU time; on a loaded one it is longer).", "",
+          markdown_table(["command", "cache", "process wall (s)", "process CPU (s)", "compiled (s)", "reported wall (s)", "target",
                           "load"], table)]
     rep = rows.get(REPORTED_TARGET[0], {}).get("cold", {}).get("reported_wall")
     if rep:
