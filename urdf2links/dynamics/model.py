@@ -76,6 +76,7 @@ class Model:
         """The tree flattened for the kernels (:class:`FlatTree`)."""
         self._g, self._g0 = g.copy(), np.zeros(3)      # writable: the frozen kernel takes writable arrays
         self._hot = {}                  # the frozen hot entries this model has called (model_kernels.frozen)
+        self._TI, self._TF = self.compiled.TI, self.compiled.TF     # the hot path's arguments, one lookup each
         self._nq = tree.n               # the length of q'' on the hot path (no coupling there)
         self._numpy_plan = None
         if coupling is None:
@@ -346,7 +347,12 @@ class Model:
         """
         if base is None and not loads and self._C is None and method == "recursive":    # the hot path
             out = np.empty(self._nq)
-            pivot = self._call("fd_plain", self._g if gravity else self._g0, q, qd, _EMPTY if tau is None else tau, out)
+            fd = self._hot.get("fd_plain") or self._hot.setdefault("fd_plain", MK.frozen("fd_plain"))
+            try:        # _call's work inlined: each Python step here is a few percent of the call
+                pivot = fd(self._TI, self._TF, self._g if gravity else self._g0, q, qd, _EMPTY if tau is None else tau,
+                           out)
+            except TypeError:       # not float64 vectors (or a batch): converted on the general path
+                pivot = -2
             if pivot == -1:
                 return out
         if method != "recursive":
