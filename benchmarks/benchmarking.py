@@ -150,11 +150,11 @@ def chain(n: int):
 
 
 @njit(cache=True)
-def eval_loop(y, out, reps, I, F, W, SI, SF, X):
+def eval_loop(y, out, reps, I, F, W, SI, SF, X, FX):
     """``reps`` evaluations of the compiled right-hand side at ``y`` (t moving), inside a compiled loop:
     ``eval_loop(y, out, reps, *plan.rhs.args)``."""
     for r in range(reps):
-        scene_rhs(0.01 * r, y, out, I, F, W, SI, SF, X)
+        scene_rhs(0.01 * r, y, out, I, F, W, SI, SF, X, FX)
 
 
 def load_models(shipped=(), real=()) -> list:

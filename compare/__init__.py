@@ -4,6 +4,10 @@ Installed as ``urdf2links.compare`` from the repository's top-level ``compare/``
 MuJoCo (``import urdf2links`` does not).
 """
 
+from urdf2links import numba_cache as _numba_cache
+
+_numba_cache.install()     # before any compiled function is defined (idempotent)
+
 from .agreement.terms import TermsComparison, compare_terms_urdf, massless_moving_links, repaired_urdf_text
 from .agreement.trajectory import DIVERGENCE_THRESHOLD, SceneComparison, compare_scene, growth_fit, scene_key
 from .mujoco_side.mjcf import MjcfModel, mjcf_from_model, mjcf_from_scene

@@ -19,9 +19,9 @@ from __future__ import annotations
 
 import math
 import sys
-import time
 from pathlib import Path
 
+from urdf2links.compilation import clock  # durations without numba's compilation
 from urdf2links.console import err, shown_path
 from urdf2links.integration.integrators import METHODS
 from urdf2links.locations import DEFAULT_OUT, default_baselines, report_scenes, shipped_robots_dir
@@ -200,9 +200,9 @@ def report_command(args) -> int:
                 return 2
             err(f"baselines: {shown_path(baselines_path)} (exit 1 when a figure grows past its baseline)")
     entries, summaries, failed, errors = [], [], [], []
-    start = time.perf_counter()
+    start = clock()
     for i, f in enumerate(files, 1):
-        t0 = time.perf_counter()
+        t0 = clock()
         scene = override_loading(load_scene(f), load)
         T, note = report_t_end(scene, t_end=args.t_end, cap=args.cap)
         err(f"[{i}/{len(files)}] {Path(scene.robot).stem}/{scene.name}: t = 0..{T:g} s"
@@ -231,7 +231,7 @@ def report_command(args) -> int:
         summaries.append(summary)
         entries.append({"summary": summary, "link": f"{summary['robot']}/{summary['scene']}/report.html", "check": check})
         tr, en = summary["trajectory"], summary["energy"]
-        err(f"    done in {time.perf_counter() - t0:.1f} s: terms {summary['terms']['max_rel_error']:.1e}, "
+        err(f"    done in {clock() - t0:.1f} s: terms {summary['terms']['max_rel_error']:.1e}, "
              f"max |dq| {tr['max_abs_error']:.1e}, drift {en['project_drift_rel']:.1e} / {en['mujoco_drift_rel']:.1e}"
              + ("" if check is None else f", baseline {'ok' if check.ok else 'FAILED: ' + ', '.join(check.failures)}"))
     note = ""
@@ -250,7 +250,7 @@ def report_command(args) -> int:
         bp = write_baselines(summaries, args.write_baselines, factor=args.factor)
         err(f"wrote {shown_path(bp)}")
     print(idx["table"])
-    print(f"\n{shown_path(idx['html'])}: {len(entries)} scene(s) in {time.perf_counter() - start:.0f} s")
+    print(f"\n{shown_path(idx['html'])}: {len(entries)} scene(s) in {clock() - start:.0f} s")
     for e in errors:
         err(f"urdf2links report: scene failed: {e}")
     for f in failed:

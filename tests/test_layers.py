@@ -19,7 +19,7 @@ ROOT = Path(__file__).resolve().parents[1]
 #: ``urdf2links`` itself (the public API, re-exported) matches only the package's ``__init__``.
 LAYERS = [
     ("base", ("urdf2links.errors", "urdf2links.ranges", "urdf2links.console", "urdf2links.locations",
-              "urdf2links.numba_cache", "urdf2links.robots")),
+              "urdf2links.numba_cache", "urdf2links.compilation", "urdf2links.robots")),
     ("dynamics", ("urdf2links.dynamics",)),
     ("parsers", ("urdf2links.parsers",)),
     ("scenes", ("urdf2links.scenes",)),

@@ -15,18 +15,22 @@ import os as _os
 if "OMP_WAIT_POLICY" not in _os.environ and "GOMP_SPINCOUNT" not in _os.environ:
     _os.environ["OMP_WAIT_POLICY"] = "PASSIVE"
 
-from . import numba_cache as _numba_cache  # noqa: E402
+# The public API is loaded on first use (PEP 562): ``import urdf2links`` (and ``urdf2links --help``) imports
+# neither numba nor scipy, so it takes a few tens of milliseconds; ``urdf2links.Model`` (or ``from urdf2links
+# import Model``) imports what it needs then. numba's cache folder is set up by the first compiled
+# subpackage imported (urdf2links.dynamics, before any compiled function is defined).
+_PUBLIC = {
+    "Wrench": "dynamics.loads", "Model": "dynamics.model", "BaseState": "dynamics.transforms",
+    "base_transforms": "dynamics.transforms", "LinkSpec": "dynamics.tree", "LinkTree": "dynamics.tree",
+    "build_tree": "dynamics.tree", "pseudo_inertia_from": "dynamics.tree",
+    "AuditRecord": "parsers.importer", "load_urdf": "parsers.importer", "load_urdf_string": "parsers.importer",
+    "urdf_link_poses": "parsers.importer", "load_mjcf": "parsers.mjcf", "load_mjcf_string": "parsers.mjcf",
+    "load_robot": "parsers.robot_file",
+}
 
-_numba_cache.install()     # before any compiled function is defined: numba caches into the user's folder
-
-from .dynamics.loads import Wrench
-from .dynamics.model import Model
-from .dynamics.transforms import BaseState, base_transforms
-from .dynamics.tree import LinkSpec, LinkTree, build_tree, pseudo_inertia_from
-from .errors import (
+from .errors import (  # noqa: E402  (light: the error classes alone)
     DescriptionError,
     DynamicsError,
-    DescriptionError,
     InertiaError,
     MeshError,
     MJCFError,
@@ -35,12 +39,29 @@ from .errors import (
     URDFSyntaxError,
     URDFValueError,
 )
-from .parsers.importer import AuditRecord, load_urdf, load_urdf_string, urdf_link_poses
-from .parsers.mjcf import load_mjcf, load_mjcf_string
-from .parsers.robot_file import load_robot
+
+
+def __getattr__(name: str):
+    """A public name (or a subpackage) imported at its first use."""
+    import importlib
+
+    if name in _PUBLIC:
+        value = getattr(importlib.import_module(f".{_PUBLIC[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    try:
+        return importlib.import_module(f".{name}", __name__)
+    except ModuleNotFoundError as exc:
+        if exc.name != f"{__name__}.{name}":
+            raise
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_PUBLIC))
+
 
 __all__ = [
-    "DescriptionError",
     "load_urdf",
     "load_mjcf",
     "load_mjcf_string",

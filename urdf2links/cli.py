@@ -13,20 +13,33 @@ import os
 import sys
 import warnings
 
-import numpy as np
-
-from .dynamics.transforms import PARAMETERS
 from .errors import DescriptionError, DynamicsError, IntegrationError, SceneError
-from .scenes.limits import LimitExcursion
-from .scenes.scene import Q0_CHOICES
-from .scenes.scene_toml import hold_of, load_options_of, scene_from_args, write_scene_option, xacro_args_of
+from .ranges import Q0_CHOICES
 
 __all__ = ["main", "build_parser", "format_tree", "scene_from_args", "xacro_args_of", "write_scene_option"]
+
+# numpy, numba and the stages are imported by the handlers that use them: `urdf2links --help` (and the
+# parser) load only argparse and the base modules.
+_LAZY = {"scene_from_args": "scenes.scene_toml", "xacro_args_of": "scenes.scene_toml",
+         "write_scene_option": "scenes.scene_toml", "hold_of": "scenes.scene_toml", "load_options_of": "scenes.scene_toml"}
+
+
+def __getattr__(name: str):
+    """The scene helpers this module re-exports, imported at first use."""
+    if name in _LAZY:
+        import importlib
+
+        return getattr(importlib.import_module(f".{_LAZY[name]}", __package__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def format_tree(model) -> str:
     """The tree as a table: link, parent, the six parameters (coordinates marked ``[name]``),
     mass, COM, eigenvalues of H; then the audit findings and the importer's notes."""
+    import numpy as np
+
+    from .dynamics.transforms import PARAMETERS
+
     tree = model.tree
     rows = [("link", "parent", *PARAMETERS, "mass", "COM", "eig(H)")]
     for p, name in enumerate(tree.link_names):
@@ -117,7 +130,7 @@ def _joint_lines(joints) -> list[str]:
 
 def _inspect(args) -> int:
     from .scenes.plan import compile_plan
-    from .scenes.scene_toml import scene_or_robot, scene_toml
+    from .scenes.scene_toml import hold_of, load_options_of, scene_or_robot, scene_toml
 
     if args.scene or str(args.file).endswith(".toml"):
         scene = scene_or_robot(args.file, q0=args.q0, seed=args.seed, t_end=args.t_end, load=load_options_of(args),
@@ -157,7 +170,9 @@ def _simulate(args) -> int:
     from pathlib import Path
 
     from .integration.simulate import describe_stretches, simulate
+    from .scenes.limits import LimitExcursion
     from .scenes.scene import robot_label
+    from .scenes.scene_toml import scene_from_args, write_scene_option
 
     scene = scene_from_args(args)
     write_scene_option(args, scene)
@@ -201,6 +216,26 @@ def _simulate(args) -> int:
     return 0
 
 
+def _cache(args) -> int:
+    from .numba_cache import cache_dir, cache_folders, clear_cache
+
+    folder = cache_dir()
+    if args.clear:
+        gone = clear_cache(folder, which="all" if args.all else "stale")
+        print(f"{folder}: removed {len(gone)} folder(s), {sum(f.size for f in gone) / 1e6:.1f} MB"
+              + ("" if args.all else " (other installs' and removed installs'; --all removes this install's too)"))
+    rows = cache_folders(folder)
+    if not rows:
+        print(f"{folder}: empty (nothing compiled yet; the first run compiles and fills it)")
+        return 0
+    words = {"current": "this install", "other": "another install", "gone": "sources removed (stale)"}
+    print(f"{folder}: {len(rows)} folder(s), {sum(f.size for f in rows) / 1e6:.1f} MB")
+    for f in rows:
+        print(f"  {f.path.name:<32} {f.size / 1e6:7.1f} MB {f.files:5d} files  {words[f.status]}"
+              + (f": {f.source}" if f.source is not None else ""))
+    return 0
+
+
 def _compare(args) -> int:
     from .compare.commands import compare_command
 
@@ -224,8 +259,11 @@ def _sweep(args) -> int:
     loop here or split across a Dask cluster (``--scheduler``); an .npz of the trajectories."""
     from pathlib import Path
 
+    import numpy as np
+
     from .integration.batch import simulate_batch, sweep_states
     from .scenes.scene import robot_label
+    from .scenes.scene_toml import scene_from_args, write_scene_option
 
     scene = scene_from_args(args)
     write_scene_option(args, scene)
@@ -258,8 +296,6 @@ def _sweep(args) -> int:
     np.savez_compressed(npz, t=res.t, q=res.q, qd=res.qd, work=res.work, nfev=res.nfev, status=res.status, q0=q0,
                         qd0=qd0, coordinate_names=np.array(res.coordinate_names))
     where = f"on {len(res.chunks)} chunks at {args.scheduler}" if client is not None else "on this machine"
-    if res.compilation is not None and res.compilation.happened:
-        print(res.compilation.describe("urdf2links sweep"))
     for note in res.notes:
         print(f"note: {note}")
     print(f"{scene.name}: {model.name}, {args.count} initial states (seed {args.seed}, spread {args.spread:g}), "
@@ -316,7 +352,7 @@ def _add_animation_option(p) -> None:
 def _add_load_options(p) -> None:
     """How the robot is loaded: the same options on every command that loads one. For a scene file they
     replace its ``[robot]`` options (the scene's notes say so)."""
-    from .parsers.importer import INERTIA_POLICIES, MIMIC_POLICIES
+    from .ranges import INERTIA_POLICIES, MIMIC_POLICIES
 
     g = p.add_argument_group("loading the robot (for a scene file: replaces its [robot] options, noted)")
     g.add_argument("--floating-base", "--floating", dest="floating", action="store_true",
@@ -539,13 +575,23 @@ def _check_parser(sub) -> None:
     p.set_defaults(func=_check)
 
 
+def _cache_parser(sub) -> None:
+    p = sub.add_parser("cache", help="list (default) or clear numba's cache of compiled code (the first run of a "
+                       "command compiles; the next ones load it)")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--list", action="store_true", help="the cache's folders: size, and the install each serves (default)")
+    g.add_argument("--clear", action="store_true", help="remove the folders of other and removed installs")
+    p.add_argument("--all", action="store_true", help="with --clear: this install's too (the next run compiles again)")
+    p.set_defaults(func=_cache)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``urdf2links`` command line: one sub-command per handler above."""
     parser = argparse.ArgumentParser(prog="urdf2links", description="URDF robots as trees of links of the trace "
                                      "method, simulated, and compared with MuJoCo.")
     sub = parser.add_subparsers(dest="command", required=True)
     for add in (_list_parser, _inspect_parser, _simulate_parser, _compare_parser, _report_parser, _sweep_parser,
-                _tradeoff_parser, _check_parser):
+                _tradeoff_parser, _check_parser, _cache_parser):
         add(sub)
     return parser
 
@@ -579,6 +625,9 @@ def main(argv=None) -> int:
     """Run a command; every error ends in one message on stderr and exit status 2, never a traceback
     (``URDF2LINKS_DEBUG=1`` shows the traceback of an internal error)."""
     args = build_parser().parse_args(argv)
+    from . import compilation
+
+    compilation.show_progress(not getattr(args, "quiet", False))
     try:
         _resolve_inputs(args)
         return args.func(args)
@@ -597,6 +646,19 @@ def main(argv=None) -> int:
         print(f"urdf2links {args.command}: error: {type(err).__name__}: {err} (an internal error of urdf2links: "
               "please report it; URDF2LINKS_DEBUG=1 shows the traceback)", file=sys.stderr)
         return 2
+    finally:
+        compilation.show_progress(False)
+        _say_compilation()
+
+
+def _say_compilation() -> None:
+    """The command's one line about numba's compilation, when it compiled anything (stderr)."""
+    from . import compilation
+
+    if compilation.functions():
+        from .numba_cache import cache_dir
+
+        print(compilation.summary(cache_dir()), file=sys.stderr)
 
 
 if __name__ == "__main__":

@@ -28,12 +28,17 @@ import os
 import re
 import sys
 import tempfile
+from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["cache_dir", "install", "source_stamp"]
+__all__ = ["cache_dir", "install", "source_stamp", "CacheFolder", "cache_folders", "clear_cache", "ORIGIN"]
+
+#: The file in each cached source folder's subfolder that names the source folder it caches.
+ORIGIN = "origin.txt"
 
 _PACKAGE = "urdf2links"
 _STAMP: list = []
+_INSTALLED: list = []
 #: A source file that defines compiled functions (its edits invalidate the cache).
 _COMPILED = re.compile(r"@njit|\bnjit\(|\bcfunc\(|@jit\b|numba\.jit\(|@vectorize|@guvectorize")
 
@@ -93,13 +98,28 @@ def source_stamp() -> str:
 
 def install() -> Path | None:
     """Put the package's cache locator first in numba's list (once); returns the cache folder, or
-    None when the user's ``NUMBA_CACHE_DIR`` decides (numba's own locator then serves every function)."""
-    if os.environ.get("NUMBA_CACHE_DIR"):
-        return None
+    None when the user's ``NUMBA_CACHE_DIR`` decides (numba's own locator then serves every function).
+    Folders of installs whose sources are gone are removed (:func:`clear_cache`). A folder that cannot
+    be written: the compiled code is kept for this process only (a private temporary folder, removed
+    at exit), said once on stderr."""
+    from . import compilation
+
+    compilation.watch()         # numba's compilation events: kept out of reported times, shown while they run
+    if os.environ.get("NUMBA_CACHE_DIR") or _INSTALLED:
+        return _INSTALLED[0] if _INSTALLED else None
     folder = cache_dir()
-    if not _writable(folder):
-        folder = Path(tempfile.gettempdir()) / f"{_PACKAGE}-numba-{os.getuid() if hasattr(os, 'getuid') else 'user'}"
-        folder.mkdir(parents=True, exist_ok=True)
+    if _writable(folder):
+        clear_cache(folder, which="gone")
+    else:
+        import atexit
+        import shutil
+
+        wanted = folder
+        folder = Path(tempfile.mkdtemp(prefix=f"{_PACKAGE}-numba-"))
+        atexit.register(shutil.rmtree, folder, True)
+        print(f"urdf2links: note: the cache folder {wanted} cannot be written; the compiled code is kept for this "
+              "process only (set URDF2LINKS_CACHE_DIR to a writable folder to keep it)", file=sys.stderr)
+    _INSTALLED.append(folder)
     from numba.core import caching
 
     impl = getattr(caching, "CacheImpl", None)
@@ -129,6 +149,12 @@ def _locator_class(base, folder: Path):
         def get_source_stamp(self):
             return source_stamp()
 
+        def ensure_cache_path(self):
+            super().ensure_cache_path()
+            origin = Path(self._cache_path) / ORIGIN
+            if not origin.exists():       # which source folder this subfolder caches (cache --list)
+                origin.write_text(str(Path(self._py_file).resolve().parent) + "\n", encoding="utf-8")
+
         @classmethod
         def from_function(cls, py_func, py_file):
             module = getattr(py_func, "__module__", "") or ""
@@ -139,3 +165,56 @@ def _locator_class(base, folder: Path):
             return cls(py_func, py_file)
 
     return PackageCacheLocator
+
+
+# -- the cache folder's contents: urdf2links cache --list | --clear -------------------------------------
+@dataclass(frozen=True)
+class CacheFolder:
+    """One subfolder of the cache: ``path``, ``source`` (the source folder it caches, None when not
+    recorded), ``status``: ``"current"`` (this install's sources), ``"other"`` (another install, still
+    there) or ``"gone"`` (sources removed, or not recorded); ``size`` in bytes, ``files``."""
+
+    path: Path
+    source: Path | None
+    status: str
+    size: int
+    files: int
+
+
+def _current_sources() -> set:
+    return {str(f.parent) for root in _roots() for f in root.rglob("*.py")}
+
+
+def cache_folders(folder: Path | None = None) -> list[CacheFolder]:
+    """Every subfolder of the cache ``folder`` (default :func:`cache_dir`), with its status."""
+    folder = Path(folder) if folder is not None else cache_dir()
+    if not folder.is_dir():
+        return []
+    current, out = _current_sources(), []
+    for sub in sorted(p for p in folder.iterdir() if p.is_dir()):
+        origin = sub / ORIGIN
+        try:
+            source = Path(origin.read_text(encoding="utf-8").strip()) if origin.exists() else None
+        except OSError:
+            source = None
+        status = ("current" if source is not None and str(source) in current else
+                  "other" if source is not None and source.is_dir() else "gone")
+        files = [f for f in sub.rglob("*") if f.is_file()]
+        out.append(CacheFolder(sub, source, status, sum(f.stat().st_size for f in files), len(files)))
+    return out
+
+
+def clear_cache(folder: Path | None = None, *, which: str = "stale") -> list[CacheFolder]:
+    """Remove the cache's subfolders ``which`` says: ``"gone"`` (their sources no longer exist),
+    ``"stale"`` (gone, and other installs'), ``"all"``. Returns the removed ones."""
+    import shutil
+
+    if which not in ("gone", "stale", "all"):
+        raise ValueError(f"clear_cache: which must be 'gone', 'stale' or 'all', got {which!r}")
+    keep = {"gone": ("current", "other"), "stale": ("current",), "all": ()}[which]
+    removed = []
+    for f in cache_folders(folder):
+        if f.status not in keep:
+            shutil.rmtree(f.path, ignore_errors=True)
+            removed.append(f)
+    return removed

@@ -36,10 +36,12 @@ from __future__ import annotations
 import math
 
 __all__ = ["RANGES", "out_of_range", "MIN_T_END", "MIN_ATOL", "MAX_SAMPLES", "MAX_STEPS", "MAX_TABLE_SAMPLES", "RTOL_FLOOR",
-           "METHODS"]
+           "METHODS", "Q0_CHOICES"]
 
 #: The integration methods a scene or ``integrate()`` may name (:mod:`urdf2links.integration.integrators`);
 #: ``auto`` (DOP853, Radau5 while the scene is stiff) is the default of scenes.
+#: The initial states a robot's default scene can start from (urdf2links.scenes.excitation; ``--q0``).
+Q0_CHOICES = ("excite", "random", "rest", "zero")
 METHODS = ("auto", "RK45", "DOP853", "Radau5", "Radau", "BDF", "LSODA", "RK4", "midpoint")
 
 #: quantity -> (largest absolute value, unit) (module doc).
@@ -84,3 +86,8 @@ def out_of_range(value: float, quantity: str) -> str | None:
     if math.isfinite(value) and abs(value) <= bound:
         return None
     return f"{value:g} is outside the physical range |{quantity}| <= {bound:g}{(' ' + unit) if unit else ''}"
+
+#: How a robot's inconsistent inertias are treated, and how mimic joints are read (the loaders' options;
+#: here, in the base layer, so that the command line can offer them without loading the importer).
+INERTIA_POLICIES = ("audit", "strict", "repair")
+MIMIC_POLICIES = ("independent", "coupled")

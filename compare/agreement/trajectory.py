@@ -57,7 +57,6 @@
 from __future__ import annotations
 
 import math
-import time
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -66,6 +65,7 @@ from typing import Callable
 import mujoco
 import numpy as np
 
+from urdf2links.compilation import clock  # durations without numba's compilation
 from urdf2links.console import shown_path
 from urdf2links.errors import IntegrationError
 from urdf2links.integration.simulate import TIMED_REGION as PROJECT_REGION
@@ -84,7 +84,7 @@ from ..mujoco_side.mujoco_mjcf import FILE_LABEL, file_route_inputs, file_runner
 from ..mujoco_side.mujoco_constraints import with_constraints
 from .constraint_agreement import run_notes as constraint_run_notes
 from ..mujoco_side.mujoco_run import TIMED_REGION as MUJOCO_REGION
-from ..mujoco_side.mujoco_run import MujocoRun, energy_function, run_mujoco
+from ..mujoco_side.mujoco_run import MujocoRun, energy_function
 from ..mujoco_side.stable_run import stable_run
 from .actuator_terms import file_actuators, merged, route1_actuators, route2_actuators
 from .scene_terms import ROUTE1_LABEL, route1_terms, route2_terms
@@ -357,7 +357,7 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     project's run and MuJoCo's inputs all take that plan. When MuJoCo's run blows up (a stiff model),
     ``mujoco_fallback`` runs a stable setting instead and shows its convergence
     (:func:`urdf2links.compare.mujoco_side.stable_run.stable_run`; ``summary()["mujoco"]["fallback"]``)."""
-    start = time.perf_counter()
+    start = clock()
     say = log or (lambda _m: None)
     if isinstance(scene, (str, Path)):
         scene = load_scene(scene)
@@ -394,18 +394,16 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
         terms["route2"] = merged(terms["route2"], act2)
 
     meth = method or scene.run.method
-    warm = warm_up(plan, methods=(meth,))
-    if warm.happened:
-        say(warm.describe("urdf2links warm-up"))
+    warm = warm_up(plan, methods=(meth,))      # its compilation: in the summary, and on the command's one line
     say(f"project: {meth}" + (f" rtol {rtol or scene.run.rtol:g}" if meth not in ("RK4", "midpoint") else "")
         + f", t = 0..{T:g} s")
-    left = None if max_wall is None else max_wall - (time.perf_counter() - start)
+    left = None if max_wall is None else max_wall - (clock() - start)
     if left is not None and left <= 0:
         raise IntegrationError(f"{scene.path or scene.name}: max_wall={max_wall:g} s spent before the project's run "
                                "(loading and terms)")
     traj = simulate(plan, t_end=T, method=method, rtol=rtol, atol=atol, samples=samples,
                     progress=progress, max_wall=left)
-    if max_wall is not None and time.perf_counter() - start > max_wall:
+    if max_wall is not None and clock() - start > max_wall:
         raise IntegrationError(f"{scene.path or scene.name}: max_wall={max_wall:g} s spent before MuJoCo's run")
     say(f"MuJoCo: {mujoco_integrator} dt {mujoco_dt:g}, {int(round(T / mujoco_dt))} steps")
     file_run = mf is not None and not file_route_inputs(scene, plan)
@@ -416,8 +414,6 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
                                timestep=mujoco_dt, fallback=mujoco_fallback, runner=runner)
     if fallback is not None:
         say(fallback["note"])
-    if run.compilation.happened:
-        say(run.compilation.describe("MuJoCo's control callback"))
 
     t = np.asarray(run.t, float)
     q_o, qd_o, W, EV_o, h_o, resampled = _project_at(traj, plan, t, T)
@@ -442,7 +438,7 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
                  "actuators": plan.actuator_set.actuators,
                  "q0": dict(zip(model.coordinate_names, q0.tolist())),
                  "qd0": dict(zip(model.coordinate_names, qd0.tolist())),
-                 "total_s": time.perf_counter() - start})
+                 "total_s": clock() - start})
     return SceneComparison(
         scene=scene, model=model, mj=mj, traj=traj, run=run, t=t, q_ours=q_o, q_mujoco=run.q, error=error,
         energy=energy, terms=terms, growth=growth, threshold=threshold, info=info, notes=notes)

@@ -12,9 +12,9 @@ figure, or a robot with a baseline that is no longer compared); 2 on bad argumen
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 
+from urdf2links.compilation import clock  # durations without numba's compilation
 from urdf2links.console import TaskBar, err, shown_path
 from urdf2links.locations import DEFAULT_OUT, default_baselines
 from urdf2links.scenes.scene_toml import xacro_args_of
@@ -121,7 +121,7 @@ def _run(args, robots, settings, bar) -> tuple[list[RobotResult], dict]:
         bar.line(_line(res, count["k"], len(robots)))
 
     log = (lambda m: bar.line(m, advance=False))
-    start = time.perf_counter()
+    start = clock()
     if args.scheduler:
         from urdf2links.integration.distributed import connect, worker_count
 
@@ -141,7 +141,7 @@ def _run(args, robots, settings, bar) -> tuple[list[RobotResult], dict]:
         how = "in this process" if jobs == 1 else f"in {jobs} processes"
         log(f"running {len(robots)} robots {how}")
         results = run_corpus(robots, settings, jobs=jobs, on_result=done, log=log)
-    return results, {"how": how, "wall_s": time.perf_counter() - start}
+    return results, {"how": how, "wall_s": clock() - start}
 
 
 def corpus_command(args) -> int:

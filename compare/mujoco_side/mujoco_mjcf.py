@@ -28,12 +28,12 @@ import contextlib
 import copy
 import dataclasses
 import math
-import time
 from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
 
+from urdf2links.compilation import clock  # durations without numba's compilation
 from urdf2links.parsers.mjcf import compile_mjcf
 from urdf2links.parsers.mjcf_notes import MUJOCO_OFF
 from urdf2links.scenes.excitation import coordinate_ranges
@@ -295,7 +295,7 @@ def file_terms(mf: MujocoFile, model, scene, *, states: int = 8, seed: int = 0) 
     span = coordinate_ranges(model)     # within the joints' limits, else +-1 around qpos0 (or the home keyframe)
     err_A = err_b = 0.0
     per_state = []
-    start = time.perf_counter()
+    start = clock()
     M = np.zeros((m.nv, m.nv))
     for _ in range(states):
         q = rng.uniform(span.lower, span.upper)
@@ -315,7 +315,7 @@ def file_terms(mf: MujocoFile, model, scene, *, states: int = 8, seed: int = 0) 
     return {"label": FILE_LABEL, "route": "mjcf-file", "max_rel_error_A": err_A, "max_rel_error_bias": err_b,
             "max_rel_error": max(err_A, err_b), "states": states, "seed": seed, "per_state": per_state,
             "mapping": "A vs J^T mj_fullM J, e + G vs J^T (qfrc_bias + mj_fullM J' q'), qvel = J q' (E50)",
-            "refusals": [], "notes": list(mf.notes), "wall_time_s": time.perf_counter() - start}
+            "refusals": [], "notes": list(mf.notes), "wall_time_s": clock() - start}
 
 
 def run_file(mf: MujocoFile, plan, *, t_end: float, samples: int, reference=None) -> MujocoRun:
@@ -323,7 +323,7 @@ def run_file(mf: MujocoFile, plan, *, t_end: float, samples: int, reference=None
     the samples read back in the project's coordinates (module doc), MuJoCo's energies (armature and
     springs included) from an untimed pass. ``reference`` (samples, n): the project's ``q`` at the same
     times, for the branch of the angles."""
-    start = time.perf_counter()
+    start = clock()
     m, model = mf.model, mf.source
     qmap = model.info["mujoco"]
     q0, qd0 = plan.scene.initial_state(model)
@@ -347,9 +347,9 @@ def run_file(mf: MujocoFile, plan, *, t_end: float, samples: int, reference=None
         for j in range(S):
             k = int(ks[j])
             if k > done:
-                t0 = time.perf_counter()
+                t0 = clock()
                 mujoco.mj_step(m, d, nstep=k - done)
-                engine += time.perf_counter() - t0
+                engine += clock() - t0
                 done = k
             ts[j], qpos[j], qvel[j] = d.time, d.qpos, d.qvel
     blow = _blow_ups(d)
@@ -380,7 +380,7 @@ def run_file(mf: MujocoFile, plan, *, t_end: float, samples: int, reference=None
         energy[j] = de.energy[1], de.energy[0]
     return MujocoRun(t=ts, q=q, qd=qd, energy=energy, base_tracking_error=0.0, wall_time=engine, nsteps=int(ks[-1]),
                      timestep=dt, integrator=integ, coordinate_names=model.coordinate_names, notes=notes,
-                     harness_time=time.perf_counter() - start, inputs="none" if inputs is None else "compiled",
+                     harness_time=clock() - start, inputs="none" if inputs is None else "compiled",
                      callback_calls=0 if inputs is None else int(inputs.calls), blow_ups=blow,
                      compilation=inputs.compilation if inputs is not None else Compilation())
 

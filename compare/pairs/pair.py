@@ -14,12 +14,12 @@ against tolerances.
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from urdf2links.compilation import clock  # durations without numba's compilation
 from urdf2links.console import shown_path
 from urdf2links.parsers.parts import RobotParts, robot_parts
 
@@ -131,7 +131,7 @@ def compare_descriptions_of(urdf, mjcf, *, explicit_map: dict | None = None, loa
     joint: mjcf joint}`` (``--map``); ``load``: the first file's loading options (``floating_base``,
     ``package_dirs``, ``strict``, ``xacro_args``; the second takes ``package_dirs`` and ``xacro_args`` too when
     it is a URDF)."""
-    start = time.perf_counter()
+    start = clock()
     load = dict(load or {})
     U = robot_parts(urdf, **load)
     M = robot_parts(mjcf, **{k: v for k, v in load.items() if k != "floating_base"})
@@ -142,4 +142,4 @@ def compare_descriptions_of(urdf, mjcf, *, explicit_map: dict | None = None, loa
     effects = evaluate_effects(U, M, mapping, diffs, states=states, seed=seed)
     ordered = order_differences(diffs, effects)
     return PairComparison(U, M, Path(urdf), Path(mjcf), mapping, ordered, below, effects, _notes(U, M),
-                          time.perf_counter() - start)
+                          clock() - start)

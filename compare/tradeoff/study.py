@@ -61,7 +61,6 @@ from __future__ import annotations
 
 import math
 import statistics
-import time
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -69,6 +68,7 @@ from typing import Callable
 
 import numpy as np
 
+from urdf2links.compilation import clock as _clock  # durations without numba's compilation
 from urdf2links.console import shown_path
 from urdf2links.integration.charts import floating_links
 from urdf2links.integration.integrators import METHODS, integrate
@@ -428,7 +428,7 @@ def _timing_rounds(st: _Study, cfgs, rows, repeats, log) -> None:
     mjc = [x for x in ok if x[0].engine == "MuJoCo"]
     order = [x for pair in zip(proj, mjc) for x in pair] + proj[len(mjc):] + mjc[len(proj):]
     for r in range(repeats):
-        t0 = time.perf_counter()
+        t0 = _clock()
         for cfg, row in (order if r % 2 == 0 else order[::-1]):
             try:
                 if cfg.engine == "urdf2links":
@@ -437,7 +437,7 @@ def _timing_rounds(st: _Study, cfgs, rows, repeats, log) -> None:
                     row["wall_times_s"].append(float(_mujoco(st, cfg, 2).wall_time))
             except Exception as err:
                 row["notes"].append(f"timing round {r + 1} failed: {type(err).__name__}: {err}")
-        _say(log, f"timing round {r + 1}/{repeats}: {len(order)} runs in {time.perf_counter() - t0:.1f} s")
+        _say(log, f"timing round {r + 1}/{repeats}: {len(order)} runs in {_clock() - t0:.1f} s")
     for _, row in ok:
         if row["wall_times_s"]:
             row["wall_time_s"] = float(statistics.median(row["wall_times_s"]))
@@ -503,7 +503,7 @@ def run_study(scene, *, t_end: float | None = None, quick: bool = False, repeats
     (``rows``, ``reference``, ``crossover``, ``timing``, ``machine``, ...). ``t_end`` defaults to the
     scene's, capped at :data:`DEFAULT_T_CAP`; ``quick``: short ladders, one timing round, a cheaper
     check run."""
-    start = time.perf_counter()
+    start = _clock()
     if isinstance(scene, (str, Path)):
         scene = load_scene(scene)
     methods, mujoco_integrators, repeats, budget, T, t_note, S, check = _settings(
@@ -526,6 +526,6 @@ def run_study(scene, *, t_end: float | None = None, quick: bool = False, repeats
     data = _study_record(st, rows, _reference_record(st, chk, check, est_final), quick=quick, budget=budget,
                          repeats=repeats, t_note=t_note)
     data["crossover"] = crossover(rows, st.est_max)
-    data["total_s"] = time.perf_counter() - start
+    data["total_s"] = _clock() - start
     _say(log, data["crossover"]["statement"])
     return json_ready(data)

@@ -18,6 +18,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..compilation import one_signature
+
 from .tree_arrays import I_ANCIDX, I_ANCPTR, I_ANCROW, I_RUNPTR, I_RUNS, W_A, nn
 
 __all__ = ["ltdl", "ltdl_solve", "unpack", "cholesky", "cholesky_solve", "pivot_floor"]
@@ -25,12 +27,14 @@ __all__ = ["ltdl", "ltdl_solve", "unpack", "cholesky", "cholesky_solve", "pivot_
 EPS = 2.220446049250313e-16
 
 
+@one_signature
 @njit(cache=True)
 def pivot_floor(scale, n):
     """The rounding level of a matrix whose largest diagonal entry is ``scale``: ``10 eps n scale``."""
     return 10.0 * EPS * max(scale, 1e-300) * n
 
 
+@one_signature
 @njit(cache=True)
 def ltdl(TI, W):
     """``A = L^T D L`` in place of the packed ``A`` (E47): ``D[k]`` on the diagonal slot of row ``k``,
@@ -77,6 +81,7 @@ def ltdl(TI, W):
     return -1
 
 
+@one_signature
 @njit(cache=True)
 def ltdl_solve(TI, W, x, ix):
     """Solve ``L^T D L y = x[ix:ix + n]`` in place after :func:`ltdl`. A row whose coordinates are
@@ -113,6 +118,7 @@ def ltdl_solve(TI, W, x, ix):
         x[ix + k] = v
 
 
+@one_signature
 @njit(cache=True)
 def unpack(TI, W, A):
     """The packed ``A`` (before :func:`ltdl`) as a dense symmetric matrix into ``A`` (n, n); pairs
@@ -131,6 +137,7 @@ def unpack(TI, W, A):
             A[l, i] = W[wa + j]
 
 
+@one_signature
 @njit(cache=True)
 def cholesky(A, a0, n, Lf, l0):
     """Dense ``A = L L^T`` of the (n, n) row-major ``A[a0:]`` into ``Lf[l0:]`` (lower triangle).
@@ -159,6 +166,7 @@ def cholesky(A, a0, n, Lf, l0):
     return -1
 
 
+@one_signature
 @njit(cache=True)
 def cholesky_solve(Lf, l0, n, x, x0):
     """Solve ``L L^T y = x[x0:x0 + n]`` in place after :func:`cholesky`."""

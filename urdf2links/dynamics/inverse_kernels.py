@@ -24,6 +24,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
+from ..compilation import one_signature
+
 from .kernels import _base_frame, _constant, _rates, _slot, _store, add_wrench, clear_wrenches, dynamics
 from .tree_arrays import (
     AC,
@@ -54,6 +56,7 @@ from .tree_arrays import (
 __all__ = ["kinematics_acc", "own_armature", "id_row", "id_one", "id_batch", "id_plain", "inverse_size"]
 
 
+@one_signature
 @njit(cache=True)
 def kinematics_acc(TI, TF, W, q, iq, qd, iqd, qdd, iqdd, B, ib, has_base, gx, gy, gz):
     """:func:`~urdf2links.dynamics.kernels.kinematics` with the coordinates' accelerations
@@ -92,6 +95,7 @@ def kinematics_acc(TI, TF, W, q, iq, qd, iqd, qdd, iqdd, B, ib, has_base, gx, gy
         _store(W, wl + KL * p, R, o, V, Acc)
 
 
+@one_signature
 @njit(cache=True)
 def own_armature(TI, TF, W, qdd, iqdd):
     """``b_k -= a_k q_k''`` for every coordinate with an armature of its own (E49: ``a_k`` on ``a_kk``);
@@ -111,6 +115,7 @@ def inverse_size(nt: int) -> int:
     return 3 * nt
 
 
+@one_signature
 @njit(cache=True)
 def id_row(TI, TF, W, X, q, qd, qdd, base, has_base, gx, gy, gz, loads, C, d, coupled, out):
     """``tau = A q'' + e + G - Q`` (E54) into ``out`` (n,) at the model state ``(q, q', q'')``: ``base``
@@ -163,6 +168,7 @@ def id_row(TI, TF, W, X, q, qd, qdd, base, has_base, gx, gy, gz, loads, C, d, co
         out[i] = s
 
 
+@one_signature
 @njit(cache=True)
 def id_one(TI, TF, q, qd, qdd, base, has_base, gx, gy, gz, loads, C, d, coupled, out):
     """:func:`id_row` for one state, with its own scratch."""
@@ -184,6 +190,7 @@ def id_batch(TI, TF, Q, QD, QDD, BASE, has_base, gx, gy, gz, loads, C, d, couple
                    loads, C, d, coupled, OUT[b])
 
 
+@one_signature
 @njit(cache=True)
 def id_plain(TI, TF, g, q, qd, qdd, out):
     """:func:`id_row` for a fixed base, no loads, no coupling (the hot path of

@@ -40,6 +40,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..compilation import one_signature
+
 from .tree_arrays import (
     AC,
     BASE_ACC,
@@ -162,6 +164,7 @@ def _store(W, d, R, o, V, Acc):
         W[d + AC + j] = Acc[j]
 
 
+@one_signature
 @njit(cache=True)
 def _base_frame(W, wb, B, ib, has_base, gx, gy, gz):
     """The frame every root link starts from, into the base record: {A} from its six factors
@@ -185,6 +188,7 @@ def _base_frame(W, wb, B, ib, has_base, gx, gy, gz):
     W[wb + AC + 5] -= gz
 
 
+@one_signature
 @njit(cache=True)
 def kinematics(TI, TF, W, q, iq, qd, iqd, moving, B, ib, has_base, gx, gy, gz):
     """Root to leaves (E33): pose ``R, o``, twist ``(omega, v)`` and spatial acceleration at
@@ -224,6 +228,7 @@ def kinematics(TI, TF, W, q, iq, qd, iqd, moving, B, ib, has_base, gx, gy, gz):
         _store(W, wl + KL * p, R, o, V, Acc)
 
 
+@one_signature
 @njit(cache=True)
 def poses(TI, W, R, o):
     """Copy every link's rotation into ``R`` (L, 3, 3) and origin into ``o`` (L, 3) after :func:`kinematics`."""
@@ -329,6 +334,7 @@ def _link_wrench(W, d, wb, momentum):
 
 
 # -- leaves to root ---------------------------------------------------------------------------------
+@one_signature
 @njit(cache=True)
 def _subtree_sums(TI, W, loads):
     """(E30): every link's (m, c, J), inertial wrench and (with ``loads``) external wrench summed over its subtree."""
@@ -346,6 +352,7 @@ def _subtree_sums(TI, W, loads):
                     W[e + j] += W[d + j]
 
 
+@one_signature
 @njit(cache=True)
 def dynamics(TI, TF, W, want_A, loads, momentum):
     """Leaves to root after :func:`kinematics` (and, with ``loads``, the external wrenches of
@@ -406,6 +413,7 @@ def dynamics(TI, TF, W, want_A, loads, momentum):
         armature(TI, TF, W, want_A)
 
 
+@one_signature
 @njit(cache=True)
 def armature(TI, TF, W, want_A):
     """The armature's terms (E49) added to the packed ``A`` (with ``want_A``) and to ``b = -(e + G)``,
@@ -444,6 +452,7 @@ def armature(TI, TF, W, want_A):
 
 
 # -- applied wrenches, energies, base power -----------------------------------------------------------
+@one_signature
 @njit(cache=True)
 def clear_wrenches(TI, W):
     wl = nn(TI[W_LINK])
@@ -452,6 +461,7 @@ def clear_wrenches(TI, W):
             W[wl + KL * p + FX + j] = 0.0
 
 
+@one_signature
 @njit(cache=True)
 def add_wrench(TI, W, p, F0, F1, F2, M0, M1, M2, r0, r1, r2, local):
     """Add a force ``F`` and a moment ``M`` acting at the point ``r`` (link frame) of link ``p`` to
@@ -475,6 +485,7 @@ def add_wrench(TI, W, p, F0, F1, F2, M0, M1, M2, r0, r1, r2, local):
     W[e + 5] += M2 + x0 * F1 - x1 * F0
 
 
+@one_signature
 @njit(cache=True)
 def energies(TI, TF, W, gx, gy, gz):
     """``(E, V)`` after :func:`kinematics` (E37): ``E = 0.5 sum (m v.v + 2 v.(omega x c) + omega.J omega)``,
@@ -502,6 +513,7 @@ def energies(TI, TF, W, gx, gy, gz):
     return E, V
 
 
+@one_signature
 @njit(cache=True)
 def armature_energy(TI, TF, W):
     """The armature's kinetic energy (E49) after :func:`kinematics`: ``0.5 a q'^2`` per coordinate of
@@ -523,6 +535,7 @@ def armature_energy(TI, TF, W):
     return E
 
 
+@one_signature
 @njit(cache=True)
 def base_power(TI, W, gx, gy, gz):
     """``(dE/dt, dV/dt)`` at fixed ``(q, q')`` due to the base motion alone (E41), after

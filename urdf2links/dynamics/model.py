@@ -27,7 +27,6 @@ from collections import namedtuple
 from typing import Iterable, Sequence
 
 import numpy as np
-import scipy.linalg
 
 from ..errors import DynamicsError
 from . import model_kernels as MK
@@ -42,7 +41,7 @@ __all__ = ["Model", "METHODS", "DEFAULT_GRAVITY", "FlatTree"]
 METHODS = ("recursive", "numpy", "literal")
 DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
 _NO_C, _NO_D = np.zeros((0, 0)), np.zeros(0)
-_EMPTY, _EMPTY2 = np.empty(0), np.empty((0, 0))        # the unused output of a hot terms call
+_EMPTY, _EMPTY2 = np.empty(0), np.empty((0, 0))        # an absent qd or tau, the unused output of a hot terms call
 
 FlatTree = namedtuple("FlatTree", ["TI", "TF"])
 """The tree flattened for the kernels (:func:`urdf2links.dynamics.tree_arrays.flat_tree`)."""
@@ -77,6 +76,7 @@ class Model:
         """The tree flattened for the kernels (:class:`FlatTree`)."""
         self._g, self._g0 = g.copy(), np.zeros(3)      # writable: the frozen kernel takes writable arrays
         self._hot = {}                  # the frozen hot entries this model has called (model_kernels.frozen)
+        self._TI, self._TF = self.compiled.TI, self.compiled.TF     # the hot path's arguments, one lookup each
         self._nq = tree.n               # the length of q'' on the hot path (no coupling there)
         self._numpy_plan = None
         if coupling is None:
@@ -247,7 +247,7 @@ class Model:
         """A (n, n), or (B, n, n) for q (B, n), (E19): ``a_il = sum_p tr(T_i H T_l^T)``."""
         if self._plain(base, method):
             A = np.empty((self._nq, self._nq))
-            if self._call("terms_plain", self._g0, q, None, MK.MASS, A, _EMPTY) == 0:
+            if self._call("terms_plain", self._g0, q, _EMPTY, MK.MASS, A, _EMPTY) == 0:
                 return A
         self._check_method(method)
         if method != "recursive":
@@ -271,7 +271,7 @@ class Model:
         """G (n,) or (B, n), (E22): ``g_i = m g e3^T T_i r_C`` summed over links, for ``self.gravity_vector``."""
         if self._plain(base, method):
             v = np.empty(self._nq)
-            if self._call("terms_plain", self._g, q, None, MK.BIAS, _EMPTY2, v) == 0:
+            if self._call("terms_plain", self._g, q, _EMPTY, MK.BIAS, _EMPTY2, v) == 0:
                 return v
         self._check_method(method)
         if method != "recursive":
@@ -314,7 +314,7 @@ class Model:
         """V of gravity (a float, or (B,)), (E21): ``sum_p m_p g z_C`` (for ``self.gravity_vector``)."""
         if self._plain(base, method):
             out = np.empty(2)
-            if self._call("energy_plain", self._g, q, None, out) == 0:
+            if self._call("energy_plain", self._g, q, _EMPTY, out) == 0:
                 return float(out[1])
         self._check_method(method)
         if method != "recursive":
@@ -347,7 +347,12 @@ class Model:
         """
         if base is None and not loads and self._C is None and method == "recursive":    # the hot path
             out = np.empty(self._nq)
-            pivot = self._call("fd_plain", self._g if gravity else self._g0, q, qd, tau, out)
+            fd = self._hot.get("fd_plain") or self._hot.setdefault("fd_plain", MK.frozen("fd_plain"))
+            try:        # _call's work inlined: each Python step here is a few percent of the call
+                pivot = fd(self._TI, self._TF, self._g if gravity else self._g0, q, qd, _EMPTY if tau is None else tau,
+                           out)
+            except TypeError:       # not float64 vectors (or a batch): converted on the general path
+                pivot = -2
             if pivot == -1:
                 return out
         if method != "recursive":
@@ -448,6 +453,8 @@ class Model:
     def solve_mass_matrix(self, A: np.ndarray, rhs: np.ndarray, *, q=None) -> np.ndarray:
         """``A^{-1} rhs`` by Cholesky; a matrix that is not positive definite raises DynamicsError."""
         try:
+            import scipy.linalg     # here: the oracles alone need it (a slow import)
+
             c, low = scipy.linalg.cho_factor(A, lower=True, check_finite=True)
         except (np.linalg.LinAlgError, ValueError) as err:
             raise self.not_positive_definite(A, q) from err

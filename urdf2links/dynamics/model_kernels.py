@@ -24,6 +24,8 @@ from __future__ import annotations
 import numpy as np
 from numba import get_num_threads, njit, prange, types
 
+from ..compilation import one_signature
+
 from .factor import cholesky, cholesky_solve, ltdl, ltdl_solve, unpack
 from .inverse_kernels import id_plain  # noqa: F401  (a hot entry: frozen() finds it here)
 from .kernels import add_wrench, clear_wrenches, dynamics, energies, kinematics, poses
@@ -36,6 +38,7 @@ __all__ = ["coupled_size", "fd_plain_frozen", "frozen", "terms_plain", "forces_p
 MASS, BIAS, FORCES = 0, 1, 2        # what terms_row returns: A, -b (e, or G), Q
 
 
+@one_signature
 @njit(cache=True)
 def coupled_size(n_tree, n):
     """Scratch of a coupled row: ``q_tree``, ``q'_tree`` (n_tree,), ``A``, its factor (n, n), ``rhs`` (n,)."""
@@ -43,6 +46,7 @@ def coupled_size(n_tree, n):
 
 
 # -- one state ----------------------------------------------------------------------------------------
+@one_signature
 @njit(cache=True)
 def _state(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, C, d, coupled):
     """:func:`~urdf2links.dynamics.kernels.kinematics` at the model state ``(q, qd)`` (rates zero unless ``moving``)."""
@@ -62,6 +66,7 @@ def _state(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, C, d, couple
     kinematics(TI, TF, W, X, 0, X, nt, moving, base, 0, has_base, gx, gy, gz)
 
 
+@one_signature
 @njit(cache=True)
 def _terms(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, loads, C, d, coupled, want_A):
     _state(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, C, d, coupled)
@@ -74,6 +79,7 @@ def _terms(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, loads, C, d,
     dynamics(TI, TF, W, want_A, nl > 0, False)
 
 
+@one_signature
 @njit(cache=True)
 def reduce_vector(C, v, iv, out, io, sign):
     """``out[io + i] = sign sum_a C[a, i] v[iv + a]`` (E42)."""
@@ -85,6 +91,7 @@ def reduce_vector(C, v, iv, out, io, sign):
         out[io + i] = sign * s
 
 
+@one_signature
 @njit(cache=True)
 def reduce_mass(TI, W, C, A):
     """``A = C^T A_tree C`` (n, n) from the packed tree matrix (E42); the lower triangle is summed,
@@ -112,6 +119,7 @@ def reduce_mass(TI, W, C, A):
             A[k, i] = A[i, k]
 
 
+@one_signature
 @njit(cache=True)
 def fd_row(TI, TF, W, X, q, qd, tau, has_tau, base, has_base, gx, gy, gz, loads, C, d, coupled, out):
     """q'' (E24) into ``out`` (n,): ``A q'' = Q + tau - e - G``. Returns -1, or the failing pivot."""
@@ -147,6 +155,7 @@ def fd_row(TI, TF, W, X, q, qd, tau, has_tau, base, has_base, gx, gy, gz, loads,
     return pivot
 
 
+@one_signature
 @njit(cache=True)
 def terms_row(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, loads, C, d, coupled, what, A, v):
     """``what``: MASS the mass matrix into ``A`` (n, n); BIAS ``-b = e + G`` into ``v`` (n,) (with
@@ -167,6 +176,7 @@ def terms_row(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, loads, C,
             v[i] = sign * W[k + i]
 
 
+@one_signature
 @njit(cache=True)
 def energy_row(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, C, d, coupled):
     """``(E, V)`` (E37) at one state."""
@@ -175,22 +185,24 @@ def energy_row(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, C, d, co
 
 
 # -- single-state entries -----------------------------------------------------------------------------
+@one_signature
 @njit(cache=True)
 def fd_plain(TI, TF, g, q, qd, tau, out):
-    """:func:`fd_row` for a fixed base, no loads, no coupling, tau None or (n,); -2 when a size is wrong."""
+    """:func:`fd_row` for a fixed base, no loads, no coupling, tau (n,) or (0,) (none: one signature,
+    :data:`_PLAIN_SIGS`); -2 when a size is wrong."""
     n = TI[1]
     if q.size != n or qd.size != n or out.size != n:
         return -2
-    if tau is not None:
-        if tau.size != n:
-            return -2
+    has_tau = tau.size > 0
+    if has_tau and tau.size != n:
+        return -2
     W = np.empty(TI[W_SIZE])
     kinematics(TI, TF, W, q, 0, qd, 0, True, g, 0, False, g[0], g[1], g[2])
     dynamics(TI, TF, W, True, False, False)
     wb = nn(TI[W_B])
     for i in range(n):
         v = W[wb + i]
-        if tau is not None:
+        if has_tau:
             v += tau[i]
         out[i] = v
     pivot = ltdl(TI, W)
@@ -199,10 +211,11 @@ def fd_plain(TI, TF, g, q, qd, tau, out):
     return pivot
 
 
+@one_signature
 @njit(cache=True)
 def terms_plain(TI, TF, g, q, qd, what, A, v):
     """:func:`terms_row` for a fixed base, no loads, no coupling: MASS into ``A`` (n, n); BIAS ``-b``
-    into ``v`` (n,): ``e`` with ``g`` zero, ``G`` with ``qd`` None (at rest). -2 when a size is wrong, else 0."""
+    into ``v`` (n,): ``e`` with ``g`` zero, ``G`` with ``qd`` of size 0 (at rest). -2 when a size is wrong, else 0."""
     n = TI[1]
     if q.size != n:
         return -2
@@ -212,7 +225,7 @@ def terms_plain(TI, TF, g, q, qd, what, A, v):
     elif v.size != n:
         return -2
     W = np.empty(TI[W_SIZE])
-    if qd is None:
+    if qd.size == 0:
         kinematics(TI, TF, W, q, 0, q, 0, False, g, 0, False, g[0], g[1], g[2])
     else:
         if qd.size != n:
@@ -228,6 +241,7 @@ def terms_plain(TI, TF, g, q, qd, what, A, v):
     return 0
 
 
+@one_signature
 @njit(cache=True)
 def forces_plain(TI, TF, q, loads, v):
     """``Q`` (E23) of ``loads`` (k, 11) into ``v`` (n,) for a fixed base and no coupling (:func:`terms_row`
@@ -248,15 +262,16 @@ def forces_plain(TI, TF, q, loads, v):
     return 0
 
 
+@one_signature
 @njit(cache=True)
 def energy_plain(TI, TF, g, q, qd, out):
-    """``(E, V)`` (E37) into ``out`` (2,) for a fixed base and no coupling; ``qd`` None: at rest
+    """``(E, V)`` (E37) into ``out`` (2,) for a fixed base and no coupling; ``qd`` of size 0: at rest
     (V only is meaningful). -2 when a size is wrong, else 0."""
     n = TI[1]
     if q.size != n or out.size != 2:
         return -2
     W = np.empty(TI[W_SIZE])
-    if qd is None:
+    if qd.size == 0:
         kinematics(TI, TF, W, q, 0, q, 0, False, g, 0, False, 0.0, 0.0, 0.0)
     else:
         if qd.size != n:
@@ -269,15 +284,13 @@ def energy_plain(TI, TF, g, q, qd, out):
 _F1 = types.Array(types.float64, 1, "C")
 _F2 = types.Array(types.float64, 2, "C")
 _I1 = types.Array(types.int64, 1, "C")
-#: The signatures the hot single-state entries are compiled for (vectors: float64, C-contiguous).
+#: The one signature each hot single-state entry is compiled for (vectors: float64, C-contiguous; an
+#: absent ``qd`` or ``tau`` is an array of size 0, not None, which would be a second compiled variant).
 _PLAIN_SIGS = {
-    "fd_plain": [types.int64(_I1, _F1, _F1, _F1, _F1, types.none, _F1),
-                 types.int64(_I1, _F1, _F1, _F1, _F1, _F1, _F1)],
-    "terms_plain": [types.int64(_I1, _F1, _F1, _F1, types.none, types.int64, _F2, _F1),
-                    types.int64(_I1, _F1, _F1, _F1, _F1, types.int64, _F2, _F1)],
+    "fd_plain": [types.int64(_I1, _F1, _F1, _F1, _F1, _F1, _F1)],
+    "terms_plain": [types.int64(_I1, _F1, _F1, _F1, _F1, types.int64, _F2, _F1)],
     "forces_plain": [types.int64(_I1, _F1, _F1, _F2, _F1)],
-    "energy_plain": [types.int64(_I1, _F1, _F1, _F1, types.none, _F1),
-                     types.int64(_I1, _F1, _F1, _F1, _F1, _F1)],
+    "energy_plain": [types.int64(_I1, _F1, _F1, _F1, _F1, _F1)],
     "id_plain": [types.int64(_I1, _F1, _F1, _F1, _F1, _F1, _F1)],
 }
 
@@ -304,6 +317,7 @@ def fd_plain_frozen():
     return frozen("fd_plain")
 
 
+@one_signature
 @njit(cache=True)
 def fd_one(TI, TF, q, qd, tau, has_tau, base, has_base, gx, gy, gz, loads, C, d, coupled, out):
     X = np.empty(coupled_size(C.shape[0], C.shape[1]) if coupled else 0)
@@ -311,6 +325,7 @@ def fd_one(TI, TF, q, qd, tau, has_tau, base, has_base, gx, gy, gz, loads, C, d,
                   coupled, out)
 
 
+@one_signature
 @njit(cache=True)
 def terms_one(TI, TF, q, qd, moving, base, has_base, gx, gy, gz, loads, C, d, coupled, what, A, v):
     X = np.empty(coupled_size(C.shape[0], C.shape[1]) if coupled else 0)
@@ -318,12 +333,14 @@ def terms_one(TI, TF, q, qd, moving, base, has_base, gx, gy, gz, loads, C, d, co
               what, A, v)
 
 
+@one_signature
 @njit(cache=True)
 def energy_one(TI, TF, q, qd, moving, base, has_base, gx, gy, gz, C, d, coupled):
     X = np.empty(coupled_size(C.shape[0], C.shape[1]) if coupled else 0)
     return energy_row(TI, TF, np.empty(TI[W_SIZE]), X, q, qd, moving, base, has_base, gx, gy, gz, C, d, coupled)
 
 
+@one_signature
 @njit(cache=True)
 def poses_one(TI, TF, q, base, has_base, C, d, coupled, R, o):
     """The {0}-pose of every link: rotations ``R`` (L, 3, 3) and origins ``o`` (L, 3)."""

@@ -38,6 +38,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..compilation import one_signature
+
 from .transforms import elementary
 
 __all__ = ["flat_tree", "HEADER", "CONSTANT", "KS", "KF", "KL", "workspace_size", "nn", "armature_items",
@@ -75,6 +77,7 @@ BASE_S = 42         # scratch unit twist of a base factor (6,)
 KB = 48
 
 
+@one_signature
 @njit(cache=True)
 def nn(k):
     """``max(k, 0)`` of an offset or index that is never negative: it tells the compiler so. An

@@ -9,8 +9,12 @@ stretches of ``auto``). Shapes: scalar ``t`` -> ``(dim,)``, times ``(k,)`` -> ``
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
-from scipy.integrate import OdeSolution
+
+if TYPE_CHECKING:
+    from scipy.integrate import OdeSolution
 
 __all__ = ["DenseOutput", "midpoint_dense"]
 

@@ -6,9 +6,12 @@
 the work of non-potential forces, and the power-balance error ``h - h(0) - W`` at every sample.
 
 Timing: ``stats["wall_time"]`` is the integration only (:data:`TIMED_REGION`);
-``stats["run_s"]`` the whole call. numba compiles the kernels and loops at their first call in a
-process (or loads them from its disk cache); :func:`warm_up` makes that happen before a timed
-run and :func:`record_compilation` says whether anything was compiled and how long it took.
+``stats["run_s"]`` the whole call, both without numba's compilation. numba compiles the kernels and
+loops at their first call in a process (or loads them from its disk cache); the integration compiles
+(or loads) what it calls before its clock starts, and a compilation inside it (Radau5 when ``auto``
+turns stiff) stops the clock (:func:`urdf2links.compilation.clock`); ``stats["compile_s"]`` is the
+compilation the call saw. :func:`warm_up` compiles a scene's run ahead, and :func:`record_compilation`
+says whether anything was compiled and how long it took.
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import compilation
 from ..console import Progress
 from ..dynamics.model import Model
 from ..errors import IntegrationError
@@ -37,7 +41,7 @@ __all__ = ["Trajectory", "simulate", "Progress", "warm_up", "record_compilation"
 TIMED_REGION = ("urdf2links' integrator: the integration loop from the first evaluation of the compiled right-hand "
                 "side to the last step, with the dense output's coefficients the samples are read from (re-charting "
                 "switches included); not the plan's compilation, the evaluation at the samples, the energies, the "
-                "poses, nor numba's compilation (warmed up before)")
+                "poses, nor numba's compilation (done before the clock starts, or the clock stopped while it runs)")
 
 
 @dataclass(frozen=True, eq=False)
@@ -141,7 +145,7 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
     n = model.n
     y0 = np.r_[q, qd, 0.0]
     t_eval = np.linspace(0.0, run.t_end, max(run.samples, 2))
-    started = time.perf_counter()
+    started, compiled0 = compilation.clock(), compilation.seconds()
     bar = Progress(run.t_end, label=f"{scene.name} {run.method}", enabled=progress)
     # torques, springs, actuators and a computed torque (its reference: every coordinate) act on coordinates:
     # their links keep their chart
@@ -172,7 +176,8 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
              "message": res.message, "recharting": run.recharting, "n_recharts": len(res.recharts),
              "recharts": res.recharts, "segments": len(res.segments),
              "limit_excursions": [e.as_dict() for e in limit_excursions(model, t, qs)],
-             "spring_notes": list(plan.spring_set.notes), "run_s": time.perf_counter() - started}
+             "spring_notes": list(plan.spring_set.notes), "run_s": compilation.clock() - started,
+             "compile_s": compilation.seconds() - compiled0}
     return Trajectory(t=t, q=qs, qd=qds, coordinate_names=model.coordinate_names,
                       energy={"kinetic": E, "potential": V, "work": W, "function": h, "error": h - h[0] - W},
                       poses=poses, stats=stats, scene=scene.name, robot=model.name, sol=res.sol,
@@ -239,7 +244,7 @@ def _record_poses(res, n: int, recorded: list[str], *, started: float, max_wall:
     qc = res.y_chart[:, :n]
     poses = {link: np.empty((len(res.t), 4, 4)) for link in recorded}
     for i, (k, ti, a) in enumerate(zip(res.segment_of, res.t, qc)):
-        if recorded and max_wall is not None and i % 1000 == 0 and time.perf_counter() - started > max_wall:
+        if recorded and max_wall is not None and i % 1000 == 0 and compilation.clock() - started > max_wall:
             raise IntegrationError(f"{where}: max_wall={max_wall:g} s spent while recording the poses "
                                    f"of {', '.join(recorded)} at sample {i} of {len(res.t)} (fewer samples would do)")
         p = res.segments[k].plan
@@ -289,7 +294,8 @@ def record_compilation():
 def warm_up(scene, *, model: Model | None = None, methods=None, t_end: float | None = None) -> Compilation:
     """Run ``scene`` (a Scene, its compiled :class:`~urdf2links.scenes.plan.Plan`, or a scene file) once with each of ``methods`` over a few steps, so that every compiled function
     a run of it calls is compiled (or loaded from numba's cache) here and not inside a timed run
-    (``methods`` default: the scene's own; ``auto`` warms Radau5 too).
+    (``methods`` default: the scene's own; ``auto`` warms DOP853: Radau5 is compiled when a run turns
+    stiff, outside its timed region too, :mod:`urdf2links.compilation`).
     ``t_end`` defaults to the shorter of the scene's and 0.01 s. Returns the
     :class:`Compilation` of the whole warm-up. A method that fails here is left to fail (and be
     reported) in the real run."""
@@ -297,8 +303,8 @@ def warm_up(scene, *, model: Model | None = None, methods=None, t_end: float | N
     scene = plan.scene
     T = min(scene.run.t_end, 0.01) if t_end is None else float(t_end)
     methods = (scene.run.method,) if methods is None else tuple(methods)
-    if "auto" in methods:           # auto calls Radau5's loop once the scene turns stiff: compiled here too
-        methods = tuple(dict.fromkeys((*methods, "Radau5")))
+    # auto's Radau5 is not warmed: it is compiled only if a run turns stiff, and that compilation is
+    # kept out of the run's wall_time anyway (urdf2links.compilation.clock)
     with record_compilation() as rec:
         for m in methods:
             kw = {"dt": T / 4} if m in ("RK4", "midpoint") else {"rtol": 1e-6, "atol": 1e-8}

@@ -44,8 +44,7 @@ from .urdf import parse_urdf
 
 __all__ = ["load_urdf", "load_urdf_string", "urdf_link_poses", "AuditRecord", "INERTIA_POLICIES", "MIMIC_POLICIES"]
 
-INERTIA_POLICIES = ("audit", "strict", "repair")
-MIMIC_POLICIES = ("independent", "coupled")
+from ..ranges import INERTIA_POLICIES, MIMIC_POLICIES  # noqa: E402  (the options, shared with the command line)
 _I4 = np.eye(4)
 
 

@@ -4,6 +4,10 @@ May import the base modules, :mod:`urdf2links.dynamics` and :mod:`urdf2links.par
 or compare.
 """
 
+from .. import numba_cache as _numba_cache
+
+_numba_cache.install()     # before any compiled function is defined (idempotent)
+
 from .plan import Plan, as_plan, compile_plan
 from .scene import Scene, default_scene, load_scene
 

@@ -33,7 +33,6 @@ from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.interpolate import CubicSpline, make_interp_spline
 
 from ..errors import SceneError
 from ..ranges import MAX_TABLE_SAMPLES, out_of_range
@@ -200,6 +199,8 @@ class Table(TimeFunction):
         object.__setattr__(self, "times", t)
         object.__setattr__(self, "values", v)
         ta, va = np.array(t), np.array(v)
+        from scipy.interpolate import CubicSpline, make_interp_spline    # here: scipy costs an import of 0.3-0.7 s
+
         spline = CubicSpline(ta, va) if self.kind == "cubic" else make_interp_spline(ta, va, k=5)
         object.__setattr__(self, "_spline", spline)
 

@@ -84,7 +84,7 @@ import numpy as np
 from ..dynamics.transforms import PARAMETERS, BaseState
 from ..errors import SceneError
 from ..locations import example_robot_data_dir, shipped_robots_dir
-from ..ranges import MAX_SAMPLES, MAX_STEPS, METHODS, MIN_ATOL, MIN_T_END, RANGES, RTOL_FLOOR
+from ..ranges import MAX_SAMPLES, MAX_STEPS, METHODS, MIN_ATOL, Q0_CHOICES, MIN_T_END, RANGES, RTOL_FLOOR
 from .actuators import ActuatorSpec, hold_actuators, parse_actuators
 from .constraints import constraint_options, parse_constraints
 from .excitation import DAMPER_TORQUE_TEXT, coordinate_ranges, damper_torques, excited_state
@@ -97,7 +97,6 @@ __all__ = ["Scene", "AppliedLoad", "Spring", "SpringSet", "RunSettings", "load_s
 DEFAULT_SCENE_NAME = "default"
 #: The default scene's initial states: ``excite`` (every coordinate moving, E65; the default), ``random``
 #: (random q0, at rest), ``rest`` (q = 0 or qpos0, at rest; ``zero`` is its old name).
-Q0_CHOICES = ("excite", "random", "rest", "zero")
 
 _TOP = ("description", "chaotic", "robot", "gravity", "base", "force", "moment", "torque", "spring",
         "dampers", "springs", "gravcomp", "initial", "run", "record", "actuator", "computed_torque",

@@ -17,7 +17,6 @@ import math
 from collections import namedtuple
 
 import numpy as np
-from scipy.interpolate import BSpline, PPoly
 
 from .functions import Constant, Sines, Table
 
@@ -65,6 +64,8 @@ def function_data(fn) -> tuple[int, np.ndarray]:
         return 0, np.array(data)
     if isinstance(fn, Table):
         spl = fn._spline
+        from scipy.interpolate import BSpline, PPoly     # here: only tables need it (a slow import)
+
         pp = PPoly.from_spline(spl) if isinstance(spl, BSpline) else PPoly(spl.c, spl.x)
         x, c = np.asarray(pp.x, float), np.asarray(pp.c, float)
         # keep the intervals inside [t0, t1] (from_spline adds empty ones at the ends)

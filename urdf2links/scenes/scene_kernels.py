@@ -8,12 +8,30 @@ gravity), Q (no wrench is added), tau, springs, dampers, actuators (MuJoCo's law
 computed torque (the scene's inverse dynamics at its reference, E57, one more O(n) pass). Without coupled coordinates ``q''`` is
 solved in place by the tree-sparse factorization (:mod:`urdf2links.dynamics.factor`, E47); with them, by a
 dense Cholesky of ``C^T A C`` (E46).
+
+**Effects compiled only where a scene has them.** Some terms are large pieces of compiled code that
+most scenes never use: the computed torque (a second O(n) pass), the coupled coordinates' dense
+solve, the actuators and the loads (forces, moments, gravcomp). Each is an *effect*
+(:data:`EFFECTS`): the compiled scene passes one marker per effect in ``FX`` (its last argument), ``1``
+when the scene has it and ``None`` when not, and the code of an effect sits behind ``if marker is not
+None:``. numba decides such a test when it compiles (the marker's type is ``none`` or ``int64``) and
+leaves the dead branch out, with every function only it calls: a pendulum's right-hand side never
+compiles the computed torque. Each combination of effects is its own compiled (and cached) variant of
+:func:`scene_rhs` and of the loops that call it.
+
+To add an effect (a constraint, a contact): its arrays and counts in
+:mod:`urdf2links.scenes.scene_arrays`; its kernel here; its name in :data:`EFFECTS` and its test in
+:func:`effects_of`; one marker argument more in :func:`_rhs` (unpacked from ``FX`` in
+:func:`scene_rhs`), and its call behind ``if marker is not None:`` where it acts (:func:`_rhs` for a
+pass of its own, :func:`_applied` for a generalized force).
 """
 
 from __future__ import annotations
 
 import numpy as np
 from numba import njit
+
+from ..compilation import one_signature
 
 from ..dynamics.factor import cholesky, cholesky_solve, ltdl, ltdl_solve
 from ..dynamics.inverse_kernels import kinematics_acc, own_armature
@@ -53,9 +71,20 @@ from .scene_arrays import (
     scratch_size,
 )
 
-__all__ = ["CompiledScene", "scene_rhs", "scene_energies", "fn_eval", "fn_data_eval", "computed_torque", "ct_torque_at"]
+__all__ = ["CompiledScene", "scene_rhs", "scene_energies", "fn_eval", "fn_data_eval", "computed_torque", "ct_torque_at",
+           "EFFECTS", "effects_of"]
+
+#: The effects compiled only into the scenes that have them (module doc), in the order of ``FX``.
+EFFECTS = ("loads", "actuators", "computed_torque", "coupled")
 
 
+def effects_of(SI) -> tuple:
+    """``FX``: one marker per :data:`EFFECTS`, ``1`` when the compiled scene ``SI`` has the effect, else ``None``."""
+    present = {"loads": SI[5] > 0, "actuators": SI[S_NA] > 0, "computed_torque": SI[S_CT] > 0, "coupled": SI[4] != 0}
+    return tuple(1 if present[name] else None for name in EFFECTS)
+
+
+@one_signature
 @njit(cache=True)
 def fn_data_eval(kind, data, o, t, order):
     """``d^order f / dt^order`` at ``t`` of a time function of ``kind`` whose data
@@ -99,6 +128,7 @@ def fn_data_eval(kind, data, o, t, order):
     return out
 
 
+@one_signature
 @njit(cache=True)
 def fn_eval(SI, SF, j, t, order):
     """``d^order f_j / dt^order`` at ``t`` of the scene's time function ``j`` (:func:`fn_data_eval`)."""
@@ -106,6 +136,7 @@ def fn_eval(SI, SF, j, t, order):
 
 
 # -- the right-hand side ------------------------------------------------------------------------------
+@one_signature
 @njit(cache=True)
 def _tree_state(SI, SF, q, iq, qd, iqd, sign, X):
     """Coupled coordinates: ``X[0:nt] = C q + d``, ``X[nt:2 nt] = sign C q'`` (E42); ``sign`` -1 or 0
@@ -122,6 +153,7 @@ def _tree_state(SI, SF, q, iq, qd, iqd, sign, X):
         X[nt + a] = sign * s2
 
 
+@one_signature
 @njit(cache=True)
 def _base_values(SI, SF, t, X, xb):
     """``X[xb:xb + 18]``: pose, rate and acceleration of {A} at ``t`` from the base functions."""
@@ -132,6 +164,7 @@ def _base_values(SI, SF, t, X, xb):
         X[xb + 12 + j] = fn_eval(SI, SF, fj, t, 2)
 
 
+@one_signature
 @njit(cache=True)
 def _apply_loads(SI, SF, I, W, t):
     """Add every load of the scene at time ``t`` to the links' external wrenches (in the tree's link
@@ -155,6 +188,7 @@ def _apply_loads(SI, SF, I, W, t):
             add_wrench(I, W, link, 0.0, 0.0, 0.0, v0, v1, v2, r0, r1, r2, local)
 
 
+@one_signature
 @njit(cache=True)
 def _actuators(SI, SF, t, y, iy, f, jf):
     """Every actuator's generalized force (E55) at ``t``, ``q = y[iy:iy + n]``, ``q' = y[iy + n:]`` added to
@@ -176,9 +210,11 @@ def _actuators(SI, SF, t, y, iy, f, jf):
         f[jf + i] += gear * a
 
 
+@one_signature
 @njit(cache=True)
-def _inputs(SI, SF, t, y, iy, f, jf):
-    """Joint torques, dampers ``-c q'`` and actuators at ``(t, q = y[iy:], q' = y[iy + n:])`` added to ``f[jf:]``."""
+def _inputs(SI, SF, t, y, iy, f, jf, actuators):
+    """Joint torques, dampers ``-c q'`` and (``actuators`` not None: the effect's marker) actuators at
+    ``(t, q = y[iy:], q' = y[iy + n:])`` added to ``f[jf:]``."""
     n = SI[0]
     ti, tf = SI[S_TORQUE_IDX], SI[S_TORQUE_FN]
     for j in range(SI[6]):
@@ -187,10 +223,12 @@ def _inputs(SI, SF, t, y, iy, f, jf):
     for j in range(SI[8]):
         i = SI[di + j]
         f[jf + i] -= SF[dc + j] * y[iy + n + i]
-    if SI[S_NA] > 0:
-        _actuators(SI, SF, t, y, iy, f, jf)
+    if actuators is not None:
+        if SI[S_NA] > 0:
+            _actuators(SI, SF, t, y, iy, f, jf)
 
 
+@one_signature
 @njit(cache=True)
 def _springs(SI, SF, y, iy, f, jf):
     """Springs ``-k (q - rest)`` at ``q = y[iy:]`` added to ``f[jf:]``."""
@@ -200,17 +238,22 @@ def _springs(SI, SF, y, iy, f, jf):
         f[jf + i] -= SF[k + j] * (y[iy + i] - SF[rest + j])
 
 
+@one_signature
 @njit(cache=True)
-def _applied(SI, SF, t, y, Q, iQ, f, jf, X):
+def _applied(SI, SF, t, y, Q, iQ, f, jf, X, loads, actuators, ct):
     """``f[jf:jf + n]``: every generalized force the scene applies besides ``-(e + G)``: Q of the
     loads (``Q[iQ:]``, when there are loads), joint torques, dampers ``-c q'``, actuators, the computed
     torque (already in ``X``, :func:`computed_torque`) and springs ``-k (q - rest)``. Returns the power
-    ``q' . f`` of the non-potential ones (springs excluded)."""
+    ``q' . f`` of the non-potential ones (springs excluded). ``loads``, ``actuators``, ``ct``: the
+    effects' markers (module doc)."""
     n = SI[0]
     for i in range(n):
-        f[jf + i] = Q[iQ + i] if SI[5] > 0 else 0.0
-    _inputs(SI, SF, t, y, 0, f, jf)
-    if SI[S_CT] > 0:
+        f[jf + i] = 0.0
+    if loads is not None:
+        for i in range(n):
+            f[jf + i] = Q[iQ + i]
+    _inputs(SI, SF, t, y, 0, f, jf, actuators)
+    if ct is not None:
         xt = ct_torque_at(n, SI[1])
         for i in range(n):
             f[jf + i] += X[xt + i]
@@ -221,12 +264,14 @@ def _applied(SI, SF, t, y, Q, iQ, f, jf, X):
     return P
 
 
+@one_signature
 @njit(cache=True)
 def ct_torque_at(n, nt):
     """Where :func:`computed_torque` leaves the torque in the scene's scratch (scene_arrays.scratch_size)."""
     return 2 * nt + 18 + 2 * n * n + 2 * n + 3 * n + nt
 
 
+@one_signature
 @njit(cache=True)
 def computed_torque(t, I, F, W, SI, SF, X):
     """The computed torque at ``t`` (E57) into ``X[ct_torque_at(n, nt):]`` (n,): the inverse dynamics of
@@ -287,14 +332,15 @@ def computed_torque(t, I, F, W, SI, SF, X):
             X[xt + i] = v
     for i in range(n):
         X[xo + i] = 0.0
-    _inputs(SI, SF, t, X, xr, X, xo)
+    _inputs(SI, SF, t, X, xr, X, xo, 1)
     _springs(SI, SF, X, xr, X, xo)
     for i in range(n):
         X[xt + i] -= X[xo + i]
 
 
+@one_signature
 @njit(cache=True)
-def _coupled_solve(SI, SF, I, W, X, t, y, out):
+def _coupled_solve(SI, SF, I, W, X, t, y, out, loads, actuators, ct):
     """Coupled coordinates: ``A = C^T A_tree C``, ``rhs = C^T (b + Q) + f`` and ``q''`` by a dense
     Cholesky into ``out[n:2 n]``; returns the pivot (scratch layout: :func:`scratch_size`)."""
     n, nt = SI[0], SI[1]
@@ -302,9 +348,9 @@ def _coupled_solve(SI, SF, I, W, X, t, y, out):
     xa = 2 * nt + 18
     xl = xa + n * n
     xf = xl + n * n
-    if SI[5] > 0:
+    if loads is not None:
         reduce_vector(C, W, I[W_Q], X, xf + n, 1.0)
-    P = _applied(SI, SF, t, y, X, xf + n, X, xf, X)
+    P = _applied(SI, SF, t, y, X, xf + n, X, xf, X, loads, actuators, ct)
     reduce_vector(C, W, I[W_B], out, n, 1.0)
     for i in range(n):
         out[n + i] += X[xf + i]
@@ -315,42 +361,52 @@ def _coupled_solve(SI, SF, I, W, X, t, y, out):
     return pivot, P
 
 
+@one_signature
 @njit(cache=True)
-def scene_rhs(t, y, out, I, F, W, SI, SF, X):
+def scene_rhs(t, y, out, I, F, W, SI, SF, X, FX):
     """``out = (q', q'', P)`` (2n + 1,) at ``(t, y = (q, q', W))``; ``W`` the tree's scratch, ``X``
-    the scene's (:func:`~urdf2links.scenes.scene_arrays.scratch_size`). Returns -1, or the index of the
+    the scene's (:func:`~urdf2links.scenes.scene_arrays.scratch_size`), ``FX`` the markers of its
+    effects (:func:`effects_of`: only their code is compiled). Returns -1, or the index of the
     failing pivot (then ``out`` is NaN). ``P`` is the power of the non-potential forces
     ``q' . (Q + tau - c q' + actuators + computed torque)`` minus the explicit rate ``dE/dt - dV/dt`` of a
     moving base (see :mod:`urdf2links.scenes.plan`)."""
+    return _rhs(t, y, out, I, F, W, SI, SF, X, FX[0], FX[1], FX[2], FX[3])
+
+
+@one_signature
+@njit(cache=True)
+def _rhs(t, y, out, I, F, W, SI, SF, X, loads, actuators, ct, coupled):
+    """:func:`scene_rhs` with the markers of :data:`EFFECTS` as arguments of their own (numba drops
+    the code behind ``if marker is not None`` when a marker is None: module doc)."""
     n, nt = SI[0], SI[1]
-    has_base, coupled, loads = SI[2] != 0, SI[4] != 0, SI[5] > 0
-    applied = loads or SI[6] > 0 or SI[7] > 0 or SI[8] > 0 or SI[S_NA] > 0 or SI[S_CT] > 0
+    has_base = SI[2] != 0
+    applied = SI[6] > 0 or SI[7] > 0 or SI[8] > 0 or loads is not None or actuators is not None or ct is not None
     g = SI[S_GRAV]
     gx, gy, gz = SF[g], SF[g + 1], SF[g + 2]
     xb = 2 * nt
-    if SI[S_CT] > 0:            # first: it uses the tree's scratch for its own pass
+    if ct is not None:          # first: it uses the tree's scratch for its own pass
         computed_torque(t, I, F, W, SI, SF, X)
     if has_base:
         _base_values(SI, SF, t, X, xb)
-    if coupled:
+    if coupled is not None:
         _tree_state(SI, SF, y, 0, y, n, 1.0, X)
         kinematics(I, F, W, X, 0, X, nt, True, X, xb, has_base, gx, gy, gz)
     else:
         kinematics(I, F, W, y, 0, y, n, True, X, xb, has_base, gx, gy, gz)
-    if loads:
+    if loads is not None:
         clear_wrenches(I, W)
         _apply_loads(SI, SF, I, W, t)
-    dynamics(I, F, W, True, loads, has_base)
+    dynamics(I, F, W, True, loads is not None, has_base)
     for i in range(n):
         out[i] = y[n + i]
     P = 0.0
-    if coupled:
-        pivot, P = _coupled_solve(SI, SF, I, W, X, t, y, out)
+    if coupled is not None:
+        pivot, P = _coupled_solve(SI, SF, I, W, X, t, y, out, loads, actuators, ct)
     else:
         wb = nn(I[W_B])
         if applied:
             xf = 2 * nt + 18
-            P = _applied(SI, SF, t, y, W, I[W_Q], X, xf, X)
+            P = _applied(SI, SF, t, y, W, I[W_Q], X, xf, X, loads, actuators, ct)
             for i in range(n):
                 out[n + i] = W[wb + i] + X[xf + i]
         else:
@@ -370,6 +426,7 @@ def scene_rhs(t, y, out, I, F, W, SI, SF, X):
     return -1
 
 
+@one_signature
 @njit(cache=True)
 def scene_energies(ts, Q, QD, out, I, F, W, SI, SF, X):
     """At each sample ``k``: ``out[k] = (E, V, h)``: kinetic energy and potential energy of gravity
@@ -422,14 +479,24 @@ class CompiledScene:
         self.W = np.zeros(int(self.I[W_SIZE]))
         self.X = np.zeros(scratch_size(model.n, model.tree.n))
         self.dim = 2 * model.n + 1
+        self.FX = effects_of(self.SI)
 
     @property
     def args(self):
-        return (self.I, self.F, self.W, self.SI, self.SF, self.X)
+        """``(I, F, W, SI, SF, X, FX)``: the arguments of :func:`scene_rhs` after the state."""
+        return (self.I, self.F, self.W, self.SI, self.SF, self.X, self.FX)
 
     def fresh_args(self):
         """Arguments with their own scratch (for another thread)."""
-        return (self.I, self.F, np.zeros_like(self.W), self.SI, self.SF, np.zeros_like(self.X))
+        return (self.I, self.F, np.zeros_like(self.W), self.SI, self.SF, np.zeros_like(self.X), self.FX)
+
+    def prepare(self, t, y):
+        """Compile (or load from the cache) :func:`scene_rhs` for this scene's effects before a timed
+        run (:func:`urdf2links.compilation.ensure`)."""
+        from .. import compilation
+
+        y = np.asarray(y, dtype=float)
+        compilation.ensure(scene_rhs, (float(t), y, np.empty(self.dim), *self.args))
 
     def __call__(self, t, y):
         y = np.asarray(y, dtype=float)
@@ -444,7 +511,7 @@ class CompiledScene:
         n = self.plan.n
         if self.SI[S_CT] == 0:
             return np.zeros(n)
-        I, F, W, SI, SF, X = self.fresh_args()
+        I, F, W, SI, SF, X, _ = self.fresh_args()
         computed_torque(float(t), I, F, W, SI, SF, X)
         xt = ct_torque_at(n, int(SI[1]))
         return X[xt:xt + n].copy()
@@ -454,7 +521,7 @@ class CompiledScene:
         t = np.ascontiguousarray(t, dtype=float)
         out = np.empty((t.size, 3))
         scene_energies(t, np.ascontiguousarray(Q, dtype=float), np.ascontiguousarray(QD, dtype=float), out,
-                       *self.args)
+                       *self.args[:6])
         return out[:, 0], out[:, 1], out[:, 2]
 
     def check(self, t, y):

@@ -19,7 +19,6 @@ import numpy as np
 
 from ..dense import DenseOutput
 from .erk import TABLEAUX
-from .radau import R_HDOP, R_HNEW, R_HOLD, R_RATE_D, R_RATE_I, R_RHO, R_RHO0, R_T
 from .stiffness import (BACKOFF, E_HLAMB, E_HSUM, E_IASTI, E_RATIO, RATIO_HLAMBDA, STIFF_HLAMBDA, STIFF_RATIO,
                         STIFF_TESTS, SWITCH_BACK)
 
@@ -45,6 +44,8 @@ def _stiff_reason(out, tests: int, record: dict) -> tuple[str, dict]:
 
 
 def _nonstiff_reason(out) -> tuple[str, dict]:
+    from .radau import R_HDOP, R_HOLD, R_RATE_D, R_RATE_I, R_RHO, R_RHO0, R_T    # Radau5 ran: imported
+
     st = out.st
     rho, dop, imp = float(st[R_RHO]), float(st[R_RATE_D]), float(st[R_RATE_I])
     figures = {"rho": rho, "rho0": float(st[R_RHO0]), "dop853_evals_per_s": dop, "radau5_evals_per_s": imp,
@@ -113,6 +114,8 @@ def drive_auto(drv, loops, args, f0, t0, t1, y0, rtol, atol, dt, need_dense, str
             started, start_fig = _nonstiff_reason(out)
             record["end_figures"] = start_fig
             radau_rate = start_fig["radau5_evals_per_s"]
+            from .radau import R_HNEW, R_HOLD
+
             h = min(max(float(out.st[R_HOLD]), float(out.st[R_HNEW])), start_fig["dop853_h"])
             method, backoffs = "DOP853", backoffs + 1
             continue

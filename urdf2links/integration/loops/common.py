@@ -10,6 +10,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ...compilation import one_signature
+
 from ...scenes.scene_kernels import scene_rhs
 
 __all__ = ["AngleGuard", "evaluate", "rms", "finite", "guard_fires", "EPS"]
@@ -41,6 +43,7 @@ class AngleGuard:
 
 
 # -- small pieces -----------------------------------------------------------------------------------
+@one_signature
 @njit(cache=True)
 def rms(x, scale):
     s = 0.0
@@ -50,6 +53,7 @@ def rms(x, scale):
     return np.sqrt(s / x.size)
 
 
+@one_signature
 @njit(cache=True)
 def finite(x):
     for i in range(x.size):
@@ -58,6 +62,7 @@ def finite(x):
     return True
 
 
+@one_signature
 @njit(cache=True)
 def guard_fires(y, guard):
     """The angle guard ``guard = (indices, thresholds)``: some ``|cos y[i]| < threshold``."""
@@ -68,14 +73,15 @@ def guard_fires(y, guard):
     return False
 
 
+@one_signature
 @njit(cache=True)
 def evaluate(t, y, out, args, counters):
     """One evaluation of the compiled scene ``args`` into ``out``; counts it in ``cnt[0]``. On
     failure the state goes to ``fail = [t, y]`` for the driver's error, and it returns False."""
     cnt, fail = counters
     cnt[0] += 1
-    I, F, W, SI, SF, X = args
-    pivot = scene_rhs(t, y, out, I, F, W, SI, SF, X)
+    I, F, W, SI, SF, X, FX = args
+    pivot = scene_rhs(t, y, out, I, F, W, SI, SF, X, FX)
     if pivot < 0 and finite(out):
         return True
     fail[0] = t

@@ -19,14 +19,14 @@ from collections import namedtuple
 
 import numpy as np
 
+from ... import compilation
 from ...errors import IntegrationError
 from ...scenes.scene_kernels import CompiledScene
 from ..dense import DenseOutput, midpoint_dense
-from . import erk, fixed, radau
+from . import erk, fixed
 from .common import AngleGuard
 from .erk import TABLEAUX
 from .fixed import MAX_HALVINGS
-from .radau import R_FIRST, R_NEED_JAC, R_NQ, R_NV, R_SIZE, R_STORED, R_T, radau_tolerances
 from .stiffness import E_DETECT, E_ND, E_NEEDED, E_SIZE
 
 __all__ = ["Outcome", "run", "CHUNK", "wall_message", "Stretch", "run_erk", "run_radau", "structure_of"]
@@ -73,6 +73,8 @@ def _interpreted(*, user_jac: bool) -> dict:
     """The loops as plain Python functions: each compiled function's source rebound to a copy of its
     module's namespace in which ``evaluate`` calls a Python right-hand side (``args = (rhs, jac)``).
     The same code as the compiled loops, so the two cannot drift."""
+    from . import radau
+
     loops = {}
     for module in (fixed, erk, radau):
         ns = dict(vars(module))
@@ -86,9 +88,22 @@ def _interpreted(*, user_jac: bool) -> dict:
     return loops
 
 
+class _CompiledLoops(dict):
+    """The compiled loops by name; Radau5's module (and scipy's coefficients it reads) is imported
+    at its first use: a run that never turns stiff does not load it."""
+
+    def __missing__(self, name):
+        if name != "radau_chunk":
+            raise KeyError(name)
+        from .radau import radau_chunk
+
+        self[name] = radau_chunk
+        return radau_chunk
+
+
 def _compiled() -> dict:
-    return {"rk4_chunk": fixed.rk4_chunk, "midpoint_chunk": fixed.midpoint_chunk, "erk_chunk": erk.erk_chunk,
-            "initial_step": erk.initial_step, "radau_chunk": radau.radau_chunk}
+    return _CompiledLoops(rk4_chunk=fixed.rk4_chunk, midpoint_chunk=fixed.midpoint_chunk, erk_chunk=erk.erk_chunk,
+                          initial_step=erk.initial_step)
 
 
 # -- drivers (Python): chunks, storage, progress, results -------------------------------------------
@@ -125,6 +140,16 @@ class _Driver:
         self.guard = (np.zeros(0, np.int64), np.zeros(0))
         if self.compiled and isinstance(stop, AngleGuard):     # tested inside the compiled loop
             self.guard, self.stop = (stop.indices, stop.thresholds), None
+        self.ready = set()
+
+    def call(self, loops, name, *args):
+        """``loops[name](*args)``; a compiled loop's first call in this run is compiled (or loaded from
+        the cache) first, outside the run's time (:func:`urdf2links.compilation.ensure`): Radau5's loop
+        only when a run of ``auto`` turns stiff."""
+        if self.compiled and name not in self.ready:
+            compilation.ensure(loops[name], args)
+            self.ready.add(name)
+        return loops[name](*args)
 
     def size(self) -> int:
         return int(min(self.chunk, self.budget - self.cnt[1]))
@@ -153,7 +178,8 @@ def run_erk(drv, loops, tab, args, f0, t0, t1, y0, rtol, atol, dt, need_dense, *
     first ``nd`` components, which ends the stretch (status 4) after that many stiff verdicts."""
     d = y0.size
     max_step = np.inf if dt is None else float(dt)
-    h_abs = loops["initial_step"](t0, y0, f0, t1, max_step, tab.order, rtol, atol, args, drv.counters) if h0 is None \
+    h_abs = drv.call(loops, "initial_step", t0, y0, f0, t1, max_step, tab.order, rtol, atol, args,
+                                      drv.counters) if h0 is None \
         else min(float(h0), max_step)
     cap = 256
     ts, ys, dens = np.empty(cap), np.empty((cap, d)), np.empty((cap if need_dense else 0, tab.n_dense, d))
@@ -165,7 +191,7 @@ def run_erk(drv, loops, tab, args, f0, t0, t1, y0, rtol, atol, dt, need_dense, *
     state = (st, y0.copy(), f0.copy(), np.zeros((16, d)))
     ctl = (float(t1), rtol, atol, max_step, need_dense)
     while True:
-        status = loops["erk_chunk"](tab, ctl, state, (ts, ys, dens), drv.guard, drv.counters, drv.size(), args)
+        status = drv.call(loops, "erk_chunk", tab, ctl, state, (ts, ys, dens), drv.guard, drv.counters, drv.size(), args)
         if drv.after_chunk(status, st[0], state[1]):
             break
         if int(st[2]) >= ts.size:
@@ -191,12 +217,15 @@ def run_radau(drv, loops, args, f0, t0, t1, y0, rtol, atol, dt, need_dense, stru
     ``h0`` the first step (default: scipy's initial step for an error of order 3 at the mapped
     tolerances); ``detect = (h_D, e_D)`` (``auto``: DOP853's last step and evaluations per step when
     it handed over) ends the stretch (status 5) when DOP853 would be cheaper."""
+    from . import radau
+    from .radau import R_FIRST, R_NEED_JAC, R_NQ, R_NV, R_SIZE, R_STORED, R_T, radau_tolerances
+
     d = y0.size
     nq, nv = structure
     r, a, fnewt = radau_tolerances(rtol, atol)
     max_step = np.inf if dt is None else float(dt)
     if h0 is None:
-        h0 = loops["initial_step"](t0, y0, f0, t1, max_step, 3, r, a, args, drv.counters)
+        h0 = drv.call(loops, "initial_step", t0, y0, f0, t1, max_step, 3, r, a, args, drv.counters)
     st = np.zeros(R_SIZE)
     st[R_T], st[1], st[R_STORED], st[R_FIRST], st[R_NEED_JAC] = t0, min(float(h0), max_step), 1.0, 1.0, 1.0
     st[radau.R_FACCON], st[radau.R_ERRACC], st[R_NQ], st[R_NV] = 1.0, 0.01, nq, nv
@@ -216,7 +245,7 @@ def run_radau(drv, loops, args, f0, t0, t1, y0, rtol, atol, dt, need_dense, stru
     ts, ys, dens = np.empty(cap), np.empty((cap, d)), np.empty((cap if need_dense else 0, 3, d))
     ts[0], ys[0] = t0, y0
     while True:
-        status = loops["radau_chunk"](ctl, state, (ts, ys, dens), drv.guard, drv.counters, drv.size(), args)
+        status = drv.call(loops, "radau_chunk", ctl, state, (ts, ys, dens), drv.guard, drv.counters, drv.size(), args)
         if drv.after_chunk(status, st[R_T], y):
             break
         if int(st[R_STORED]) >= ts.size:
@@ -234,7 +263,7 @@ def _drive_rk4(drv, loops, args, f0, y0, grid, need_dense):
     ys[0], fs[0] = y0, f0
     st = np.zeros(1)
     while True:
-        status = loops["rk4_chunk"](grid, (st, ys, fs), drv.guard, drv.counters, drv.size(), args)
+        status = drv.call(loops, "rk4_chunk", grid, (st, ys, fs), drv.guard, drv.counters, drv.size(), args)
         i = int(st[0])
         if drv.after_chunk(status, grid[i], ys[i]):
             break
@@ -255,8 +284,8 @@ def _drive_midpoint(drv, loops, args, f0, t0, y0, rtol, atol, grid, need_dense, 
     st = np.array([0.0, 0.0, t0, 0.0 if const else 1.0, float(const), 0.0, 0.0, 0.0, 0.0, float(const), 0.0])
     state = (st, np.zeros(3), np.zeros((3, d)), J, np.zeros((d, d)))
     while True:
-        status = loops["midpoint_chunk"](grid, (rtol, atol), state, (ts, ys, ks), drv.guard, drv.counters,
-                                         drv.size(), args)
+        status = drv.call(loops, "midpoint_chunk", grid, (rtol, atol), state, (ts, ys, ks), drv.guard, drv.counters,
+                          drv.size(), args)
         if status == 3:
             ts, ys, ks = _grow((ts, ys, ks), max(16, ts.size // 2))
             continue

@@ -7,13 +7,15 @@ extra stages). scipy itself is their reference in the tests.
 
 from __future__ import annotations
 
+import importlib.util
 from collections import namedtuple
+from collections.abc import Mapping
+from pathlib import Path
 
 import numpy as np
 from numba import njit
-from scipy.integrate._ivp import dop853_coefficients as _dop
-from scipy.integrate._ivp.rk import RK45 as _RK45
 
+from ...compilation import one_signature
 from .common import evaluate, guard_fires, rms
 from .stiffness import E_DETECT, explicit_stiff
 
@@ -28,6 +30,8 @@ error weights ``E5``, ``E3`` (13,), DOP853's dense matrix ``D`` (4, 16), RK45's 
 
 
 def _tableau_rk45() -> Tableau:
+    from scipy.integrate._ivp.rk import RK45 as _RK45
+
     A = np.zeros((16, 16))
     A[:6, :5] = _RK45.A
     C = np.zeros(16)
@@ -39,15 +43,50 @@ def _tableau_rk45() -> Tableau:
     return Tableau(6, 4, A, np.r_[_RK45.B, np.zeros(6)], C, E, np.zeros(13), np.zeros((4, 16)), P, 4, False)
 
 
+def _scipy_dop853():
+    """scipy's DOP853 coefficients (``scipy/integrate/_ivp/dop853_coefficients.py``: numpy arrays and
+    nothing else), loaded from their file: importing them as a module of ``scipy.integrate`` would
+    import that whole package first (half a second of every command's start)."""
+    root = Path(importlib.util.find_spec("scipy").submodule_search_locations[0])
+    spec = importlib.util.spec_from_file_location("urdf2links_scipy_dop853_coefficients",
+                                                  root / "integrate" / "_ivp" / "dop853_coefficients.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
 def _tableau_dop853() -> Tableau:
+    _dop = _scipy_dop853()
     return Tableau(12, 7, np.ascontiguousarray(_dop.A, dtype=float), np.asarray(_dop.B, float),
                    np.asarray(_dop.C, float), np.asarray(_dop.E5, float), np.asarray(_dop.E3, float),
                    np.ascontiguousarray(_dop.D, dtype=float), np.zeros((16, 7)), 7, True)
 
 
-TABLEAUX = {"RK45": _tableau_rk45(), "DOP853": _tableau_dop853()}
+class _Tableaux(Mapping):
+    """The pairs by name, each built at its first use (RK45's from scipy's class, which imports
+    ``scipy.integrate``)."""
+
+    _BUILD = {"RK45": _tableau_rk45, "DOP853": _tableau_dop853}
+
+    def __init__(self):
+        self._built = {}
+
+    def __getitem__(self, name) -> Tableau:
+        if name not in self._built:
+            self._built[name] = self._BUILD[name]()
+        return self._built[name]
+
+    def __iter__(self):
+        return iter(self._BUILD)
+
+    def __len__(self):
+        return len(self._BUILD)
 
 
+TABLEAUX = _Tableaux()
+
+
+@one_signature
 @njit(cache=True)
 def initial_step(t0, y0, f0, t_end, max_step, order, rtol, atol, args, counters):
     """scipy's ``select_initial_step`` (Hairer, Norsett, Wanner I, II.4)."""
@@ -72,6 +111,7 @@ def initial_step(t0, y0, f0, t_end, max_step, order, rtol, atol, args, counters)
 
 
 # -- RK45 / DOP853 ----------------------------------------------------------------------------------
+@one_signature
 @njit(cache=True)
 def _stages(tab, first, last, t, h, y, K, ystage, args, counters):
     """Stages ``first .. last - 1``: ``K[s] = F(t + C_s h, y + h sum_j A_sj K[j])``."""
@@ -87,6 +127,7 @@ def _stages(tab, first, last, t, h, y, K, ystage, args, counters):
     return True
 
 
+@one_signature
 @njit(cache=True)
 def _error_norm(tab, h, K, scale, err5, err3):
     """The pair's error estimate in units of ``scale`` (scipy's norms: RK45 rms, DOP853's
@@ -117,6 +158,7 @@ def _error_norm(tab, h, K, scale, err5, err3):
     return rms(err5, scale)
 
 
+@one_signature
 @njit(cache=True)
 def _attempt(tab, ctl, t, h_abs, y, f, K, work, args, counters):
     """Steps from ``t`` until one is accepted: returns ``(status, t_new, h, h_abs)`` with the next
@@ -165,6 +207,7 @@ def _attempt(tab, ctl, t, h_abs, y, f, K, work, args, counters):
         cnt[2] += 1
 
 
+@one_signature
 @njit(cache=True)
 def _dense_row(tab, t, h, y, y_new, f_new, K, ystage, row, args, counters):
     """The dense-output coefficients (n_dense, d) of the accepted step into ``row`` (DOP853's three
@@ -194,6 +237,7 @@ def _dense_row(tab, t, h, y, y_new, f_new, K, ystage, row, args, counters):
     return True
 
 
+@one_signature
 @njit(cache=True)
 def erk_chunk(tab, ctl, state, store, guard, counters, chunk, args):
     """Up to ``chunk`` accepted steps of an explicit pair.

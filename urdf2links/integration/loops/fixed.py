@@ -11,6 +11,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ...compilation import one_signature
+
 from .common import EPS, evaluate, finite, guard_fires
 
 __all__ = ["rk4_chunk", "midpoint_chunk", "NEWTON_MAXITER", "MAX_HALVINGS"]
@@ -20,6 +22,7 @@ NEWTON_MAXITER = 8        # midpoint: simplified Newton iterations per attempt
 
 
 # -- RK4 --------------------------------------------------------------------------------------------
+@one_signature
 @njit(cache=True)
 def rk4_chunk(grid, state, guard, counters, chunk, args):
     """Up to ``chunk`` RK4 steps along ``grid`` from index ``st[0]``; ``state = (st, ys, fs)``, ``ys``,
@@ -71,6 +74,7 @@ def rk4_chunk(grid, state, guard, counters, chunk, args):
 
 # -- implicit midpoint ------------------------------------------------------------------------------
 # st = [grid index, stored n, t, need_jac, jac_fresh, have_minv, inv_h, hist_len, njev, jac_const, h]
+@one_signature
 @njit(cache=True)
 def _jacobian(t, y, f, J, args, counters):
     """Forward differences of the right-hand side around ``(t, y)`` (``f`` = F(t, y)) into ``J``."""
@@ -89,6 +93,7 @@ def _jacobian(t, y, f, J, args, counters):
     return True
 
 
+@one_signature
 @njit(cache=True)
 def _predict(hist_h, hist_k, hist_len, h, k0, k_pred):
     """The first guess of the stage slope: extrapolation of the last accepted slopes at a
@@ -108,6 +113,7 @@ def _predict(hist_h, hist_k, hist_len, h, k0, k_pred):
             k_pred[i] = k0[i]
 
 
+@one_signature
 @njit(cache=True)
 def _newton(t, h, y, k, k_pred, scale, tol, st, J, minv, work, args, counters):
     """Simplified Newton iterations for ``k = F(t + h/2, y + h/2 k)`` from ``k = k_pred``.
@@ -190,6 +196,7 @@ def _newton(t, h, y, k, k_pred, scale, tol, st, J, minv, work, args, counters):
         dy_old = dy
 
 
+@one_signature
 @njit(cache=True)
 def _invert(M, out):
     """``out = M^-1``; False when ``M`` is singular or not finite (the iteration then fails)."""
@@ -202,6 +209,7 @@ def _invert(M, out):
     return finite(out.ravel())
 
 
+@one_signature
 @njit(cache=True)
 def _midpoint_scale(y, atol, rtol, scale):
     """Error weights ``atol + rtol |y|``; with ``atol`` all zero, floored at ``1e-8 rtol max|y|``."""
@@ -218,6 +226,7 @@ def _midpoint_scale(y, atol, rtol, scale):
             scale[i] = max(scale[i], rtol * 1e-8 * ymax + 1e-300)
 
 
+@one_signature
 @njit(cache=True)
 def _record(n, t, h, k, store, hist):
     """Accept the step ``y_n+1 = y_n + h k`` at ``t``; push ``(h, k)`` onto the slope history."""
@@ -237,6 +246,7 @@ def _record(n, t, h, k, store, hist):
         hist_k[0, i] = k[i]
 
 
+@one_signature
 @njit(cache=True)
 def midpoint_chunk(grid, ctl, state, store, guard, counters, chunk, args):
     """Up to ``chunk`` grid intervals of the implicit midpoint rule.

@@ -13,9 +13,12 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ...compilation import one_signature
+
 __all__ = ["lu_factor", "lu_solve"]
 
 
+@one_signature
 @njit(cache=True)
 def lu_factor(A, piv):
     """``A`` (m, m) <- its LU factors with partial pivoting, ``piv`` (m,) int64 the row swapped
@@ -47,6 +50,7 @@ def lu_factor(A, piv):
     return -1
 
 
+@one_signature
 @njit(cache=True)
 def lu_solve(A, piv, b):
     """``b`` (m,) <- ``M^-1 b`` for the factors ``A``, ``piv`` of :func:`lu_factor` (same kind:

@@ -52,6 +52,8 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit
+
+from ...compilation import one_signature
 from scipy.integrate._ivp import radau as _sr
 
 from .common import EPS, evaluate, guard_fires
@@ -131,6 +133,7 @@ def radau_tolerances(rtol: float, atol):
 
 
 # -- the structured linear algebra ------------------------------------------------------------------
+@one_signature
 @njit(cache=True)
 def radau_jacobian(t, y, f, Jl, nq, nv, yp, fp, args, counters):
     """Forward differences (RADAU5's increments ``sqrt(eps max(1e-5, |y_j|))``, backward when the
@@ -154,6 +157,7 @@ def radau_jacobian(t, y, f, Jl, nq, nv, yp, fp, args, counters):
     return True
 
 
+@one_signature
 @njit(cache=True)
 def _factor(h, Jl, nq, nv, E1, p1, E2, p2):
     """The reduced iteration matrices ``g - J_v - J_q / g`` (E60) for ``g = MU_REAL / h`` (real) and
@@ -173,6 +177,7 @@ def _factor(h, Jl, nq, nv, E1, p1, E2, p2):
     return lu_factor(E1, p1) < 0 and lu_factor(E2, p2) < 0
 
 
+@one_signature
 @njit(cache=True)
 def _solve(g, Jl, nq, nv, E, piv, r, tmp):
     """``r`` (d,) <- ``(g - J)^-1 r`` with the factors of :func:`_factor` (E60): ``x_v`` from the
@@ -197,6 +202,7 @@ def _solve(g, Jl, nq, nv, E, piv, r, tmp):
 
 
 # -- one step ---------------------------------------------------------------------------------------
+@one_signature
 @njit(cache=True)
 def _predict(st, h, Z, Q, prev):
     """Starting stages ``Z`` (3, d): zero on the first step, else the last step's collocation
@@ -216,6 +222,7 @@ def _predict(st, h, Z, Q, prev):
             Z[k, i] = Q[0, i] * x + Q[1, i] * x2 + Q[2, i] * x3 - prev[i]
 
 
+@one_signature
 @njit(cache=True)
 def _newton(t, h, y, scal, fnewt, thet, st, arrays, lin, args, counters):
     """Simplified Newton iterations on the stage system from ``Z`` (RADAU5). Returns ``(code,
@@ -288,6 +295,7 @@ def _newton(t, h, y, scal, fnewt, thet, st, arrays, lin, args, counters):
     return code, newt
 
 
+@one_signature
 @njit(cache=True)
 def _error(t, h, y, f0, scal, refine, st, arrays, lin, args, counters):
     """RADAU5's error estimate ``(g1 - J)^-1 (F(t, y) + Z E / h)`` in units of ``scal`` (rms, at least
@@ -322,6 +330,7 @@ def _error(t, h, y, f0, scal, refine, st, arrays, lin, args, counters):
     return max(np.sqrt(err / d), 1e-10)
 
 
+@one_signature
 @njit(cache=True)
 def _new_matrices(t, y, f0, st, arrays, lin, args, counters):
     """A fresh Jacobian when one is due (with ``rho`` in ``auto``), and the factorisations for the
@@ -357,6 +366,7 @@ def _new_matrices(t, y, f0, st, arrays, lin, args, counters):
     return 0
 
 
+@one_signature
 @njit(cache=True)
 def _accept(t, h, last, err, quot, y, f0, ctl, st, arrays, dense3, args, counters):
     """The accepted step: the new state and slope, the dense coefficients ``Q`` and the next step
@@ -402,6 +412,7 @@ def _accept(t, h, last, err, quot, y, f0, ctl, st, arrays, dense3, args, counter
     return True
 
 
+@one_signature
 @njit(cache=True)
 def _step(ctl, st, y, f0, scal, arrays, dense3, lin, args, counters):
     """Attempts from ``st[R_T]`` until one is accepted (RADAU5's control flow). Returns 0, or -1
@@ -460,6 +471,7 @@ def _step(ctl, st, y, f0, scal, arrays, dense3, lin, args, counters):
             st[R_NEED_JAC] = 1.0
 
 
+@one_signature
 @njit(cache=True)
 def radau_chunk(ctl, state, store, guard, counters, chunk, args):
     """Up to ``chunk`` accepted steps of Radau IIA (5).

@@ -45,6 +45,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ...compilation import one_signature
+
 __all__ = ["STIFF_HLAMBDA", "STIFF_RATIO", "RATIO_HLAMBDA", "STIFF_TESTS", "NONSTIFF_RESET", "SWITCH_BACK", "BACKOFF",
            "MIN_IMPLICIT_STEPS", "JAC_REFRESH", "E_DETECT", "E_IASTI", "E_NONSTI", "E_HLAMB", "E_NEEDED", "E_ND",
            "E_HMAX", "E_HSUM", "E_RATIO", "E_SIZE", "explicit_stiff", "spectral_radius", "explicit_cheaper"]
@@ -73,6 +75,7 @@ E_DETECT, E_IASTI, E_NONSTI, E_HLAMB, E_NEEDED, E_ND, E_HMAX, E_HSUM, E_RATIO = 
 E_SIZE = 12
 
 
+@one_signature
 @njit(cache=True)
 def explicit_stiff(st, h, y_new, f_new, f_old, y_last, k_last):
     """Hairer's stiffness test (E58) after an accepted explicit step ``h`` from a state of slope
@@ -108,6 +111,7 @@ def explicit_stiff(st, h, y_new, f_new, f_old, y_last, k_last):
     return False
 
 
+@one_signature
 @njit(cache=True)
 def spectral_radius(Jl, nq, nv, x, xn):
     """Spectral radius of the Jacobian of the ``m = nq + nv`` components that feed back (``q' = v``
@@ -148,6 +152,7 @@ def spectral_radius(Jl, nq, nv, x, xn):
     return np.exp(logsum / (iters - iters // 2))
 
 
+@one_signature
 @njit(cache=True)
 def explicit_cheaper(rho, rho0, h_dop, e_dop, evals_per_step, h, max_step):
     """``(yes, dop_rate, implicit_rate)``: DOP853's predicted evaluations per second of simulated time

@@ -1,0 +1,223 @@
+"""numba's compilation, kept out of every reported time and shown while it runs.
+
+numba compiles a function at its first call in a process (or loads it from the disk cache,
+:mod:`urdf2links.numba_cache`). A cold first run of a scene spends seconds there, in the middle of the
+code it times. This module watches numba's ``numba:compile`` events (numba's public event API) and:
+
+- :func:`clock` is ``time.perf_counter()`` standing still while numba compiles: a duration taken
+  with it (``clock() - start``) leaves compilation out, wherever in the timed code it happened (the
+  integration loops at their first call, Radau5 when a run of ``auto`` turns stiff, a batch kernel);
+- :func:`ensure` compiles, or loads from the cache, a compiled function for the arguments it is about
+  to get, before a timed region (loading a large function takes tens of milliseconds, and raises no
+  event), and adds that time to the compilation too;
+- :func:`seconds` and :func:`functions` say how much was compiled in this process; :func:`summary`
+  is the one line the command prints ("compiling the solver for this machine, first run only:
+  14 s"), and :func:`show_progress` turns on a line on stderr that counts the seconds while numba
+  compiles (the command line turns it on; the library stays silent); :func:`per_function` the
+  seconds of each function (``URDF2LINKS_COMPILE_LOG=FILE`` writes them at exit);
+- :func:`one_signature` compiles a kernel once whatever constants its callers pass.
+
+Nothing here imports numba until a compiled function is about to be used (:func:`watch`, called by
+:mod:`urdf2links.numba_cache` when it installs the cache): ``import urdf2links`` stays fast.
+"""
+
+from __future__ import annotations
+
+import sys
+import threading
+import time
+
+__all__ = ["clock", "ensure", "seconds", "functions", "per_function", "summary", "show_progress", "watch", "WHAT",
+           "one_signature"]
+
+#: How the command line names what is compiled.
+WHAT = "compiling the solver for this machine, first run only"
+
+
+class _Tracker:
+    """Top-level compilations (numba compiles callees inside their caller: only the outermost event
+    counts), their total seconds and the functions compiled; the progress line's state."""
+
+    def __init__(self):
+        self.lock = threading.Lock()
+        self.depth = 0
+        self.since = 0.0            # perf_counter() when the outermost compilation (or ensure) started
+        self.total = 0.0            # seconds of finished compilations
+        self.names: list[str] = []
+        self.stack: list = []       # [name, start, seconds of nested compilations] per open compilation
+        self.per_function: dict = {}    # name -> [seconds of its own, seconds with its callees, compilations]
+        self.progress = None        # the stream of the progress line, or None
+        self.ticker = None
+        self.shown = False          # a progress line is on the screen
+
+    def begin(self, name: str | None = None):
+        with self.lock:
+            if self.depth == 0:
+                self.since = time.perf_counter()
+            self.depth += 1
+            if name:
+                self.names.append(name)
+            self.stack.append([name, time.perf_counter(), 0.0])
+            if self.progress is not None and self.ticker is None:
+                self.ticker = threading.Thread(target=self._tick, name="urdf2links-compiling", daemon=True)
+                self.ticker.start()
+
+    def end(self):
+        with self.lock:
+            self.depth -= 1
+            if self.stack:
+                name, start, nested = self.stack.pop()
+                took = time.perf_counter() - start
+                if self.stack:
+                    self.stack[-1][2] += took
+                if name:
+                    rec = self.per_function.setdefault(name, [0.0, 0.0, 0])
+                    rec[0] += took - nested
+                    rec[1] += took
+                    rec[2] += 1
+            if self.depth == 0:
+                self.total += time.perf_counter() - self.since
+                self._clear()
+
+    def ongoing(self) -> float:
+        with self.lock:
+            return self.total + (time.perf_counter() - self.since if self.depth > 0 else 0.0)
+
+    def _clear(self):
+        if self.shown and self.progress is not None:
+            if self.progress.isatty():
+                self.progress.write("\r\033[K")
+                self.progress.flush()
+            self.shown = False
+
+    def _tick(self):
+        """The progress line: after 1 s of compilation, the seconds so far (redrawn each second on a
+        terminal; a log gets one line saying that it compiles)."""
+        told = False
+        while True:
+            time.sleep(0.25)
+            with self.lock:
+                stream = self.progress
+                if stream is None:
+                    self.ticker = None
+                    return
+                busy = time.perf_counter() - self.since if self.depth > 0 else 0.0
+                if busy < 1.0:
+                    continue
+                if stream.isatty():
+                    stream.write(f"\r{WHAT}: {self.total + busy:.0f} s ...")
+                    stream.flush()
+                    self.shown = True
+                elif not told:
+                    stream.write(f"{WHAT} ...\n")
+                    stream.flush()
+                    told = True
+
+
+_T = _Tracker()
+_WATCHING: list = []
+
+
+def watch() -> None:
+    """Listen to numba's ``numba:compile`` events (once per process; imports numba)."""
+    if _WATCHING:
+        return
+    from numba.core import event
+
+    class Listener(event.Listener):
+        def on_start(self, ev):
+            fn = getattr(ev.data.get("dispatcher"), "py_func", None)
+            _T.begin(f"{getattr(fn, '__module__', '?')}.{getattr(fn, '__qualname__', fn)}")
+
+        def on_end(self, ev):
+            _T.end()
+
+    listener = Listener()
+    event.register("numba:compile", listener)
+    import atexit
+
+    atexit.register(_write_log)
+    _WATCHING.append(listener)
+
+
+def clock() -> float:
+    """``time.perf_counter()`` minus every second numba has spent compiling in this process (and
+    :func:`ensure` loading): the difference of two readings leaves compilation out."""
+    return time.perf_counter() - _T.ongoing()
+
+
+def seconds() -> float:
+    """Seconds spent compiling (and in :func:`ensure`) in this process so far."""
+    return _T.ongoing()
+
+
+def functions() -> list[str]:
+    """The functions numba compiled in this process (``module.qualname``), in order, each once."""
+    return list(dict.fromkeys(_T.names))
+
+
+def ensure(dispatcher, args) -> None:
+    """Compile, or load from the disk cache, ``dispatcher`` for the types of ``args`` (a tuple of the
+    arguments of its next call) unless it has that variant already; the time counts as compilation
+    (:func:`clock`), so that the timed call that follows runs the compiled code at once."""
+    watch()
+    sig = tuple(dispatcher.typeof_pyval(a) for a in args)
+    if sig in dispatcher.overloads:
+        return
+    _T.begin()
+    try:
+        dispatcher.compile(sig)
+    finally:
+        _T.end()
+
+
+def per_function() -> dict:
+    """``{name: {"own_s", "with_callees_s", "compilations"}}`` of every function numba compiled in this
+    process: its own seconds (its callees' compilations, nested in it, left out), with them, and how
+    many variants (docs/speed.md's table of compile times per kernel)."""
+    with _T.lock:
+        return {k: {"own_s": v[0], "with_callees_s": v[1], "compilations": v[2]} for k, v in _T.per_function.items()}
+
+
+def _write_log() -> None:
+    """At exit, when ``URDF2LINKS_COMPILE_LOG`` names a file: :func:`per_function` as JSON there."""
+    import json
+    import os
+
+    path = os.environ.get("URDF2LINKS_COMPILE_LOG")
+    if path and _T.per_function:
+        with open(path, "w", encoding="utf-8") as fh:
+            json.dump({"seconds": seconds(), "functions": per_function()}, fh, indent=1)
+
+
+def summary(cache_folder=None) -> str | None:
+    """The command's one line about compilation: None when nothing was compiled in this process."""
+    names = functions()
+    if not names:
+        return None
+    where = f"; cached in {cache_folder}: `urdf2links cache --list`" if cache_folder else ""
+    return f"{WHAT}: {seconds():.1f} s ({len(names)} compiled functions{where}; no reported time includes it)"
+
+
+def show_progress(on: bool = True, *, stream=None) -> None:
+    """Show compilation on ``stream`` (default stderr) while it runs (:class:`_Tracker`), or not (``on`` False)."""
+    with _T.lock:
+        _T.progress = (stream or sys.stderr) if on else None
+
+
+def one_signature(dispatcher):
+    """``dispatcher`` (a compiled function) compiled once for the types of its arguments, whatever
+    constants its callers pass: numba types a constant argument by its value (``0`` is
+    ``Literal[int](0)``, ``True`` is ``Literal[bool](True)``) and compiles a callee anew for every
+    pattern of constants it is called with (the recursive pass was compiled five times for a
+    pendulum). Callers' constants are widened to their plain types (``int64``, ``bool``) here;
+    ``None`` stays ``none`` (the effects' markers, :mod:`urdf2links.scenes.scene_kernels`)."""
+    from numba.core import types
+
+    resolve = dispatcher.get_call_template
+
+    def get_call_template(args, kws):
+        return resolve(tuple(types.unliteral(a) for a in args), {k: types.unliteral(v) for k, v in kws.items()})
+
+    dispatcher.get_call_template = get_call_template
+    return dispatcher
