@@ -106,7 +106,9 @@ def _fake(folder: Path, name: str, source: Path | None, size: int = 10) -> Path:
 
 def test_cache_list_and_clear(tmp_path):
     """Each cache folder's status from the source folder it records: this install's, another's (still
-    there), gone (removed, or not recorded: an older layout); ``stale`` clears all but this install's."""
+    there), gone (removed), unknown (not recorded: an older layout, or a folder another process is
+    creating at this moment -- two xdist workers start at once -- so never removed at start);
+    ``stale`` clears all but this install's."""
     cache = tmp_path / "cache"
     here = ROOT / "urdf2links" / "dynamics"
     other = tmp_path / "other_install"
@@ -116,9 +118,9 @@ def test_cache_list_and_clear(tmp_path):
     _fake(cache, "dynamics_3", tmp_path / "removed")
     _fake(cache, "dynamics_4", None)
     status = {f.path.name: f.status for f in cache_folders(cache)}
-    assert status == {"dynamics_1": "current", "dynamics_2": "other", "dynamics_3": "gone", "dynamics_4": "gone"}
-    assert {f.path.name for f in clear_cache(cache, which="gone")} == {"dynamics_3", "dynamics_4"}
-    assert {f.path.name for f in clear_cache(cache, which="stale")} == {"dynamics_2"}
+    assert status == {"dynamics_1": "current", "dynamics_2": "other", "dynamics_3": "gone", "dynamics_4": "unknown"}
+    assert {f.path.name for f in clear_cache(cache, which="gone")} == {"dynamics_3"}
+    assert {f.path.name for f in clear_cache(cache, which="stale")} == {"dynamics_2", "dynamics_4"}
     assert [f.path.name for f in cache_folders(cache)] == ["dynamics_1"]
     out = subprocess.run([sys.executable, "-m", "urdf2links", "cache", "--list"], capture_output=True, text=True,
                          env=dict(os.environ, URDF2LINKS_CACHE_DIR=str(cache)), cwd=tmp_path)

@@ -228,7 +228,8 @@ def _cache(args) -> int:
     if not rows:
         print(f"{folder}: empty (nothing compiled yet; the first run compiles and fills it)")
         return 0
-    words = {"current": "this install", "other": "another install", "gone": "sources removed (stale)"}
+    words = {"current": "this install", "other": "another install", "gone": "sources removed (stale)",
+             "unknown": "no origin recorded: an older version's, or being written (stale)"}
     print(f"{folder}: {len(rows)} folder(s), {sum(f.size for f in rows) / 1e6:.1f} MB")
     for f in rows:
         print(f"  {f.path.name:<32} {f.size / 1e6:7.1f} MB {f.files:5d} files  {words[f.status]}"

@@ -172,7 +172,7 @@ def _locator_class(base, folder: Path):
 class CacheFolder:
     """One subfolder of the cache: ``path``, ``source`` (the source folder it caches, None when not
     recorded), ``status``: ``"current"`` (this install's sources), ``"other"`` (another install, still
-    there) or ``"gone"`` (sources removed, or not recorded); ``size`` in bytes, ``files``."""
+    there) ``"gone"`` (sources removed) or ``"unknown"`` (no origin recorded: an older version's folder, or one being created); ``size`` in bytes, ``files``."""
 
     path: Path
     source: Path | None
@@ -197,8 +197,10 @@ def cache_folders(folder: Path | None = None) -> list[CacheFolder]:
             source = Path(origin.read_text(encoding="utf-8").strip()) if origin.exists() else None
         except OSError:
             source = None
-        status = ("current" if source is not None and str(source) in current else
-                  "other" if source is not None and source.is_dir() else "gone")
+        # no origin file: an older version's folder, or one that another process is creating right now
+        # (two processes starting at once, pytest-xdist's workers): never removed as "gone"
+        status = ("unknown" if source is None else "current" if str(source) in current else
+                  "other" if source.is_dir() else "gone")
         files = [f for f in sub.rglob("*") if f.is_file()]
         out.append(CacheFolder(sub, source, status, sum(f.stat().st_size for f in files), len(files)))
     return out
@@ -206,12 +208,13 @@ def cache_folders(folder: Path | None = None) -> list[CacheFolder]:
 
 def clear_cache(folder: Path | None = None, *, which: str = "stale") -> list[CacheFolder]:
     """Remove the cache's subfolders ``which`` says: ``"gone"`` (their sources no longer exist),
-    ``"stale"`` (gone, and other installs'), ``"all"``. Returns the removed ones."""
+    ``"stale"`` (gone, unknown -- no origin file, an older version's -- and other installs'), ``"all"``.
+    Returns the removed ones."""
     import shutil
 
     if which not in ("gone", "stale", "all"):
         raise ValueError(f"clear_cache: which must be 'gone', 'stale' or 'all', got {which!r}")
-    keep = {"gone": ("current", "other"), "stale": ("current",), "all": ()}[which]
+    keep = {"gone": ("current", "other", "unknown"), "stale": ("current",), "all": ()}[which]
     removed = []
     for f in cache_folders(folder):
         if f.status not in keep:
