@@ -84,6 +84,7 @@ from ..dynamics.transforms import PARAMETERS, BaseState
 from ..errors import SceneError
 from ..locations import example_robot_data_dir, shipped_robots_dir
 from ..ranges import MAX_SAMPLES, MAX_STEPS, METHODS, MIN_ATOL, MIN_T_END, RANGES, RTOL_FLOOR
+from .contact import parse_contacts
 from .actuators import ActuatorSpec, hold_actuators, parse_actuators
 from .functions import Constant, SceneValueError, TimeFunction, VectorFunction, parse_function, vector_function
 
@@ -95,7 +96,8 @@ DEFAULT_SCENE_NAME = "default"
 Q0_CHOICES = ("zero", "random")
 
 _TOP = ("description", "chaotic", "robot", "gravity", "base", "force", "moment", "torque", "spring",
-        "dampers", "springs", "gravcomp", "initial", "run", "record", "actuator", "computed_torque")
+        "dampers", "springs", "gravcomp", "initial", "run", "record", "actuator", "computed_torque",
+        "contact")       # issue 37
 _ROBOT = ("urdf", "mjcf", "shipped", "example_robot_data", "floating_base", "inertia", "mimic", "package_dirs",
           "strict", "xacro_args")
 #: Joint types whose damping (URDF or MJCF) becomes a damper on their one coordinate.
@@ -194,6 +196,8 @@ class Scene:
     """``[[computed_torque]]``: ``(coordinate, reference q_r(t))``."""
     gravcomp_factor: float | None = None
     gravcomp_bodies: tuple[tuple[str, float], ...] = ()
+    contacts: tuple = ()
+    """``[[contact]]`` blocks (issue 37): :class:`urdf2links.scenes.contact.ContactSpec`."""
 
     def model(self):
         """Load the scene's robot with its options (a :class:`~urdf2links.dynamics.model.Model`)."""
@@ -579,7 +583,8 @@ def scene_from_dict(data: dict, *, where: str = "<scene>", directory: Path | Non
                  chaotic=chaotic, gravity=gravity, base=base, loads=loads, torques=torques, springs=springs,
                  q0=q0, qd0=qd0, run=run, link_poses=link_poses, urdf_damping=urdf_damping,
                  file_springs=file_springs, gravcomp=gravcomp, actuators=actuators, computed_torque=computed,
-                 gravcomp_factor=gravcomp_factor, gravcomp_bodies=gravcomp_bodies)
+                 gravcomp_factor=gravcomp_factor, gravcomp_bodies=gravcomp_bodies,
+                 contacts=parse_contacts(r, data))     # issue 37
 
 
 def _gravcomp(r: _Reader, data: dict) -> tuple[bool, float | None, tuple]:

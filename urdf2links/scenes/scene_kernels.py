@@ -20,6 +20,7 @@ from ..dynamics.inverse_kernels import kinematics_acc, own_armature
 from ..dynamics.kernels import add_wrench, base_power, clear_wrenches, dynamics, energies, kinematics
 from ..dynamics.model_kernels import reduce_mass, reduce_vector
 from ..dynamics.tree_arrays import W_B, W_Q, W_SIZE, nn
+from .contact_kernels import contact_potential, contact_wrenches, has_wrenches   # issue 37
 from .scene_arrays import (
     KA,
     S_ACT_FLAGS,
@@ -207,8 +208,9 @@ def _applied(SI, SF, t, y, Q, iQ, f, jf, X):
     torque (already in ``X``, :func:`computed_torque`) and springs ``-k (q - rest)``. Returns the power
     ``q' . f`` of the non-potential ones (springs excluded)."""
     n = SI[0]
+    wrenches = has_wrenches(SI)     # issue 37: loads or contact
     for i in range(n):
-        f[jf + i] = Q[iQ + i] if SI[5] > 0 else 0.0
+        f[jf + i] = Q[iQ + i] if wrenches else 0.0
     _inputs(SI, SF, t, y, 0, f, jf)
     if SI[S_CT] > 0:
         xt = ct_torque_at(n, SI[1])
@@ -302,7 +304,7 @@ def _coupled_solve(SI, SF, I, W, X, t, y, out):
     xa = 2 * nt + 18
     xl = xa + n * n
     xf = xl + n * n
-    if SI[5] > 0:
+    if has_wrenches(SI):            # issue 37: loads or contact
         reduce_vector(C, W, I[W_Q], X, xf + n, 1.0)
     P = _applied(SI, SF, t, y, X, xf + n, X, xf, X)
     reduce_vector(C, W, I[W_B], out, n, 1.0)
@@ -323,7 +325,7 @@ def scene_rhs(t, y, out, I, F, W, SI, SF, X):
     ``q' . (Q + tau - c q' + actuators + computed torque)`` minus the explicit rate ``dE/dt - dV/dt`` of a
     moving base (see :mod:`urdf2links.scenes.plan`)."""
     n, nt = SI[0], SI[1]
-    has_base, coupled, loads = SI[2] != 0, SI[4] != 0, SI[5] > 0
+    has_base, coupled, loads = SI[2] != 0, SI[4] != 0, has_wrenches(SI)     # issue 37: loads or contact
     applied = loads or SI[6] > 0 or SI[7] > 0 or SI[8] > 0 or SI[S_NA] > 0 or SI[S_CT] > 0
     g = SI[S_GRAV]
     gx, gy, gz = SF[g], SF[g + 1], SF[g + 2]
@@ -337,9 +339,11 @@ def scene_rhs(t, y, out, I, F, W, SI, SF, X):
         kinematics(I, F, W, X, 0, X, nt, True, X, xb, has_base, gx, gy, gz)
     else:
         kinematics(I, F, W, y, 0, y, n, True, X, xb, has_base, gx, gy, gz)
+    Pel = 0.0
     if loads:
         clear_wrenches(I, W)
         _apply_loads(SI, SF, I, W, t)
+        Pel = contact_wrenches(SI, SF, I, W)       # issue 37: ground contact (E80), its elastic power (E81)
     dynamics(I, F, W, True, loads, has_base)
     for i in range(n):
         out[i] = y[n + i]
@@ -366,7 +370,7 @@ def scene_rhs(t, y, out, I, F, W, SI, SF, X):
     if has_base:   # the base's twist, acceleration and the links' momentum, recorded by the passes
         dE, dV = base_power(I, W, gx, gy, gz)
         P -= dE - dV
-    out[2 * n] = P
+    out[2 * n] = P + Pel
     return -1
 
 
@@ -404,6 +408,7 @@ def scene_energies(ts, Q, QD, out, I, F, W, SI, SF, X):
         for j in range(SI[7]):
             x = Q[s, SI[si + j]] - SF[rest + j]
             V += 0.5 * SF[k + j] * x * x
+        V += contact_potential(SI, SF, I, W)       # issue 37: the contact's elastic energy (E81)
         out[s, 0] = E0
         out[s, 1] = V
         out[s, 2] = (0.5 * (E0 + E1) - 2.0 * E2 + V) if has_base else E0 + V
