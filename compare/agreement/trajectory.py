@@ -75,6 +75,8 @@ from urdf2links.scenes.scene import Scene, load_scene, robot_label
 from ..mujoco_side.mjcf import MjcfModel, mjcf_from_scene
 from ..mujoco_side.mujoco_mjcf import FILE_LABEL, file_route_inputs, file_terms, mujoco_from_mjcf, run_file
 from ..mujoco_side.mujoco_run import TIMED_REGION as MUJOCO_REGION
+from ..mujoco_side.contact_inputs import contact_energy
+from .contact_reference import contact_reference
 from ..mujoco_side.mujoco_run import MujocoRun, energy_function, run_mujoco
 from ..mujoco_side.stable_run import stable_run
 from .actuator_terms import file_actuators, merged, route1_actuators, route2_actuators
@@ -168,6 +170,9 @@ class SceneComparison:
     threshold: float
     info: dict = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
+    contact: dict | None = None
+    """Issue 37: a ``[[contact]]`` scene's ground and MuJoCo's native contact beside it
+    (:func:`urdf2links.compare.agreement.contact_reference.contact_reference`), else None."""
 
     @property
     def key(self) -> str:
@@ -308,6 +313,7 @@ class SceneComparison:
                      "tracking_error": float(run.base_tracking_error) if moving else None},
             "wall_time": self._wall_time_summary(),
             "notes": list(self.notes),
+            **({"contact": self.contact} if self.contact is not None else {}),     # issue 37
         }
 
 
@@ -412,9 +418,13 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
                  "q0": dict(zip(model.coordinate_names, q0.tolist())),
                  "qd0": dict(zip(model.coordinate_names, qd0.tolist())),
                  "total_s": time.perf_counter() - start})
+    contact = None
+    if "contact" in plan.terms:       # issue 37: MuJoCo's own contact on the same scene, as a reference
+        say("MuJoCo's native contact (a reference, not an error)")
+        contact, info["contact_series"] = contact_reference(plan, mj, t, q_o, qd_o, T, samples)
     return SceneComparison(
         scene=scene, model=model, mj=mj, traj=traj, run=run, t=t, q_ours=q_o, q_mujoco=run.q, error=error,
-        energy=energy, terms=terms, growth=growth, threshold=threshold, info=info, notes=notes)
+        energy=energy, terms=terms, growth=growth, threshold=threshold, info=info, notes=notes, contact=contact)
 
 
 def _check_mujoco_steps(scene, T: float, mujoco_dt) -> None:
@@ -481,10 +491,12 @@ def _energy_balances(scene, plan, mj, run, traj, EV_o, h_o, W) -> tuple[dict, di
     """Both engines' balances ``h - h(0) - W`` (MuJoCo's without ``W`` when no work acts), the
     energy arrays for the report, and what the summary says about them."""
     work_terms = any(term in plan.terms for term in ("Q", "tau", "damper", "base", "gravcomp", "actuator",
-                                                   "computed_torque"))
-    EV_m = run.total_energy
+                                                   "computed_torque", "contact"))
+    # issue 37: the contact's elastic energy (E81) at MuJoCo's states, which MuJoCo's own energy does not count
+    V_c = contact_energy(plan, run.t, run.q) if "contact" in plan.terms else 0.0
+    EV_m = run.total_energy + V_c
     if scene.base is not None:
-        h_m = energy_function(mj, run, plan)
+        h_m = energy_function(mj, run, plan) + V_c
         quantity, sym = "h = E2 - E0 + V (energy function; moving base)", "h"
     else:
         h_m = EV_m
@@ -492,7 +504,7 @@ def _energy_balances(scene, plan, mj, run, traj, EV_o, h_o, W) -> tuple[dict, di
     bal_o = h_o - h_o[0] - W
     if work_terms:
         bal_m = h_m - h_m[0] - W
-        what = [w for w, on in (("forces/moments", "Q" in plan.terms), ("joint torques", "tau" in plan.terms),
+        what = [w for w, on in (("contact", "contact" in plan.terms), ("forces/moments", "Q" in plan.terms), ("joint torques", "tau" in plan.terms),
                                 ("dampers", "damper" in plan.terms), ("the moving base", "base" in plan.terms),
                                 ("gravcomp", "gravcomp" in plan.terms), ("actuators", "actuator" in plan.terms),
                                 ("the computed torque", "computed_torque" in plan.terms)) if on]

@@ -77,7 +77,8 @@ def file_route_inputs(scene, plan=None) -> list[str]:
     empty when it runs it. Actuators on a ball's or free joint's angles run through the control callback
     (:meth:`~urdf2links.compare.mujoco_side.mujoco_inputs.CompiledInputs.for_file`)."""
     out = [w for w, on in (("[base]", scene.base is not None), ("[[force]]/[[moment]]", bool(scene.loads)),
-                           ("[[torque]]", bool(scene.torques)), ("[[computed_torque]]", bool(scene.computed_torque)))
+                           ("[[torque]]", bool(scene.torques)), ("[[computed_torque]]", bool(scene.computed_torque)),
+                           ("[[contact]]", bool(getattr(scene, "contacts", ()))))     # issue 37: route 1 carries it
            if on]
     if plan is not None:
         bad = [a.name for a in plan.actuator_set.actuators if _carried(plan, a) is False]
