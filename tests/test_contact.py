@@ -183,3 +183,90 @@ def test_bad_contact_is_refused_by_name(quad, contact, says):
     with pytest.raises(SceneError, match=None) as err:
         compile_plan(scene_from_dict(data, where="quad.toml", name="quad.toml"), quad)
     assert says in str(err.value) and "quad.toml" in str(err.value)
+
+
+# --------------------------------------------------------------------------- the robot's own spheres, --ground
+
+CAPSULE_BODY = """<mujoco model="capsule_body">
+  <worldbody>
+    <body name="torso" pos="0.1 0.2 0.5" euler="0.3 -0.2 0.5">
+      <freejoint/>
+      <geom type="capsule" fromto="-0.2 0.05 0 0.3 -0.05 0.1" size="0.03" density="800"/>
+      <geom type="sphere" pos="0 0 -0.1" size="0.04" density="800"/>
+      <geom type="sphere" pos="0 0 0.2" size="0.05" contype="0" conaffinity="0" density="800"/>
+    </body>
+  </worldbody>
+</mujoco>"""
+
+
+def test_mjcf_capsule_ends_and_spheres_are_contact_spheres():
+    """MJCF: a colliding sphere geom and both ends of a capsule (the visual sphere left out), at the places
+    MuJoCo puts them (geom_xpos +- half-length along geom_xmat's z) at qpos0."""
+    import mujoco
+
+    from urdf2links.parsers.mjcf import load_mjcf_string
+    from urdf2links.scenes.contact import _link_poses
+
+    model = load_mjcf_string(CAPSULE_BODY)
+    spheres = model.info["collision_spheres"]
+    assert [(b, r) for b, _, r in spheres] == [("torso", 0.03), ("torso", 0.03), ("torso", 0.04)]
+    m = mujoco.MjModel.from_xml_string(CAPSULE_BODY)
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    axis = d.geom_xmat[0].reshape(3, 3)[:, 2] * m.geom_size[0, 1]
+    want = [d.geom_xpos[0] + axis, d.geom_xpos[0] - axis, d.geom_xpos[1]]
+    T = _link_poses(model, model.info["q0"])["torso"]
+    got = [T[:3, :3] @ np.asarray(c) + T[:3, 3] for _, c, _ in spheres]
+    # measured 1e-16 m
+    assert np.max(np.abs(np.array(got) - np.array(want))) < 1e-12
+
+
+def test_ground_takes_the_lowest_spheres_and_touches_at_q0(quad):
+    """--ground on quad12 (floating): its lowest foot spheres, the plane through their lowest point at q0, and
+    --hold's servos on the trunk's six coordinates removed; the scene written as TOML reads back the same."""
+    from urdf2links.scenes.contact import resolve_contacts, with_ground
+    from urdf2links.scenes.scene import default_scene
+    from urdf2links.scenes.scene_toml import scene_toml
+
+    q0 = {"FL_thigh": 0.6, "FL_knee": -1.2}
+    scene = with_ground(replace_q0(default_scene(ROBOTS / "quad12.urdf", floating=True, hold=2.0), q0), quad)
+    assert scene.name.endswith("-ground") and len(scene.actuators) == 12
+    assert all(not a.coordinate.startswith("trunk.") for a in scene.actuators)
+    cset = resolve_contacts(scene.contacts, quad, scene.initial_state(quad)[0])
+    # the legs hang straight (0.36 m below the hip) except FL's, bent 9 cm up: the other three feet are lowest
+    assert sorted(s.link for s in cset.spheres) == ["FR_calf", "RL_calf", "RR_calf"]
+    assert cset.rows[0][4] == pytest.approx(-0.36 - 0.02, abs=1e-12)
+    back = scene_from_dict(__import__("tomllib").loads(scene_toml(scene)), name="back")
+    assert _same_specs(back.contacts, scene.contacts)
+
+
+def replace_q0(scene, q0):
+    import dataclasses
+
+    return dataclasses.replace(scene, q0=q0)
+
+
+def _same_specs(a, b) -> bool:
+    return len(a) == len(b) and all(x.describe() == y.describe() and x.lowest == y.lowest for x, y in zip(a, b))
+
+
+def test_ground_on_a_robot_without_collision_spheres():
+    """solo12 has only meshes: --ground puts 2 cm spheres at its lowest leaf links, the four feet."""
+    from corpus import ROOT
+
+    from urdf2links.scenes.contact import resolve_contacts, with_ground
+    from urdf2links.scenes.scene import default_scene
+
+    scene = with_ground(default_scene(ROOT / "solo_description/robots/solo12.urdf", floating=True))
+    model = scene.model()
+    cset = resolve_contacts(scene.contacts, model, scene.initial_state(model)[0])
+    assert sorted(s.link for s in cset.spheres) == ["FL_FOOT", "FR_FOOT", "HL_FOOT", "HR_FOOT"]
+    assert "no collision spheres" in " ".join(cset.notes)
+
+
+def test_ground_refuses_a_fixed_base():
+    from urdf2links.scenes.contact import with_ground
+    from urdf2links.scenes.scene import default_scene
+
+    with pytest.raises(SceneError, match="fixed base.*--floating"):
+        with_ground(default_scene(ROBOTS / "quad12.urdf"))

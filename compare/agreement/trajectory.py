@@ -75,7 +75,7 @@ from urdf2links.scenes.scene import Scene, load_scene, robot_label
 from ..mujoco_side.mjcf import MjcfModel, mjcf_from_scene
 from ..mujoco_side.mujoco_mjcf import FILE_LABEL, file_route_inputs, file_terms, mujoco_from_mjcf, run_file
 from ..mujoco_side.mujoco_run import TIMED_REGION as MUJOCO_REGION
-from ..mujoco_side.contact_inputs import contact_energy
+from ..mujoco_side.contact_inputs import contact_energy, contact_timestep
 from .contact_reference import contact_reference
 from ..mujoco_side.mujoco_run import MujocoRun, energy_function, run_mujoco
 from ..mujoco_side.stable_run import stable_run
@@ -384,6 +384,11 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
                     progress=progress, max_wall=left)
     if max_wall is not None and time.perf_counter() - start > max_wall:
         raise IntegrationError(f"{scene.path or scene.name}: max_wall={max_wall:g} s spent before MuJoCo's run")
+    step_note = None
+    if "contact" in plan.terms:         # issue 37: MuJoCo's step resolves the contact's stiffest mode
+        mujoco_dt, step_note = contact_timestep(plan, traj, mujoco_dt)
+        if step_note:
+            say(step_note)
     say(f"MuJoCo: {mujoco_integrator} dt {mujoco_dt:g}, {int(round(T / mujoco_dt))} steps")
     file_run = mf is not None and not file_route_inputs(scene, plan)
     fallback = None
@@ -404,7 +409,7 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     div = divergence_time(t, err_max, threshold)
     growth = growth_fit(t, err_max, end_time=div) if scene.chaotic else None
     energy, info = _energy_balances(scene, plan, mj, run, traj, EV_o, h_o, W)
-    notes = _run_notes(scene, plan, mj, run, traj, t_end_note, resampled=resampled)
+    notes = _run_notes(scene, plan, mj, run, traj, t_end_note, resampled=resampled) + ([step_note] if step_note else [])
     if mf is not None:
         notes += ([f"route 2 (the MJCF file in MuJoCo): {x}" for x in mf.notes]
                   + [f"import: {x}" for x in model.info.get("notes", [])])
