@@ -491,16 +491,19 @@ def _prescribe_base(m, d, H, I, F, t, xfrc, qfrc):
         qfrc[bdof[j]] += s - f[bdof[j]]
 
 
+@njit(cache=True, inline="always")
+def _scene_arrays(H):
+    """The project's compiled scene and tree arrays of this run, with scratch of their own: (TI, TF, W, SI, SF, X)."""
+    return (carray(_voidptr(H[P_TI]), H[N_TI], np.int64), carray(_voidptr(H[P_TF]), H[N_TF], np.float64),
+            carray(_voidptr(H[P_W]), H[N_W], np.float64), carray(_voidptr(H[P_SI]), H[N_SI], np.int64),
+            carray(_voidptr(H[P_SF]), H[N_SF], np.float64), carray(_voidptr(H[P_X]), H[N_X], np.float64))
+
+
 @njit(cache=True)
 def _computed_torque(H, I, t, qfrc):
     """The project's computed torque at ``t`` (:func:`urdf2links.scenes.scene_kernels.computed_torque`, on
     the project's own compiled scene and tree arrays, with scratch of its own) into ``qfrc_applied``."""
-    TI = carray(_voidptr(H[P_TI]), H[N_TI], np.int64)
-    TF = carray(_voidptr(H[P_TF]), H[N_TF], np.float64)
-    W = carray(_voidptr(H[P_W]), H[N_W], np.float64)
-    SI = carray(_voidptr(H[P_SI]), H[N_SI], np.int64)
-    SF = carray(_voidptr(H[P_SF]), H[N_SF], np.float64)
-    X = carray(_voidptr(H[P_X]), H[N_X], np.float64)
+    TI, TF, W, SI, SF, X = _scene_arrays(H)
     computed_torque(t, TI, TF, W, SI, SF, X)
     xt = ct_torque_at(SI[0], SI[1])
     dof = _int(H, I, I_DOF)
@@ -511,12 +514,7 @@ def _computed_torque(H, I, t, qfrc):
 @njit(cache=True)
 def _contact(H, t, qfrc):
     """Issue 37: the contact's Q at MuJoCo's state into ``qfrc_applied`` (:func:`contact_inputs.add_contact`)."""
-    TI = carray(_voidptr(H[P_TI]), H[N_TI], np.int64)
-    TF = carray(_voidptr(H[P_TF]), H[N_TF], np.float64)
-    W = carray(_voidptr(H[P_W]), H[N_W], np.float64)
-    SI = carray(_voidptr(H[P_SI]), H[N_SI], np.int64)
-    SF = carray(_voidptr(H[P_SF]), H[N_SF], np.float64)
-    X = carray(_voidptr(H[P_X]), H[N_X], np.float64)
+    TI, TF, W, SI, SF, X = _scene_arrays(H)
     qpos = carray(_voidptr(H[QPOS]), H[NQ], np.float64)
     qvel = carray(_voidptr(H[QVEL]), H[NV], np.float64)
     index = carray(_voidptr(H[P_CI]), H[N_CI], np.int64)

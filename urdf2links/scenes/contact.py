@@ -181,37 +181,52 @@ def resolve_contacts(specs, model, q0, *, where: str = "<scene>") -> ContactSet:
     poses = _link_poses(model, q0)
     robot = _robot_spheres(model)
     rows, spheres, notes = [], [], []
+    # the choice of spheres and the "touching" height, made once per model and initial state: a re-charted
+    # model (urdf2links.integration.charts) shares info with its original but not the meaning of q0's angles
+    cache = model.info.setdefault("contact_resolution", {})
     for i, spec in enumerate(specs):
-        chosen = list(spec.spheres)
-        for link in spec.links:
-            if link not in frame_of:
-                raise SceneError(f"{where}: contact[{i}].links names {link!r}, not a link of robot {model.name!r}; "
-                                 f"links are {sorted(frame_of)}")
-            own = [s for s in robot if s.link == link]
-            if not own:
-                raise SceneError(f"{where}: contact[{i}].links: link {link!r} of {model.name!r} has no collision sphere "
-                                 "(URDF <collision><sphere>, MJCF sphere or capsule geom); give its sphere with "
-                                 "spheres = [{link, centre, radius}]")
-            chosen += own
-        if spec.lowest:
-            low, how = _lowest(model, poses, spec.normal)
-            chosen += [s for s in low if not any(s.link == c.link and np.allclose(s.centre, c.centre) for c in chosen)]
-            notes.append(f"contact[{i}]: the robot's lowest spheres ({how}): "
-                         + ", ".join(sorted({s.link for s in low})))
-        for s in chosen:
-            if s.link not in frame_of:
-                raise SceneError(f"{where}: contact[{i}] sphere on {s.link!r}, not a link of robot {model.name!r}; "
-                                 f"links are {sorted(frame_of)}")
-        height = spec.height
-        if height == "touching":
-            height = min(_bottom(poses, s, spec.normal) for s in chosen)
-            notes.append(f"contact[{i}]: ground height {height:.6g} m, touching the lowest sphere at the initial state")
+        key = (spec.describe(), spec.links, spec.lowest, repr([(s.link, s.centre.tolist(), s.radius) for s in spec.spheres]),
+               np.asarray(q0, float).tobytes())
+        if key not in cache:
+            cache[key] = _choose(spec, i, model, frame_of, poses, robot, where)
+        chosen, height, more = cache[key]
+        notes += more
         for s in chosen:
             tname, X = frame_of[s.link]
             X = np.asarray(X, float)
             rows.append((model.tree.link_index(tname), X[:3, :3] @ s.centre + X[:3, 3], s.radius, spec, float(height)))
             spheres.append(s)
     return ContactSet(tuple(rows), tuple(spheres), tuple(notes))
+
+
+def _choose(spec, i, model, frame_of, poses, robot, where) -> tuple[list, float, list]:
+    """One block's spheres, its height and notes (:func:`resolve_contacts`)."""
+    notes = []
+    chosen = list(spec.spheres)
+    for link in spec.links:
+        if link not in frame_of:
+            raise SceneError(f"{where}: contact[{i}].links names {link!r}, not a link of robot {model.name!r}; "
+                             f"links are {sorted(frame_of)}")
+        own = [s for s in robot if s.link == link]
+        if not own:
+            raise SceneError(f"{where}: contact[{i}].links: link {link!r} of {model.name!r} has no collision sphere "
+                             "(URDF <collision><sphere>, MJCF sphere or capsule geom); give its sphere with "
+                             "spheres = [{link, centre, radius}]")
+        chosen += own
+    if spec.lowest:
+        low, how = _lowest(model, poses, spec.normal)
+        chosen += [s for s in low if not any(s.link == c.link and np.allclose(s.centre, c.centre) for c in chosen)]
+        notes.append(f"contact[{i}]: the robot's lowest spheres ({how}): "
+                     + ", ".join(sorted({s.link for s in low})))
+    for s in chosen:
+        if s.link not in frame_of:
+            raise SceneError(f"{where}: contact[{i}] sphere on {s.link!r}, not a link of robot {model.name!r}; "
+                             f"links are {sorted(frame_of)}")
+    height = spec.height
+    if height == "touching":
+        height = min(_bottom(poses, s, spec.normal) for s in chosen)
+        notes.append(f"contact[{i}]: ground height {height:.6g} m, touching the lowest sphere at the initial state")
+    return chosen, height, notes
 
 
 def contact_arrays(cset: ContactSet) -> tuple[np.ndarray, np.ndarray]:
