@@ -93,6 +93,10 @@ def _print_headline(s: dict, stream=sys.stdout) -> None:
               f"at the end (largest difference {b['max_difference']:.2e} m), feet {nat['feet']['final_max_distance']:.2e} m "
               f"apart, settled at {st['ours'] if st['ours'] is not None else 'never'} / "
               f"{st['native'] if st['native'] is not None else 'never'} s (law / native)", file=stream)
+    if s.get("coverage"):
+        print(f"  coverage   {s['coverage']['text']}", file=stream)
+    if s.get("verdict"):
+        print(f"  verdict    {s['verdict']['text']}", file=stream)
     print(f"  wall time  urdf2links {wt['project_s']:.3g} s (integrator), MuJoCo {wt['mujoco_s']:.3g} s (engine, "
           f"mj_step nstep); whole calls {wt['project_run_s']:.3g} s / {wt['mujoco_harness_s']:.3g} s", file=stream)
     if wt["project_compiled"]:
@@ -104,7 +108,7 @@ def _print_headline(s: dict, stream=sys.stdout) -> None:
 
 def _compare_cmd(args) -> str:
     parts = ["urdf2links compare", shown_path(args.scene)]
-    parts += [f for f, on in (("--floating", args.floating), (f"--q0 {args.q0}", args.q0 != "zero"),
+    parts += [f for f, on in (("--floating", args.floating), (f"--q0 {args.q0}", args.q0 != "excite"),
                               (f"--inertia {args.inertia}", args.inertia), (f"--mimic {args.mimic}", args.mimic),
                               ("--strict", args.strict)) if on]
     parts += [f"--package-dir {shown_path(d)}" for d in args.package_dir] + [f"--xacro-arg {a}" for a in args.xacro_arg]

@@ -175,4 +175,9 @@ def test_corpus_index_loads_with_its_plots(browser, pages):
         heads = page.js("Array.from(document.querySelectorAll('#corpus th')).map(h => h.textContent)")
         page.click_on(f"#corpus th:nth-child({heads.index('n') + 1})")   # largest first on the first click
         assert [r.split(":")[1] for r in page.js(rows)][:2] == ["6", "2"]
+        assert "coveragemoved" in heads          # both robots moved every coordinate: none is weak evidence
+        page.click_on("#only-weak")
+        assert page.js("document.getElementById('shown').textContent") == "0 of 3 robots shown"
+        page.click_on("#only-weak")
+        assert page.js("document.getElementById('shown').textContent") == "3 of 3 robots shown"
         assert page.errors() == []

@@ -1,16 +1,16 @@
-"""The command line, run as a user runs it."""
+"""The command line, run as a user runs it (in this process: tests/cli_runner.py)."""
 
 from __future__ import annotations
 
-import subprocess
-import sys
 from pathlib import Path
+
+from cli_runner import run_cli
 
 ROBOTS = Path(__file__).resolve().parent.parent / "robots"
 
 
 def run(*args):
-    return subprocess.run([sys.executable, "-m", "urdf2links.cli", *args], capture_output=True, text=True)
+    return run_cli(*args)          # in this process, as a subprocess would show it (tests/cli_runner.py)
 
 
 def test_inspect_prints_tree_and_audit():

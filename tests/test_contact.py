@@ -229,7 +229,7 @@ def test_ground_takes_the_lowest_spheres_and_touches_at_q0(quad):
     from urdf2links.scenes.scene_toml import scene_toml
 
     q0 = {"FL_thigh": 0.6, "FL_knee": -1.2}
-    scene = with_ground(replace_q0(default_scene(ROBOTS / "quad12.urdf", floating=True, hold=2.0), q0), quad)
+    scene = with_ground(replace_q0(default_scene(ROBOTS / "quad12.urdf", floating=True, q0="zero", hold=2.0), q0), quad)
     assert scene.name.endswith("-ground") and len(scene.actuators) == 12
     assert all(not a.coordinate.startswith("trunk.") for a in scene.actuators)
     cset = resolve_contacts(scene.contacts, quad, scene.initial_state(quad)[0])
@@ -257,7 +257,7 @@ def test_ground_on_a_robot_without_collision_spheres():
     from urdf2links.scenes.contact import resolve_contacts, with_ground
     from urdf2links.scenes.scene import default_scene
 
-    scene = with_ground(default_scene(ROOT / "solo_description/robots/solo12.urdf", floating=True))
+    scene = with_ground(default_scene(ROOT / "solo_description/robots/solo12.urdf", floating=True, q0="zero"))
     model = scene.model()
     cset = resolve_contacts(scene.contacts, model, scene.initial_state(model)[0])
     assert sorted(s.link for s in cset.spheres) == ["FL_FOOT", "FR_FOOT", "HL_FOOT", "HR_FOOT"]

@@ -103,7 +103,7 @@ def test_ground_on_go1_agrees_once_mujocos_step_resolves_the_contact():
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")         # go1's base inertia finding: audited, not the point here
-        scene = with_ground(default_scene(ROOT / "go1_description/urdf/go1.urdf", floating=True, t_end=0.6))
+        scene = with_ground(default_scene(ROOT / "go1_description/urdf/go1.urdf", floating=True, q0="zero", t_end=0.6))
         model = scene.model()
     plan = compile_plan(scene, model)
     traj = simulate(plan, samples=121, progress=False)

@@ -4,11 +4,11 @@ joint-limit excursions, and the CLI forms ``simulate|compare ROBOT.urdf`` and ``
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
+
+from cli_runner import run_cli
 
 from urdf2links import load_urdf
 from urdf2links.errors import SceneError
@@ -50,15 +50,16 @@ def arm(tmp_path):
 
 
 def cli(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "urdf2links.cli", *args], capture_output=True, text=True, cwd=cwd)
+    return run_cli(*args, cwd=cwd)  # in this process, as a subprocess would show it (tests/cli_runner.py)
 
 
 def test_default_scene_contents(arm):
-    s = default_scene(arm)
-    assert s.name == "default" and s.path is None and s.urdf_damping
+    s = default_scene(arm, q0="rest")
+    assert s.name == "default-rest" and s.path is None and s.urdf_damping
     np.testing.assert_array_equal(s.gravity, [0.0, 0.0, -9.81])
     assert s.base is None and not s.loads and not s.torques and s.q0 == {} and s.qd0 == {}
     assert s.run.t_end == 1.0 and s.run.method == "auto"
+    assert default_scene(arm, q0="zero").q0 == {} and default_scene(arm, q0="zero").name == "default-rest"
     assert s.load_options["floating_base"] is False
     floating = default_scene(arm, floating=True, t_end=0.5)
     assert floating.load_options["floating_base"] and floating.run.t_end == 0.5
@@ -99,6 +100,9 @@ def test_scene_toml_round_trip(arm, tmp_path):
     back = load_scene(f)
     assert back.robot.resolve() == arm.resolve() and back.urdf_damping
     assert back.q0 == pytest.approx(s.q0, abs=0) and back.run == s.run
+    ex = default_scene(arm, seed=3, t_end=0.7)         # the excited default: qd0 and its damper torques too
+    again = load_scene(write_scene(ex, tmp_path / "excited.toml"))
+    assert again.qd0 == ex.qd0 and again.q0 == ex.q0 and again.torques == ex.torques and len(ex.torques) == 3
     np.testing.assert_array_equal(back.gravity, s.gravity)
     assert back.load_options == {**s.load_options}
     with pytest.raises(SceneError, match="functions of time"):
@@ -132,7 +136,7 @@ def test_simulate_robot_file_without_scene(arm, tmp_path):
 def test_inspect_scene_prints_the_default_scene(arm):
     out = cli("inspect", str(arm), "--scene")
     assert out.returncode == 0, out.stderr
-    assert "[dampers]" in out.stdout and "from_urdf = true" in out.stdout and "terms computed: A, e, G, damper" in out.stdout
+    assert "[dampers]" in out.stdout and "from_urdf = true" in out.stdout and "terms computed: A, e, G, tau, damper" in out.stdout
     table = cli("inspect", str(arm))
     assert "damping" in table.stdout and "0.8" in table.stdout and "-0.5" in table.stdout
 

@@ -1,8 +1,8 @@
 """Both engines timed the same way (issue 13): what each timed region contains, compilation kept out.
 
-No test here asserts a speed except the fresh-environment one the issue asks for, whose bound (2x)
-compares a run with itself after numba's compilation moved out of the timed region (it held 25 s
-of compilation against 0.05 s of integration before).
+No test here asserts a speed: that compilation stays out of the timed regions is checked on numba's
+own compile events (a fresh environment's first scene compiles nothing outside its warm-up), not by
+timing a run against itself, which a loaded machine moves (a 2x bound failed at 3.0x under load).
 """
 
 from __future__ import annotations
@@ -61,18 +61,31 @@ def test_summary_states_the_timed_regions():
 _FIRST_SCENE = """
 import json
 from urdf2links.compare.commands import shipped_scenes
-from urdf2links.compare.agreement.trajectory import compare_scene
-s = compare_scene(shipped_scenes()[0], states=2, progress=False).summary()
-print(json.dumps({"scene": s["key"], **{k: s["wall_time"][k] for k in ("project_s", "project_compiled", "project_warmup_s")}}))
+from urdf2links.compare.agreement import trajectory
+from urdf2links.integration.simulate import record_compilation
+inside, timed = [], trajectory.simulate
+
+def simulate(*args, **kwargs):          # compare_scene's timed run (its warm-up calls simulate elsewhere)
+    with record_compilation() as rec:
+        out = timed(*args, **kwargs)
+    inside.extend(rec.functions)
+    return out
+
+trajectory.simulate = simulate
+with record_compilation() as everything:
+    s = trajectory.compare_scene(shipped_scenes()[0], states=2, progress=False).summary()
+print(json.dumps({"scene": s["key"], "all": everything.functions, "warm_up": s["wall_time"]["project_compiled"],
+                  "inside_run": inside}))
 """
 
 
 @pytest.mark.slow
-def test_first_scene_in_a_fresh_environment(tmp_path):
-    """`urdf2links report`'s first scene with an empty numba cache (everything compiles) and again
-    with the cache it filled: the first run's timed integration is within 2x of the second's (the
-    issue's bound; the margin is the machine's jitter: compilation inside the timed region was
-    500x). Only that direction is bounded: a first run faster than the second is jitter too."""
+def test_first_scene_in_a_fresh_environment_compiles_only_in_its_warm_up(tmp_path):
+    """`urdf2links report`'s first scene with an empty numba cache (everything compiles), then again
+    with the cache it filled. In the fresh run numba compiles nothing inside the timed run (the whole
+    simulate() call that holds the timed integration: numba's compile events, whatever the machine's
+    load); the warm-up compiled. The second run compiles nothing at all: the disk cache serves a new
+    process."""
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba-cache"))
 
     def run():
@@ -81,10 +94,9 @@ def test_first_scene_in_a_fresh_environment(tmp_path):
         assert out.returncode == 0, out.stderr[-3000:]
         return json.loads(out.stdout.strip().splitlines()[-1])
 
-    first, second = run(), run()
-    assert first["project_compiled"], "the first run found a filled cache: not a fresh environment"
-    assert not second["project_compiled"], f"the second run compiled again: {second['project_compiled']}"
-    ratio = first["project_s"] / second["project_s"]
-    print(f"{first['scene']}: project_s {first['project_s']:.4f} s fresh (warm-up {first['project_warmup_s']:.1f} s "
-          f"compiling {len(first['project_compiled'])} functions), {second['project_s']:.4f} s cached: x{ratio:.2f}")
-    assert ratio <= 2.0
+    first = run()
+    assert first["all"], "nothing recorded"
+    assert not first["inside_run"], f"{first['scene']}: compiled inside the timed run: {first['inside_run']}"
+    assert first["warm_up"], "the first run found a filled cache: not a fresh environment"
+    second = run()
+    assert not second["all"], f"the second run compiled again: {second['all']}"

@@ -231,7 +231,9 @@ def test_counters_and_callback(method):
     elif method == "Radau5":
         # the initial F, scipy's initial step (1), the Jacobian's d columns, three stages per Newton
         # iteration (at least one per attempt), F at each accepted state but the last
-        assert res.njev >= 1 and res.nrejected >= 0
+        # the smooth oscillator: rejections are rare (measured 2 of 152 accepted steps, 3 Jacobians);
+        # a step controller that rejected one step in ten would be broken
+        assert res.njev >= 1 and isinstance(res.nrejected, int) and res.nrejected <= res.nsteps // 10
         assert res.nfev >= 1 + d * res.njev + 3 * (res.nsteps + res.nrejected) + res.nsteps - 1
     else:
         assert res.nrejected is None and res.nfev >= res.nsteps

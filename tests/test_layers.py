@@ -33,8 +33,9 @@ LAYERS = [
     ("compare: reports", ("urdf2links.compare.reports",)),
     ("compare: pairs", ("urdf2links.compare.pairs",)),
     ("compare: corpus", ("urdf2links.compare.corpus",)),
+    ("compare: check", ("urdf2links.compare.check",)),
     ("compare: commands", ("urdf2links.compare", "urdf2links.compare.commands")),
-    ("command line", ("urdf2links.cli", "urdf2links.__main__")),
+    ("command line", ("urdf2links.cli", "urdf2links.__main__", "urdf2links.pytest_plugin")),
 ]
 EXACT = {"urdf2links", "urdf2links.compare"}    # prefixes that match only themselves
 
@@ -124,6 +125,7 @@ def test_imports_go_downward(module):
     ("urdf2links.integration.simulate", "import urdf2links.compare.agreement.trajectory"),
     ("urdf2links.compare.mujoco_side.mjcf", "from ..reports.report import write_report"),
     ("urdf2links.compare.tradeoff.study", "from ..corpus import rows"),
+    ("urdf2links.compare.corpus.rows", "from ..check.config import read_config"),       # corpus -> check
 ])
 def test_a_planted_wrong_way_import_is_caught(module, planted):
     """The check fails on an import that goes up: each planted line added to a real module."""
@@ -134,10 +136,12 @@ def test_a_planted_wrong_way_import_is_caught(module, planted):
 
 
 def test_only_the_command_line_imports_compare():
-    """Nothing under urdf2links/ but the command line reaches the MuJoCo side."""
+    """Nothing under urdf2links/ but the command line (and the pytest plugin of ``urdf2links check``, lazily,
+    when it is active) reaches the MuJoCo side."""
     offenders = []
     for module, path in SOURCES.items():
-        if module.startswith("urdf2links.compare") or module in ("urdf2links.cli", "urdf2links.__main__"):
+        if module.startswith("urdf2links.compare") or module in ("urdf2links.cli", "urdf2links.__main__",
+                                                                 "urdf2links.pytest_plugin"):
             continue
         for line, target in imports_of(path.read_text(), module, is_package=path.name == "__init__.py"):
             if target.startswith("urdf2links.compare"):

@@ -206,7 +206,7 @@ def test_default_scene_takes_the_files_effects(files):
     from urdf2links.scenes.plan import compile_plan
     from urdf2links.scenes.scene import default_scene
 
-    scene = default_scene(files["free"])
+    scene = default_scene(files["free"], q0="rest")
     model = scene.model()
     plan = compile_plan(scene, model)
     assert scene.gravity.tolist() == [3.0, 0.0, -8.0]
@@ -214,7 +214,7 @@ def test_default_scene_takes_the_files_effects(files):
     assert "gravcomp" in plan.describe() and "armature" in plan.describe()
     q0, _ = scene.initial_state(model)
     assert q0 == pytest.approx(model.info["q0"])             # MuJoCo's qpos0
-    springs = compile_plan(default_scene(files["hinge_anchor"]), load_mjcf(files["hinge_anchor"])).spring_set.springs
+    springs = compile_plan(default_scene(files["hinge_anchor"], q0="rest"), load_mjcf(files["hinge_anchor"])).spring_set.springs
     assert [(s.coordinate, s.stiffness, s.rest, s.damping) for s in springs] == [("h", 2.0, pytest.approx(np.radians(40)), 0.3)]
 
 

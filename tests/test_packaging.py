@@ -104,13 +104,29 @@ def test_installed_package_works_from_another_folder(installed, tmp_path):
 # --------------------------------------------------------------------------- install, run, reinstall
 
 
+def _running_site_dirs() -> list[str]:
+    """The running environment's package folders, in import order: its site-packages (a venv's, a conda
+    env's or the system's dist-packages), the user's site if it is on the path, and folders that its
+    ``.pth`` files added (cmeel's prefix). Never the base interpreter's, unless that is what runs."""
+    import site
+
+    dirs = [*site.getsitepackages(), *([site.getusersitepackages()] if site.ENABLE_USER_SITE else [])]
+    dirs += [p for p in sys.path if p.endswith(("site-packages", "dist-packages"))]
+    return [d for d in dict.fromkeys(dirs) if Path(d).is_dir()]
+
+
 def _venv(folder: Path) -> tuple[Path, Path]:
-    """A fresh virtual environment that sees this environment's packages (the dependencies) but
-    installs urdf2links into its own site-packages: ``(its bin folder, its site-packages)``."""
-    subprocess.run([sys.executable, "-m", "venv", "--system-site-packages", str(folder)], check=True)
+    """A fresh virtual environment that installs urdf2links into its own site-packages and sees the
+    RUNNING environment's packages (the dependencies) behind them: a ``.pth`` file names the running
+    environment's package folders. ``--system-site-packages`` would show the base interpreter's
+    packages instead, which lack numba when the suite itself runs in a venv (issue 31). The folders are
+    added as plain paths: their own ``.pth`` files (an editable install of this checkout among them) are
+    not run, so the venv's own urdf2links is the one imported. ``(its bin folder, its site-packages)``."""
+    subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(folder)], check=True)
     bin_ = folder / "bin"
     site = Path(subprocess.run([str(bin_ / "python"), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
                                capture_output=True, text=True, check=True).stdout.strip())
+    (site / "_running_env.pth").write_text("".join(f"{d}\n" for d in _running_site_dirs()))
     return bin_, site
 
 
@@ -263,6 +279,8 @@ def test_every_import_is_a_declared_dependency():
     for module, files in sorted(_third_party_imports(["urdf2links", "compare"]).items()):
         dists = _distributions(module)
         used |= dists
+        if module == "pytest" and files == {"urdf2links/pytest_plugin.py"}:
+            continue        # the pytest plugin (an entry point) is only ever loaded by a running pytest
         if not dists & runtime and not any(dists & e for e in optional.values()):
             problems.append(f"{module} (distribution {sorted(dists) or 'unknown'}) imported by {sorted(files)} "
                             "is not in [project] dependencies")

@@ -202,7 +202,10 @@ def test_compiled_radau5_and_scipy_radau_meet_the_reference(name, rtol):
     """Against DOP853 at rtol 1e-13: the compiled Radau5 within 20 x rtol of the reference (its rtol is
     mapped to rtol^(5/6) for an order-3 estimate of an order-5 method: the global error lands near
     rtol; measured 2-8 x rtol), and in the same range as scipy's Radau at the same rtol (which
-    controls the order-3 estimate at rtol itself: more accurate, more steps)."""
+    controls the order-3 estimate at rtol itself: more accurate, more steps). Measured (rtol 1e-9):
+    ours 0.52 and 2.97 x rtol, scipy 0.012 and 1.8 x rtol; ours in 261 and 498 steps, scipy in 624 and
+    1196 (0.42 x both). Bounds: 20 x rtol for both errors (a wrong reference would put both off), and
+    ours in fewer than 0.6 x scipy's steps (the point of the mapped tolerance)."""
     plan, y0 = _scene(name)
     T = 0.3
     te = np.linspace(0.0, T, 61)
@@ -213,8 +216,8 @@ def test_compiled_radau5_and_scipy_radau_meet_the_reference(name, rtol):
     n = plan.model.n
     err = np.abs(ours.y[:, :n] - ref.y[:, :n]).max()
     err_scipy = np.abs(scipys.y[:, :n] - ref.y[:, :n]).max()
-    assert err < 20 * rtol, err
-    assert ours.nsteps < scipys.nsteps and err < 1000 * err_scipy + 2 * rtol
+    assert err < 20 * rtol and err_scipy < 20 * rtol, (err, err_scipy)
+    assert ours.nsteps < 0.6 * scipys.nsteps, (ours.nsteps, scipys.nsteps)
 
 
 @pytest.mark.parametrize("method", ["Radau5", "auto"])

@@ -5,6 +5,9 @@ scenes must run by name there, and what the table says a command writes must be 
 Each line runs as written, with one addition so that the suite stays short: a short ``--t-end``
 where the command takes one and the line sets none (the length of a run changes no code path the
 line demonstrates). The outputs the table names in backticks (``out/...``) are checked to exist.
+Each line runs in this process (tests/cli_runner.py: what a subprocess would show, without paying
+Python's start and numba's cache loading again per line); the installed command itself starts in
+tests/test_packaging.py's fresh environments.
 """
 
 from __future__ import annotations
@@ -12,12 +15,11 @@ from __future__ import annotations
 import os
 import re
 import shlex
-import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
+
+from cli_runner import run_cli
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -56,12 +58,9 @@ def test_the_table_has_the_commands():
 
 @pytest.mark.parametrize("command, what", ROWS, ids=[c for c, _ in ROWS])
 def test_a_readme_command_runs_from_an_empty_folder(command, what, tmp_path):
-    beside = Path(sys.executable).parent / "urdf2links"      # the command of this environment's install
-    exe = str(beside) if beside.is_file() else shutil.which("urdf2links")
     argv = _argv(command)
-    prefix = [exe] if exe else [sys.executable, "-m", "urdf2links"]
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
-    out = subprocess.run(prefix + argv[1:], cwd=tmp_path, capture_output=True, text=True, env=env, timeout=900)
+    out = run_cli(*argv[1:], cwd=tmp_path, env=env)
     assert out.returncode == 0, f"{' '.join(argv)}\n{out.stderr[-3000:]}"
     assert "Traceback" not in out.stderr
     for path in re.findall(r"`(out/[^`\s]+)`", what):

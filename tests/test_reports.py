@@ -15,6 +15,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from cli_runner import run_cli
+
 import mujoco  # noqa: F401,E402 -- a declared dependency: a broken MuJoCo fails the suite
 
 from urdf2links.compare.reports.baselines import check_baseline, load_baselines  # noqa: E402
@@ -234,7 +236,7 @@ def test_check_fails_naming_the_figure(pendulum, crane):
 
 
 def cli(*args, cwd=ROOT):
-    return subprocess.run([sys.executable, "-m", "urdf2links.cli", *args], capture_output=True, text=True, cwd=cwd)
+    return run_cli(*args, cwd=cwd)  # in this process, as a subprocess would show it (tests/cli_runner.py)
 
 
 def test_compare_cli_runs_and_checks(tmp_path):

@@ -1,7 +1,8 @@
 """Command line: ``urdf2links inspect FILE.urdf|FILE.xacro|FILE.xml|SCENE.toml``, ``urdf2links simulate
 SCENE.toml|ROBOT.urdf``, ``urdf2links sweep SCENE.toml|ROBOT.urdf``, ``urdf2links compare
-SCENE.toml|ROBOT.urdf``, ``urdf2links report [--corpus DIR ...]`` and ``urdf2links tradeoff SCENE.toml``
-(the MuJoCo comparison and the work-precision study: the handlers import the ``compare`` package,
+SCENE.toml|ROBOT.urdf``, ``urdf2links report [--corpus DIR ...]``, ``urdf2links tradeoff SCENE.toml`` and
+``urdf2links check [PATH]`` (the MuJoCo comparison, the work-precision study and a repository's model regression
+check, docs/ci.md: the handlers import the ``compare`` package,
 and with it MuJoCo, only when they run). A robot file given to
 ``simulate`` or ``compare`` runs in its default scene (:func:`urdf2links.scenes.scene.default_scene`)."""
 
@@ -17,6 +18,7 @@ import numpy as np
 from .dynamics.transforms import PARAMETERS
 from .errors import DescriptionError, DynamicsError, IntegrationError, SceneError
 from .scenes.limits import LimitExcursion
+from .scenes.scene import Q0_CHOICES
 from .scenes.scene_toml import hold_of, load_options_of, scene_from_args, write_scene_option, xacro_args_of
 
 __all__ = ["main", "build_parser", "format_tree", "scene_from_args", "xacro_args_of", "write_scene_option"]
@@ -45,12 +47,27 @@ def format_tree(model) -> str:
     lines = _table(rows)
     out = [f"robot {model.name!r} from {model.source}: {tree.n_links} links, {model.n} coordinates", ""] + lines
     out += _joint_lines(model.info.get("joints", []))
+    out += _constraint_lines(model.info)
     out += ["", f"inertia audit: {len(model.audit)} finding(s)"]
     out += [f"  - {r}" for r in model.audit]
     notes = model.info.get("notes", [])
     if notes:
         out += ["", "import notes:"] + [f"  - {n}" for n in notes]
     return "\n".join(out)
+
+
+def _constraint_lines(info) -> list[str]:
+    """An MJCF model's equalities and tendons (issue 36): read, and acting in scenes with ``[constraints]
+    from_file = true`` (docs/constraints.md)."""
+    from .parsers.mjcf_constraints import inspect_rows
+
+    eq, td = inspect_rows(info)
+    out = []
+    if eq:
+        out += ["", "equalities (read; constraints of scenes with [constraints] from_file = true, E68-E70):"] + _table(eq)
+    if td:
+        out += ["", "tendons (fixed ones act in scenes with [constraints] from_file = true, E76):"] + _table(td)
+    return out
 
 
 def _table(rows) -> list[str]:
@@ -200,6 +217,12 @@ def _report(args) -> int:
     return report_command(args)
 
 
+def _check(args) -> int:
+    from .compare.check.command import check_command
+
+    return check_command(args)
+
+
 def _sweep(args) -> int:
     """``urdf2links sweep``: seeded initial states around the scene's, integrated by the compiled batch
     loop here or split across a Dask cluster (``--scheduler``); an .npz of the trajectories."""
@@ -316,10 +339,12 @@ def _add_load_options(p) -> None:
 def _add_default_scene_options(p, *, seed: bool = True, write_scene: bool = True) -> None:
     """Options of a robot file run in its default scene."""
     g = p.add_argument_group("a robot file's default scene")
-    g.add_argument("--q0", choices=("zero", "random"), default="zero", help="initial configuration: zero, or "
-                   "seeded random within the joint limits (default zero)")
+    g.add_argument("--q0", choices=Q0_CHOICES, default="excite", help="initial state: excite (default: q0 and q' "
+                   "random, every coordinate moving a good part of its range in the run, a floating base with a "
+                   "random twist), random (q0 random within the joint limits, at rest), rest (q = 0 at rest; zero "
+                   "is its old name)")
     if seed:
-        g.add_argument("--seed", type=int, default=0, help="seed of --q0 random (default 0)")
+        g.add_argument("--seed", type=int, default=0, help="seed of --q0 excite and random (default 0)")
     g.add_argument("--hold", action="store_true", help="hold the robot at q0: a position servo on every coordinate, "
                    "critically damped at --hold-bandwidth, gains from the mass matrix at q0 (both engines)")
     g.add_argument("--hold-bandwidth", type=float, metavar="HZ", help="the servos' bandwidth with --hold (default 2 Hz)")
@@ -406,8 +431,8 @@ def _report_parser(sub) -> None:
                                       "reports and an index page",
                        description="Run `compare` on every shipped scene (robots/*.toml, or the scenes given) and "
                                    "write reports/<robot>/<scene>/ and reports/index.html. With --corpus: every robot "
-                                   "file found there in its default scene (gravity, fixed base, seeded random q0, 0.5 "
-                                   "s), in parallel processes (--jobs) or on a Dask cluster (--scheduler); writes "
+                                   "file found there in its default scene (gravity, fixed base, every coordinate moving "
+                                   "from a seeded random q0 and qd0, 0.5 s), in parallel processes (--jobs) or on a Dask cluster (--scheduler); writes "
                                    "index.html, corpus.json, corpus.md and a page per robot into reports/corpus/. "
                                    "Progress on stderr.")
     p.add_argument("scenes", nargs="*", help="scene files or names of shipped scenes (default: every shipped scene; "
@@ -425,7 +450,7 @@ def _report_parser(sub) -> None:
     p.add_argument("--scheduler", metavar="ADDRESS", help="--corpus: run the robots on the Dask cluster whose "
                    "scheduler is at ADDRESS (tcp://host:8786; `dask scheduler` prints it); needs "
                    "pip install 'urdf2links[distributed]'")
-    p.add_argument("--seed", type=int, default=0, help="--corpus: seed of each robot's random q0 and of the "
+    p.add_argument("--seed", type=int, default=0, help="--corpus: seed of each robot's random q0 and qd0 and of the "
                    "terms' states (default 0)")
     _add_load_options(p)
     p.add_argument("--no-thumbnails", action="store_true", help="--corpus: no picture of each robot in the index "
@@ -493,13 +518,40 @@ def _tradeoff_parser(sub) -> None:
     p.set_defaults(func=_tradeoff)
 
 
+def _check_parser(sub) -> None:
+    """The ``check`` command's options."""
+    p = sub.add_parser("check", help="check a repository's robots, pairs and scenes (urdf2links.toml or "
+                                     "[tool.urdf2links]) for CI: exit 0, 1 when a check falls short, 2 when unusable",
+                       description="Read the configuration ([tool.urdf2links] of pyproject.toml, or urdf2links.toml, "
+                                   "in PATH or above): load every robot (a load error or an inertia finding not "
+                                   "allowed fails), compare every pair part by part against its tolerances, run every "
+                                   "scene with urdf2links and MuJoCo against its baselines. Exit 0 when all hold, 1 "
+                                   "when a check falls short, 2 when the configuration or a file cannot be used "
+                                   "(docs/ci.md).")
+    p.add_argument("path", nargs="?", default=".", help="the repository's folder, or its configuration file "
+                   "(default: here)")
+    p.add_argument("--junit", metavar="FILE", help="also write JUnit XML: one test case per robot, pair and scene")
+    p.add_argument("--markdown", metavar="FILE", help="also write a Markdown summary, largest problems first (a pull "
+                   "request comment, $GITHUB_STEP_SUMMARY)")
+    p.add_argument("--changed-since", metavar="GIT_REF", help="check only what depends on files changed since this "
+                   "commit (the robot files, their meshes and xacro includes, scene files)")
+    p.add_argument("--jobs", type=int, help="run the checks in N processes (default 1: here)")
+    p.add_argument("--write-baselines", action="store_true", help="accept this run's scene figures as the baselines")
+    p.add_argument("--init", action="store_true", help="write urdf2links.toml for PATH: every robot found, pairs "
+                   "guessed by robot name, the current state accepted (baselines written)")
+    p.add_argument("--write-workflow", nargs="?", const=True, metavar="FILE", help="write the CI workflow (docs/ci.md) "
+                   "to .github/workflows/urdf2links-check.yml (or FILE)")
+    p.add_argument("--quiet", action="store_true", help="no line per check while it runs")
+    p.set_defaults(func=_check)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``urdf2links`` command line: one sub-command per handler above."""
     parser = argparse.ArgumentParser(prog="urdf2links", description="URDF robots as trees of links of the trace "
                                      "method, simulated, and compared with MuJoCo.")
     sub = parser.add_subparsers(dest="command", required=True)
     for add in (_list_parser, _inspect_parser, _simulate_parser, _compare_parser, _report_parser, _sweep_parser,
-                _tradeoff_parser):
+                _tradeoff_parser, _check_parser):
         add(sub)
     return parser
 

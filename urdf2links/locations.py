@@ -67,22 +67,23 @@ def _first_sentence(text: str) -> str:
 
 
 def shipped() -> list[Shipped]:
-    """Every shipped robot and scene (``robots/`` and ``robots/hard/``), robots first, by name; then the pairs
+    """Every shipped robot and scene (``robots/``, ``robots/hard/`` and ``robots/loops/``), robots first, by name; then the pairs
     files of ``urdf2links report --pairs`` (``robots/pairs/``, kind ``pairs``)."""
     folder = shipped_robots_dir()
     summaries = _robot_summaries(folder)
     out = []
-    for sub in (folder, folder / "hard"):
+    kind = {folder: "", folder / "hard": " (hard case)", folder / "loops": " (closed loop)"}   # loops: issue 36
+    for sub in kind:
         for p in sorted([*sub.glob("*.urdf"), *sub.glob("*.xml")]):
-            out.append(Shipped(p.stem, ("robot" if sub == folder else "robot (hard case)") + (" (MJCF)" if p.suffix ==
-                               ".xml" else ""), p, summaries.get(p.name, "")))
-    for sub in (folder, folder / "hard"):
+            out.append(Shipped(p.stem, "robot" + kind[sub] + (" (MJCF)" if p.suffix == ".xml" else ""), p,
+                               summaries.get(p.name, "")))
+    for sub in kind:
         for p in sorted(sub.glob("*.toml")):
             try:
                 summary = str(tomllib.loads(p.read_text()).get("description", ""))
             except (OSError, tomllib.TOMLDecodeError):
                 summary = ""
-            out.append(Shipped(p.stem, "scene" if sub == folder else "scene (hard case)", p, summary))
+            out.append(Shipped(p.stem, "scene" + kind[sub], p, summary))
     for p in sorted((folder / "pairs").glob("*.toml")):      # pairs files of `report --pairs NAME`
         try:
             summary = str(tomllib.loads(p.read_text()).get("description", ""))

@@ -25,6 +25,7 @@ import numpy as np
 
 from urdf2links.dynamics.transforms import BaseState
 from urdf2links.parsers.xacro_input import expand_xacro, is_xacro_path
+from urdf2links.scenes.excitation import coordinate_ranges
 from urdf2links.scenes.scene import Scene, robot_stem
 
 from ..mujoco_side.mjcf import MjcfModel
@@ -93,8 +94,9 @@ def route1_terms(mj: MjcfModel, model, scene: Scene, *, states: int = 8, seed: i
     err_A = err_b = 0.0
     per_state = []
     start = time.perf_counter()
+    span = coordinate_ranges(model)     # the states span the joints' limits (a +-1 window where none)
     for _ in range(states):
-        q = rng.uniform(-1.0, 1.0, n)
+        q = rng.uniform(span.lower, span.upper)
         qd = rng.standard_normal(n)
         bs = None
         if mj.moving_base:

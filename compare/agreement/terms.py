@@ -47,6 +47,7 @@ from lxml import etree
 
 from urdf2links import load_urdf
 from urdf2links.dynamics.inertia import inertial_from_pseudo, pseudo_inertia
+from urdf2links.scenes.excitation import coordinate_ranges
 
 from ..mujoco_side.mujoco_urdf import MujocoRefused, MujocoURDF, mujoco_data_at, mujoco_from_urdf, mujoco_terms
 
@@ -402,7 +403,8 @@ def compare_terms_urdf(urdf_path, model, *, states: int = 8, seed: int = 0,
     :data:`SPHERE_RADIUS`, at the link origin) in the text MuJoCo loads AND compare with the
     project's import of that same text; ``notes`` gives the spheres' effect on ``model``'s ``A``.
 
-    At ``states`` seeded random states (``q`` uniform in [-1, 1] rad or m, ``qd`` standard
+    At ``states`` seeded random states (``q`` uniform within the joints' limits, a [-1, 1] window (rad or
+    m) where a joint has none (:func:`urdf2links.scenes.excitation.coordinate_ranges`), ``qd`` standard
     normal) in ``model.coordinate_names`` order, the relative errors (see
     :class:`TermsComparison`) are computed and their maxima returned. Gravity is
     ``model.gravity_vector`` on both sides. ``fusestatic`` is MuJoCo's compiler option (off:
@@ -475,8 +477,9 @@ def _seeded_errors(mj, ours, names, states, seed):
     err_A = err_b = 0.0
     worst: dict = {}
     floors = 0
+    span = coordinate_ranges(ours)      # the states span the joints' limits (a +-1 window where none)
     for k in range(states):
-        q = rng.uniform(-1.0, 1.0, n)
+        q = rng.uniform(span.lower, span.upper)
         qd = rng.standard_normal(n)
         t = mujoco_terms(mj, dict(zip(names, q)), dict(zip(names, qd)), order=names)
         A = ours.mass_matrix(q)

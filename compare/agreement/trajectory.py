@@ -2,8 +2,8 @@
 
 :func:`compare_scene` is the MuJoCo cross-validation of one scene:
 
-1. **Terms at identical states.** At ``states`` seeded random states (``q`` uniform in
-   [-1, 1] rad or m, ``qd`` standard normal; with a moving base also a random base pose
+1. **Terms at identical states.** At ``states`` seeded random states (``q`` uniform within the
+   joints' limits, a [-1, 1] window (rad or m) where a joint has none, ``qd`` standard normal; with a moving base also a random base pose
    (uniform in [-1, 1]) and rate (standard normal), accelerations zero since ``qfrc_bias``
    holds none), ``A`` against ``mj_fullM`` and ``e + G`` (the scene's gravity) against
    ``qfrc_bias``, as ``max|ours - MuJoCo| / max|MuJoCo|`` (:mod:`urdf2links.compare.agreement.scene_terms`):
@@ -35,7 +35,13 @@
 
 4. **Base tracking** (moving base): how far MuJoCo's ``base_A`` is from the prescribed pose.
 
-5. **Wall time** of each engine, timed the same way (not checked against baselines): urdf2links'
+5. **Coverage and verdict**: what the run exercised (:func:`urdf2links.scenes.coverage.coverage` of the
+   project's run: per coordinate the range traversed, the largest ``|q'|``, the swing of its share of the
+   kinetic energy, E66; weak evidence when fewer than half of the coordinates moved, E67), and the
+   verdict that states it, the model's scope (constraints and tendons dropped) and MuJoCo's fallback
+   after a blow-up (:mod:`urdf2links.compare.agreement.verdict`).
+
+6. **Wall time** of each engine, timed the same way (not checked against baselines): urdf2links'
    integrator (:data:`urdf2links.integration.simulate.TIMED_REGION`) after a warm-up that compiles, or loads
    from numba's cache, every compiled function the run calls (:func:`urdf2links.integration.simulate.warm_up`;
    its time is reported on its own); MuJoCo's ``mj_step(nstep)`` calls
@@ -69,11 +75,14 @@ from urdf2links.parsers.xacro_input import is_xacro_path
 from urdf2links.ranges import MAX_STEPS
 from urdf2links.scenes.limits import LimitExcursion
 from urdf2links.scenes.actuators import describe_actuator
+from urdf2links.scenes.coverage import Coverage, coverage
 from urdf2links.scenes.plan import compile_plan
 from urdf2links.scenes.scene import Scene, load_scene, robot_label
 
 from ..mujoco_side.mjcf import MjcfModel, mjcf_from_scene
-from ..mujoco_side.mujoco_mjcf import FILE_LABEL, file_route_inputs, file_terms, mujoco_from_mjcf, run_file
+from ..mujoco_side.mujoco_mjcf import FILE_LABEL, file_route_inputs, file_runner, file_terms, mujoco_from_mjcf
+from ..mujoco_side.mujoco_constraints import with_constraints
+from .constraint_agreement import run_notes as constraint_run_notes
 from ..mujoco_side.mujoco_run import TIMED_REGION as MUJOCO_REGION
 from ..mujoco_side.contact_inputs import contact_energy, contact_timestep
 from .contact_reference import contact_reference
@@ -81,6 +90,7 @@ from ..mujoco_side.mujoco_run import MujocoRun, energy_function, run_mujoco
 from ..mujoco_side.stable_run import stable_run
 from .actuator_terms import file_actuators, merged, route1_actuators, route2_actuators
 from .scene_terms import ROUTE1_LABEL, route1_terms, route2_terms
+from .verdict import comparison_verdict, cut_scope
 
 __all__ = [
     "SceneComparison",
@@ -219,6 +229,19 @@ class SceneComparison:
                                      "scene that is not marked chaotic")
         return trajectory
 
+    @property
+    def coverage(self) -> Coverage:
+        """What the run exercised (:func:`urdf2links.scenes.coverage.coverage` of the project's run)."""
+        return self.info["coverage"]
+
+    def verdict(self, trajectory: dict | None = None) -> dict:
+        """The verdict (:func:`~urdf2links.compare.agreement.verdict.comparison_verdict`): the trajectories'
+        agreement with the model's scope, MuJoCo's fallback and the weak-evidence mark stated in it."""
+        trajectory = trajectory or self._trajectory_summary()
+        return comparison_verdict(trajectory["verdict"], scope=self.info["scope"], coverage=self.coverage,
+                                  mujoco_integrator=self.run.integrator, mujoco_timestep=float(self.run.timestep),
+                                  blow_ups=dict(self.run.blow_ups), fallback=self.info.get("mujoco_fallback"))
+
     def _energy_summary(self) -> dict:
         e = self.energy
         return {
@@ -271,6 +294,8 @@ class SceneComparison:
         r1, r2 = self.terms["route1"], self.terms["route2"]
         term_max = max([r["max_rel_error"] for r in (r1, r2) if "max_rel_error" in r])
         trajectory, energy = self._trajectory_summary(), self._energy_summary()
+        verdict = self.verdict(trajectory)
+        trajectory["verdict"] = verdict["text"]
         moving = self.mj.moving_base
         return {
             "schema": 1,
@@ -306,6 +331,8 @@ class SceneComparison:
                       "max_rel_error_route1": float(r1["max_rel_error"]),
                       "max_rel_error_route2": r2.get("max_rel_error"),
                       "route1": r1, "route2": r2},
+            "verdict": verdict,
+            "coverage": self.coverage.summary(),
             "trajectory": trajectory,
             "energy": energy,
             "limit_excursions": list(traj.stats.get("limit_excursions", [])),
@@ -356,6 +383,8 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     say(f"terms at {states} seeded states (route 1" + (", route 2)" if not scene.load_options.get("floating_base")
                                                        else ")"))
     mj = mjcf_from_scene(scene, model, timestep=mujoco_dt, integrator=mujoco_integrator)
+    if plan.constraints is not None:    # issue 36: the scene's constraints and tendons as MuJoCo equalities
+        mj = with_constraints(mj, plan.constraints)
     mf = None
     if is_mjcf_path(scene.robot):       # route 2: MuJoCo runs the file itself
         mf = mujoco_from_mjcf(plan, timestep=mujoco_dt, integrator=mujoco_integrator)
@@ -392,13 +421,12 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     say(f"MuJoCo: {mujoco_integrator} dt {mujoco_dt:g}, {int(round(T / mujoco_dt))} steps")
     file_run = mf is not None and not file_route_inputs(scene, plan)
     fallback = None
-    if file_run:
-        run = run_file(mf, plan, t_end=T, samples=samples, reference=traj.q if len(traj.q) == samples else None)
-    else:
-        run, fallback = stable_run(mj, plan, t_end=T, samples=samples, integrator=mujoco_integrator,
-                                   timestep=mujoco_dt, fallback=mujoco_fallback)
-        if fallback is not None:
-            say(fallback["note"])
+    runner = (file_runner(mf, plan, t_end=T, samples=samples, reference=traj.q if len(traj.q) == samples else None)
+              if file_run else None)     # the file's route falls back like route 1 when MuJoCo blows up
+    run, fallback = stable_run(mj, plan, t_end=T, samples=samples, integrator=mujoco_integrator,
+                               timestep=mujoco_dt, fallback=mujoco_fallback, runner=runner)
+    if fallback is not None:
+        say(fallback["note"])
     if run.compilation.happened:
         say(run.compilation.describe("MuJoCo's control callback"))
 
@@ -409,7 +437,9 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     div = divergence_time(t, err_max, threshold)
     growth = growth_fit(t, err_max, end_time=div) if scene.chaotic else None
     energy, info = _energy_balances(scene, plan, mj, run, traj, EV_o, h_o, W)
-    notes = _run_notes(scene, plan, mj, run, traj, t_end_note, resampled=resampled) + ([step_note] if step_note else [])
+    notes = _run_notes(scene, plan, mj, run, traj, t_end_note, resampled=resampled)
+    notes += constraint_run_notes(plan, traj, mj)   # issue 36: closed loops, couplings, tendons
+    notes += [step_note] if step_note else []      # issue 37: MuJoCo's step for the contact
     if mf is not None:
         notes += ([f"route 2 (the MJCF file in MuJoCo): {x}" for x in mf.notes]
                   + [f"import: {x}" for x in model.info.get("notes", [])])
@@ -417,7 +447,9 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
             notes.append(f"the scene's {', '.join(file_route_inputs(scene, plan))} are inputs that the run of the "
                          "MJCF file does not take yet: MuJoCo's trajectory is route 1's (the project's tree as MJCF)")
     q0, qd0 = scene.initial_state(model)
+    cov = coverage(q_o, qd_o, model=model)
     info.update({"trajectory_route": FILE_LABEL if file_run else ROUTE1_LABEL, "mujoco_fallback": fallback,
+                 "coverage": cov, "scope": cut_scope(model, scene.load_options, plan),
                  "t_end": T, "t_end_note": t_end_note, "effects": plan.terms, "warm_up": warm,
                  "actuators": plan.actuator_set.actuators,
                  "q0": dict(zip(model.coordinate_names, q0.tolist())),

@@ -40,6 +40,24 @@ def worst_first(rows: list[dict]) -> list[dict]:
     return sorted(rows, key=key)
 
 
+def coverage_counts(compared: list[dict]) -> dict:
+    """Of the compared rows: how many are weak evidence (E67), how many moved at least 90% of their
+    coordinates, and the smallest fraction moved (None without coverage)."""
+    fr = [r["coverage"]["moved_fraction"] for r in compared if (r.get("coverage") or {}).get("moved_fraction") is not None]
+    return {"weak_evidence": sum(bool(r["coverage"].get("weak_evidence")) for r in compared if r.get("coverage")),
+            "moved_90_percent": sum(f >= 0.9 for f in fr), "with_coverage": len(fr),
+            "least_moved_fraction": min(fr) if fr else None}
+
+
+def _coverage_sentence(data: dict) -> str:
+    cov = data.get("coverage") or {}
+    if not cov.get("with_coverage"):
+        return ""
+    return (f" Coverage: {cov['moved_90_percent']} of {cov['with_coverage']} compared robots moved at least 90% of their "
+            f"coordinates by more than 1e-3 (least: {cov['least_moved_fraction']:.0%}); {cov['weak_evidence']} weak "
+            "evidence (fewer than half moved).")
+
+
 def corpus_data(rows: list[dict], *, settings: dict, run: dict, command: str | None) -> dict:
     """The content of ``corpus.json``: rows sorted by file, counts, settings, versions, the run."""
     import mujoco
@@ -62,6 +80,7 @@ def corpus_data(rows: list[dict], *, settings: dict, run: dict, command: str | N
         "counts": {"robots": len(rows), **counts},
         "route1_worst": max(r1) if r1 else None,
         "route1_within_tolerance": all(v <= TERMS_TOLERANCE for v in r1),
+        "coverage": coverage_counts(compared),
         "run": run,
         "robots": sorted(rows, key=lambda r: r["file"]),
     }
@@ -127,6 +146,7 @@ _JS = """
     heads.forEach(function (h) { h.classList.remove('sorted-asc', 'sorted-desc'); });
   });
   const text = document.getElementById('filter'), out = document.getElementById('only-out');
+  const weak = document.getElementById('only-weak');
   const boxes = Array.from(document.querySelectorAll('input[data-status]'));
   function filter() {
     const q = text.value.trim().toLowerCase(), show = {};
@@ -134,14 +154,15 @@ _JS = """
     let n = 0;
     rows.forEach(function (r) {
       const ok = show[r.dataset.status] && (!out.checked || r.dataset.out === '1')
+        && (!weak.checked || r.dataset.weak === '1')
         && (q === '' || r.textContent.toLowerCase().indexOf(q) >= 0);
       r.hidden = !ok;
       if (ok) n += 1;
     });
     document.getElementById('shown').textContent = n + ' of ' + rows.length + ' robots shown';
   }
-  [text, out].concat(boxes).forEach(function (el) { el.addEventListener('input', filter); });
-  // the address may carry a view: #sort=<column>-<asc|desc>&q=<text>&status=<failed,compared>&out=1
+  [text, out, weak].concat(boxes).forEach(function (el) { el.addEventListener('input', filter); });
+  // the address may carry a view: #sort=<column>-<asc|desc>&q=<text>&status=<failed,compared>&out=1&weak=1
   const view = new URLSearchParams(location.hash.slice(1));
   if (view.has('q')) text.value = view.get('q');
   if (view.has('status')) {
@@ -149,6 +170,7 @@ _JS = """
     boxes.forEach(function (b) { b.checked = keep.indexOf(b.dataset.status) >= 0; });
   }
   if (view.get('out') === '1') out.checked = true;
+  if (view.get('weak') === '1') weak.checked = true;
   if (view.has('sort')) {
     const s = view.get('sort').split('-');
     if (heads[Number(s[0])]) sortBy(Number(s[0]), s[1] === 'desc' ? -1 : 1);
@@ -161,7 +183,8 @@ _JS = """
 _HEADINGS = [("robot file<br><span class='small'>robot name</span>", 1), ("status", 1), ("n", -1),
              ("terms<br>route 1", -1), ("terms<br>route 2", -1), ("trajectory<br>max |&Delta;q|", -1),
              ("divergence<br>|&Delta;q| &gt; 1e-3", 1), ("energy drift<br>urdf2links (rel.)", -1),
-             ("energy drift<br>MuJoCo (rel.)", -1), ("worst<br>/ tolerance", -1), ("wall<br>(s)", -1)]
+             ("energy drift<br>MuJoCo (rel.)", -1), ("worst<br>/ tolerance", -1),
+             ("coverage<br>moved", 1), ("wall<br>(s)", -1)]
 
 
 def _num(v) -> str:
@@ -214,6 +237,7 @@ def _row_html(r: dict, order: int, *, thumbs: bool, checks: bool) -> str:
     div_text = ("none" if r["status"] == "compared" else "&ndash;") if div is None else f"{div:.3g} s"
     cells.append(f"<td class='num' data-v='{_num(div)}'>{div_text}</td>")
     cells += [_cell(en.get("project_drift_rel")), _cell(en.get("mujoco_drift_rel")), _cell(worst, out=out)]
+    cells.append(_coverage_cell(r))
     cells.append(f"<td class='num' data-v='{_num(wt.get('total_s'))}'>{fmt(wt.get('total_s'), 1)}</td>")
     if checks:
         chk = r.get("check")
@@ -224,8 +248,19 @@ def _row_html(r: dict, order: int, *, thumbs: bool, checks: bool) -> str:
     reason = r.get("reason") or ""
     cells.append(f"<td class='small reason' data-v='{e(reason[:60], quote=True)}'>{e(reason[:400])}"
                  + ("..." if len(reason) > 400 else "") + "</td>")
-    return (f"<tr class='{e(r['status'])}' data-status='{e(r['status'])}' data-out='{int(out)}' data-order='{order}'>"
-            + "".join(cells) + "</tr>")
+    weak = int(bool((r.get("coverage") or {}).get("weak_evidence")))
+    return (f"<tr class='{e(r['status'])}' data-status='{e(r['status'])}' data-out='{int(out)}' data-weak='{weak}' "
+            f"data-order='{order}'>" + "".join(cells) + "</tr>")
+
+
+def _coverage_cell(r: dict) -> str:
+    """The coverage column: ``k/n`` coordinates moved (sorted by the fraction), weak evidence in red (E67)."""
+    cov = r.get("coverage") or {}
+    if cov.get("moved") is None:
+        return "<td class='num' data-v=''>&ndash;</td>"
+    weak = "<br><span class='fail'>weak evidence</span>" if cov.get("weak_evidence") else ""
+    return (f"<td class='num' data-v='{_num(cov.get('moved_fraction'))}' title='{html.escape(cov.get('text') or '', quote=True)}'>"
+            f"{cov['moved']}/{cov['coordinates']}{weak}</td>")
 
 
 #: what the project runs in a default scene: ``auto`` (DOP853, Radau5 while the run is stiff) at the scenes' rtol
@@ -247,7 +282,7 @@ def render_index(data: dict, *, figure_file: str | None = "corpus.png") -> str:
                f"read; the reason is in the row), {c['failed']} failed (a fault of urdf2links or MuJoCo). Route 1 "
                f"terms: worst {fmt(data['route1_worst'])} ("
                + ("all within" if data["route1_within_tolerance"] else "<span class='fail'>NOT all within</span>")
-               + f" {TERMS_TOLERANCE:g}).")
+               + f" {TERMS_TOLERANCE:g}).") + e(_coverage_sentence(data))
     setup = (f"Each robot in its default scene ({e(st['scene'])}), t = 0..{st['t_end']:g} s, seed {st['seed']}; terms "
              f"at {st['states']} seeded states; MuJoCo {e(st['mujoco_integrator'])} dt {st['mujoco_dt']:g} s against "
              f"urdf2links {e(_PROJECT_RUN)} (the methods each robot's run used are in its page). "
@@ -265,7 +300,9 @@ def render_index(data: dict, *, figure_file: str | None = "corpus.png") -> str:
                      f"src='{e(figure_file)}'></a></p>")
     parts += [f"<div class='controls'><button id='worst-first'>worst first</button> <input id='filter' size='28' "
               f"placeholder='filter: robot, file, reason...'> {boxes}<label><input type='checkbox' id='only-out'> out "
-              f"of tolerance only</label> <span id='shown' class='small'></span></div>",
+              f"of tolerance only</label> <label><input type='checkbox' id='only-weak'> weak evidence only "
+              f"({sum(bool((r.get('coverage') or {}).get('weak_evidence')) for r in rows)})</label> "
+              "<span id='shown' class='small'></span></div>",
               f"<table id='corpus'><thead><tr>{head}</tr></thead><tbody>\n{body}\n</tbody></table>",
               _legend(), f"<p class='small'>Data: <a href='corpus.json'>corpus.json</a>, <a href='corpus.md'>corpus.md</a>."
               + (f" Regenerate: <code>{e(data['command'])}</code>" if data.get("command") else "") + "</p>",
@@ -280,7 +317,9 @@ def _legend() -> str:
             "over coordinates and time (rad, m); divergence: first time it exceeds 1e-3. Energy drift: max |E + V "
             "&minus; (E + V)(0) &minus; W| of each engine over the robot's energy scale. worst / tolerance: the largest "
             "of route 1 and route 2 over 1e-9 and the trajectory difference over 1e-3 (above 1, in red: out of "
-            "tolerance). Wall: the robot's whole evaluation (import, both engines, terms, page). A reason on a "
+            "tolerance). Coverage: the coordinates that moved by more than 1e-3 (rad or m) in the run, of all; "
+            "<b>weak evidence</b> when fewer than half did (E67: the agreement then says little about the joints' "
+            "dynamics). Wall: the robot's whole evaluation (import, both engines, terms, page). A reason on a "
             "compared row says what was done to compare it (the project's inertia repair when the file as written "
             "cannot be simulated or MuJoCo refuses its inertias).</p>")
 
@@ -294,12 +333,14 @@ def render_markdown_table(data: dict) -> str:
     lines = ["# A corpus of robots against MuJoCo", "",
              f"{c['robots']} robots: {c['compared']} compared, {c['refused']} refused, {c['failed']} failed. Route 1 "
              f"terms: worst {fmt_md(data['route1_worst'])} (tolerance {TERMS_TOLERANCE:g}: "
-             + ("all within" if data["route1_within_tolerance"] else "NOT all within") + ").", "",
+             + ("all within" if data["route1_within_tolerance"] else "NOT all within") + ")." + _coverage_sentence(data),
+             "",
              f"Default scene ({st['scene']}), t = 0..{st['t_end']:g} s, seed {st['seed']}; MuJoCo "
              f"{st['mujoco_integrator']} dt {st['mujoco_dt']:g} s. Generated by `{data.get('command')}`; "
              "pages in index.html, figures in corpus.json.", "",
              "| robot | status | n | terms route 1 | terms route 2 | max abs dq | divergence | energy drift rel. "
-             "(urdf2links / MuJoCo) | worst / tol. | wall s | reason |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+             "(urdf2links / MuJoCo) | worst / tol. | coverage | wall s | reason |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in worst_first(data["robots"]):
         te, tr, en = r["terms"], r["trajectory"], r["energy"]
         r2 = fmt_md(te.get("route2")) + (f" ({te['route2_status']})" if te.get("route2_status") not in (None, "as written") else "")
@@ -309,10 +350,17 @@ def render_markdown_table(data: dict) -> str:
         reason = (r.get("reason") or "").replace("|", "\\|").replace("\n", " ")
         lines.append(f"| {link} | {r['status']} | {'' if r.get('n') is None else r['n']} | {fmt_md(te.get('route1'))} | "
                      f"{r2} | {fmt_md(tr.get('max_abs_error'))} | {div} | {fmt_md(en.get('project_drift_rel'))} / "
-                     f"{fmt_md(en.get('mujoco_drift_rel'))} | {fmt_md(r.get('worst'))} | "
+                     f"{fmt_md(en.get('mujoco_drift_rel'))} | {fmt_md(r.get('worst'))} | {_coverage_md(r)} | "
                      f"{fmt_md((r.get('wall_time') or {}).get('total_s'), 1)} | "
                      + (reason[:160] + ("..." if len(reason) > 160 else "")) + " |")
     return "\n".join(lines) + "\n"
+
+
+def _coverage_md(r: dict) -> str:
+    cov = r.get("coverage") or {}
+    if cov.get("moved") is None:
+        return "-"
+    return f"{cov['moved']}/{cov['coordinates']}" + (" **weak evidence**" if cov.get("weak_evidence") else "")
 
 
 def plot_corpus(data: dict, path) -> Path | None:

@@ -7,8 +7,8 @@ and, when asked, its light report page. It never raises for a robot: every outco
 ``status`` says what happened (:data:`STATUSES`):
 
 * ``compared``: imported, run in its default scene (:func:`urdf2links.scenes.scene.default_scene`: gravity,
-  fixed base, seeded random ``q0`` within the joint limits, at rest, the URDF's damping; ``t_end``
-  0.5 s) by both engines and compared (:func:`urdf2links.compare.agreement.trajectory.compare_scene`: terms at
+  fixed base, every coordinate moving from a seeded random ``q0`` within the joint limits and ``q'``
+  (E65), the URDF's damping; ``t_end`` 0.5 s) by both engines and compared (:func:`urdf2links.compare.agreement.trajectory.compare_scene`: terms at
   seeded states on route 1 and route 2, trajectories, energies). MuJoCo refusing the file on route 2
   is part of a comparison, not a failure: ``terms.route2_status`` says ``repaired`` (or ``refused``)
   and ``terms.route2_reason`` gives MuJoCo's reason, as in the scene reports;
@@ -53,7 +53,8 @@ __all__ = ["RobotFile", "CorpusSettings", "RobotResult", "find_robots", "evaluat
 STATUSES = ("compared", "refused", "failed")
 #: The keys of every row of ``corpus.json`` (dotted: nested objects).
 ROW_KEYS = ("file", "status", "reason", "n", "terms.route1", "terms.route2", "trajectory.max_abs_error",
-            "trajectory.divergence_time", "energy.project_drift", "energy.mujoco_drift", "wall_time")
+            "trajectory.divergence_time", "energy.project_drift", "energy.mujoco_drift", "coverage.moved_fraction",
+            "coverage.weak_evidence", "scope", "wall_time")
 #: Keys of a row that depend on where and how fast it ran (everything else is the same on every run).
 RUN_DEPENDENT_KEYS = ("wall_time", "worker")
 #: Route 1 compares the project's own tree written as MJCF with itself through MuJoCo: its terms
@@ -77,6 +78,12 @@ class RobotFile:
     path: str
 
 
+#: How each ``q0`` choice of the default scene reads in the corpus' settings.
+_STATES = {"excite": "q0 and q' seeded random, every coordinate set to travel a good part of its range in the run "
+                     "(E65)", "random": "seeded random q0 within the joint limits, at rest", "rest": "at rest at q = 0",
+           "zero": "at rest at q = 0"}
+
+
 @dataclass(frozen=True)
 class CorpusSettings:
     """How every robot of a corpus is run (the same for all; sent to each worker).
@@ -88,7 +95,7 @@ class CorpusSettings:
     baselines file, or None) with ``factor`` and ``baselines_source`` (its path, for the messages)."""
 
     t_end: float = 0.5
-    q0: str = "random"
+    q0: str = "excite"
     seed: int = 0
     states: int = 8
     mujoco_integrator: str = "RK4"
@@ -114,8 +121,7 @@ class CorpusSettings:
                                      ("floating_base", self.floating_base), ("xacro_args", self.xacro_args))
                    if v not in ("independent", False, None, {})},
                 "baselines": self.baselines_source or None,
-                "scene": "default scene: gravity, fixed base, seeded random q0 within the joint limits, at rest, "
-                         "URDF damping"}
+                "scene": "default scene: gravity, fixed base, URDF damping, " + _STATES.get(self.q0, self.q0)}
 
 
 @dataclass
@@ -275,10 +281,16 @@ def _compared_row(row: dict, s: dict) -> None:
     row["energy"] = {"project_drift": en["project_drift"], "mujoco_drift": en["mujoco_drift"],
                      "project_drift_rel": en["project_drift_rel"], "mujoco_drift_rel": en["mujoco_drift_rel"],
                      "scale": en["scale"]}
+    cov, verdict = s.get("coverage") or {}, s.get("verdict") or {}
+    row["coverage"] = {k: cov.get(k) for k in ("coordinates", "moved", "moved_fraction", "weak_evidence", "text")}
+    row["scope"] = verdict.get("scope")
+    row["verdict"] = verdict.get("text", tr["verdict"])
     row["limit_excursions"] = len(s.get("limit_excursions", []))
     row["mujoco_notes"] = list(s["mujoco"].get("notes", []))
     row["mujoco_blow_ups"] = dict(s["mujoco"]["blow_ups"])
     fallback = s["mujoco"].get("fallback")
+    if (verdict.get("cut") or {}).get("cut"):     # the note column says what both engines left out
+        row["reason"] = verdict["scope"] + (f"; {row['reason']}" if row.get("reason") else "")
     if row["mujoco_blow_ups"]:   # the index's note column says it: the difference is MuJoCo's blow-up
         note = instability_note(row["mujoco_blow_ups"], s["mujoco"]["integrator"], s["mujoco"]["timestep"])
         row["reason"] = note + (f"; {row['reason']}" if row.get("reason") else "")
@@ -295,6 +307,8 @@ def _new_row(robot: RobotFile, settings: CorpusSettings) -> dict:
             "terms": {"route1": None, "route2": None, "route2_status": None, "route2_reason": None},
             "trajectory": {"max_abs_error": None, "divergence_time": None},
             "energy": {"project_drift": None, "mujoco_drift": None}, "worst": None, "check": None,
+            "coverage": {"coordinates": None, "moved": None, "moved_fraction": None, "weak_evidence": None},
+            "scope": None,
             "inertia": settings.inertia, "report": None, "thumbnail": None, "seed": settings.seed,
             "t_end": settings.t_end,
             "wall_time": {}, "worker": f"{socket.gethostname()}:{os.getpid()}"}

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import contextlib
 import copy
+import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
@@ -35,14 +36,17 @@ import numpy as np
 
 from urdf2links.parsers.mjcf import compile_mjcf
 from urdf2links.parsers.mjcf_notes import MUJOCO_OFF
+from urdf2links.scenes.excitation import coordinate_ranges
 
 from urdf2links.integration.simulate import Compilation
 
 from .mjcf import INTEGRATORS
+from .mujoco_constraints import route2_constraints
 from .mujoco_inputs import CompiledInputs
 from .mujoco_run import _INTEGRATOR_ENUM, MujocoRun, _blow_ups, implicit_note, instability_note
 
-__all__ = ["MujocoFile", "mujoco_from_mjcf", "file_terms", "run_file", "FILE_LABEL", "file_route_inputs"]
+__all__ = ["MujocoFile", "mujoco_from_mjcf", "file_terms", "run_file", "file_runner", "FILE_LABEL",
+           "file_route_inputs"]
 
 FILE_LABEL = "route 2: MuJoCo runs the MJCF file as written (only the scene's effects enabled)"
 
@@ -77,7 +81,8 @@ def file_route_inputs(scene, plan=None) -> list[str]:
     empty when it runs it. Actuators on a ball's or free joint's angles run through the control callback
     (:meth:`~urdf2links.compare.mujoco_side.mujoco_inputs.CompiledInputs.for_file`)."""
     out = [w for w, on in (("[base]", scene.base is not None), ("[[force]]/[[moment]]", bool(scene.loads)),
-                           ("[[torque]]", bool(scene.torques)), ("[[computed_torque]]", bool(scene.computed_torque)),
+                           ("[[torque]]", bool(scene.torques) and file_torques(scene, plan) is None),
+                           ("[[computed_torque]]", bool(scene.computed_torque)),
                            ("[[contact]]", bool(getattr(scene, "contacts", ()))))     # issue 37: route 1 carries it
            if on]
     if plan is not None:
@@ -85,6 +90,24 @@ def file_route_inputs(scene, plan=None) -> list[str]:
         if bad:
             out.append(f"actuators on joints the file leaves unnamed ({', '.join(bad[:4])}" + (", ..." if len(bad) > 4
                                                                                             else "") + ")")
+    return out
+
+
+def file_torques(scene, plan=None) -> dict | None:
+    """``{dof address: torque}`` of the scene's ``[[torque]]`` when every one is constant and on a hinge or
+    slide of the file (the default scene's damper torques, E65): MuJoCo's run of the file applies them
+    as a constant ``qfrc_applied``. None when one is not (then the run is route 1's); needs ``plan``."""
+    from urdf2links.scenes.functions import Constant
+
+    if plan is None or any(_carried(plan, a) is None for a in plan.actuator_set.actuators):
+        return None     # the control callback writes qfrc_applied (actuators on ball or free joints' angles)
+    joints = {plan.model.coordinate_names[j.coordinates[0]]: j for j in plan.model.info["mujoco"].joints
+              if j.kind in ("hinge", "slide")}
+    out = {}
+    for coord, f in scene.torques:
+        if not isinstance(f, Constant) or coord not in joints:
+            return None
+        out[joints[coord].dofadr] = out.get(joints[coord].dofadr, 0.0) + float(f.value)
     return out
 
 
@@ -214,8 +237,11 @@ def mujoco_from_mjcf(plan, *, timestep: float | None = None, integrator: str | N
         m.qpos_spring[j.qposadr] = s.rest
         m.dof_damping[j.dofadr] = s.damping
     changed = [a for a in ("tendon_stiffness", "tendon_damping") if np.any(getattr(m, a))]
+    tendons = m.tendon_stiffness.copy(), m.tendon_damping.copy()
     m.tendon_stiffness[:] = 0.0
     m.tendon_damping[:] = 0.0
+    if plan.constraints is not None and plan.scene.file_constraints:    # issue 36: the file's equalities and
+        changed = route2_constraints(m, plan, tendons, notes)          # fixed tendons act, as written
     fluid = [k for k in ("density", "viscosity") if getattr(m.opt, k) != 0.0] + (["wind"] if np.any(m.opt.wind) else [])
     m.opt.density, m.opt.viscosity = 0.0, 0.0
     m.opt.wind[:] = 0.0
@@ -254,7 +280,8 @@ def _rel(ours, theirs, floor: float = 0.0) -> float:
 
 def file_terms(mf: MujocoFile, model, scene, *, states: int = 8, seed: int = 0) -> dict:
     """``A`` against ``J^T M J`` and ``e + G`` (the scene's gravity) against ``J^T (qfrc_bias + M J' q')``
-    at seeded states around MuJoCo's qpos0 (``q0 + U(-1, 1)``, ``q'`` standard normal). Returns a
+    at seeded states within the joints' limits, ``+-1`` around MuJoCo's qpos0 where a joint has none
+    (:func:`~urdf2links.scenes.excitation.coordinate_ranges`; ``q'`` standard normal). Returns a
     JSON-ready dict like route 2's for a URDF."""
     g = np.zeros(3) if scene.gravity is None else np.asarray(scene.gravity, float)
     ours = model if np.array_equal(model.gravity_vector, g) else copy.copy(model)
@@ -266,13 +293,13 @@ def file_terms(mf: MujocoFile, model, scene, *, states: int = 8, seed: int = 0) 
     d = mujoco.MjData(m)
     qmap = model.info["mujoco"]
     rng = np.random.default_rng(seed)
-    q0 = np.asarray(model.info["q0"], float)
+    span = coordinate_ranges(model)     # within the joints' limits, else +-1 around qpos0 (or the home keyframe)
     err_A = err_b = 0.0
     per_state = []
     start = time.perf_counter()
     M = np.zeros((m.nv, m.nv))
     for _ in range(states):
-        q = q0 + rng.uniform(-1.0, 1.0, model.n)
+        q = rng.uniform(span.lower, span.upper)
         qd = rng.standard_normal(model.n)
         d.qpos[:], d.qvel[:] = qmap.to_mujoco(q, qd)
         mujoco.mj_forward(m, d)
@@ -303,6 +330,8 @@ def run_file(mf: MujocoFile, plan, *, t_end: float, samples: int, reference=None
     q0, qd0 = plan.scene.initial_state(model)
     d = mujoco.MjData(m)
     d.qpos[:], d.qvel[:] = qmap.to_mujoco(q0, qd0)
+    for dof, tau in (file_torques(plan.scene, plan) or {}).items():      # the scene's constant joint torques
+        d.qfrc_applied[dof] = tau
     dt = float(m.opt.timestep)
     t_req = np.linspace(0.0, float(t_end), int(samples))
     ks = np.rint(t_req / dt).astype(np.int64)
@@ -355,3 +384,19 @@ def run_file(mf: MujocoFile, plan, *, t_end: float, samples: int, reference=None
                      harness_time=time.perf_counter() - start, inputs="none" if inputs is None else "compiled",
                      callback_calls=0 if inputs is None else int(inputs.calls), blow_ups=blow,
                      compilation=inputs.compilation if inputs is not None else Compilation())
+
+
+def file_runner(mf: MujocoFile, plan, *, t_end: float, samples: int, reference=None):
+    """``run_at(integrator, timestep) -> MujocoRun``: :func:`run_file` of a copy of ``mf`` whose model
+    steps with that integrator and timestep (the file itself is not changed), for
+    :func:`~urdf2links.compare.mujoco_side.stable_run.stable_run` on the file's route."""
+
+    def run_at(integrator: str, timestep: float) -> MujocoRun:
+        m = copy.deepcopy(mf.model)
+        m.opt.timestep = float(timestep)
+        if integrator not in INTEGRATORS:
+            raise ValueError(f"integrator must be one of {INTEGRATORS}, got {integrator!r}")
+        m.opt.integrator = int(_INTEGRATOR_ENUM[integrator])
+        return run_file(dataclasses.replace(mf, model=m), plan, t_end=t_end, samples=samples, reference=reference)
+
+    return run_at

@@ -40,26 +40,31 @@ def _blew_up(run: MujocoRun) -> bool:
     return bool(run.blow_ups) or not (np.all(np.isfinite(run.q)) and np.all(np.isfinite(run.qd)))
 
 
-def _candidate(mj, plan, t_end, samples, integ, dt) -> tuple[MujocoRun | None, dict]:
+def _candidate(run_at, integ, dt) -> tuple[MujocoRun | None, dict]:
     """One fallback setting: its run (None when it blew up) and what was seen, with the difference to
     the run at half its timestep when it stayed stable."""
-    run = run_mujoco(mj, plan, t_end=t_end, timestep=dt, integrator=integ, samples=samples)
+    run = run_at(integ, dt)
     seen = {"integrator": integ, "timestep": dt, "blow_ups": dict(run.blow_ups), "stable": not _blew_up(run)}
     if not seen["stable"]:
         return None, seen
-    half = run_mujoco(mj, plan, t_end=t_end, timestep=dt / 2, integrator=integ, samples=samples)
+    half = run_at(integ, dt / 2)
     seen["half_timestep"] = dt / 2
     seen["max_abs_difference"] = float(np.max(np.abs(half.q - run.q))) if run.q.size and not _blew_up(half) else np.inf
     return run, seen
 
 
 def stable_run(mj, plan, *, t_end: float, samples: int, integrator: str, timestep: float,
-               fallback: bool = True) -> tuple[MujocoRun, dict | None]:
+               fallback: bool = True, runner=None) -> tuple[MujocoRun, dict | None]:
     """MuJoCo's run of ``plan`` with ``integrator`` at ``timestep``; with ``fallback`` and a blow-up,
     the first converged stable setting of :data:`FALLBACKS` x :data:`STEP_FACTORS` instead (module
     doc). Returns ``(run, record)``: the run the comparison uses, and None when the asked one was kept,
-    else the record (``asked``, ``tried``, ``chosen``, ``convergence``, ``converged``, ``note``)."""
-    run = run_mujoco(mj, plan, t_end=t_end, timestep=timestep, integrator=integrator, samples=samples)
+    else the record (``asked``, ``tried``, ``chosen``, ``convergence``, ``converged``, ``note``).
+    ``runner(integrator, timestep) -> MujocoRun`` runs another MuJoCo model the same way (the MJCF
+    file's route: :func:`~urdf2links.compare.mujoco_side.mujoco_mjcf.file_runner`); by default the
+    route-1 model ``mj`` runs ``plan`` (:func:`~urdf2links.compare.mujoco_side.mujoco_run.run_mujoco`)."""
+    run_at = runner or (lambda integ, dt: run_mujoco(mj, plan, t_end=t_end, timestep=dt, integrator=integ,
+                                                     samples=samples))
+    run = run_at(integrator, timestep)
     if not fallback or not _blew_up(run):
         return run, None
     asked = {"integrator": run.integrator, "timestep": float(run.timestep), "blow_ups": dict(run.blow_ups)}
@@ -69,7 +74,7 @@ def stable_run(mj, plan, *, t_end: float, samples: int, integrator: str, timeste
             dt = float(timestep) * factor
             if t_end / dt > MAX_STEPS:
                 continue
-            cand, seen = _candidate(mj, plan, t_end, samples, integ, dt)
+            cand, seen = _candidate(run_at, integ, dt)
             tried.append(seen)
             if cand is not None and (best_seen is None or seen["max_abs_difference"] < best_seen["max_abs_difference"]):
                 best, best_seen = cand, seen

@@ -42,7 +42,7 @@ __all__ = ["Difference", "Side", "side_model", "compare_descriptions", "ROUNDING
 #: mass and inertia, m for com and origin, rad for axis and turned frames, the joints' own units else.
 ROUNDING = {"mass": 1e-5, "com": 1e-5, "inertia": 1e-5, "axis": 1e-5, "origin": 1e-5, "armature": 1e-9,
             "damping": 1e-9, "stiffness": 1e-9, "limits": 1e-5, "type": 0.0, "joint_missing": 0.0,
-            "link_missing": 0.0}
+            "link_missing": 0.0, "constraint": 0.0}       # constraint: a loop closed on one side (issue 36)
 KINDS = tuple(ROUNDING)
 
 

@@ -33,15 +33,17 @@ from urdf2links.integration.simulate import simulate, warm_up
 from urdf2links.dynamics.rotations import matrix_to_xyz_angles, xyz_angles_to_matrix
 from urdf2links.parsers.mjcf_state import _nearest, matrix_to_quat, quat_to_matrix, rate_matrix
 from urdf2links.parsers.robot_file import is_mjcf_path
+from urdf2links.scenes.functions import Constant
 from urdf2links.scenes.plan import as_plan
 from urdf2links.scenes.scene import default_scene
 from urdf2links.view.animation import DEFAULT_FPS, Motion, Panel, render_animation
 from urdf2links.view.visuals import scene_shapes
 
 from ..agreement.trajectory import DIVERGENCE_THRESHOLD, divergence_time
-from ..mujoco_side.mujoco_mjcf import mujoco_from_mjcf, run_file
+from ..mujoco_side.mujoco_mjcf import file_runner, mujoco_from_mjcf
 from ..mujoco_side.mujoco_run import _INTEGRATOR_ENUM
 from ..mujoco_side.mujoco_urdf import MujocoRefused, mujoco_from_urdf
+from ..mujoco_side.stable_run import stable_run
 from .mapping import coordinate_map
 
 __all__ = ["PairMotion", "run_pair_motion", "pair_animation"]
@@ -113,6 +115,9 @@ def _mujoco_urdf_run(plan, *, t_end, samples, timestep, integrator) -> tuple[np.
     q0, qd0 = scene.initial_state(model)
     d = mujoco.MjData(m)
     d.qpos[adr], d.qvel[dof] = q0[joints], qd0[joints]
+    for coord, f in scene.torques:      # constant joint torques (the excited default scene's damper torques, E65)
+        if isinstance(f, Constant) and coord in mj.dof_of_joint:
+            d.qfrc_applied[mj.dof_of_joint[coord]] += float(f.value)
     if floating:
         a, f = mj.free_qpos, list(mj.free_dofs)
         phi = q0[root[3:]]
@@ -136,23 +141,32 @@ def _mujoco_urdf_run(plan, *, t_end, samples, timestep, integrator) -> tuple[np.
 
 
 def _mujoco_run(plan, *, t_end, samples, timestep, integrator, reference):
-    if is_mjcf_path(plan.scene.robot):
+    if is_mjcf_path(plan.scene.robot):     # a blow-up falls back to a stable setting, as in compare_scene
         mf = mujoco_from_mjcf(plan, timestep=timestep, integrator=integrator)
-        run = run_file(mf, plan, t_end=t_end, samples=samples, reference=reference)
+        run, _ = stable_run(None, plan, t_end=t_end, samples=samples, integrator=integrator, timestep=timestep,
+                            runner=file_runner(mf, plan, t_end=t_end, samples=samples, reference=reference))
         return run.q, [f"MuJoCo runs the MJCF file: {n}" for n in mf.notes + run.notes]
     return _mujoco_urdf_run(plan, t_end=t_end, samples=samples, timestep=timestep, integrator=integrator)
 
 
-def _mapped_initial(scene_m, model_u, model_m, q0_u, qd0_u, cmap) -> object:
+def _mapped_initial(scene_m, model_u, model_m, q0_u, qd0_u, cmap, torques_u=()) -> object:
+    """The second description's scene started at the first one's state, mapped (E52); the first one's
+    constant torques (the excited default scene's damper torques, E65) mapped onto it too."""
+    from urdf2links.scenes.functions import Constant
+
     q = np.asarray(model_m.info.get("q0", np.zeros(model_m.n)), float).copy()
     qd = np.zeros(model_m.n)
     iu = {n: i for i, n in enumerate(model_u.coordinate_names)}
     im = {n: i for i, n in enumerate(model_m.coordinate_names)}
+    to_m = {a: (b, s) for a, b, s, c in cmap}
     for a, b, s, c in cmap:
         q[im[b]] = s * q0_u[iu[a]] + c
         qd[im[b]] = s * qd0_u[iu[a]]
+    torques = tuple((to_m[a][0], Constant(to_m[a][1] * f.value)) for a, f in torques_u if a in to_m)
+    head = scene_m.description.split("; at rest at")[0]
     return dataclasses.replace(scene_m, q0=dict(zip(model_m.coordinate_names, q.tolist())),
-                               qd0=dict(zip(model_m.coordinate_names, qd.tolist())))
+                               qd0=dict(zip(model_m.coordinate_names, qd.tolist())), torques=torques,
+                               description=head + "; the first description's initial state and constant torques, mapped")
 
 
 def run_pair_motion(pair, *, q0: str = "zero", seed: int = 0, t_end: float = 1.0, load: dict | None = None,
@@ -167,11 +181,11 @@ def run_pair_motion(pair, *, q0: str = "zero", seed: int = 0, t_end: float = 1.0
         scene_u = default_scene(pair.urdf_path, q0=q0, seed=seed, t_end=t_end, floating=bool(opts_u.pop("floating_base",
                                 False)), **opts_u)
         model_u = scene_u.model()
-        scene_m = default_scene(pair.mjcf_path, t_end=t_end)
+        scene_m = default_scene(pair.mjcf_path, t_end=t_end, q0="rest")   # its state: the first one's, mapped
         model_m = scene_m.model()
     cmap = coordinate_map(pair.urdf, pair.mjcf, pair.mapping)
     q0u, qd0u = scene_u.initial_state(model_u)
-    scene_m = _mapped_initial(scene_m, model_u, model_m, q0u, qd0u, cmap)
+    scene_m = _mapped_initial(scene_m, model_u, model_m, q0u, qd0u, cmap, scene_u.torques)
     plans = (as_plan(scene_u, model=model_u), as_plan(scene_m, model=model_m))
     samples = scene_u.run.samples
     runs, notes = [], []

@@ -23,12 +23,13 @@ import numpy as np
 from urdf2links.console import shown_path
 from urdf2links.parsers.parts import RobotParts, robot_parts
 
+from .constraints import constraint_differences
 from .differences import KINDS, ROUNDING, Difference, compare_descriptions
 from .effects import evaluate_effects, order_differences
 from .explanations import explain
 from .mapping import JointMapping, map_joints
 
-__all__ = ["PairComparison", "compare_descriptions_of", "TERM_KEYS", "check_tolerances"]
+__all__ = ["PairComparison", "compare_descriptions_of", "TERM_KEYS", "check_tolerances", "exceedances"]
 
 #: Tolerances a pair may give besides the kinds: the relative differences of ``A`` and ``G`` (mapped).
 TERM_KEYS = ("A", "G")
@@ -81,26 +82,37 @@ class PairComparison:
 
 def check_tolerances(summary: dict, tolerances: dict | None = None) -> list[str]:
     """:meth:`PairComparison.check` on a written summary (``summary.json`` of a pair)."""
+    return [e["text"] for e in exceedances(summary, tolerances)]
+
+
+def _value(v) -> float:
+    return math.inf if v in ("inf", "nan") else float(v)
+
+
+def exceedances(summary: dict, tolerances: dict | None = None) -> list[dict]:
+    """What of a pair's ``summary`` exceeds ``tolerances`` (:meth:`PairComparison.check`), one dict each:
+    ``kind`` (a difference kind, or ``A``/``G``), ``value``, ``limit``, ``text`` (the line), and for a
+    difference ``difference`` (its JSON: names, both values, unit)."""
     tol = dict(tolerances or {})
     bad = [k for k in tol if k not in KINDS and k not in TERM_KEYS]
     if bad:
         raise ValueError(f"tolerances: unknown key(s) {bad}; the kinds are {list(KINDS)}, and A, G for the terms")
-    fails = []
+    out = []
     for d in summary["description_differences"]:
-        limit = float(tol.get(d["kind"], ROUNDING[d["kind"]]))
-        value = d["difference"]
-        value = math.inf if value in ("inf", "nan") else float(value)
+        limit = float(tol.get(d["kind"], ROUNDING.get(d["kind"], 0.0)))
+        value = _value(d["difference"])
         if not value <= limit:
             names = " / ".join(str(n) for n in (d["urdf"], d["mjcf"]) if n)
-            fails.append(f"{d['kind']} {names}: {value:.4g} {d['unit']} > {limit:g}")
+            out.append({"kind": d["kind"], "value": value, "limit": limit, "difference": d,
+                        "text": f"{d['kind']} {names}: {value:.4g} {d['unit']} > {limit:g}"})
     eff = summary["description_effects"]["mapped"]
     for term in TERM_KEYS:
         if term in tol:
-            value = eff[term]["max_rel_difference"]
-            value = math.inf if value in ("inf", "nan") else float(value)
+            value = _value(eff[term]["max_rel_difference"])
             if not value <= float(tol[term]):
-                fails.append(f"{term}: max relative difference {value:.4g} > {float(tol[term]):g}")
-    return fails
+                out.append({"kind": term, "value": value, "limit": float(tol[term]),
+                            "text": f"{term}: max relative difference {value:.4g} > {float(tol[term]):g}"})
+    return out
 
 
 def _notes(U: RobotParts, M: RobotParts) -> list[str]:
@@ -125,6 +137,7 @@ def compare_descriptions_of(urdf, mjcf, *, explicit_map: dict | None = None, loa
     M = robot_parts(mjcf, **{k: v for k, v in load.items() if k != "floating_base"})
     mapping = map_joints(U, M, explicit=explicit_map)
     diffs, below = compare_descriptions(U, M, mapping)
+    diffs += constraint_differences(urdf, mjcf)      # issue 36: loops closed on one side only
     explain(diffs, U, M)
     effects = evaluate_effects(U, M, mapping, diffs, states=states, seed=seed)
     ordered = order_differences(diffs, effects)

@@ -120,13 +120,16 @@ def load_baselines(path) -> dict:
 @dataclass
 class CheckResult:
     """Outcome of :func:`check_baseline`: ``ok``, the failing figure names, one line per figure,
-    warnings (settings that differ from the baseline's), ``source`` (file and key)."""
+    warnings (settings that differ from the baseline's), ``source`` (file and key), ``ratios``: each
+    checked figure over what it is allowed (above 1: failed; a divergence time: how much of its margin
+    it used up, above 1 when it came too early)."""
 
     ok: bool
     failures: list[str] = field(default_factory=list)
     lines: list[str] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
     source: str = ""
+    ratios: dict = field(default_factory=dict)
 
     def text(self) -> str:
         head = f"baseline check {'passed' if self.ok else 'FAILED'} ({self.source})"
@@ -176,6 +179,7 @@ def check_baseline(summary: dict, baselines: dict, *, factor: float | None = Non
             continue
         fl = floor[1] * scale if isinstance(floor, tuple) else floor
         allowed = f * max(b, fl)
+        res.ratios[name] = math.inf if v is None or not math.isfinite(v) else v / allowed
         if v is None or not math.isfinite(v) or v > allowed:
             res.ok = False
             res.failures.append(name)
@@ -190,6 +194,7 @@ def check_baseline(summary: dict, baselines: dict, *, factor: float | None = Non
         margin = math.log(f) / rate if rate and rate > 0 else 0.5 * d0
         earliest = d0 - margin
         name = "trajectory.divergence_time"
+        res.ratios[name] = (d0 - d) / margin if margin > 0 else (math.inf if d < d0 else 0.0)
         if d < earliest:
             res.ok = False
             res.failures.append(name)

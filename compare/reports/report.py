@@ -29,6 +29,7 @@ from ..formatting import fmt, fmt_md, fmt_t, json_ready
 from ..tradeoff.report import insert_section
 from .baselines import CheckResult
 from .contact_section import contact_markdown, contact_section
+from .coverage import coverage_cell, coverage_html, coverage_markdown, weak_evidence
 from .motion import motion_section
 from .plots import plot_coordinates, plot_energy, plot_error, plot_overview, plot_terms
 
@@ -100,13 +101,16 @@ def _top(s, check, index_link, index_label="all scenes") -> list[str]:
     e = html.escape
     tr, mj, pr = s["trajectory"], s["mujoco"], s["project"]
     title = f"{s['robot']} / {s['scene']}: urdf2links against MuJoCo"
-    verdict_cls = "box chaos" if s["chaotic"] else ("box bad" if tr["divergence_time"] is not None else "box")
+    verdict_cls = ("box chaos" if s["chaotic"] or weak_evidence(s) else
+                   ("box bad" if tr["divergence_time"] is not None else "box"))
     parts = [f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>{e(title)}</title>"
              f"<style>{_CSS}</style></head><body>",
              f"<p class='small'><a href='{e(index_link)}'>&larr; {e(index_label)}</a></p>" if index_link else "",
              f"<h1>{e(s['robot'])} / {e(s['scene'])}</h1>",
              f"<p class='sub'>{e(s['description'])}</p>",
              f"<div class='{verdict_cls}'><b>Trajectories:</b> {e(tr['verdict'])}</div>"]
+    if s.get("coverage"):
+        parts.append(f"<p class='sub'><b>Coverage:</b> {e(s['coverage']['text'])} (section 4).</p>")
     if s.get("t_end_note"):
         parts.append(f"<div class='box chaos'>{e(s['t_end_note'])}</div>")
     if check is not None:
@@ -137,7 +141,8 @@ def _terms_section(s, light=False) -> list[str]:
     e = html.escape
     r1, r2 = s["terms"]["route1"], s["terms"]["route2"]
     parts = ["<h2>1. Terms at identical states</h2>",
-             f"<p>At {r1['states']} seeded random states (seed {r1['seed']}; q uniform in [-1, 1], qd standard normal"
+             f"<p>At {r1['states']} seeded random states (seed {r1['seed']}; q uniform within the joints' limits, a "
+             "[-1, 1] window where a joint has none; qd standard normal"
              + ("; a random base pose and rate, no base acceleration" if r1.get("moving_base") else "")
              + "): the project's <code>A</code> against MuJoCo's <code>mj_fullM</code> and <code>e + G</code> "
                "against <code>qfrc_bias</code>, as max|ours &minus; MuJoCo| / max|MuJoCo|.</p>"]
@@ -210,7 +215,12 @@ def _energy_section(c, s, light=False) -> list[str]:
 
 
 def _wall_section(s) -> int:
-    return 5 if s["base"]["moving"] else 4
+    return _first_closing(s) + (1 if s["base"]["moving"] else 0)
+
+
+def _first_closing(s) -> int:
+    """The number of the first closing section: after the coverage section (4) when there is one."""
+    return 5 if s.get("coverage") else 4
 
 
 def _inputs_words(wt) -> str:
@@ -238,7 +248,7 @@ def _closing_sections(s, command) -> list[str]:
     e = html.escape
     wt, mj, pr, r2 = s["wall_time"], s["mujoco"], s["project"], s["terms"]["route2"]
     parts = []
-    n_sec = 4
+    n_sec = _first_closing(s)
     if s["base"]["moving"]:
         parts.append(f"<h2>{n_sec}. Base motion</h2>")
         parts.append(f"<p>The base {{A}} moves as prescribed by the scene; MuJoCo's <code>base_A</code> body is driven "
@@ -280,7 +290,8 @@ def render_html(c, summary: dict, *, command: str | None = None, check: "CheckRe
     figures (a comparison of two descriptions, :mod:`urdf2links.compare.pairs.report`)."""
     motion = [] if light else motion_section(c, fps=animation_fps)
     parts = (_top(summary, check, index_link, index_label) + list(first_sections) + motion + _terms_section(summary, light)
-             + _trajectory_section(c, summary, light) + _energy_section(c, summary, light) + list(extra_sections)
+             + _trajectory_section(c, summary, light) + _energy_section(c, summary, light)
+             + coverage_html(summary, 4, _rows) + list(extra_sections)
              + contact_section(c, summary)      # issue 37
              + _closing_sections(summary, command) + ["</body></html>"])
     return "\n".join(parts)
@@ -294,7 +305,7 @@ def render_markdown(s: dict) -> str:
     lines = [f"# {s['robot']} / {s['scene']}: urdf2links against MuJoCo", "", s["description"], ""]
     if s.get("t_end_note"):
         lines += [f"> {s['t_end_note']}", ""]
-    lines += [f"**Trajectories:** {tr['verdict']}", "",
+    lines += [f"**Trajectories:** {tr['verdict']}", "", *coverage_markdown(s),
               f"t = 0..{s['t_end']:g} s; urdf2links {pr['method']}"
               + (f" rtol {pr['rtol']:g}" if pr["method"] not in ("RK4", "midpoint") else f" dt {pr['dt']:g}")
               + f"; MuJoCo {mj['integrator']} dt {mj['timestep']:g} s; {s['route_description']}.", "",
@@ -370,11 +381,11 @@ def write_index(entries, out_root, *, note: str = "", command: str | None = None
     header = ["scene<br><span class='small'>robot</span>", "what acts", "t<sub>end</sub>",
               "terms<br>route 1", "terms<br>route 2", "trajectory<br>max |&Delta;q|",
               "divergence<br>|&Delta;q| &gt; 1e-3", "energy drift<br>(rel.) urdf2links", "energy drift<br>(rel.) MuJoCo",
-              "base<br>tracking", "wall (s)<br>urdf2links", "wall (s)<br>MuJoCo", "baseline<br>check"]
+              "base<br>tracking", "coverage", "wall (s)<br>urdf2links", "wall (s)<br>MuJoCo", "baseline<br>check"]
     rows = []
     md = ["| robot | scene | t_end | terms max rel. error (route 1 / route 2) | trajectory max abs error | divergence | "
-          "energy drift rel. (urdf2links / MuJoCo) | base tracking | wall s (urdf2links / MuJoCo) |",
-          "|---|---|---|---|---|---|---|---|---|"]
+          "energy drift rel. (urdf2links / MuJoCo) | base tracking | coverage | wall s (urdf2links / MuJoCo) |",
+          "|---|---|---|---|---|---|---|---|---|---|"]
     for ent in entries:
         s, link, chk = ent["summary"], ent["link"], ent.get("check")
         tr, en, te, wt = s["trajectory"], s["energy"], s["terms"], s["wall_time"]
@@ -398,13 +409,13 @@ def write_index(entries, out_root, *, note: str = "", command: str | None = None
         rows.append([f"<a href='{e(link)}'>{e(s['scene'])}</a><br><span class='small'>{e(s['robot'])}</span>", e(acts),
                      tcell, fmt(te["max_rel_error_route1"], 1), r2cell, fmt(tr["max_abs_error"], 1), divcell,
                      fmt(en["project_drift_rel"], 1), fmt(en["mujoco_drift_rel"], 1),
-                     fmt(s["base"]["tracking_error"], 1) if s["base"]["moving"] else "&ndash;",
+                     fmt(s["base"]["tracking_error"], 1) if s["base"]["moving"] else "&ndash;", coverage_cell(s),
                      f"{wt['project_s']:.2f}", f"{wt['mujoco_s']:.2f}", check])
         md.append(f"| {s['robot']} | [{s['scene']}]({link}) | {t_end} | {fmt_md(te['max_rel_error_route1'])} / "
                   f"{r2s.replace('&ndash;', '-')} | {fmt_md(tr['max_abs_error'])} | {div} | "
                   f"{fmt_md(en['project_drift_rel'])} / {fmt_md(en['mujoco_drift_rel'])} | "
                   f"{fmt_md(s['base']['tracking_error']) if s['base']['moving'] else '-'} | "
-                  f"{wt['project_s']:.2f} / {wt['mujoco_s']:.2f} |")
+                  f"{coverage_cell(s, markdown=True)} | {wt['project_s']:.2f} / {wt['mujoco_s']:.2f} |")
     first = entries[0]["summary"] if entries else None
     settings = ""
     if first:
@@ -419,13 +430,14 @@ def write_index(entries, out_root, *, note: str = "", command: str | None = None
              (f"<p><b><a href='{e(corpus_link)}'>Corpus report</a></b>: every robot of a corpus of real robot "
               "descriptions against MuJoCo, each in its default scene (<code>urdf2links report --corpus</code>).</p>"
               if corpus_link else ""),
-             _rows(rows, header, num_cols=(3, 4, 5, 7, 8, 9, 10, 11)),
+             _rows(rows, header, num_cols=(3, 4, 5, 7, 8, 9, 11, 12)),
              "<p class='small'>terms: max |ours &minus; MuJoCo| / max |MuJoCo| of A (mj_fullM) and e + G (qfrc_bias) at "
              "seeded random states; route 1 = the project's tree as MJCF, route 2 = MuJoCo's own URDF import (fixed base "
              "only; \"repaired\" when MuJoCo refused the file). Trajectory errors in rad (m for translations). Energy drift: "
              "max |h &minus; h(0) &minus; W| over the energy scale (h = E + V for a fixed base). Wall times are the "
              "integration loops. Energy drifts are relative to each scene's energy scale (max of |E|, |V &minus; V(0)|, |W|); "
-             "the scene reports give them in J.</p>"]
+             "the scene reports give them in J. Coverage: how many coordinates moved by more than 1e-3 (rad or m) in "
+             "the run; <b>weak evidence</b> when fewer than half did (E67).</p>"]
     if command:
         parts.append(f"<p class='small'>Regenerate: <code>{e(command)}</code></p>")
     parts.append("</body></html>")

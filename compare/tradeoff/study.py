@@ -73,6 +73,7 @@ from urdf2links.console import shown_path
 from urdf2links.integration.charts import floating_links
 from urdf2links.integration.integrators import METHODS, integrate
 from urdf2links.integration.simulate import simulate, warm_up
+from urdf2links.integration.constrained import refuse_constrained
 from urdf2links.scenes.plan import compile_plan
 from urdf2links.scenes.scene import load_scene, robot_label
 
@@ -510,7 +511,9 @@ def run_study(scene, *, t_end: float | None = None, quick: bool = False, repeats
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         model = scene.model()
-    st = _Study(scene, model, compile_plan(scene, model), mjcf_from_scene(scene, model), T, S)
+    plan = compile_plan(scene, model)
+    refuse_constrained(plan, "the work-precision study (urdf2links tradeoff)")    # issue 36: no KKT in its loops
+    st = _Study(scene, model, plan, mjcf_from_scene(scene, model), T, S)
     q0, qd0 = scene.initial_state(model)
     st.y0 = np.r_[q0, qd0, 0.0]
     st.charted = bool(floating_links(model)) and bool(scene.run.recharting)

@@ -24,6 +24,7 @@ import numpy as np
 from numba import njit, prange
 
 from ..scenes.plan import as_plan
+from .constrained import refuse_constrained
 from .simulate import record_compilation
 from .loops import TABLEAUX, erk_chunk, evaluate, initial_step
 
@@ -155,6 +156,7 @@ def simulate_batch(scene, q0, qd0=None, *, t_end: float | None = None, samples: 
     ``dask.distributed.Client`` to split the states across its workers in ``chunks`` chunks
     (default: one per worker); the same result as on one machine (module doc)."""
     plan = as_plan(scene, model=model)        # compiled once; a Plan passed in is used as it is
+    refuse_constrained(plan, "simulate_batch (urdf2links sweep)")     # issue 36: the batch loops have no KKT solve
     scene, model = plan.scene, plan.model
     run = scene.run
     notes = ()

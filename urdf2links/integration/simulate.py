@@ -134,6 +134,10 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
         q = model.vector(q0, "q0").copy()
     if qd0 is not None:
         qd = model.vector(qd0, "qd0").copy()
+    if plan.constraints is not None:    # issue 36: constraints and fixed tendons take the interpreted path (E72)-(E76)
+        from .constrained import simulate_constrained
+
+        return simulate_constrained(plan, run, q, qd, progress=progress, max_wall=max_wall, max_steps=max_steps)
     n = model.n
     y0 = np.r_[q, qd, 0.0]
     t_eval = np.linspace(0.0, run.t_end, max(run.samples, 2))

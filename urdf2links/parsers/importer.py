@@ -395,7 +395,9 @@ class _Importer:
         return [{"name": j.name, "type": j.type, "coordinates": coords.get(j.name, []),
                  "lower": j.limit_lower, "upper": j.limit_upper, "effort": j.limit_effort,
                  "velocity": j.limit_velocity, "damping": j.damping, "friction": j.friction,
-                 "mimic": None if j.mimic is None else j.mimic.joint} for j in self.desc.joints]
+                 "mimic": None if j.mimic is None else j.mimic.joint,
+                 "mimic_multiplier": None if j.mimic is None else j.mimic.multiplier,     # issue 36: mimic as
+                 "mimic_offset": None if j.mimic is None else j.mimic.offset} for j in self.desc.joints]  # a constraint
 
     def _repair_joint(self, rec: AuditRecord) -> AuditRecord:
         # Joint findings are on tree links that carry coordinates; those are named after the URDF child.

@@ -47,6 +47,7 @@ from ..dynamics.transforms import PARAMETERS
 from ..dynamics.tree import LinkSpec, build_tree
 from ..errors import MJCFError
 from ..ranges import out_of_range
+from .mjcf_constraints import equality_rows, tendon_rows
 from .mjcf_notes import inventory
 from .mjcf_state import MujocoJoint, MujocoMap, quat_to_matrix
 
@@ -412,6 +413,8 @@ class _Builder:
                        for n, kind, qa, da, names in self.mj_joints)
         qmap = MujocoMap(joints=joints, n=tree.n, nq=int(m.nq), nv=int(m.nv), qpos0=np.array(m.qpos0, float))
         q0, _ = qmap.from_mujoco(m.qpos0, None)
+        keys = [k for k in range(m.nkey) if mj.mj_id2name(m, mj.mjtObj.mjOBJ_KEY, k) == "home"]
+        home = qmap.from_mujoco(np.array(m.key_qpos[keys[0]], float), None, reference=q0)[0] if keys else None
         kinds = {j: _KINDS[int(m.jnt_type[j])] for j in range(m.njnt)}
         welded = [self.name("mjOBJ_BODY", b, f"body{b}") for b in range(1, m.nbody) if m.body_jntnum[b] == 0]
         if welded:
@@ -431,10 +434,14 @@ class _Builder:
         gravcomp = {self.name("mjOBJ_BODY", b, f"body{b}"): float(m.body_gravcomp[b])
                     for b in range(1, m.nbody) if m.body_gravcomp[b] != 0.0}
         frame_of = {k: (tree.link_names[t], X.tolist()) for k, (t, X) in self.frame_of.items()}
+        equalities, eq_notes = equality_rows(self)      # issue 36: read, not dropped (scenes/file_constraints.py)
+        tendons, tendon_notes = tendon_rows(self)
+        self.notes += eq_notes + tendon_notes
         coms = {self.name("mjOBJ_BODY", b, f"body{b}"): (float(m.body_mass[b]), np.array(m.body_ipos[b]).tolist())
                 for b in range(1, m.nbody)}
         info = {"format": "mjcf", "coordinates": self.coord_info, "notes": self.notes, "joints": self.joint_rows,
-                "frame_of": frame_of, "mujoco": qmap, "q0": q0, "gravcomp": gravcomp, "body_mass_com": coms,
+                "frame_of": frame_of, "equalities": equalities, "tendons": tendons, "mujoco": qmap, "q0": q0, "home": home,
+                "closed": {"equalities": int(m.neq), "tendons": int(m.ntendon)}, "gravcomp": gravcomp, "body_mass_com": coms,
                 "collision_spheres": self.collision_spheres(),      # issue 37: for [[contact]]
                 "actuators": self.actuator_rows(kinds, {j: names for j, (_, _, _, _, names) in
                                                         enumerate(self.mj_joints)}),

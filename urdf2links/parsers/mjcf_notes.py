@@ -44,9 +44,12 @@ def inventory(m, joint_kinds: dict) -> list[str]:
         "compiler took inertia from geometry); contacts are not modelled and MuJoCo's run disables them")
     add(m.npair + m.nexclude, f"{m.npair} contact pair(s), {m.nexclude} exclude(s)", "contacts are disabled on both sides")
     add(m.ntendon, f"{m.ntendon} tendon(s) ({_names(m, 'mjOBJ_TENDON', m.ntendon)})",
-        "not modelled; MuJoCo's run zeroes their stiffness and damping and disables their limits")
+        "fixed tendons are read (stiffness, damping, spring length, actuators on them; E76) and act when a scene says "
+        "[constraints] from_file = true; otherwise MuJoCo's run zeroes their stiffness and damping and disables their "
+        "limits")
     add(m.neq, f"{m.neq} equality constraint(s) ({_names(m, 'mjOBJ_EQUALITY', m.neq)})",
-        "a tree of links has none: the joints stay independent coordinates, and MuJoCo's run disables them")
+        "connect, weld and joint are read (E68-E70) and act when a scene says [constraints] from_file = true "
+        "(urdf2links inspect --scene shows them); otherwise the joints stay independent and MuJoCo's run disables them")
     add(m.nu, f"{m.nu} actuator(s) ({_names(m, 'mjOBJ_ACTUATOR', m.nu)})",
         "scene effects when a scene names them ([[actuator]] name = '...', ctrl = ...: MuJoCo's law on both engines); "
         "the others act on neither engine (MuJoCo's run switches them off)")

@@ -266,6 +266,8 @@ def resolve_actuators(specs, model, *, where="<scene>") -> ActuatorSet:
             raise SceneError(f"{where}: [[actuator]] name = {s.name!r} is not an actuator of {model.name!r}"
                              + (f"; its actuators are {have}" if have else " (the robot file declares no named "
                                 "actuator: give coordinate = '...' and the law instead)"))
+        if row["trntype"] == "tendon" and any(s.name in t["actuators"] and t["fixed"] for t in model.info.get("tendons", [])):
+            continue        # issue 36: an actuator on a fixed tendon acts through its tendon (scenes/file_constraints.py)
         why = file_actuator(row)
         if why:
             raise SceneError(f"{where}: [[actuator]] {s.name!r}: the file's actuator cannot be a scene effect: {why}")

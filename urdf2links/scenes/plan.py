@@ -41,6 +41,7 @@ import numpy as np
 from ..dynamics.transforms import BaseState
 from .actuators import actuator_forces, describe_actuator, resolve_actuators
 from .contact import resolve_contacts
+from .constraints import describe_constraints, plan_constraints
 from .functions import Constant
 from .scene_kernels import CompiledScene
 
@@ -84,11 +85,15 @@ class Plan:
         """Issue 37: the scene's contact spheres on this model (:mod:`urdf2links.scenes.contact`)."""
         self.reference_funcs = self._references(scene, model)
         """``[[computed_torque]]``: the reference of every coordinate (n functions), or () without one."""
+        self.constraints = plan_constraints(scene, model)    # issue 36: closed loops, couplings, fixed tendons
+        """:class:`~urdf2links.scenes.constraints.SceneConstraints` or None (E68)-(E76)."""
         self.terms = tuple(t for t, on in (
             ("A", True), ("e", True), ("base", self.base is not None), ("G", self.gravity_vector is not None),
             ("Q", bool(scene.loads)), ("tau", len(self.torque_funcs) > 0), ("spring", len(springs) > 0),
             ("damper", len(dampers) > 0), ("gravcomp", self.n_gravcomp > 0),
             ("actuator", bool(self.actuator_set.actuators)), ("computed_torque", bool(self.reference_funcs)),
+            ("constraint", self.constraints is not None and len(self.constraints.cset) > 0),
+            ("tendon", self.constraints is not None and bool(self.constraints.tendons)),
             ("contact", bool(self.contact_set))) if on)
         self.rhs = CompiledScene(self)
         """``y' = (qd, q'', P)`` for ``y = (q, qd, W)`` (2n + 1,): the compiled right-hand side
@@ -171,6 +176,8 @@ class Plan:
                  f"terms computed: {', '.join(self.terms)}"]
         skipped = [t for t in ("base", "G", "Q", "tau", "spring", "damper", "gravcomp", "actuator", "computed_torque")
                    if t not in self.terms]
+        skipped += [t for t, key in (("constraint", "equalities"), ("tendon", "tendons"))      # issue 36: a file's own
+                    if t not in self.terms and m.info.get(key)]
         if "gravcomp" in skipped and not m.info.get("gravcomp"):
             skipped.remove("gravcomp")
         lines.append(f"not computed (the scene does not call for them): {', '.join(skipped) or 'nothing'}")
@@ -200,6 +207,7 @@ class Plan:
             lines.append("  computed_torque: inverse dynamics of the scene at the reference (one more O(n) pass): "
                          + "; ".join(f"{c}: {f.describe()}" for c, f in named.items())
                          + "; the other coordinates held at their initial value")
+        lines += describe_constraints(self.constraints, m)
         lines += self._contact_lines()
         lines += [f"  note: {n}" for n in (*self.contact_set.notes, *self.spring_set.notes, *self.gravcomp_notes, *self.actuator_set.notes,
                                           *s.notes)]

@@ -71,6 +71,7 @@ not computed, see :mod:`urdf2links.scenes.plan`)::
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
 import math
 import re
@@ -86,6 +87,8 @@ from ..locations import example_robot_data_dir, shipped_robots_dir
 from ..ranges import MAX_SAMPLES, MAX_STEPS, METHODS, MIN_ATOL, MIN_T_END, RANGES, RTOL_FLOOR
 from .contact import parse_contacts
 from .actuators import ActuatorSpec, hold_actuators, parse_actuators
+from .constraints import constraint_options, parse_constraints
+from .excitation import DAMPER_TORQUE_TEXT, coordinate_ranges, damper_torques, excited_state
 from .functions import Constant, SceneValueError, TimeFunction, VectorFunction, parse_function, vector_function
 
 __all__ = ["Scene", "AppliedLoad", "Spring", "SpringSet", "RunSettings", "load_scene", "shipped_robots_dir",
@@ -93,10 +96,13 @@ __all__ = ["Scene", "AppliedLoad", "Spring", "SpringSet", "RunSettings", "load_s
 
 #: Name of the scene :func:`default_scene` makes (reports go to ``reports/<robot>/default/``).
 DEFAULT_SCENE_NAME = "default"
-Q0_CHOICES = ("zero", "random")
+#: The default scene's initial states: ``excite`` (every coordinate moving, E65; the default), ``random``
+#: (random q0, at rest), ``rest`` (q = 0 or qpos0, at rest; ``zero`` is its old name).
+Q0_CHOICES = ("excite", "random", "rest", "zero")
 
 _TOP = ("description", "chaotic", "robot", "gravity", "base", "force", "moment", "torque", "spring",
         "dampers", "springs", "gravcomp", "initial", "run", "record", "actuator", "computed_torque",
+        "constraint", "constraints",   # issue 36: [[constraint]], [constraints] from_file
         "contact")       # issue 37
 _ROBOT = ("urdf", "mjcf", "shipped", "example_robot_data", "floating_base", "inertia", "mimic", "package_dirs",
           "strict", "xacro_args")
@@ -196,6 +202,12 @@ class Scene:
     """``[[computed_torque]]``: ``(coordinate, reference q_r(t))``."""
     gravcomp_factor: float | None = None
     gravcomp_bodies: tuple[tuple[str, float], ...] = ()
+    constraints: tuple = ()
+    """``[[constraint]]`` blocks (:mod:`urdf2links.scenes.constraints`; issue 36)."""
+    file_constraints: bool = False
+    """``[constraints] from_file``: an MJCF file's own equalities and fixed tendons act."""
+    mimic_constraints: bool = False
+    """``[constraints] mimic``: a URDF's ``<mimic>`` joints as exact joint constraints (E70)."""
     contacts: tuple = ()
     """``[[contact]]`` blocks (issue 37): :class:`urdf2links.scenes.contact.ContactSpec`."""
 
@@ -438,49 +450,39 @@ class _Reader:
             raise SceneError(str(err)) from None
 
 
-#: A joint limit this large (rad or m) stands for "none": files written for Gazebo put +-1e16 on
-#: joints that turn freely (example-robot-data's iris rotors); drawing q0 there would start at 1e15 rad.
-NO_LIMIT = 1e6
-
-
 def _random_q0(model, rng) -> dict:
-    """A seeded initial configuration: each joint coordinate uniform within its URDF limits when both
-    are finite, below :data:`NO_LIMIT` in magnitude and lower < upper, else uniform in [-1, 1] (rad or
-    m); a floating root's position stays at the origin."""
-    limits = {j["coordinates"][0]: (j["lower"], j["upper"]) for j in model.info.get("joints", [])
-              if len(j["coordinates"]) == 1 and j["lower"] is not None and j["upper"] is not None
-              and j["lower"] < j["upper"] and max(abs(j["lower"]), abs(j["upper"])) < NO_LIMIT}
-    root = {c["name"] for c in model.info.get("coordinates", [])
-            if (c.get("joint") is None or c.get("type") == "free") and c["slot"] in "xyz"}
-    start = model.info.get("q0")      # MJCF: around MuJoCo's qpos0 where a joint has no limits
-    q0 = {}
-    for i, name in enumerate(model.coordinate_names):
-        lo, hi = limits.get(name, (-1.0, 1.0) if start is None else (start[i] - 1.0, start[i] + 1.0))
-        value = float(rng.uniform(lo, hi))
-        if name not in root:
-            q0[name] = value
-    return q0
+    """A seeded initial configuration: each joint coordinate uniform within its range
+    (:func:`~urdf2links.scenes.excitation.coordinate_ranges`: its limits when finite, below
+    :data:`~urdf2links.scenes.excitation.NO_LIMIT` in magnitude and lower < upper, else a window of +-1 (rad or m) around its start);
+    a floating root's position stays at the origin."""
+    r = coordinate_ranges(model)
+    q = rng.uniform(r.lower, r.upper)
+    return {name: float(v) for name, v, root in zip(r.names, q, r.root) if not root}
 
 
-def default_scene(robot, *, floating: bool = False, q0: str = "zero", seed: int = 0, t_end: float = 1.0,
+def default_scene(robot, *, floating: bool = False, q0: str = "excite", seed: int = 0, t_end: float = 1.0,
                   xacro_args=None, package_dirs=(), inertia: str = "audit", mimic: str = "independent",
                   strict: bool = False, model=None, hold: float | None = None) -> Scene:
     """The scene ``urdf2links simulate|compare ROBOT.urdf`` runs when no scene file is given.
 
     Gravity (9.81 m/s^2 along -z); a fixed base, or with ``floating`` six coordinates for the root
-    link; the URDF's joint damping as dampers (``[dampers] from_urdf = true``); initial state at rest,
-    ``q0="zero"`` or ``"random"`` (:func:`_random_q0`, seeded by ``seed``); ``t_end`` seconds with the
-    default integrator (``RunSettings``: auto, i.e. DOP853 and Radau5 while the
+    link; the URDF's joint damping as dampers (``[dampers] from_urdf = true``). The initial state
+    (``q0``, :data:`Q0_CHOICES`): ``"excite"`` (the default) moves every coordinate a good part of its
+    range within the run, a floating root too (:func:`~urdf2links.scenes.excitation.excited_state`, E65,
+    seeded by ``seed``); ``"random"`` a seeded random configuration at rest (:func:`_random_q0`);
+    ``"rest"`` (or ``"zero"``) at rest at the zero configuration (an MJCF file's qpos0). ``t_end``
+    seconds with the default integrator (``RunSettings``: auto, i.e. DOP853 and Radau5 while the
     scene is stiff, rtol 1e-10), 500 samples a second (at least 101).
     ``robot`` is a ``.urdf`` or ``.xacro`` path (with ``xacro_args``); ``model`` an already loaded model
     of it (loaded here otherwise, to know its coordinates and limits). ``hold`` (a bandwidth in Hz,
     ``--hold``): a position servo on every coordinate holding the initial ``q``
     (:func:`~urdf2links.scenes.actuators.hold_actuators`). The scene is named
-    :data:`DEFAULT_SCENE_NAME`; :func:`urdf2links.scenes.scene_toml.write_scene` writes it as TOML to edit.
+    :func:`default_scene_name`; :func:`urdf2links.scenes.scene_toml.write_scene` writes it as TOML to edit.
     """
     where = f"default scene of {robot}"
     r = _Reader(where)
     r.choice(q0, "q0", Q0_CHOICES)
+    q0 = "rest" if q0 == "zero" else q0
     t_end = r.number(t_end, "t_end", positive=True, quantity="time")
     from ..parsers.robot_file import is_mjcf_path, load_robot
 
@@ -500,7 +502,7 @@ def default_scene(robot, *, floating: bool = False, q0: str = "zero", seed: int 
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # the audit is in model.audit; inspect shows it
             model = load_robot(robot, **options)
-    q_init = _random_q0(model, np.random.default_rng(seed)) if q0 == "random" else {}
+    q_init, qd_init, state = _default_state(model, q0, seed, t_end, mjcf)
     held, held_text = (), ""
     if hold is not None:
         start = model.info.get("q0")
@@ -509,33 +511,55 @@ def default_scene(robot, *, floating: bool = False, q0: str = "zero", seed: int 
                               bandwidth=hold)
         held_text = f", held at q0 by position servos (critically damped at {hold:g} Hz)"
     run = RunSettings(t_end=t_end, samples=min(MAX_SAMPLES, max(101, int(round(500 * t_end)) + 1)))
+    name = default_scene_name(floating=floating, q0=q0, seed=seed, inertia=inertia, mimic=mimic, hold=hold)
+    scene = _default_scene(robot, mjcf, model, options, name, state + held_text, q_init, qd_init, run, held, floating)
+    if q0 != "excite" or held:      # --hold's servos hold the joints: no damper torque to fight them
+        return scene
+    torques = damper_torques(scene.springs_for(model).springs, qd_init)
+    if not torques:
+        return scene
+    return dataclasses.replace(scene, torques=torques, description=scene.description + "; " + DAMPER_TORQUE_TEXT)
+
+
+def _default_scene(robot, mjcf, model, options, name, state, q_init, qd_init, run, held, floating) -> Scene:
+    """The default scene's :class:`Scene` for an MJCF file (its own gravity, damping, springs) or a URDF."""
     if mjcf:
         g = np.asarray(model.info["option"]["gravity"], float)
         off = model.info["option"].get("disabled", [])
-        state = "MuJoCo's qpos0" + (f", random within the limits (seed {seed})" if q0 == "random" else "")
         effects = [w for w, on in (("joint damping", "damper" not in off), ("stiffness (at springref)", "spring" not in off),
                                    ("gravcomp", True)) if on]
-        return Scene(name=default_scene_name(q0=q0, seed=seed, inertia=inertia, hold=hold), path=None,
-                     robot=Path(robot), load_options=options,
+        return Scene(name=name, path=None, robot=Path(robot), load_options=options,
                      description=f"default scene of an MJCF file: the file's gravity {g.tolist()}, its "
-                                 + ", ".join(effects) + "; at rest at " + state + held_text,
-                     gravity=g if np.any(g) else None, q0=q_init, urdf_damping="damper" not in off,
+                                 + ", ".join(effects) + "; " + state,
+                     gravity=g if np.any(g) else None, q0=q_init, qd0=qd_init, urdf_damping="damper" not in off,
                      file_springs="spring" not in off, gravcomp=True, run=run, actuators=held)
     base = "floating base" if floating else "fixed base"
-    return Scene(name=default_scene_name(floating=floating, q0=q0, seed=seed, inertia=inertia, mimic=mimic, hold=hold),
-                 path=None, robot=Path(robot), load_options=options,
-                 description=f"default scene: gravity, {base}, q0 {q0}" + (f" (seed {seed})" if q0 == "random" else "")
-                             + ", URDF damping, at rest" + held_text,
-                 gravity=np.array([0.0, 0.0, -9.81]), q0=q_init, urdf_damping=True, run=run, actuators=held)
+    return Scene(name=name, path=None, robot=Path(robot), load_options=options,
+                 description=f"default scene: gravity, {base}, URDF damping, {state}",
+                 gravity=np.array([0.0, 0.0, -9.81]), q0=q_init, qd0=qd_init, urdf_damping=True, run=run,
+                 actuators=held)
 
 
-def default_scene_name(*, floating: bool = False, q0: str = "zero", seed: int = 0, inertia: str = "audit",
+def _default_state(model, q0: str, seed: int, t_end: float, mjcf: bool) -> tuple[dict, dict, str]:
+    """The default scene's ``(q0, qd0, phrase for its description)`` for the choice ``q0``."""
+    zero = "MuJoCo's qpos0" if mjcf else "q = 0"
+    if q0 == "excite":
+        ex = excited_state(model, seed=seed, t_end=t_end)
+        return ex.q0, ex.qd0, ex.text
+    if q0 == "random":
+        return (_random_q0(model, np.random.default_rng(seed)), {},
+                f"at rest, q0 random within the joint limits (seed {seed})")
+    return {}, {}, f"at rest at {zero} (--q0 rest)"
+
+
+def default_scene_name(*, floating: bool = False, q0: str = "excite", seed: int = 0, inertia: str = "audit",
                        mimic: str = "independent", hold: float | None = None) -> str:
     """:data:`DEFAULT_SCENE_NAME`, with what differs from the plain default scene appended
-    (``default-floating-random-seed3-repair``), so that reports of one robot in other settings do not
-    replace each other."""
-    parts = [DEFAULT_SCENE_NAME] + (["floating"] if floating else []) + ([f"random-seed{seed}"] if q0 == "random"
-                                                                          else [])
+    (``default-floating-random-seed3-repair``, ``default-rest``, ``default-seed2``), so that reports of
+    one robot in other settings do not replace each other."""
+    q0 = "rest" if q0 == "zero" else q0
+    parts = [DEFAULT_SCENE_NAME] + (["floating"] if floating else [])
+    parts += {"random": [f"random-seed{seed}"], "rest": ["rest"]}.get(q0, [f"seed{seed}"] if seed else [])
     parts += [inertia] if inertia != "audit" else []
     parts += [mimic] if mimic != "independent" else []
     parts += [] if hold is None else ["hold" if hold == 2.0 else f"hold{hold:g}hz"]
@@ -584,6 +608,7 @@ def scene_from_dict(data: dict, *, where: str = "<scene>", directory: Path | Non
                  q0=q0, qd0=qd0, run=run, link_poses=link_poses, urdf_damping=urdf_damping,
                  file_springs=file_springs, gravcomp=gravcomp, actuators=actuators, computed_torque=computed,
                  gravcomp_factor=gravcomp_factor, gravcomp_bodies=gravcomp_bodies,
+                 constraints=parse_constraints(r, data), **constraint_options(r, data),
                  contacts=parse_contacts(r, data))     # issue 37
 
 

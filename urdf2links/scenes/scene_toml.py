@@ -19,6 +19,7 @@ from pathlib import Path
 from .contact import contact_toml, with_ground
 from ..errors import SceneError, URDFError
 from ..parsers.xacro_input import parse_xacro_arg
+from .constraints import constraint_toml
 from .scene import RunSettings, Scene, default_scene, load_scene
 
 __all__ = ["scene_toml", "write_scene", "scene_or_robot", "scene_from_args", "write_scene_option", "xacro_args_of",
@@ -68,11 +69,12 @@ def _run_lines(run: RunSettings) -> list[str]:
 
 def scene_toml(scene: Scene, *, folder=None) -> str:
     """``scene`` as TOML text (robot path relative to ``folder`` when given). SceneError for a scene
-    with time functions (base motion, loads, torques), which this writer does not spell."""
+    with time functions (base motion, loads, torques that are not constant), which this writer does not spell."""
     from .functions import Constant
 
     functions = [w for w, on in (("[base]", scene.base is not None), ("[[force]]/[[moment]]", bool(scene.loads)),
-                                 ("[[torque]]", bool(scene.torques)), ("[[computed_torque]]", bool(scene.computed_torque)),
+                                 ("[[torque]]", any(not isinstance(f, Constant) for _, f in scene.torques)),
+                                 ("[[computed_torque]]", bool(scene.computed_torque)),
                                  ("[[actuator]] ctrl", any(not isinstance(a.ctrl, Constant) for a in scene.actuators)))
                  if on]
     if functions:
@@ -100,7 +102,10 @@ def scene_toml(scene: Scene, *, folder=None) -> str:
         out += [f"factor = {_value(float(scene.gravcomp_factor))}"] if scene.gravcomp_factor is not None else []
         out += [f"bodies = {_value({b: float(f) for b, f in scene.gravcomp_bodies})}"] if scene.gravcomp_bodies else []
         out += [""]
+    for coord, f in scene.torques:       # constant ones (the default scene's damper torques, E65)
+        out += ["[[torque]]", f"coordinate = {_value(coord)}", f"value = {_value(float(f.value))}", ""]
     out += _actuator_lines(scene.actuators)
+    out += constraint_toml(scene, _value)       # issue 36: [constraints], [[constraint]]
     out += contact_toml(scene.contacts, _value)     # issue 37
     out += ["[initial]", f"q = {_value({k: float(v) for k, v in scene.q0.items()})}",
             f"qd = {_value({k: float(v) for k, v in scene.qd0.items()})}", ""]
@@ -145,7 +150,7 @@ def write_scene(scene: Scene, path) -> Path:
 LOAD_OPTIONS = ("floating_base", "inertia", "mimic", "strict", "package_dirs", "xacro_args")
 
 
-def scene_or_robot(path, *, floating: bool = False, q0: str = "zero", seed: int = 0, t_end: float | None = None,
+def scene_or_robot(path, *, floating: bool = False, q0: str = "excite", seed: int = 0, t_end: float | None = None,
                    xacro_args=None, package_dirs=(), load: dict | None = None, hold: float | None = None) -> Scene:
     """A scene file (``.toml``), or the default scene of a robot file (``.urdf``, ``.xacro``, ...) with
     these options (``t_end`` default 1 s). ``load``: loading options given on the command line
@@ -162,7 +167,7 @@ def scene_or_robot(path, *, floating: bool = False, q0: str = "zero", seed: int 
         load["package_dirs"] = tuple(package_dirs)
     if path.suffix == ".toml":
         given = [o for o, on in (("--floating", floating or load.pop("floating_base", False)),
-                                 ("--q0", q0 != "zero"), ("--hold", hold is not None)) if on]
+                                 ("--q0", q0 != "excite"), ("--hold", hold is not None)) if on]
         if given:
             raise SceneError(f"{path}: {', '.join(given)} apply to a robot file run in its default scene; a scene "
                              "file names its robot, initial state and actuators in [robot], [initial] and [[actuator]]")
@@ -222,7 +227,7 @@ def scene_from_args(args):
     """The scene a ``simulate``/``compare``/``sweep``/``tradeoff`` command runs: ``args.scene`` as a scene
     file (with the loading options given), or a robot file in its default scene with ``--floating``,
     ``--q0``, ``--seed``, ``--t-end``, ``--hold``, ``--ground`` and the loading options."""
-    scene = scene_or_robot(args.scene, q0=getattr(args, "q0", "zero"), seed=getattr(args, "seed", 0),
+    scene = scene_or_robot(args.scene, q0=getattr(args, "q0", "excite"), seed=getattr(args, "seed", 0),
                            t_end=getattr(args, "t_end", None), load=load_options_of(args), hold=hold_of(args))
     return with_ground(scene) if getattr(args, "ground", False) else scene     # issue 37: --ground
 

@@ -1,0 +1,153 @@
+"""``urdf2links check --init``: a starting configuration for a folder, accepting its current state.
+
+:func:`init_config` finds every robot file under the folder (``.urdf``, ``.xacro``, MJCF ``.xml``; hidden
+folders and virtual environments skipped) and every scene file (a ``.toml`` with a ``[robot]`` table), loads
+each robot (a file that cannot be loaded is left out, and said), and guesses the pairs by robot name: a URDF
+or xacro file and an MJCF file whose ``<robot name>`` and ``<mujoco model>`` agree. The current state is
+accepted: a robot's inertia findings are allowed by link, a pair's tolerances are set just above the
+differences it has now (so a new or grown difference fails), and every scene -- each scene file and each
+robot's default scene -- is run and written as the baselines. The result is ``urdf2links.toml`` (docs/ci.md).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tomllib
+import warnings
+from pathlib import Path
+
+from lxml import etree
+
+from ..corpus.rows import is_mujoco_document
+from .config import CONFIG_NAME, DEFAULT_BASELINES, SCENE_T_END, ConfigError, RobotEntry, find_config
+
+__all__ = ["find_robot_files", "robot_name", "guess_pairs", "init_config", "toml_value"]
+
+_SKIP = {"node_modules", "__pycache__", "site-packages", "build", "dist"}
+
+
+def find_robot_files(folder: Path) -> tuple[list[Path], list[Path]]:
+    """``(robot files, scene files)`` under ``folder`` (module doc), sorted."""
+    robots, scenes = [], []
+    for here, dirs, names in os.walk(folder):
+        dirs[:] = sorted(d for d in dirs if not d.startswith(".") and d not in _SKIP
+                         and not (Path(here) / d / "pyvenv.cfg").exists())
+        for n in sorted(names):
+            p = Path(here) / n
+            if n.endswith((".urdf", ".xacro")) or n.endswith(".xml") and is_mujoco_document(p):
+                robots.append(p)
+            elif n.endswith(".toml") and n not in (CONFIG_NAME, "pyproject.toml") and _is_scene(p):
+                scenes.append(p)
+    return robots, scenes
+
+
+def _is_scene(path: Path) -> bool:
+    try:
+        return isinstance(tomllib.loads(path.read_text()).get("robot"), dict)
+    except (OSError, tomllib.TOMLDecodeError, UnicodeDecodeError):
+        return False
+
+
+def robot_name(path: Path) -> str:
+    """The robot's name as its file gives it (``<robot name>``, ``<mujoco model>``), else the file's stem."""
+    try:
+        root = etree.parse(str(path)).getroot()
+        name = root.get("model" if root.tag == "mujoco" else "name") or ""
+    except (OSError, etree.XMLSyntaxError):
+        name = ""
+    return name if name and "$" not in name else path.name.split(".")[0]
+
+
+def guess_pairs(robots: list[Path]) -> list[tuple[Path, Path]]:
+    """``(URDF or xacro, MJCF)`` of the same robot name (module doc)."""
+    firsts = [p for p in robots if not p.name.endswith(".xml")]
+    return [(u, m) for m in robots if m.name.endswith(".xml") for u in firsts if robot_name(u) == robot_name(m)]
+
+
+def toml_value(v) -> str:
+    """A TOML value: strings, booleans, numbers (``inf``), lists, inline tables."""
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, (int, float)):
+        return "inf" if v == math.inf else repr(v)
+    if isinstance(v, str):
+        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(v, dict):
+        return "{ " + ", ".join(f"{k} = {toml_value(x)}" for k, x in v.items()) + " }" if v else "{}"
+    return "[" + ", ".join(toml_value(x) for x in v) + "]"
+
+
+def _above(value: float) -> float:
+    """A tolerance just above ``value``: 1.5 times it, two significant digits (inf stays inf)."""
+    return math.inf if not math.isfinite(value) else float(f"{1.5 * value:.2g}")
+
+
+def _pair_tolerances(urdf: RobotEntry, mjcf: RobotEntry) -> tuple[dict, list[str]]:
+    """The tolerances that accept a pair as it is now, and a comment line per kind that differs."""
+    from .cases import pair_exceedances
+    from .config import PairEntry
+
+    _summary, past = pair_exceedances(PairEntry(urdf, mjcf))   # held to rounding: every difference it has now
+    now: dict[str, float] = {}
+    for e in past:
+        now[e["kind"]] = max(now.get(e["kind"], 0.0), e["value"])
+    why = [f"# accepted at init: {kind} differs now (largest {v:.3g}); its tolerance just above that"
+           for kind, v in now.items()]
+    return {kind: _above(v) for kind, v in now.items()}, why
+
+
+def _lines(table: str, entries: list[tuple[list[str], dict]]) -> list[str]:
+    out = []
+    for comments, e in entries:
+        out += ["", *comments, f"[[{table}]]"] + [f"{k} = {toml_value(v)}" for k, v in e.items()]
+    return out
+
+
+def init_config(folder, *, t_end: float = SCENE_T_END, log=print) -> Path:
+    """Write ``folder/urdf2links.toml`` (module doc) and return its path; the baselines are written by running
+    the check (:func:`urdf2links.compare.check.command.run_check` with ``write_baselines``)."""
+    from .cases import _load
+
+    folder = Path(folder).resolve()
+    found = find_config(folder)
+    if found is not None and found[0].parent == folder:
+        raise ConfigError(f"{found[0]} already configures urdf2links check: --init writes a new configuration only "
+                          "where there is none")
+    robot_paths, scene_paths = find_robot_files(folder)
+    if not robot_paths and not scene_paths:
+        raise ConfigError(f"--init: no robot file (.urdf, .xacro, MJCF .xml) or scene file under {folder}")
+    rel = {p: p.relative_to(folder).as_posix() for p in robot_paths + scene_paths}
+    loaded, plain, robots = [], [], []
+    for p in robot_paths:
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                model = _load(RobotEntry(rel[p], p))
+        except Exception as exc:  # noqa: BLE001 -- a robot that cannot be loaded is left out, and said
+            log(f"--init: left out {rel[p]}: it cannot be loaded ({type(exc).__name__}: {str(exc)[:200]})")
+            continue
+        loaded.append(p)
+        links = sorted({r.link for r in model.audit})
+        if not links:
+            plain.append(rel[p])
+            continue
+        robots.append(([f"# accepted at init: {len(model.audit)} inertia finding(s) of {rel[p]}"],
+                       {"files": [rel[p]], "allow_inertia_findings": links}))
+    robots = [([], {"files": plain})] * bool(plain) + robots
+    pairs = []
+    for u, m in guess_pairs(loaded):
+        tol, why = _pair_tolerances(RobotEntry(rel[u], u), RobotEntry(rel[m], m))
+        pairs.append(([f"# guessed at init: both files describe robot {robot_name(u)!r}", *why],
+                      {"urdf": rel[u], "mjcf": rel[m], **({"tolerances": tol} if tol else {})}))
+    scenes = [([], {"files": [rel[p] for p in scene_paths]})] * bool(scene_paths)
+    scenes += [([], {"robot": rel[p], "t_end": t_end, "q0": "random", "seed": 0}) for p in loaded]
+    text = ["# urdf2links check: robots, pairs and scenes checked on every change (docs/ci.md).",
+            "# Written by `urdf2links check --init`, accepting the current state; edit freely.",
+            f"baselines = {toml_value(DEFAULT_BASELINES)}", "factor = 10.0", "tolerances = {}"]
+    text += _lines("robots", robots) + _lines("pairs", pairs) + _lines("scenes", scenes)
+    path = folder / CONFIG_NAME
+    path.write_text("\n".join(text) + "\n")
+    log(f"wrote {path}: {len(loaded)} robot(s), {len(pairs)} pair(s), {len(scenes) - bool(scene_paths)} default "
+        f"scene(s), {len(scene_paths)} scene file(s)")
+    return path

@@ -1,0 +1,99 @@
+"""An MJCF file's equalities and fixed tendons as a scene's constraints (E68)-(E70) and tendons (E76).
+
+``[constraints] from_file = true`` in a scene of an MJCF robot makes the file's active ``connect``,
+``weld`` and ``joint`` equalities (``model.info["equalities"]``, read by
+:mod:`urdf2links.parsers.mjcf_constraints`) constraints of the run, and its fixed tendons forces, with the
+actuators whose transmission is a tendon when the scene names them (``[[actuator]] name = ...``,
+``ctrl = ...``; MuJoCo's law (E55) on the tendon's length). A joint equality in MuJoCo's ``qpos`` becomes
+one in the model's coordinates ``q = s qpos + o``: ``q_a - r_a = s_a sum_k c_k s_b^-k (q_b - r_b)^k`` with
+``r = o + s qpos0``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import SceneError
+from .actuators import Actuator
+from .constraints import ConstraintSpec
+from .tendons import FixedTendon
+
+__all__ = ["file_constraints", "tendon_actuator_names"]
+
+
+def _coordinate(model, joint, where, eq):
+    rows = [c for c in model.info.get("coordinates", []) if c.get("joint") == joint]
+    if len(rows) != 1:
+        raise SceneError(f"{where}: [constraints] from_file: equality {eq!r} names joint {joint!r}, which has "
+                         f"{len(rows)} coordinates here (a hinge or slide has one)")
+    c = rows[0]
+    return c["name"], float(c.get("sign", 1.0)), float(c.get("offset", 0.0))
+
+
+def _equality(model, row, where) -> ConstraintSpec:
+    src = f"MJCF <{row['kind']}> {row['name']!r}"
+    if row["kind"] == "joint":
+        a, sa, oa = _coordinate(model, row["joint1"], where, row["name"])
+        c = np.asarray(row["polycoef"], float)
+        if row["joint2"] is None:
+            return ConstraintSpec(row["name"], "joint", coordinates=(a,), coefficients=tuple(sa * c),
+                                  reference=(oa + sa * row["qpos0_1"], 0.0), source=src)
+        b, sb, ob = _coordinate(model, row["joint2"], where, row["name"])
+        coef = tuple(sa * c[k] / sb ** k for k in range(5))
+        return ConstraintSpec(row["name"], "joint", coordinates=(a, b), coefficients=coef,
+                              reference=(oa + sa * row["qpos0_1"], ob + sb * row["qpos0_2"]), source=src)
+    points = (np.asarray(row["anchor1"], float), np.asarray(row["anchor2"], float))
+    if row["kind"] == "connect":
+        return ConstraintSpec(row["name"], "connect", links=(row["body1"], row["body2"]), points=points, source=src)
+    return ConstraintSpec(row["name"], "weld", links=(row["body1"], row["body2"]), points=points,
+                          frames=(np.asarray(row["rel"], float), np.eye(3)), source=src)
+
+
+def tendon_actuator_names(model) -> set:
+    """The names of the file's actuators whose transmission is a tendon."""
+    return {a for t in model.info.get("tendons", []) for a in t["actuators"]}
+
+
+def _tendon(model, row, specs, where) -> FixedTendon:
+    names = model.coordinate_names
+    coef = np.zeros(model.n)
+    for joint, c in row["joints"]:
+        name, s, _ = _coordinate(model, joint, where, row["name"])
+        coef[names.index(name)] += c / s            # qpos = (q - o) / s; the offset only shifts the length
+    table = {a["name"]: a for a in model.info.get("actuators", [])}
+    acts = []
+    for spec in specs:
+        if spec.coordinate is None and spec.name in row["actuators"]:
+            a = table[spec.name]
+            acts.append(Actuator(spec.name, row["name"], -1, a["kind"], a["gain"], tuple(a["bias"]), a["gear"],
+                                 spec.ctrl, a["ctrlrange"], a["forcerange"], "file", row["name"], a.get("kp"),
+                                 a.get("kv")))
+    offset = sum(c * (-_coordinate(model, j, where, row["name"])[2]) / _coordinate(model, j, where, row["name"])[1]
+                 for j, c in row["joints"])
+    a, b = row["lengthspring"]
+    return FixedTendon(row["name"], coef, row["stiffness"], row["damping"], (a - offset, b - offset), tuple(acts))
+
+
+def file_constraints(model, scene, where) -> tuple[list[ConstraintSpec], list[FixedTendon], list[str]]:
+    """``(constraint specs, tendons, notes)`` of the file's active equalities and fixed tendons."""
+    if model.info.get("format") != "mjcf":
+        raise SceneError(f"{where}: [constraints] from_file = true needs an MJCF robot (its <equality> and <tendon>); "
+                         f"robot {model.name!r} is not one (a URDF's <mimic>: [constraints] mimic = true)")
+    specs, tendons, notes = [], [], []
+    for row in model.info.get("equalities", []):
+        if not row["supported"]:
+            notes.append(f"equality {row['name']!r} ({row['kind']}) not modelled: {row['why']}")
+        elif not row["active"]:
+            notes.append(f"equality {row['name']!r} is inactive in the file (active=\"false\"): left out")
+        else:
+            specs.append(_equality(model, row, where))
+    for row in model.info.get("tendons", []):
+        if not row["fixed"]:
+            notes.append(f"tendon {row['name']!r} is spatial: not modelled")
+            continue
+        if row["limited"] or row["frictionloss"]:
+            notes.append(f"tendon {row['name']!r}: limits and friction loss not modelled")
+        td = _tendon(model, row, scene.actuators, where)
+        if td.stiffness or td.damping or td.actuators:
+            tendons.append(td)
+    return specs, tendons, notes
