@@ -25,6 +25,7 @@ STUDIES = {
     "allegro_left": ("example-robot-data", "allegro_hand_description/urdf/allegro_left_hand.urdf"),
     "allegro_right": ("example-robot-data", "allegro_hand_description/urdf/allegro_right_hand.urdf"),
     "ur5_stiff_servo": ("shipped", "ur5_stiff_servo.toml"),
+    "quad12_drop": ("shipped", "quad12_drop.toml"),      # ground contact (issue 37): stiff by nature
 }
 
 

@@ -86,6 +86,13 @@ def _print_headline(s: dict, stream=sys.stdout) -> None:
           file=stream)
     if s["base"]["moving"]:
         print(f"  base       tracking error {s['base']['tracking_error']:.2e}", file=stream)
+    if s.get("contact"):        # issue 37: MuJoCo's native contact beside the law
+        nat = s["contact"]["native"]
+        b, st = nat["base_height"], nat["settle_time"]
+        print(f"  contact    MuJoCo's native contact (a reference): base height {b['native_final'] - b['ours_final']:+.2e} m "
+              f"at the end (largest difference {b['max_difference']:.2e} m), feet {nat['feet']['final_max_distance']:.2e} m "
+              f"apart, settled at {st['ours'] if st['ours'] is not None else 'never'} / "
+              f"{st['native'] if st['native'] is not None else 'never'} s (law / native)", file=stream)
     if s.get("coverage"):
         print(f"  coverage   {s['coverage']['text']}", file=stream)
     if s.get("verdict"):

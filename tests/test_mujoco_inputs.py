@@ -32,7 +32,8 @@ def shipped_driven_scenes():
     out = []
     for f in sorted(ROBOTS.glob("*.toml")) + sorted((ROBOTS / "hard").glob("*.toml")):
         scene = load_scene(f)
-        if _driven(scene):
+        # a [[contact]] scene's law runs only in the compiled callback (tests/test_contact_mujoco.py checks it)
+        if _driven(scene) and not scene.contacts:
             out.append(pytest.param(f, id=f.stem))
     return out
 

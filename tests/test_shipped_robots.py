@@ -31,6 +31,8 @@ EXPECTED = {
                            "wrist_1_joint", "wrist_2_joint", "wrist_3_joint")),
     "deck_crane.urdf": ({}, ("slew", "luff", "sway_x", "sway_y")),
     "spring_arm.urdf": ({}, ("j1", "j2", "j3")),
+    "quad12.urdf": ({"floating_base": True}, ('trunk.x', 'trunk.y', 'trunk.z', 'trunk.phi_x', 'trunk.phi_y', 'trunk.phi_z', 'FL_hip', 'FL_thigh', 'FL_knee', 'FR_hip', 'FR_thigh', 'FR_knee', 'RL_hip', 'RL_thigh', 'RL_knee', 'RR_hip', 'RR_thigh', 'RR_knee')),
+    "biped10.urdf": ({"floating_base": True}, ('torso.x', 'torso.y', 'torso.z', 'torso.phi_x', 'torso.phi_y', 'torso.phi_z', 'L_hip_roll', 'L_hip_pitch', 'L_knee', 'L_ankle_pitch', 'L_ankle_roll', 'R_hip_roll', 'R_hip_pitch', 'R_knee', 'R_ankle_pitch', 'R_ankle_roll')),
 }
 SEED = 20240611
 G = 9.81

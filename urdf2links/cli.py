@@ -138,6 +138,10 @@ def _inspect(args) -> int:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             model = scene.model()
+        if getattr(args, "ground", False):      # issue 37
+            from .scenes.contact import with_ground
+
+            scene = with_ground(scene, model)
         if scene.path is None:
             print(scene_toml(scene))
         print(compile_plan(scene, model).describe())
@@ -381,6 +385,8 @@ def _add_default_scene_options(p, *, seed: bool = True, write_scene: bool = True
     g.add_argument("--hold", action="store_true", help="hold the robot at q0: a position servo on every coordinate, "
                    "critically damped at --hold-bandwidth, gains from the mass matrix at q0 (both engines)")
     g.add_argument("--hold-bandwidth", type=float, metavar="HZ", help="the servos' bandwidth with --hold (default 2 Hz)")
+    g.add_argument("--ground", action="store_true", help="a floating robot on the ground: contact at its lowest "
+                   "collision spheres (else its lowest leaf links), touching at q0 (docs/contact.md)")
     if write_scene:
         g.add_argument("--write-scene", metavar="FILE.toml", help="also write the default scene to FILE.toml, to "
                        "edit and run by name")

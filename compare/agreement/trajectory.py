@@ -84,6 +84,8 @@ from ..mujoco_side.mujoco_mjcf import FILE_LABEL, file_route_inputs, file_runner
 from ..mujoco_side.mujoco_constraints import with_constraints
 from .constraint_agreement import run_notes as constraint_run_notes
 from ..mujoco_side.mujoco_run import TIMED_REGION as MUJOCO_REGION
+from ..mujoco_side.contact_inputs import contact_energy, contact_timestep
+from .contact_reference import contact_reference
 from ..mujoco_side.mujoco_run import MujocoRun, energy_function
 from ..mujoco_side.stable_run import stable_run
 from .actuator_terms import file_actuators, merged, route1_actuators, route2_actuators
@@ -178,6 +180,9 @@ class SceneComparison:
     threshold: float
     info: dict = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
+    contact: dict | None = None
+    """Issue 37: a ``[[contact]]`` scene's ground and MuJoCo's native contact beside it
+    (:func:`urdf2links.compare.agreement.contact_reference.contact_reference`), else None."""
 
     @property
     def key(self) -> str:
@@ -335,6 +340,7 @@ class SceneComparison:
                      "tracking_error": float(run.base_tracking_error) if moving else None},
             "wall_time": self._wall_time_summary(),
             "notes": list(self.notes),
+            **({"contact": self.contact} if self.contact is not None else {}),     # issue 37
         }
 
 
@@ -405,6 +411,11 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
                     progress=progress, max_wall=left)
     if max_wall is not None and clock() - start > max_wall:
         raise IntegrationError(f"{scene.path or scene.name}: max_wall={max_wall:g} s spent before MuJoCo's run")
+    step_note = None
+    if "contact" in plan.terms:         # issue 37: MuJoCo's step resolves the contact's stiffest mode
+        mujoco_dt, step_note = contact_timestep(plan, traj, mujoco_dt)
+        if step_note:
+            say(step_note)
     say(f"MuJoCo: {mujoco_integrator} dt {mujoco_dt:g}, {int(round(T / mujoco_dt))} steps")
     file_run = mf is not None and not file_route_inputs(scene, plan)
     fallback = None
@@ -424,6 +435,7 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     energy, info = _energy_balances(scene, plan, mj, run, traj, EV_o, h_o, W)
     notes = _run_notes(scene, plan, mj, run, traj, t_end_note, resampled=resampled)
     notes += constraint_run_notes(plan, traj, mj)   # issue 36: closed loops, couplings, tendons
+    notes += [step_note] if step_note else []      # issue 37: MuJoCo's step for the contact
     if mf is not None:
         notes += ([f"route 2 (the MJCF file in MuJoCo): {x}" for x in mf.notes]
                   + [f"import: {x}" for x in model.info.get("notes", [])])
@@ -439,9 +451,13 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
                  "q0": dict(zip(model.coordinate_names, q0.tolist())),
                  "qd0": dict(zip(model.coordinate_names, qd0.tolist())),
                  "total_s": clock() - start})
+    contact = None
+    if "contact" in plan.terms:       # issue 37: MuJoCo's own contact on the same scene, as a reference
+        say("MuJoCo's native contact (a reference, not an error)")
+        contact, info["contact_series"] = contact_reference(plan, mj, t, q_o, qd_o, T, samples)
     return SceneComparison(
         scene=scene, model=model, mj=mj, traj=traj, run=run, t=t, q_ours=q_o, q_mujoco=run.q, error=error,
-        energy=energy, terms=terms, growth=growth, threshold=threshold, info=info, notes=notes)
+        energy=energy, terms=terms, growth=growth, threshold=threshold, info=info, notes=notes, contact=contact)
 
 
 def _check_mujoco_steps(scene, T: float, mujoco_dt) -> None:
@@ -508,10 +524,12 @@ def _energy_balances(scene, plan, mj, run, traj, EV_o, h_o, W) -> tuple[dict, di
     """Both engines' balances ``h - h(0) - W`` (MuJoCo's without ``W`` when no work acts), the
     energy arrays for the report, and what the summary says about them."""
     work_terms = any(term in plan.terms for term in ("Q", "tau", "damper", "base", "gravcomp", "actuator",
-                                                   "computed_torque"))
-    EV_m = run.total_energy
+                                                   "computed_torque", "contact"))
+    # issue 37: the contact's elastic energy (E81) at MuJoCo's states, which MuJoCo's own energy does not count
+    V_c = contact_energy(plan, run.t, run.q) if "contact" in plan.terms else 0.0
+    EV_m = run.total_energy + V_c
     if scene.base is not None:
-        h_m = energy_function(mj, run, plan)
+        h_m = energy_function(mj, run, plan) + V_c
         quantity, sym = "h = E2 - E0 + V (energy function; moving base)", "h"
     else:
         h_m = EV_m
@@ -519,7 +537,7 @@ def _energy_balances(scene, plan, mj, run, traj, EV_o, h_o, W) -> tuple[dict, di
     bal_o = h_o - h_o[0] - W
     if work_terms:
         bal_m = h_m - h_m[0] - W
-        what = [w for w, on in (("forces/moments", "Q" in plan.terms), ("joint torques", "tau" in plan.terms),
+        what = [w for w, on in (("contact", "contact" in plan.terms), ("forces/moments", "Q" in plan.terms), ("joint torques", "tau" in plan.terms),
                                 ("dampers", "damper" in plan.terms), ("the moving base", "base" in plan.terms),
                                 ("gravcomp", "gravcomp" in plan.terms), ("actuators", "actuator" in plan.terms),
                                 ("the computed torque", "computed_torque" in plan.terms)) if on]

@@ -60,6 +60,8 @@ from urdf2links.integration.simulate import Compilation, record_compilation
 from urdf2links.scenes.scene_arrays import scene_view
 from urdf2links.scenes.scene_kernels import _actuators, computed_torque, ct_torque_at, fn_data_eval
 
+from .contact_inputs import add_contact, contact_index     # issue 37
+
 __all__ = ["CompiledInputs", "LayoutError", "mjdata_offsets", "check_offsets", "callback_pointer", "control",
            "HEADER_FIELDS"]
 
@@ -246,6 +248,7 @@ HEADER_FIELDS = (
     "calls", "error", "error_count",
     # actuators' controls and the computed torque (issue 26): d->ctrl, and the project's compiled scene
     "ctrl", "nctrl", "fwdActuation", "qvel", "ct", "pTI", "nTI", "pTF", "nTF", "pW", "nW", "pSI", "nSI", "pSF", "nSF", "pX", "nX",
+    "contact", "pCI", "nCI",        # issue 37: the scene's contact law (contact_inputs.add_contact), its index array
 )
 _H = {name: k for k, name in enumerate(HEADER_FIELDS)}
 (ACTIVE, DATA, TIME_OFF, NV, NQ, NBODY, NR, NL, BASE_BODY, PRESCRIBE, QFRC_APPLIED, XFRC_APPLIED, XPOS, XMAT, XIPOS,
@@ -258,9 +261,10 @@ _H = {name: k for k, name in enumerate(HEADER_FIELDS)}
 CALLS, ERROR, ERROR_COUNT = F_END + 1, F_END + 2, F_END + 3
 (CTRL, NCTRL, FN_FWDACT, QVEL, CT, P_TI, N_TI, P_TF, N_TF, P_W, N_W, P_SI, N_SI, P_SF, N_SF, P_X, N_X) = range(
     ERROR_COUNT + 1, ERROR_COUNT + 18)
+CONTACT, P_CI, N_CI = N_X + 1, N_X + 2, N_X + 3       # issue 37
 NHEADER = len(HEADER_FIELDS)
 assert HEADER_FIELDS[A_F] == "F" and HEADER_FIELDS[I_END] == "i_end" and HEADER_FIELDS[ERROR_COUNT] == "error_count"
-assert HEADER_FIELDS[CTRL] == "ctrl" and HEADER_FIELDS[N_X] == "nX" and NHEADER == N_X + 1
+assert HEADER_FIELDS[CTRL] == "ctrl" and HEADER_FIELDS[N_X] == "nX" and NHEADER == N_CI + 1
 
 #: The process-wide header the callback reads. Its address reaches the compiled code as the
 #: external symbol :data:`HEADER_SYMBOL`, registered with LLVM's dynamic linker before the callback
@@ -487,21 +491,34 @@ def _prescribe_base(m, d, H, I, F, t, xfrc, qfrc):
         qfrc[bdof[j]] += s - f[bdof[j]]
 
 
+@njit(cache=True, inline="always")
+def _scene_arrays(H):
+    """The project's compiled scene and tree arrays of this run, with scratch of their own: (TI, TF, W, SI, SF, X)."""
+    return (carray(_voidptr(H[P_TI]), H[N_TI], np.int64), carray(_voidptr(H[P_TF]), H[N_TF], np.float64),
+            carray(_voidptr(H[P_W]), H[N_W], np.float64), carray(_voidptr(H[P_SI]), H[N_SI], np.int64),
+            carray(_voidptr(H[P_SF]), H[N_SF], np.float64), carray(_voidptr(H[P_X]), H[N_X], np.float64))
+
+
 @njit(cache=True)
 def _computed_torque(H, I, t, qfrc):
     """The project's computed torque at ``t`` (:func:`urdf2links.scenes.scene_kernels.computed_torque`, on
     the project's own compiled scene and tree arrays, with scratch of its own) into ``qfrc_applied``."""
-    TI = carray(_voidptr(H[P_TI]), H[N_TI], np.int64)
-    TF = carray(_voidptr(H[P_TF]), H[N_TF], np.float64)
-    W = carray(_voidptr(H[P_W]), H[N_W], np.float64)
-    SI = carray(_voidptr(H[P_SI]), H[N_SI], np.int64)
-    SF = carray(_voidptr(H[P_SF]), H[N_SF], np.float64)
-    X = carray(_voidptr(H[P_X]), H[N_X], np.float64)
+    TI, TF, W, SI, SF, X = _scene_arrays(H)
     computed_torque(t, TI, TF, W, SI, SF, X)
     xt = ct_torque_at(SI[0], SI[1])
     dof = _int(H, I, I_DOF)
     for i in range(SI[0]):
         qfrc[dof[i]] += X[xt + i]
+
+
+@njit(cache=True)
+def _contact(H, t, qfrc):
+    """Issue 37: the contact's Q at MuJoCo's state into ``qfrc_applied`` (:func:`contact_inputs.add_contact`)."""
+    TI, TF, W, SI, SF, X = _scene_arrays(H)
+    qpos = carray(_voidptr(H[QPOS]), H[NQ], np.float64)
+    qvel = carray(_voidptr(H[QVEL]), H[NV], np.float64)
+    index = carray(_voidptr(H[P_CI]), H[N_CI], np.int64)
+    add_contact(t, TI, TF, W, SI, SF, X, qpos, qvel, index, qfrc)
 
 
 @njit(cache=True)
@@ -597,6 +614,8 @@ def control(m, d, header_address):
         _ball_servos(H, I, F, t, qfrc)
     if _int(H, I, I_LOAD_LINK).size:
         _apply_loads(m, d, H, I, F, t, xfrc, qfrc)
+    if H[CONTACT]:          # issue 37: the scene's contact law on MuJoCo's state (E83)
+        _contact(H, t, qfrc)
     if H[PRESCRIBE]:
         if act_fn.size:     # qfrc_actuator of these controls (MuJoCo computes it after this callback)
             _call_fwdActuation(H[FN_FWDACT], _address(m), _address(d))
@@ -699,7 +718,9 @@ class CompiledInputs:
         fns = _libmujoco_functions()
         # the computed torque runs the project's compiled scene in the callback, with scratch of its own
         ct = bool(plan.reference_funcs) and not file
-        self.arrays = plan.rhs.fresh_args() if ct or len(ints["ball"]) else ()
+        contact = "contact" in plan.terms and not file      # issue 37
+        self.arrays = plan.rhs.fresh_args() if ct or contact or len(ints["ball"]) else ()
+        self.contact_index = contact_index(self.mj, plan) if contact else np.zeros(1, np.int64)
         values = {
             "active": 0, "data": d._address, "time_offset": offsets["time"], **extra,
             "qfrc_applied": d.qfrc_applied.ctypes.data, "xfrc_applied": d.xfrc_applied.ctypes.data,
@@ -712,6 +733,7 @@ class CompiledInputs:
             "calls": 0, "error": 0, "error_count": 0,
             "ctrl": d.ctrl.ctypes.data if d.ctrl.size else 0, "nctrl": int(d.ctrl.size), "ct": int(ct),
             "fwdActuation": fns["mj_fwdActuation"], "qvel": d.qvel.ctypes.data,
+            "contact": int(contact), "pCI": self.contact_index.ctypes.data, "nCI": self.contact_index.size,
         }
         for key, arr in zip(("TI", "TF", "W", "SI", "SF", "X"), self.arrays):
             values[f"p{key}"], values[f"n{key}"] = arr.ctypes.data, arr.size

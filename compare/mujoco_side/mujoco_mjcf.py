@@ -82,7 +82,8 @@ def file_route_inputs(scene, plan=None) -> list[str]:
     (:meth:`~urdf2links.compare.mujoco_side.mujoco_inputs.CompiledInputs.for_file`)."""
     out = [w for w, on in (("[base]", scene.base is not None), ("[[force]]/[[moment]]", bool(scene.loads)),
                            ("[[torque]]", bool(scene.torques) and file_torques(scene, plan) is None),
-                           ("[[computed_torque]]", bool(scene.computed_torque)))
+                           ("[[computed_torque]]", bool(scene.computed_torque)),
+                           ("[[contact]]", bool(getattr(scene, "contacts", ()))))     # issue 37: route 1 carries it
            if on]
     if plan is not None:
         bad = [a.name for a in plan.actuator_set.actuators if _carried(plan, a) is False]

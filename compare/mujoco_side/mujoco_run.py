@@ -426,7 +426,12 @@ def implicit_note(integ: str, m) -> str | None:
 def _inputs(mj, m, d, plan, inputs, explicit, base_fn, torques, loads, ctrl, notes):
     """The run's control callback: None without inputs, the compiled one for a scene's inputs,
     else the Python one."""
-    if base_fn is None and torques is None and loads is None and ctrl is None:
+    contact = plan is not None and "contact" in plan.terms         # issue 37: the law runs in the compiled callback
+    if contact and (inputs != "compiled" or explicit):
+        raise ValueError(f"{plan.scene.name}: a [[contact]] scene runs its contact law in the compiled control callback "
+                         "(inputs='compiled', the scene's own inputs); got inputs=" + repr(inputs)
+                         + (" and inputs given as callables" if explicit else ""))
+    if base_fn is None and torques is None and loads is None and ctrl is None and not contact:
         return None
     if inputs == "compiled" and plan is not None and not explicit:
         return CompiledInputs(mj, plan, m, d)

@@ -28,6 +28,7 @@ from urdf2links.view.animation import DEFAULT_FPS
 from ..formatting import fmt, fmt_md, fmt_t, json_ready
 from ..tradeoff.report import insert_section
 from .baselines import CheckResult
+from .contact_section import contact_markdown, contact_section
 from .coverage import coverage_cell, coverage_html, coverage_markdown, weak_evidence
 from .motion import motion_section
 from .plots import plot_coordinates, plot_energy, plot_error, plot_overview, plot_terms
@@ -291,6 +292,7 @@ def render_html(c, summary: dict, *, command: str | None = None, check: "CheckRe
     parts = (_top(summary, check, index_link, index_label) + list(first_sections) + motion + _terms_section(summary, light)
              + _trajectory_section(c, summary, light) + _energy_section(c, summary, light)
              + coverage_html(summary, 4, _rows) + list(extra_sections)
+             + contact_section(c, summary)      # issue 37
              + _closing_sections(summary, command) + ["</body></html>"])
     return "\n".join(parts)
 
@@ -326,6 +328,7 @@ def render_markdown(s: dict) -> str:
               f"Energy: {en['quantity']}; {en['note']}.", "",
               f"Timed regions: urdf2links: {wt['regions']['project_s']}. MuJoCo: {wt['regions']['mujoco_s']}. "
               + _compile_words(wt), ""]
+    lines += contact_markdown(s)        # issue 37: a [[contact]] scene's ground and MuJoCo's native contact
     return "\n".join(lines)
 
 

@@ -377,7 +377,11 @@ class _Importer:
             k: (tree.link_names[t], X.tolist()) for k, (t, X) in self.frame_of.items()},
                 # each URDF link's mass and centre of mass (link frame), for gravcomp (MuJoCo's body gravcomp)
                 "body_mass_com": {k: (float(H[3, 3]), (H[:3, 3] / H[3, 3] if H[3, 3] > 0 else np.zeros(3)).tolist())
-                                  for k, H in self.H_link.items()}}
+                                  for k, H in self.H_link.items()},
+                # issue 37: every <collision> sphere (link, centre in the link frame, radius), for [[contact]]
+                "collision_spheres": [(name, np.asarray(g.origin.xyz, float).tolist(), float(g.radius))
+                                      for name, link in self.desc.links.items() for g in link.collisions
+                                      if g.kind == "sphere" and g.radius]}
         return Model(tree, coupling=coupling, name=self.desc.name, source=self.desc.source,
                      audit=self.records, info=info)
 

@@ -385,6 +385,26 @@ class _Builder:
         except ValueError as err:
             raise MJCFError(f"{self.where}: the tree of links cannot be built: {err}") from err
 
+    def collision_spheres(self) -> list:
+        """Issue 37: ``(body, centre in the body frame, radius)`` of every colliding sphere geom and of both
+        ends of every colliding capsule geom (``contype`` or ``conaffinity`` non-zero), for ``[[contact]]``."""
+        m, mj, out = self.m, self.mj, []
+        for g in range(m.ngeom):
+            kind = int(m.geom_type[g])
+            if kind not in (int(mj.mjtGeom.mjGEOM_SPHERE), int(mj.mjtGeom.mjGEOM_CAPSULE)) or m.geom_bodyid[g] == 0 \
+                    or not (m.geom_contype[g] or m.geom_conaffinity[g]):
+                continue
+            body, pos, r = self.name("mjOBJ_BODY", int(m.geom_bodyid[g]), f"body{int(m.geom_bodyid[g])}"), \
+                np.array(m.geom_pos[g], float), float(m.geom_size[g, 0])
+            if kind == int(mj.mjtGeom.mjGEOM_SPHERE):
+                out.append((body, pos.tolist(), r))
+                continue
+            R = np.empty(9)
+            mj.mju_quat2Mat(R, np.array(m.geom_quat[g], float))
+            axis = R.reshape(3, 3)[:, 2] * float(m.geom_size[g, 1])
+            out += [(body, (pos + axis).tolist(), r), (body, (pos - axis).tolist(), r)]
+        return out
+
     def model(self) -> Model:
         m, mj = self.m, self.mj
         tree = self.build()
@@ -422,6 +442,7 @@ class _Builder:
         info = {"format": "mjcf", "coordinates": self.coord_info, "notes": self.notes, "joints": self.joint_rows,
                 "frame_of": frame_of, "equalities": equalities, "tendons": tendons, "mujoco": qmap, "q0": q0, "home": home,
                 "closed": {"equalities": int(m.neq), "tendons": int(m.ntendon)}, "gravcomp": gravcomp, "body_mass_com": coms,
+                "collision_spheres": self.collision_spheres(),      # issue 37: for [[contact]]
                 "actuators": self.actuator_rows(kinds, {j: names for j, (_, _, _, _, names) in
                                                         enumerate(self.mj_joints)}),
                 "option": {"gravity": gravity.tolist(), "timestep": float(m.opt.timestep), "integrator": integrator,

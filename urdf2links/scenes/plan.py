@@ -40,6 +40,7 @@ import numpy as np
 
 from ..dynamics.transforms import BaseState
 from .actuators import actuator_forces, describe_actuator, resolve_actuators
+from .contact import resolve_contacts
 from .constraints import describe_constraints, plan_constraints
 from .functions import Constant
 from .scene_kernels import CompiledScene
@@ -79,6 +80,9 @@ class Plan:
         self.damping = np.array([s.damping for s in dampers])
         self.actuator_set = resolve_actuators(scene.actuators, model, where=str(scene.path or scene.name))
         """The scene's actuators on this model (:mod:`urdf2links.scenes.actuators`) and notes."""
+        self.contact_set = resolve_contacts(scene.contacts, model, scene.initial_state(model)[0],
+                                            where=str(scene.path or scene.name))
+        """Issue 37: the scene's contact spheres on this model (:mod:`urdf2links.scenes.contact`)."""
         self.reference_funcs = self._references(scene, model)
         """``[[computed_torque]]``: the reference of every coordinate (n functions), or () without one."""
         self.constraints = plan_constraints(scene, model)    # issue 36: closed loops, couplings, fixed tendons
@@ -89,7 +93,8 @@ class Plan:
             ("damper", len(dampers) > 0), ("gravcomp", self.n_gravcomp > 0),
             ("actuator", bool(self.actuator_set.actuators)), ("computed_torque", bool(self.reference_funcs)),
             ("constraint", self.constraints is not None and len(self.constraints.cset) > 0),
-            ("tendon", self.constraints is not None and bool(self.constraints.tendons))) if on)
+            ("tendon", self.constraints is not None and bool(self.constraints.tendons)),
+            ("contact", bool(self.contact_set))) if on)
         self.rhs = CompiledScene(self)
         """``y' = (qd, q'', P)`` for ``y = (q, qd, W)`` (2n + 1,): the compiled right-hand side
         (:mod:`urdf2links.scenes.scene_kernels`)."""
@@ -152,6 +157,19 @@ class Plan:
         return self.rhs.energies(t, q, qd)
 
     # -- words -----------------------------------------------------------------------------------
+    def _contact_lines(self) -> list[str]:
+        """Issue 37: the contact's lines of :meth:`describe`."""
+        specs = {id(r[3]): r[3] for r in self.contact_set.rows}
+        out = []
+        for spec in specs.values():
+            on = [f"{s.link} (r {s.radius:g} m, {s.source})" for r, s in zip(self.contact_set.rows,
+                                                                             self.contact_set.spheres) if r[3] is spec]
+            out.append(f"  contact (E77-E80, Q through the links' wrenches): {spec.describe()}; spheres on "
+                       + ", ".join(on))
+        if out and self.reference_funcs:
+            out.append("  note: the computed torque (E57) leaves the contact out of its inverse dynamics")
+        return out
+
     def describe(self) -> str:
         s, m = self.scene, self.model
         lines = [f"scene {s.name!r}: robot {m.name!r} ({m.n} coordinates, {m.tree.n_links} links)",
@@ -190,7 +208,8 @@ class Plan:
                          + "; ".join(f"{c}: {f.describe()}" for c, f in named.items())
                          + "; the other coordinates held at their initial value")
         lines += describe_constraints(self.constraints, m)
-        lines += [f"  note: {n}" for n in (*self.spring_set.notes, *self.gravcomp_notes, *self.actuator_set.notes,
+        lines += self._contact_lines()
+        lines += [f"  note: {n}" for n in (*self.contact_set.notes, *self.spring_set.notes, *self.gravcomp_notes, *self.actuator_set.notes,
                                           *s.notes)]
         r = s.run
         lines.append(f"run: t_end {r.t_end:g} s, method {r.method}, rtol {r.rtol:g}, atol {r.atol:g}"

@@ -85,6 +85,7 @@ from ..dynamics.transforms import PARAMETERS, BaseState
 from ..errors import SceneError
 from ..locations import example_robot_data_dir, shipped_robots_dir
 from ..ranges import MAX_SAMPLES, MAX_STEPS, METHODS, MIN_ATOL, Q0_CHOICES, MIN_T_END, RANGES, RTOL_FLOOR
+from .contact import parse_contacts
 from .actuators import ActuatorSpec, hold_actuators, parse_actuators
 from .constraints import constraint_options, parse_constraints
 from .excitation import DAMPER_TORQUE_TEXT, coordinate_ranges, damper_torques, excited_state
@@ -100,7 +101,8 @@ DEFAULT_SCENE_NAME = "default"
 
 _TOP = ("description", "chaotic", "robot", "gravity", "base", "force", "moment", "torque", "spring",
         "dampers", "springs", "gravcomp", "initial", "run", "record", "actuator", "computed_torque",
-        "constraint", "constraints")   # issue 36: [[constraint]], [constraints] from_file
+        "constraint", "constraints",   # issue 36: [[constraint]], [constraints] from_file
+        "contact")       # issue 37
 _ROBOT = ("urdf", "mjcf", "shipped", "example_robot_data", "floating_base", "inertia", "mimic", "package_dirs",
           "strict", "xacro_args")
 #: Joint types whose damping (URDF or MJCF) becomes a damper on their one coordinate.
@@ -205,6 +207,8 @@ class Scene:
     """``[constraints] from_file``: an MJCF file's own equalities and fixed tendons act."""
     mimic_constraints: bool = False
     """``[constraints] mimic``: a URDF's ``<mimic>`` joints as exact joint constraints (E70)."""
+    contacts: tuple = ()
+    """``[[contact]]`` blocks (issue 37): :class:`urdf2links.scenes.contact.ContactSpec`."""
 
     def model(self):
         """Load the scene's robot with its options (a :class:`~urdf2links.dynamics.model.Model`)."""
@@ -603,7 +607,8 @@ def scene_from_dict(data: dict, *, where: str = "<scene>", directory: Path | Non
                  q0=q0, qd0=qd0, run=run, link_poses=link_poses, urdf_damping=urdf_damping,
                  file_springs=file_springs, gravcomp=gravcomp, actuators=actuators, computed_torque=computed,
                  gravcomp_factor=gravcomp_factor, gravcomp_bodies=gravcomp_bodies,
-                 constraints=parse_constraints(r, data), **constraint_options(r, data))
+                 constraints=parse_constraints(r, data), **constraint_options(r, data),
+                 contacts=parse_contacts(r, data))     # issue 37
 
 
 def _gravcomp(r: _Reader, data: dict) -> tuple[bool, float | None, tuple]:

@@ -18,6 +18,7 @@ from collections import namedtuple
 
 import numpy as np
 
+from .contact import contact_arrays
 from .functions import Constant, Sines, Table
 
 __all__ = ["SceneArrays", "compile_scene", "scene_view", "function_data", "scratch_size", "ct_offset", "SHEAD", "KA"]
@@ -31,7 +32,9 @@ __all__ = ["SceneArrays", "compile_scene", "scene_view", "function_data", "scrat
 (S_NA, S_CT) = range(30, 32)                        # actuators; 1 with a computed torque
 (S_ACT_IDX, S_ACT_FN, S_ACT_FLAGS, S_CT_FN) = range(32, 36)
 S_ACT_PRM = 36                                      # per actuator: gain, b0, b1, b2, gear, cmin, cmax, fmin, fmax
-SHEAD = 37
+# issue 37: ground contact, a block after every other (urdf2links.scenes.contact_kernels reads it)
+(S_NCONTACT, S_CONTACT_LINK, S_CONTACT_DATA) = range(37, 40)
+SHEAD = 40
 KA = 9                                              # floats per actuator
 ACT_CTRL_LIMITED, ACT_FORCE_LIMITED = 1, 2          # act_flags bits
 
@@ -147,7 +150,12 @@ def compile_scene(plan) -> tuple[np.ndarray, np.ndarray]:
     head[S_ACT_IDX:S_CT_FN + 1] = at_i[11:]
     head[S_LOAD_X:S_FN_DATA + 1] = at_f[:9]
     head[S_ACT_PRM] = at_f[9]
-    return np.concatenate([head] + ints), np.concatenate(floats)
+    # issue 37: the contact spheres (links, KC floats each) appended after every other block
+    c_links, c_data = contact_arrays(plan.contact_set)
+    head[S_NCONTACT] = c_links.size
+    head[S_CONTACT_LINK] = SHEAD + sum(a.size for a in ints)
+    head[S_CONTACT_DATA] = sum(a.size for a in floats)
+    return np.concatenate([head] + ints + [c_links]), np.concatenate(floats + [c_data])
 
 
 def scene_view(SI, SF) -> SceneArrays:

@@ -38,6 +38,7 @@ from ..dynamics.inverse_kernels import kinematics_acc, own_armature
 from ..dynamics.kernels import add_wrench, base_power, clear_wrenches, dynamics, energies, kinematics
 from ..dynamics.model_kernels import reduce_mass, reduce_vector
 from ..dynamics.tree_arrays import W_B, W_Q, W_SIZE, nn
+from .contact_kernels import contact_potential, contact_wrenches   # issue 37
 from .scene_arrays import (
     KA,
     S_ACT_FLAGS,
@@ -46,6 +47,7 @@ from .scene_arrays import (
     S_ACT_PRM,
     S_BASE_FN,
     S_CT,
+    S_NCONTACT,
     S_CT_FN,
     S_NA,
     S_C,
@@ -80,7 +82,8 @@ EFFECTS = ("loads", "actuators", "computed_torque", "coupled")
 
 def effects_of(SI) -> tuple:
     """``FX``: one marker per :data:`EFFECTS`, ``1`` when the compiled scene ``SI`` has the effect, else ``None``."""
-    present = {"loads": SI[5] > 0, "actuators": SI[S_NA] > 0, "computed_torque": SI[S_CT] > 0, "coupled": SI[4] != 0}
+    # "loads": every wrench on links, the scene's loads (forces, moments, gravcomp) or its contact (issue 37)
+    present = {"loads": SI[5] > 0 or SI[S_NCONTACT] > 0, "actuators": SI[S_NA] > 0, "computed_torque": SI[S_CT] > 0, "coupled": SI[4] != 0}
     return tuple(1 if present[name] else None for name in EFFECTS)
 
 
@@ -393,9 +396,11 @@ def _rhs(t, y, out, I, F, W, SI, SF, X, loads, actuators, ct, coupled):
         kinematics(I, F, W, X, 0, X, nt, True, X, xb, has_base, gx, gy, gz)
     else:
         kinematics(I, F, W, y, 0, y, n, True, X, xb, has_base, gx, gy, gz)
-    if loads is not None:
+    Pel = 0.0
+    if loads is not None:       # loads or contact (effects_of): wrenches on links
         clear_wrenches(I, W)
         _apply_loads(SI, SF, I, W, t)
+        Pel = contact_wrenches(SI, SF, I, W)       # issue 37: ground contact (E80), its elastic power (E81)
     dynamics(I, F, W, True, loads is not None, has_base)
     for i in range(n):
         out[i] = y[n + i]
@@ -422,7 +427,7 @@ def _rhs(t, y, out, I, F, W, SI, SF, X, loads, actuators, ct, coupled):
     if has_base:   # the base's twist, acceleration and the links' momentum, recorded by the passes
         dE, dV = base_power(I, W, gx, gy, gz)
         P -= dE - dV
-    out[2 * n] = P
+    out[2 * n] = P + Pel
     return -1
 
 
@@ -461,6 +466,7 @@ def scene_energies(ts, Q, QD, out, I, F, W, SI, SF, X):
         for j in range(SI[7]):
             x = Q[s, SI[si + j]] - SF[rest + j]
             V += 0.5 * SF[k + j] * x * x
+        V += contact_potential(SI, SF, I, W)       # issue 37: the contact's elastic energy (E81)
         out[s, 0] = E0
         out[s, 1] = V
         out[s, 2] = (0.5 * (E0 + E1) - 2.0 * E2 + V) if has_base else E0 + V

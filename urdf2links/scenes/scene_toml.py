@@ -16,6 +16,7 @@ import json
 from dataclasses import fields
 from pathlib import Path
 
+from .contact import contact_toml, with_ground
 from ..errors import SceneError, URDFError
 from ..parsers.xacro_input import parse_xacro_arg
 from .constraints import constraint_toml
@@ -105,6 +106,7 @@ def scene_toml(scene: Scene, *, folder=None) -> str:
         out += ["[[torque]]", f"coordinate = {_value(coord)}", f"value = {_value(float(f.value))}", ""]
     out += _actuator_lines(scene.actuators)
     out += constraint_toml(scene, _value)       # issue 36: [constraints], [[constraint]]
+    out += contact_toml(scene.contacts, _value)     # issue 37
     out += ["[initial]", f"q = {_value({k: float(v) for k, v in scene.q0.items()})}",
             f"qd = {_value({k: float(v) for k, v in scene.qd0.items()})}", ""]
     out += _run_lines(scene.run) + [""]
@@ -224,9 +226,10 @@ def hold_of(args) -> float | None:
 def scene_from_args(args):
     """The scene a ``simulate``/``compare``/``sweep``/``tradeoff`` command runs: ``args.scene`` as a scene
     file (with the loading options given), or a robot file in its default scene with ``--floating``,
-    ``--q0``, ``--seed``, ``--t-end``, ``--hold`` and the loading options."""
-    return scene_or_robot(args.scene, q0=getattr(args, "q0", "excite"), seed=getattr(args, "seed", 0),
-                          t_end=getattr(args, "t_end", None), load=load_options_of(args), hold=hold_of(args))
+    ``--q0``, ``--seed``, ``--t-end``, ``--hold``, ``--ground`` and the loading options."""
+    scene = scene_or_robot(args.scene, q0=getattr(args, "q0", "excite"), seed=getattr(args, "seed", 0),
+                           t_end=getattr(args, "t_end", None), load=load_options_of(args), hold=hold_of(args))
+    return with_ground(scene) if getattr(args, "ground", False) else scene     # issue 37: --ground
 
 
 def write_scene_option(args, scene) -> None:
