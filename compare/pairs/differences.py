@@ -43,7 +43,7 @@ __all__ = ["Difference", "Side", "side_model", "compare_descriptions", "ROUNDING
 #: mass and inertia, m for com and origin, rad for axis and turned frames, the joints' own units else.
 ROUNDING = {"mass": 1e-5, "com": 1e-5, "inertia": 1e-5, "axis": 1e-5, "origin": 1e-5, "armature": 1e-9,
             "damping": 1e-9, "stiffness": 1e-9, "limits": 1e-5, "type": 0.0, "joint_missing": 0.0,
-            "link_missing": 0.0, "root_pose": 1e-5}
+            "link_missing": 0.0, "root_pose": 1e-5, "friction": 1e-9}
 KINDS = tuple(ROUNDING)
 
 
@@ -228,10 +228,10 @@ class _Comparer:
                 self._axis(a, b, mt, links, bu[a.name], bm[b.name])
             if len(JOINT_KINDS[a.kind]) == 1:
                 self._limits(a, b, mt, links)
-            unit = {"hinge": ("N m s/rad", "N m/rad", "kg m^2"), "slide": ("N s/m", "N/m", "kg")}.get(a.kind,
-                                                                                                   ("", "", ""))
+            unit = {"hinge": ("N m s/rad", "N m/rad", "kg m^2", "N m"), "slide": ("N s/m", "N/m", "kg", "N")}.get(
+                a.kind, ("", "", "", ""))
             for kind, attr, u in (("damping", "damping", unit[0]), ("stiffness", "stiffness", unit[1]),
-                                  ("armature", "armature", unit[2])):
+                                  ("armature", "armature", unit[2]), ("friction", "friction", unit[3])):
                 va, vb = float(getattr(a, attr)), float(getattr(b, attr))
                 undo = (lambda s, n=b.name, v=va, at=attr: replace(s, parts=s.parts.with_joint(n, **{at: v})))
                 self.add(Difference(kind, a.name, b.name, va, vb, abs(va - vb), u,
