@@ -144,3 +144,13 @@ def test_example_robot_data_with_the_root_turned_lists_no_sign_flip(folder, rel)
     frames = lambda x: sorted(d.label() for d in x.differences if d.kind in ("axis", "origin"))  # noqa: E731
     assert frames(c) == frames(c0)
     assert sum(d.kind == "root_pose" for d in c.differences) == 1
+
+
+def test_a_joints_effort(arm, folder):
+    """URDF <limit effort="150"> against an MJCF actuatorfrcrange lowered to +-100: a limit, not the dynamics."""
+    def edit(spec):
+        spec.joint("elbow_joint").actfrcrange = [-100.0, 100.0]
+    c = _planted(arm, folder, "effort", edit)
+    assert [(d.kind, d.urdf) for d in c.differences] == [("effort", "elbow_joint")]
+    assert c.differences[0].difference == pytest.approx(50 / 150)
+    assert c.summary()["description_counts"]["non_dynamic"] == {"count": 1, "kinds": ["effort"]}

@@ -43,7 +43,7 @@ __all__ = ["Difference", "Side", "side_model", "compare_descriptions", "ROUNDING
 #: mass and inertia, m for com and origin, rad for axis and turned frames, the joints' own units else.
 ROUNDING = {"mass": 1e-5, "com": 1e-5, "inertia": 1e-5, "axis": 1e-5, "origin": 1e-5, "armature": 1e-9,
             "damping": 1e-9, "stiffness": 1e-9, "limits": 1e-5, "type": 0.0, "joint_missing": 0.0,
-            "link_missing": 0.0, "root_pose": 1e-5, "friction": 1e-9}
+            "link_missing": 0.0, "root_pose": 1e-5, "friction": 1e-9, "effort": 1e-5}
 KINDS = tuple(ROUNDING)
 
 
@@ -228,6 +228,7 @@ class _Comparer:
                 self._axis(a, b, mt, links, bu[a.name], bm[b.name])
             if len(JOINT_KINDS[a.kind]) == 1:
                 self._limits(a, b, mt, links)
+                self._effort(a, b, links)
             unit = {"hinge": ("N m s/rad", "N m/rad", "kg m^2", "N m"), "slide": ("N s/m", "N/m", "kg", "N")}.get(
                 a.kind, ("", "", "", ""))
             for kind, attr, u in (("damping", "damping", unit[0]), ("stiffness", "stiffness", unit[1]),
@@ -275,6 +276,19 @@ class _Comparer:
             what = f"range [{lu[0]:.6g}, {lu[1]:.6g}] against [{lm[0]:.6g}, {lm[1]:.6g}] (mapped)"
         self.add(Difference("limits", a.name, b.name, list(lu), list(lm), d, "rad" if a.kind == "hinge" else "m",
                             what, links))
+
+    def _effort(self, a, b, links):
+        """The largest joint force: URDF ``<limit effort>`` against MJCF ``actuatorfrcrange`` (relative; inf when
+        one side only)."""
+        if a.effort is None and b.effort is None:
+            return
+        u = "N m" if a.kind == "hinge" else "N"
+        if a.effort is None or b.effort is None:
+            d, what = math.inf, f"joint force limited on one side only: {a.effort} against {b.effort} {u}"
+        else:
+            d = abs(a.effort - b.effort) / max(a.effort, b.effort, 1e-300)
+            what = f"effort {a.effort:.6g} {u} against actuatorfrcrange +-{b.effort:.6g} {u}"
+        self.add(Difference("effort", a.name, b.name, a.effort, b.effort, d, "relative", what, links))
 
     # parts: mass, COM, inertia -----------------------------------------------------------------------
     def parts(self):
