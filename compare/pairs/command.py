@@ -43,6 +43,11 @@ def _headline(s: dict, label: str) -> None:
     print(f"{label}: {s['descriptions']['urdf']['file']} against {s['descriptions']['mjcf']['file']}")
     print(f"  joints     {len(jm['matched'])} matched ({', '.join(f'{n} by {k}' for k, n in jm['matched_by'].items() if n)}),"
           f" mapped fraction {jm['mapped_fraction']:.3g}" + (f"; negated: {', '.join(jm['negated'])}" if jm["negated"] else ""))
+    n = s.get("description_counts")
+    if n:
+        print(f"  counts     {n['dynamics']['count']} change the dynamics (A {float(n['dynamics']['effect']['A']):.2e}, "
+              f"G {float(n['dynamics']['effect']['G']):.2e}), {n['non_dynamic']['count']} do not, root pose "
+              f"{n['root_pose']['count']}")
     print(f"  parts      {len(diffs)} difference(s) above rounding" + "".join(
         f"\n    {d['kind']:<10} {d['urdf'] or '-'} / {d['mjcf'] or '-'}: {float(d['difference']):.3g} {d['unit']}"
         + (" (explained)" if d.get("explanation") else "") for d in diffs[:8])

@@ -35,6 +35,7 @@ from urdf2links.dynamics.inertia import pseudo_inertia
 from urdf2links.parsers.parts import JOINT_KINDS, RobotParts, home_poses, parts_model
 
 from .mapping import JointMapping
+from .roots import alignment, align_second, match_bodies, pose_words, root_pair
 
 __all__ = ["Difference", "Side", "side_model", "compare_descriptions", "ROUNDING", "KINDS", "split_H"]
 
@@ -42,7 +43,8 @@ __all__ = ["Difference", "Side", "side_model", "compare_descriptions", "ROUNDING
 #: mass and inertia, m for com and origin, rad for axis and turned frames, the joints' own units else.
 ROUNDING = {"mass": 1e-5, "com": 1e-5, "inertia": 1e-5, "axis": 1e-5, "origin": 1e-5, "armature": 1e-9,
             "damping": 1e-9, "stiffness": 1e-9, "limits": 1e-5, "type": 0.0, "joint_missing": 0.0,
-            "link_missing": 0.0, "constraint": 0.0}       # constraint: a loop closed on one side (issue 36)
+            "link_missing": 0.0, "constraint": 0.0,        # constraint: a loop closed on one side (issue 36)
+            "root_pose": 1e-5, "friction": 1e-9, "effort": 1e-5}
 KINDS = tuple(ROUNDING)
 
 
@@ -168,9 +170,10 @@ def _frame_turn(I1, I2) -> float | None:
     return best
 
 
-def _last_joint_body(parts: RobotParts) -> dict[str, str]:
-    """Joint -> its body, for joints that are their body's last (whose tree link the body's mass is in)."""
-    return {b.joints[-1].name: b.name for b in parts.bodies if b.joints}
+def _vec(v) -> str:
+    """A vector as a file writes it: ``(0 0 1)``, 4 significant digits, no ``-0``."""
+    a = np.asarray(v, float)
+    return "(" + " ".join(f"{x:.4g}" for x in np.where(np.abs(a) < 5e-7, 0.0, a)) + ")"
 
 
 def _body_of(parts: RobotParts) -> dict[str, str]:
@@ -184,32 +187,25 @@ def _joint_label(b) -> str:
     return b.fixed_joint or b.name
 
 
-def _match_bodies(U: RobotParts, M: RobotParts, mapping: JointMapping) -> dict[str, str]:
-    lu, lm = _last_joint_body(U), _last_joint_body(M)
-    pairs = {}
-    for mt in mapping.matches:
-        if mt.urdf in lu and mt.mjcf in lm:
-            pairs[lu[mt.urdf]] = lm[mt.mjcf]
-    taken = set(pairs.values())
-    names_m = {b.name for b in M.bodies}
-    for b in U.bodies:
-        if b.name not in pairs and b.name in names_m and b.name not in taken:
-            pairs[b.name] = b.name
-            taken.add(b.name)
-    return pairs
-
-
 # -- the comparison --------------------------------------------------------------------------------------
 class _Comparer:
     def __init__(self, U: RobotParts, M: RobotParts, mapping: JointMapping):
         self.U, self.M, self.mapping = U, M, mapping
-        self.bodies = _match_bodies(U, M, mapping)
+        self.bodies = match_bodies(U, M, [(m.urdf, m.mjcf) for m in mapping.matches])
+        self.root = mapping.root if mapping.root is not None else root_pair(U, M, self.bodies)
         self.pmU, self.pmM = parts_model(U), parts_model(M)
-        self.WU, self.WM = home_poses(U), home_poses(M)
+        self.WU = home_poses(U)
+        self.WM = self._aligned(M)          # the second's world carried into the first's (E63)
         self.bu = {b.name: b for b in U.bodies}
         self.bm = {b.name: b for b in M.bodies}
         self.out: list[Difference] = []
         self.below = {k: 0 for k in KINDS}
+
+    def _aligned(self, parts: RobotParts) -> dict:
+        """The second description's (``parts``, as it is now) home poses carried by the roots' alignment (E63)."""
+        W = home_poses(parts)
+        D = alignment(self.U, parts, self.root, self.WU, W)
+        return {k: D @ v for k, v in W.items()}
 
     def add(self, d: Difference) -> None:
         if d.difference > ROUNDING[d.kind] or (ROUNDING[d.kind] == 0 and d.difference > 0):
@@ -233,35 +229,35 @@ class _Comparer:
                 self._axis(a, b, mt, links, bu[a.name], bm[b.name])
             if len(JOINT_KINDS[a.kind]) == 1:
                 self._limits(a, b, mt, links)
-            unit = {"hinge": ("N m s/rad", "N m/rad", "kg m^2"), "slide": ("N s/m", "N/m", "kg")}.get(a.kind,
-                                                                                                   ("", "", ""))
+                self._effort(a, b, links)
+            unit = {"hinge": ("N m s/rad", "N m/rad", "kg m^2", "N m"), "slide": ("N s/m", "N/m", "kg", "N")}.get(
+                a.kind, ("", "", "", ""))
             for kind, attr, u in (("damping", "damping", unit[0]), ("stiffness", "stiffness", unit[1]),
-                                  ("armature", "armature", unit[2])):
+                                  ("armature", "armature", unit[2]), ("friction", "friction", unit[3])):
                 va, vb = float(getattr(a, attr)), float(getattr(b, attr))
                 undo = (lambda s, n=b.name, v=va, at=attr: replace(s, parts=s.parts.with_joint(n, **{at: v})))
                 self.add(Difference(kind, a.name, b.name, va, vb, abs(va - vb), u,
                                     f"{attr} {va:.6g} against {vb:.6g} {u}".rstrip(), links, undo=undo))
 
     def _axis(self, a, b, mt, links, bU, bM):
-        """The axes compared in the frame of the nearest body both sides have above them (a body frame placed
-        differently is not an axis difference; a turned origin above the joint is one, beside the origin's)."""
-        ua, ub = np.asarray(a.axis, float), np.asarray(b.axis, float)
-        if self.bodies.get(bU) == bM:
-            refU, refM, _ = self._reference(bU)
-            RU, RM = self._rel(self.WU, refU, bU)[:3, :3], self._rel(self.WM, refM, bM)[:3, :3]
-            ua, ub = RU @ ua, RM @ ub
+        """The axes compared in the frame of the nearest body both sides have above them (the roots' poses taken
+        out, E63; a body frame placed differently is not an axis difference; a turned origin above the joint is
+        one, beside the origin's)."""
+        refU, refM, _ = self._reference(bU)
+        RU, RM = self._rel(self.WU, refU, bU)[:3, :3], self._rel(self.WM, refM, bM)[:3, :3]
+        ua, ub = RU @ np.asarray(a.axis, float), RM @ np.asarray(b.axis, float)
         ang = float(np.arccos(np.clip(float(np.dot(ua, ub)), -1.0, 1.0)))
-        what = (f"axis negated ({np.round(ua, 6).tolist()} against {np.round(ub, 6).tolist()} in the frame of the body "
-                f"above): q maps with sign -1" if mt.sign < 0 and ang > math.pi - 1e-5 else
-                f"axis turned by {ang:.4g} rad" + (" (q maps with sign -1)" if mt.sign < 0 else ""))
-        refs = self._reference(bU)[:2] if self.bodies.get(bU) == bM else None
-        world_a = ua
+        where = f"in the frame of {refU or 'the root'}"
+        if mt.sign < 0 and ang > math.pi - 1e-5:
+            what = f"axis negated: {_vec(ua)} against {_vec(ub)} {where}; q maps with sign -1"
+        else:
+            what = (f"axis turned by {ang:.4g} rad ({math.degrees(ang):.3g} deg): {_vec(ua)} against {_vec(ub)} {where}"
+                    + (" (q maps with sign -1)" if mt.sign < 0 else ""))
+        what += f"; as written: axis {_vec(a.axis)} in {bU}, {_vec(b.axis)} in {bM}"
 
-        def undo(s, n=b.name, bM=bM, refs=refs, u=np.array(world_a, float)):
+        def undo(s, n=b.name, bM=bM, refM=refM, u=np.array(ua, float)):
             """The second's axis made the first's, in the frame of the body above as the second is now."""
-            if refs is None:
-                return replace(s, parts=s.parts.with_joint(n, axis=u))
-            RM = self._rel(home_poses(s.parts), refs[1], bM)[:3, :3]
+            RM = self._rel(self._aligned(s.parts), refM, bM)[:3, :3]
             return replace(s, parts=s.parts.with_joint(n, axis=RM.T @ u))
         self.add(Difference("axis", a.name, b.name, a.axis, b.axis, ang, "rad", what, links, undo=undo))
 
@@ -281,6 +277,19 @@ class _Comparer:
             what = f"range [{lu[0]:.6g}, {lu[1]:.6g}] against [{lm[0]:.6g}, {lm[1]:.6g}] (mapped)"
         self.add(Difference("limits", a.name, b.name, list(lu), list(lm), d, "rad" if a.kind == "hinge" else "m",
                             what, links))
+
+    def _effort(self, a, b, links):
+        """The largest joint force: URDF ``<limit effort>`` against MJCF ``actuatorfrcrange`` (relative; inf when
+        one side only)."""
+        if a.effort is None and b.effort is None:
+            return
+        u = "N m" if a.kind == "hinge" else "N"
+        if a.effort is None or b.effort is None:
+            d, what = math.inf, f"joint force limited on one side only: {a.effort} against {b.effort} {u}"
+        else:
+            d = abs(a.effort - b.effort) / max(a.effort, b.effort, 1e-300)
+            what = f"effort {a.effort:.6g} {u} against actuatorfrcrange +-{b.effort:.6g} {u}"
+        self.add(Difference("effort", a.name, b.name, a.effort, b.effort, d, "relative", what, links))
 
     # parts: mass, COM, inertia -----------------------------------------------------------------------
     def parts(self):
@@ -365,11 +374,11 @@ class _Comparer:
         return p, (None if p is None else self.bodies[p]), through[::-1]
 
     def origins(self):
-        mj_last = _last_joint_body(self.M)
+        mj_last = {b.joints[-1].name: b.name for b in self.M.bodies if b.joints}
         lm = {v: k for k, v in mj_last.items()}
         for bU, bM in self.bodies.items():
-            if self.bu[bU].parent is None and self.bm[bM].parent is None:
-                continue
+            if (bU, bM) == (self.root.urdf, self.root.mjcf):
+                continue                  # the roots' pose: root_pose, once
             refU, refM, through = self._reference(bU)
             if refM is not None and not self._is_ancestor(refM, bM):
                 continue
@@ -418,13 +427,32 @@ class _Comparer:
             W = home_poses(s.parts)
             parent = s.parts.body(bM).parent
             WP = np.eye(4) if parent is None else W[parent]
-            WR = np.eye(4) if refM is None else W[refM]
+            WR = np.linalg.inv(alignment(self.U, s.parts, self.root, self.WU, W)) if refM is None else W[refM]
             parts = s.parts.replaced(bM, pose=np.linalg.inv(WP) @ WR @ PU)
             b = parts.body(bM)
             if anchor is not None and b.joints and b.joints[-1].kind == "hinge":
                 parts = parts.with_joint(b.joints[-1].name, anchor=np.array(anchor, float))
             return replace(s, parts=parts)
         return undo
+
+    # the roots ----------------------------------------------------------------------------------------
+    def root_pose(self):
+        """The roots' pose difference, once (module :mod:`~urdf2links.compare.pairs.roots`, E63)."""
+        rU, rM = self.root.urdf, self.root.mjcf
+        if rU is None:
+            return
+        WU, WM = self.WU[rU], home_poses(self.M)[rM]
+        D = alignment(self.U, self.M, self.root, self.WU)
+        dp, rot = float(np.linalg.norm(D[:3, 3])), _angle(D[:3, :3])
+        floating = all(self.root.floating)
+        d, unit = (rot, "rad") if rot > dp else (dp, "m")
+        what = (f"root {rU} at {pose_words(WU, self.U.format)} against {rM} at {pose_words(WM, self.M.format)}: "
+                f"moved {dp:.4g} m, turned {rot:.4g} rad ({math.degrees(rot):.3g} deg); "
+                + ("a floating root's pose at home is a state (both start from the first's), not a description "
+                   "difference" if floating else "the mount: where the robot is fixed in the world"))
+        undo = None if floating else (lambda s: replace(s, parts=align_second(
+            s.parts, alignment(self.U, s.parts, self.root, self.WU))))
+        self.add(Difference("root_pose", rU, rM, WU, WM, d, unit, what, (rU, rM), undo=undo))
 
     # missing -----------------------------------------------------------------------------------------
     def missing(self):
@@ -455,6 +483,7 @@ def compare_descriptions(U: RobotParts, M: RobotParts, mapping: JointMapping) ->
     """Every difference between ``U`` (the first description) and ``M`` above :data:`ROUNDING` (module doc),
     in no order yet, and ``{kind: how many were below rounding}``."""
     c = _Comparer(U, M, mapping)
+    c.root_pose()
     c.joints()
     c.parts()
     c.origins()

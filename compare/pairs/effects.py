@@ -143,12 +143,12 @@ def _attribute(terms: Terms, M: RobotParts, diffs: list[Difference], *, signs: b
 
 #: The order in which every difference is undone at once: frames before what is expressed in them (an axis is
 #: set relative to the body above as the body is then placed).
-_UNDO_ORDER = {"origin": 0, "axis": 1}
+_UNDO_ORDER = {"root_pose": 0, "origin": 1, "axis": 2}
 
 
 def _undo_all(terms: Terms, M: RobotParts, diffs: list[Difference], *, signs: bool) -> dict:
     side = Side(M)
-    for d in sorted(diffs, key=lambda d: _UNDO_ORDER.get(d.kind, 2)):
+    for d in sorted(diffs, key=lambda d: _UNDO_ORDER.get(d.kind, 3)):
         if d.undo is not None:
             side = d.undo(side)
     r = terms.compare(side, signs=signs)

@@ -24,6 +24,8 @@ import numpy as np
 from urdf2links.errors import DescriptionError
 from urdf2links.parsers.parts import JOINT_KINDS, RobotParts, home_poses
 
+from .roots import RootPair, alignment, match_bodies, root_pair
+
 __all__ = ["JointMatch", "JointMapping", "map_joints", "moving_parent", "coordinate_map", "parse_map"]
 
 
@@ -53,6 +55,7 @@ class JointMapping:
     matches: tuple[JointMatch, ...]
     unmatched_urdf: tuple[str, ...]
     unmatched_mjcf: tuple[str, ...]
+    root: RootPair | None = None
 
     @property
     def mapped_fraction(self) -> float:
@@ -69,7 +72,8 @@ class JointMapping:
         by = {k: sum(m.by == k for m in self.matches) for k in ("map", "name", "structure")}
         return {"matched": [m.to_json() for m in self.matches], "unmatched_urdf": list(self.unmatched_urdf),
                 "unmatched_mjcf": list(self.unmatched_mjcf), "mapped_fraction": self.mapped_fraction,
-                "matched_by": by, "negated": [m.urdf for m in self.matches if m.sign < 0]}
+                "matched_by": by, "negated": [m.urdf for m in self.matches if m.sign < 0],
+                "root": None if self.root is None else self.root.to_json()}
 
 
 def parse_map(items) -> dict[str, str]:
@@ -104,12 +108,15 @@ def moving_parent(parts: RobotParts, joint: str) -> str | None:
     raise KeyError(joint)
 
 
-def _world_axes(parts: RobotParts) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    """Joint -> (axis, anchor) in the world at home."""
-    W = home_poses(parts)
+def _world_axes(parts: RobotParts, D=None, W=None) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Joint -> (axis, anchor) in the world at home; ``D`` (4, 4): the world carried into the first
+    description's by the roots' alignment (E63), so that neither depends on where a file puts its root."""
+    W = home_poses(parts) if W is None else W
+    D = np.eye(4) if D is None else D
     out = {}
     for j, b in parts.joints:
-        R, p = W[b.name][:3, :3], W[b.name][:3, 3]
+        F = D @ W[b.name]
+        R, p = F[:3, :3], F[:3, 3]
         out[j.name] = (R @ np.asarray(j.axis, float), p + R @ np.asarray(j.anchor, float))
     return out
 
@@ -143,7 +150,10 @@ def map_joints(urdf: RobotParts, mjcf: RobotParts, *, explicit: dict | None = No
         if a not in pairs and a in jm and a not in taken:
             pairs[a] = (a, "name")
             taken.add(a)
-    axes_u, axes_m = _world_axes(urdf), _world_axes(mjcf)
+    WU, WM = home_poses(urdf), home_poses(mjcf)
+    root = root_pair(urdf, mjcf, match_bodies(urdf, mjcf, [(a, b) for a, (b, _) in pairs.items()]))
+    axes_u = _world_axes(urdf, W=WU)
+    axes_m = _world_axes(mjcf, alignment(urdf, mjcf, root, WU, WM), W=WM)
     reach = max([float(np.linalg.norm(p)) for _, p in axes_u.values()] + [1e-3])
     parent_u = {a: moving_parent(urdf, a) for a in ju}
     parent_m = {b: moving_parent(mjcf, b) for b in jm}
@@ -168,13 +178,17 @@ def map_joints(urdf: RobotParts, mjcf: RobotParts, *, explicit: dict | None = No
             pairs[a] = (best, "structure")
             taken.add(best)
             changed = True
+    final = root_pair(urdf, mjcf, match_bodies(urdf, mjcf, [(a, b) for a, (b, _) in pairs.items()]))
+    if final != root:
+        axes_m = _world_axes(mjcf, alignment(urdf, mjcf, final, WU, WM), W=WM)
     matches = []
     for a in ju:                       # in the first description's tree order
         if a in pairs:
             b, by = pairs[a]
             s, c = _sign_offset(ju[a], jm[b], axes_u[a][0], axes_m[b][0])
             matches.append(JointMatch(a, b, by, ju[a].kind, jm[b].kind, s, c))
-    return JointMapping(tuple(matches), tuple(a for a in ju if a not in pairs), tuple(b for b in jm if b not in taken))
+    return JointMapping(tuple(matches), tuple(a for a in ju if a not in pairs), tuple(b for b in jm if b not in taken),
+                        final)
 
 
 def coordinate_map(urdf: RobotParts, mjcf: RobotParts, mapping: JointMapping, *, signs: bool = True):
@@ -183,7 +197,7 @@ def coordinate_map(urdf: RobotParts, mjcf: RobotParts, mapping: JointMapping, *,
     coordinates taken as equal by name). Pairs of different kinds map the slots they share."""
     ju = {j.name: j for j, _ in urdf.joints}
     jm = {j.name: j for j, _ in mjcf.joints}
-    wu, wm = _world_axes(urdf), _world_axes(mjcf)
+    wu, wm = _world_axes(urdf), _world_axes(mjcf, alignment(urdf, mjcf, mapping.root))
     out = []
     for m in mapping.matches:
         a, b = ju[m.urdf], jm[m.mjcf]
@@ -194,7 +208,8 @@ def coordinate_map(urdf: RobotParts, mjcf: RobotParts, mapping: JointMapping, *,
             out.append((a.coordinates[0], b.coordinates[0], s, c))
             continue
         slots_b = dict(zip(JOINT_KINDS[b.kind], zip(b.coordinates, b.home)))
+        state = a.kind == b.kind == "free"            # a floating root's pose is a state: the same one (E63)
         for slot, name, home in zip(JOINT_KINDS[a.kind], a.coordinates, a.home):
             if slot in slots_b:
-                out.append((name, slots_b[slot][0], 1.0, float(slots_b[slot][1]) - float(home)))
+                out.append((name, slots_b[slot][0], 1.0, 0.0 if state else float(slots_b[slot][1]) - float(home)))
     return out

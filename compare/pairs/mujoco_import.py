@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import mujoco
+import numpy as np
 from lxml import etree
 
 from ..mujoco_side.mujoco_urdf import MujocoRefused, _mujoco_warnings, _prepare, _read
@@ -45,12 +46,38 @@ def _with_settings(text: str, extra: dict) -> str:
     return etree.tostring(root, encoding="unicode")
 
 
+def _placed(prepared: str, source: str, *, floating_base: bool, root_pose) -> tuple[mujoco.MjModel, str]:
+    """MuJoCo's import through ``MjSpec`` with the top-level bodies placed: a free joint added to the one root
+    body (``floating_base``), and ``root_pose`` ``(pos (3,), quat (4,) w x y z)`` composed onto every top-level
+    body's pose (a mount, or a floating root's initial pose). The compiled model and the written MJCF."""
+    spec = mujoco.MjSpec.from_string(prepared)
+    tops = list(spec.worldbody.bodies)
+    if floating_base:
+        if len(tops) != 1:
+            raise ValueError(f"{source}: a floating base needs one root body under the world, MuJoCo's import has "
+                             f"{[b.name for b in tops]}")
+        tops[0].add_freejoint(name="floating_base")
+    if root_pose is not None:
+        pos, quat = np.asarray(root_pose[0], float), np.asarray(root_pose[1], float)
+        quat = quat / np.linalg.norm(quat)
+        R = np.zeros(9)
+        mujoco.mju_quat2Mat(R, quat)
+        for b in tops:
+            q = np.zeros(4)
+            mujoco.mju_mulQuat(q, quat, np.asarray(b.quat, float))
+            b.pos, b.quat = R.reshape(3, 3) @ np.asarray(b.pos, float) + pos, q
+    m = spec.compile()
+    return m, spec.to_xml()
+
+
 def save_mujoco_import(urdf, out_path, *, fusestatic: bool = True, keep_geometry: bool = True,
-                       balance: bool = False) -> ImportResult:
+                       balance: bool = False, floating_base: bool = False, root_pose=None) -> ImportResult:
     """MuJoCo's import of ``urdf`` written to ``out_path`` as MJCF (module doc). ``keep_geometry``: keep
     the ``<visual>``/``<collision>`` geometry (meshes must then resolve from the file's folder);
-    ``balance``: let MuJoCo's compiler repair inertias it would refuse. :class:`MujocoRefused` carries
-    MuJoCo's words when it refuses."""
+    ``balance``: let MuJoCo's compiler repair inertias it would refuse; ``floating_base``: a free joint on
+    the root body; ``root_pose``: ``(pos, quat)`` (w x y z) composed onto the top-level bodies (the robot
+    mounted, or its floating root started, elsewhere: what :mod:`urdf2links.compare.pairs.roots` takes
+    out). :class:`MujocoRefused` carries MuJoCo's words when it refuses."""
     text, source, folder = _read(Path(urdf))
     notes: list[str] = []
     prepared, _links = _prepare(text, source, strip_meshes=not keep_geometry, fusestatic=fusestatic,
@@ -61,14 +88,18 @@ def save_mujoco_import(urdf, out_path, *, fusestatic: bool = True, keep_geometry
         prepared = _with_settings(prepared, extra)
         settings.update(extra)
         notes.append("MuJoCo's compiler may repair inertias: " + ", ".join(f'{k}="{v}"' for k, v in extra.items()))
-    try:
-        with _mujoco_warnings(notes):
-            m = mujoco.MjModel.from_xml_string(prepared)
-    except ValueError as err:
-        raise MujocoRefused(source, str(err).strip()) from None
     out = Path(out_path)
     out.parent.mkdir(parents=True, exist_ok=True)
-    mujoco.mj_saveLastXML(str(out), m)
+    try:
+        with _mujoco_warnings(notes):
+            if floating_base or root_pose is not None:
+                m, xml = _placed(prepared, source, floating_base=floating_base, root_pose=root_pose)
+                out.write_text(xml)
+            else:
+                m = mujoco.MjModel.from_xml_string(prepared)
+                mujoco.mj_saveLastXML(str(out), m)
+    except ValueError as err:
+        raise MujocoRefused(source, str(err).strip()) from None
     root = etree.parse(str(out)).getroot()
     comp = root.find("compiler")
     if comp is None:

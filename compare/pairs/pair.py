@@ -29,7 +29,12 @@ from .effects import evaluate_effects, order_differences
 from .explanations import explain
 from .mapping import JointMapping, map_joints
 
-__all__ = ["PairComparison", "compare_descriptions_of", "TERM_KEYS", "check_tolerances", "exceedances"]
+__all__ = ["PairComparison", "compare_descriptions_of", "TERM_KEYS", "check_tolerances", "exceedances", "DYNAMIC_KINDS"]
+
+#: The kinds that change the dynamics (A, G, the joint forces); the others (limits, frames) do not, and
+#: ``root_pose`` is counted apart.
+DYNAMIC_KINDS = ("mass", "com", "inertia", "origin", "axis", "armature", "damping", "stiffness", "friction", "type",
+                 "joint_missing", "link_missing", "constraint")
 
 #: Tolerances a pair may give besides the kinds: the relative differences of ``A`` and ``G`` (mapped).
 TERM_KEYS = ("A", "G")
@@ -57,7 +62,19 @@ class PairComparison:
     def summary(self) -> dict:
         """The JSON of the description half (module doc)."""
         counts = {k: sum(d.kind == k for d in self.differences) for k in KINDS}
+        dyn = [d for d in self.differences if d.kind in DYNAMIC_KINDS]
+        eff = self.effects["mapped"]
+        head = {"dynamics": {"count": len(dyn), "kinds": sorted({d.kind for d in dyn}),
+                             "effect": {"A": eff["A"]["max_rel_difference"], "G": eff["G"]["max_rel_difference"],
+                                        "after_undoing_all": dict(self.effects["after_undoing_all"])}},
+                "non_dynamic": {"count": sum(d.kind not in DYNAMIC_KINDS and d.kind != "root_pose"
+                                             for d in self.differences),
+                                "kinds": sorted({d.kind for d in self.differences
+                                                 if d.kind not in DYNAMIC_KINDS and d.kind != "root_pose"})},
+                "root_pose": {"count": counts.get("root_pose", 0),
+                              "floating": bool(self.mapping.root and all(self.mapping.root.floating))}}
         return {
+            "description_counts": head,
             "descriptions": {"urdf": {"file": shown_path(self.urdf_path), "format": self.urdf.format,
                                       "name": self.urdf.name, "bodies": len(self.urdf.bodies),
                                       "joints": len(self.urdf.joints)},
@@ -98,7 +115,10 @@ def exceedances(summary: dict, tolerances: dict | None = None) -> list[dict]:
     if bad:
         raise ValueError(f"tolerances: unknown key(s) {bad}; the kinds are {list(KINDS)}, and A, G for the terms")
     out = []
+    floating = bool(summary.get("description_counts", {}).get("root_pose", {}).get("floating"))
     for d in summary["description_differences"]:
+        if d["kind"] == "root_pose" and floating and "root_pose" not in tol:
+            continue                  # a floating root's pose at home is a state, not a description difference
         limit = float(tol.get(d["kind"], ROUNDING.get(d["kind"], 0.0)))
         value = _value(d["difference"])
         if not value <= limit:

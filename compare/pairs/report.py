@@ -85,6 +85,13 @@ def _verdict(s: dict, failures) -> str:
         terms.append(f"{term} differs by {fmt(t['max_rel_difference'])} (relative)"
                      + (f", {_share(by['explains'])} of it from {_E(by['kind'])} of "
                         f"<code>{_E(str(by['urdf'] or by['mjcf']))}</code>" if by else ""))
+    n = s.get("description_counts")
+    if n:
+        head += (f"<br><b>{n['dynamics']['count']}</b> change the dynamics (A {fmt(n['dynamics']['effect']['A'])}, "
+                 f"G {fmt(n['dynamics']['effect']['G'])} relative); <b>{n['non_dynamic']['count']}</b> do not "
+                 f"(limits, frames); root pose: <b>{n['root_pose']['count']}</b>"
+                 + (" (a floating root's pose at home: a state)" if n['root_pose']['floating'] and
+                    n['root_pose']['count'] else "") + ".")
     cls = "box" if not diffs else ("box bad" if failures else "box warn")
     check = ""
     if failures is not None:

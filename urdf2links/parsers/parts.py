@@ -75,6 +75,7 @@ class JointPart:
     friction: float = 0.0
     source_type: str = ""
     written_axis: np.ndarray | None = None
+    effort: float | None = None
 
     @property
     def built_axis(self) -> np.ndarray:
@@ -186,6 +187,7 @@ def _urdf_parts(path, *, floating_base, package_dirs, strict, xacro_args) -> Rob
         lo, hi = (j.limit_lower, j.limit_upper) if j.type in ("revolute", "prismatic") else (None, None)
         jp = JointPart(j.name, kind, axis=u, home=(0.0,) * len(JOINT_KINDS[kind]), lower=lo, upper=hi,
                        damping=float(j.damping or 0.0), friction=float(j.friction or 0.0), source_type=j.type,
+                       effort=float(j.limit_effort) if j.limit_effort else None,
                        written_axis=None if kind in ("ball", "free") else np.asarray(j.axis, float))
         bodies.append(BodyPart(name, j.parent, pose, H, (jp,)))
     return RobotParts(desc.name, str(desc.source), "urdf", tuple(bodies), notes=tuple(desc.notes))
@@ -224,7 +226,8 @@ def _mjcf_parts(path) -> RobotParts:
                 lower=float(m.jnt_range[j, 0]) if limited else None, upper=float(m.jnt_range[j, 1]) if limited else None,
                 damping=float(m.dof_damping[da]), stiffness=float(m.jnt_stiffness[j]),
                 springref=float(m.qpos_spring[qa]) if kind in ("hinge", "slide") else 0.0,
-                armature=float(m.dof_armature[da]), friction=float(m.dof_frictionloss[da]), source_type=kind))
+                armature=float(m.dof_armature[da]), friction=float(m.dof_frictionloss[da]), source_type=kind,
+                effort=float(np.max(np.abs(m.jnt_actfrcrange[j]))) if m.jnt_actfrclimited[j] else None))
         bodies.append(BodyPart(bname, None if parent == 0 else name("mjOBJ_BODY", parent, f"body{parent}"), pose, H,
                                tuple(joints)))
     g = np.array(m.opt.gravity, float)
