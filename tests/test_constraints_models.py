@@ -29,22 +29,29 @@ from urdf2links.scenes.scene import scene_from_dict
 DM = importlib.resources.files("dm_control")
 GYM = importlib.resources.files("gymnasium").joinpath("envs", "mujoco", "assets")
 
-#: file -> (equalities, tendons, equalities not modelled (tendon equalities), [initial] q). Counts checked by grep
+#: The coupled joints move from the start, at velocities the couplings allow (MuJoCo starts from the scene's
+#: state as given): quadruped's legs (pitch + knee + ankle held by each tendon equality), the hands' thumb and
+#: finger together (the tendon equality holds finger - thumb).
+_LEGS = {"yaw_front_left": 2.0, "pitch_front_left": 1.0, "knee_front_left": 1.0, "ankle_front_left": -2.0,
+         "knee_back_right": 3.0, "ankle_back_right": -3.0, "pitch_front_right": 2.0, "knee_front_right": -1.0,
+         "ankle_front_right": -1.0}
+_HAND = {"arm_shoulder": 1.0, "arm_elbow": -1.5, "thumb": 2.0, "finger": 2.0}
+#: file -> (path, equalities, tendons, equalities not modelled, [initial] q, [initial] qd). Counts checked by grep
 #: of the files and against MuJoCo's compile. Fish's fins start apart so that its tendon spring (fins_sym,
 #: stiffness 1e-4) acts from the first step.
 MODELS = {
-    "dm_control/suite/quadruped.xml": (DM / "suite/quadruped.xml", 4, 12, 4, {}),
-    "dm_control/suite/manipulator.xml": (DM / "suite/manipulator.xml", 1, 2, 1, {}),
-    "dm_control/suite/fish.xml": (DM / "suite/fish.xml", 0, 2, 0, {"finleft_roll": 0.5, "finright_roll": -0.1}),
-    "dm_control/suite/point_mass.xml": (DM / "suite/point_mass.xml", 0, 2, 0, {}),
-    "dm_control/suite/stacker.xml": (DM / "suite/stacker.xml", 1, 2, 1, {}),
-    "dm_control/suite/dog.xml": (DM / "suite/dog.xml", 0, 8, 0, {}),
-    "dm_control/mujoco/testing/assets/humanoid.xml": (DM / "mujoco/testing/assets/humanoid.xml", 0, 2, 0, {}),
-    "gymnasium humanoid.xml": (GYM / "humanoid.xml", 0, 2, 0, {}),
-    "gymnasium humanoidstandup.xml": (GYM / "humanoidstandup.xml", 0, 2, 0, {}),
+    "dm_control/suite/quadruped.xml": (DM / "suite/quadruped.xml", 4, 12, 0, {}, _LEGS),
+    "dm_control/suite/manipulator.xml": (DM / "suite/manipulator.xml", 1, 2, 0, {}, _HAND),
+    "dm_control/suite/fish.xml": (DM / "suite/fish.xml", 0, 2, 0, {"finleft_roll": 0.5, "finright_roll": -0.1}, {}),
+    "dm_control/suite/point_mass.xml": (DM / "suite/point_mass.xml", 0, 2, 0, {}, {}),
+    "dm_control/suite/stacker.xml": (DM / "suite/stacker.xml", 1, 2, 0, {}, _HAND),
+    "dm_control/suite/dog.xml": (DM / "suite/dog.xml", 0, 8, 0, {}, {}),
+    "dm_control/mujoco/testing/assets/humanoid.xml": (DM / "mujoco/testing/assets/humanoid.xml", 0, 2, 0, {}, {}),
+    "gymnasium humanoid.xml": (GYM / "humanoid.xml", 0, 2, 0, {}, {}),
+    "gymnasium humanoidstandup.xml": (GYM / "humanoidstandup.xml", 0, 2, 0, {}, {}),
 }
-#: 0.1 s of each run: the engines' difference is at rounding (measured at most 3.3e-10 rad, on stacker) and
-#: far below the comparison's divergence threshold (1e-3).
+#: 0.1 s of each run: the engines' difference is at most 3.3e-9 rad (manipulator and stacker: MuJoCo's soft
+#: tendon equality at solref 1e-3 s), far below the comparison's divergence threshold (1e-3).
 T_END = 0.1
 FIGURE_BOUNDS = {name: f"max |dq| < {DIVERGENCE_THRESHOLD:g} over {T_END:g} s" for name in MODELS}
 FIGURE_NOTE = ("Each file run by `compare_scene` with `[constraints] from_file = true` and gravity 9.81, from qpos0 "
@@ -54,28 +61,29 @@ FIGURE_NOTE = ("Each file run by `compare_scene` with `[constraints] from_file =
 _RUNS: dict = {}
 
 
-def _scene(path, q=None):
+def _scene(path, q=None, qd=None):
     data = {"robot": {"mjcf": str(path)}, "gravity": {"magnitude": 9.81}, "constraints": {"from_file": True},
             "run": {"t_end": T_END, "samples": 21}}
-    if q:
-        data["initial"] = {"q": dict(q)}
+    initial = {k: dict(v) for k, v in (("q", q), ("qd", qd)) if v}
+    if initial:
+        data["initial"] = initial
     return scene_from_dict(data, where=f"{path.name}.toml")
 
 
 def compared(name):
     """The comparison of model ``name`` with its file's constraints on (computed once per module)."""
     if name not in _RUNS:
-        path, _, _, _, q = MODELS[name]
+        path, _, _, _, q, qd = MODELS[name]
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")     # the import's audit findings on these files (notes)
             model = urdf2links.load_mjcf(path)
-        _RUNS[name] = model, compare_scene(_scene(path, q), model=model, progress=False, mujoco_fallback=False)
+        _RUNS[name] = model, compare_scene(_scene(path, q, qd), model=model, progress=False, mujoco_fallback=False)
     return _RUNS[name]
 
 
 @pytest.mark.parametrize("name", list(MODELS))
 def test_model_compared_with_its_constraints(name, record_figure):
-    path, n_eq, n_td, n_cut, _ = MODELS[name]
+    path, n_eq, n_td, n_cut, _, _ = MODELS[name]
     m = mujoco.MjModel.from_xml_path(str(path))
     model, cmp = compared(name)
     eqs, tds = model.info.get("equalities", []), model.info.get("tendons", [])
@@ -117,20 +125,64 @@ def test_model_compared_with_its_constraints(name, record_figure):
     record_figure(name, "verdict scope", verdict["scope"], "{}")
 
 
-def test_dropping_a_tendon_on_one_side_is_seen():
-    """The fish's tendon spring (fins_sym, E76) is what the comparison checks, not a bystander: our run without
-    it is 0.17 rad away from MuJoCo's run of the file with it (measured; the fins are light), against 4.4e-11
-    with it on both sides (the constrained path's DOP853 at the scene's default tolerances)."""
+@pytest.mark.parametrize("name, what", [("dm_control/suite/fish.xml", "tendon fins_sym"),
+                                        ("dm_control/suite/quadruped.xml", "equality coupling_front_left"),
+                                        ("dm_control/suite/manipulator.xml", "equality coupling")])
+def test_dropping_a_coupling_on_one_side_is_seen(name, what):
+    """What the comparison checks is not a bystander: our run without the fish's tendon spring (fins_sym, E76),
+    or without a tendon equality (E70 on the tendons' lengths), is far from MuJoCo's run of the file with it
+    (measured 0.17 rad on fish, 0.031 on quadruped, 0.044 on manipulator over 0.1 s), against at most 3.3e-9
+    with it on both sides (MuJoCo's soft constraint at solref 1e-3 s; DOP853's tolerance on fish)."""
+    from urdf2links.dynamics.constraints import ConstraintSet
     from urdf2links.integration import simulate
     from urdf2links.scenes.constraints import SceneConstraints
 
-    name = "dm_control/suite/fish.xml"
     model, cmp = compared(name)
-    path, *_, q = MODELS[name]
-    plan = as_plan(_scene(path, q), model=model)
-    assert [t.name for t in plan.constraints.tendons] == ["fins_sym"]
-    assert cmp.summary()["trajectory"]["max_abs_error"] < 1e-9
-    plan.constraints = SceneConstraints(plan.constraints.cset, ())        # the tendon dropped on our side
-    dropped = simulate(plan, progress=False)
-    assert np.allclose(dropped.t, cmp.t)
-    assert np.abs(dropped.q - cmp.q_mujoco).max() > 100 * DIVERGENCE_THRESHOLD
+    path, *_, q, qd = MODELS[name]
+    plan = as_plan(_scene(path, q, qd), model=model)
+    kind, dropped = what.split()
+    cons, tendons = plan.constraints.cset.constraints, plan.constraints.tendons
+    assert dropped in [c.name for c in cons] + [t.name for t in tendons]
+    assert cmp.summary()["trajectory"]["max_abs_error"] < 1e-8
+    plan.constraints = SceneConstraints(ConstraintSet(model, [c for c in cons if c.name != dropped]),
+                                        tuple(t for t in tendons if t.name != dropped))   # dropped on our side
+    run = simulate(plan, progress=False)
+    assert np.allclose(run.t, cmp.t)
+    assert np.abs(run.q - cmp.q_mujoco).max() > 10 * DIVERGENCE_THRESHOLD
+
+
+def test_tendon_equality_against_the_file_in_mujoco(tmp_path):
+    """A tendon equality of two fixed tendons (E70 on their lengths l = c . q, E76): manipulator.xml's coupling
+    made to follow its grasp tendon by a cubic polycoef. Our Phi and Phi_q against MuJoCo's efc_pos and efc_J
+    of that file at seeded states: equal to rounding (measured 1e-16), the lengths referred to MuJoCo's
+    tendon_length0 at qpos0."""
+    from urdf2links.compare.mujoco_side.mujoco_constraints import equality_rows
+
+    spec = mujoco.MjSpec.from_file(str(DM / "suite/manipulator.xml"))
+    (e,) = spec.equalities
+    e.name2, e.data[:5] = "grasp", [0.01, -0.4, 0.3, 0.2, 0.0]
+    file = tmp_path / "manipulator_cubic.xml"
+    file.write_text(spec.to_xml())
+    m = mujoco.MjModel.from_xml_path(str(file))
+    m.opt.disableflags &= ~int(mujoco.mjtDisableBit.mjDSBL_EQUALITY)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = urdf2links.load_mjcf(file)
+    plan = as_plan(_scene(file), model=model)
+    (c,) = plan.constraints.cset.constraints
+    assert c.kind == "tendon" and c.coef2 is not None
+    adr = {j.coordinates[0]: j.qposadr for j in model.info["mujoco"].joints if j.kind in ("hinge", "slide")}
+    assert all(r.get("sign", 1.0) == 1.0 and r.get("offset", 0.0) == 0.0 for r in model.info["coordinates"])
+    rng = np.random.default_rng(3)
+    d = mujoco.MjData(m)
+    for _ in range(4):
+        q = rng.uniform(-0.6, 0.6, model.n)
+        d.qpos[:] = m.qpos0
+        d.qpos[[adr[i] for i in range(model.n)]] = q
+        mujoco.mj_forward(m, d)
+        rows = equality_rows(m, d, 0)
+        T = plan.constraints.cset.terms(q)
+        J = np.asarray(d.efc_J).reshape(-1, m.nv)[rows][:, [m.jnt_dofadr[m.jnt_qposadr.tolist().index(adr[i])]
+                                                            for i in range(model.n)]]
+        assert abs(float(d.efc_pos[rows[0]]) - T.phi[0]) < 1e-14
+        assert np.abs(J - T.J).max() < 1e-14
