@@ -153,14 +153,15 @@ def test_dropping_a_coupling_on_one_side_is_seen(name, what):
 
 def test_tendon_equality_against_the_file_in_mujoco(tmp_path):
     """A tendon equality of two fixed tendons (E70 on their lengths l = c . q, E76): manipulator.xml's coupling
-    made to follow its grasp tendon by a cubic polycoef. Our Phi and Phi_q against MuJoCo's efc_pos and efc_J
-    of that file at seeded states: equal to rounding (measured 1e-16), the lengths referred to MuJoCo's
-    tendon_length0 at qpos0."""
+    made to follow its grasp tendon by a cubic polycoef, thumb and finger given a ``ref`` (so that ``qpos0`` and
+    the lengths there, MuJoCo's ``tendon_length0``, are not 0). Our Phi and Phi_q against MuJoCo's efc_pos and
+    efc_J of that file at seeded states: equal to rounding (measured 1e-16)."""
     from urdf2links.compare.mujoco_side.mujoco_constraints import equality_rows
 
     spec = mujoco.MjSpec.from_file(str(DM / "suite/manipulator.xml"))
     (e,) = spec.equalities
     e.name2, e.data[:5] = "grasp", [0.01, -0.4, 0.3, 0.2, 0.0]
+    spec.joint("thumb").ref, spec.joint("finger").ref = 0.3, -0.2
     file = tmp_path / "manipulator_cubic.xml"
     file.write_text(spec.to_xml())
     m = mujoco.MjModel.from_xml_path(str(file))
@@ -172,17 +173,18 @@ def test_tendon_equality_against_the_file_in_mujoco(tmp_path):
     (c,) = plan.constraints.cset.constraints
     assert c.kind == "tendon" and c.coef2 is not None
     adr = {j.coordinates[0]: j.qposadr for j in model.info["mujoco"].joints if j.kind in ("hinge", "slide")}
-    assert all(r.get("sign", 1.0) == 1.0 and r.get("offset", 0.0) == 0.0 for r in model.info["coordinates"])
+    so = [(r.get("sign", 1.0), r.get("offset", 0.0)) for r in model.info["coordinates"]]
+    assert m.tendon_length0[0] != 0.0 and m.tendon_length0[1] != 0.0
     rng = np.random.default_rng(3)
     d = mujoco.MjData(m)
     for _ in range(4):
         q = rng.uniform(-0.6, 0.6, model.n)
         d.qpos[:] = m.qpos0
-        d.qpos[[adr[i] for i in range(model.n)]] = q
+        d.qpos[[adr[i] for i in range(model.n)]] = [(x - o) / s for x, (s, o) in zip(q, so)]
         mujoco.mj_forward(m, d)
         rows = equality_rows(m, d, 0)
         T = plan.constraints.cset.terms(q)
         J = np.asarray(d.efc_J).reshape(-1, m.nv)[rows][:, [m.jnt_dofadr[m.jnt_qposadr.tolist().index(adr[i])]
                                                             for i in range(model.n)]]
         assert abs(float(d.efc_pos[rows[0]]) - T.phi[0]) < 1e-14
-        assert np.abs(J - T.J).max() < 1e-14
+        assert np.abs(J * [s for s, _ in so] - T.J).max() < 1e-14     # dq = s dqpos
