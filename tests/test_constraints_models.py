@@ -56,8 +56,11 @@ T_END = 0.1
 FIGURE_BOUNDS = {name: f"max |dq| < {DIVERGENCE_THRESHOLD:g} over {T_END:g} s" for name in MODELS}
 FIGURE_NOTE = ("Each file run by `compare_scene` with `[constraints] from_file = true` and gravity 9.81, from qpos0 "
                "(fish: fins at 0.5 and -0.1 rad), MuJoCo RK4 at 1e-4 s running the file itself (route 2). "
-               "'acting' tendons have a stiffness or damping, or carry an actuator the scene names; the other "
-               "tendons carry no force on either engine.")
+               "Tendons 'with a force' have a stiffness or damping (or carry an actuator the scene names); the "
+               "others carry none on either engine (their actuators act on neither). Equalities 'solved': exact "
+               "rows here (E70 on fixed tendons' lengths), MuJoCo's soft constraint at solref 1e-3 s, solimp "
+               "0.9999 in its run of the file. The coupled joints start moving (quadruped's legs, the hands' "
+               "thumb and finger, the arms), at velocities the couplings allow.")
 _RUNS: dict = {}
 
 
@@ -118,9 +121,15 @@ def test_model_compared_with_its_constraints(name, record_figure):
         assert not verdict["cut"]["cut"], verdict["scope"]
     err = s["trajectory"]["max_abs_error"]
     assert s["trajectory"]["divergence_time"] is None and err < DIVERGENCE_THRESHOLD
-    record_figure(name, "equalities", f"{n_eq}" + (f" ({n_cut} tendon equalities: not modelled, dropped on both "
-                                                   "engines)" if n_cut else ""), "{}")
-    record_figure(name, "tendons", f"{n_td} fixed, acting: {', '.join(acting) or 'none'}", "{}")
+    kinds = {}
+    for e in eqs:
+        kinds.setdefault(e["kind"], []).append(e["supported"])
+    record_figure(name, "equalities", ", ".join(f"{len(v)} {k} ({'solved' if all(v) else 'NOT modelled'})"
+                                                for k, v in kinds.items()) or "none", "{}")
+    record_figure(name, "tendons", f"{n_td} fixed, with a force: {', '.join(acting) or 'none'}", "{}")
+    stats = cmp.traj.stats.get("constraints")
+    if stats is not None and stats["rows"]:
+        record_figure(name, "max |lambda|", float(np.abs(stats["lambda"]).max()), "{:.2g}")
     record_figure(name, "max |dq|", err, "{:.1e}")
     record_figure(name, "verdict scope", verdict["scope"], "{}")
 
@@ -188,3 +197,18 @@ def test_tendon_equality_against_the_file_in_mujoco(tmp_path):
                                                             for i in range(model.n)]]
         assert abs(float(d.efc_pos[rows[0]]) - T.phi[0]) < 1e-14
         assert np.abs(J * [s for s, _ in so] - T.J).max() < 1e-14     # dq = s dqpos
+
+
+def test_docs_table_is_the_recorded_figures():
+    """docs/constraints.md's table of these models is the committed report's figures as rendered by
+    ``python -m urdf2links.compare.reports.models_table`` (not typed by hand; regenerate both together)."""
+    import json
+    from pathlib import Path
+
+    from urdf2links.compare.reports.models_table import BEGIN, END, render
+
+    root = Path(__file__).resolve().parents[1]
+    data = json.loads((root / "reports/constraints_models/constraints_models.json").read_text())
+    assert {r["case"] for r in data["rows"]} == set(MODELS) and not any(r["failed"] for r in data["rows"])
+    doc = (root / "docs/constraints.md").read_text()
+    assert doc.split(BEGIN, 1)[1].split(END, 1)[0].strip() == render(data).strip()
