@@ -228,3 +228,20 @@ def test_docs_table_is_the_recorded_figures():
     assert {r["case"] for r in data["rows"]} == set(MODELS) and not any(r["failed"] for r in data["rows"])
     doc = (root / "docs/constraints.md").read_text()
     assert doc.split(BEGIN, 1)[1].split(END, 1)[0].strip() == render(data).strip()
+
+
+@pytest.mark.parametrize("name", ["dm_control/suite/quadruped.xml", "dm_control/suite/manipulator.xml"])
+def test_tendon_equalities_in_route_1(name):
+    """Route 1 (the project's tree as MJCF) writes each tendon equality as two fixed tendons and a ``<tendon>``
+    equality: at states of the run our Phi_q equals its efc_J rows to rounding and lambda its efc_force to
+    MuJoCo's regularizer at solimp 0.9999 (measured 1e-4 relative on both; bound 5e-3 as the loops' test)."""
+    from urdf2links.compare.agreement.constraint_agreement import constraint_terms, states_of
+    from urdf2links.compare.mujoco_side.mjcf import mjcf_from_scene
+    from urdf2links.compare.mujoco_side.mujoco_constraints import with_constraints
+
+    model, cmp = compared(name)
+    plan = as_plan(cmp.scene, model=model)
+    mj = with_constraints(mjcf_from_scene(plan.scene, model), plan.constraints)
+    t = constraint_terms(plan, mj, states_of(cmp.traj))
+    assert t["jacobian"]["max_abs"] < 1e-12 * max(1.0, t["jacobian"]["scale"])
+    assert t["force"]["max_abs"] < 5e-3 * t["force"]["scale"]
