@@ -128,6 +128,9 @@ def run_notes(plan, traj, mj=None) -> list[str]:
                  f"{t['jacobian']['max_abs']:.2e} (of {t['jacobian']['scale']:.3g}); lambda against efc_force "
                  f"{t['force']['max_abs']:.2e} (of {t['force']['scale']:.3g}); J^T lambda against qfrc_constraint "
                  f"{t['generalized_force']['max_abs']:.2e} (of {t['generalized_force']['scale']:.3g})"]
+    if not c["rows"]:       # fixed tendons alone (a stiffness, a damping): nothing to solve or project
+        return [f"fixed tendons ({', '.join(td.name for td in plan.constraints.tendons)}) act on both engines "
+                "(E76); no constraint rows: the run takes the constrained path (DOP853) for their forces alone"]
     return terms + ([f"constraints ({', '.join(c['rows'])}): solved with multipliers and projected after every step "
              f"(E72-E74, DOP853 + projection); max |Phi| {c['max_residual']:.2e} at the samples, "
              f"{c['max_step_drift']:.2e} before any projection; lambda {c['lambda'].min():.4g} .. "

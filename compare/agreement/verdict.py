@@ -40,8 +40,9 @@ def cut_scope(model, load_options: dict | None = None, plan=None) -> dict:
     if scene is not None and getattr(scene, "file_constraints", False):
         cons = plan.constraints
         eq -= 0 if cons is None else sum(1 for c in cons.cset.constraints if c.source.startswith("MJCF"))
-        inert = [t for t in model.info.get("tendons", []) if t["fixed"] and not (t["stiffness"] or t["damping"]
-                                                                                  or t["actuators"] or t["limited"])]
+        named = {a.name for a in getattr(scene, "actuators", ())}   # the others act on neither engine (notes)
+        inert = [t for t in model.info.get("tendons", []) if t["fixed"] and not (
+            t["stiffness"] or t["damping"] or set(t["actuators"]) & named or t["limited"] or t["frictionloss"])]
         tendons -= (0 if cons is None else len(cons.tendons)) + len(inert)
     if scene is not None and getattr(scene, "mimic_constraints", False):
         mimic = 0

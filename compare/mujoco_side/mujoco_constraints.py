@@ -8,6 +8,7 @@ the project's tree, equality disabled) and adds, through MuJoCo's ``MjSpec``:
 - a ``weld`` (E69) as two sites carrying the two frames and ``<weld site1 site2>``;
 - a ``joint`` coupling (E70) as ``<joint joint1 joint2 polycoef>``: route 1's ``qpos`` is ``q`` and its
   ``qpos0`` is 0, so the polynomial ``q_a = r_a + p(q_b - r_b)`` is re-expanded about 0;
+- a ``tendon`` equality the same way on two fixed tendons written for it (``<tendon tendon1 tendon2>``);
 - a fixed tendon (E76) as ``<tendon><fixed>`` with its stiffness, damping and spring length, and its
   actuators as ``<general tendon=...>`` (MuJoCo's law, E55);
 
@@ -72,6 +73,26 @@ def _site(spec, mj: MjcfModel, d, p, point, frame, name):
     return body.add_site(name=name, pos=X[:3, :3] @ point + X[:3, 3], quat=_quat(X[:3, :3] @ frame))
 
 
+def _tendon_equality(spec, e, c, names):
+    """A ``tendon`` equality as two route-1 fixed tendons ``{name}__l1``, ``{name}__l2`` (their
+    ``tendon_length0`` is 0 at route 1's ``qpos0 = 0``) and ``<tendon tendon1 tendon2 polycoef>``."""
+    tendons = []
+    for k, u in enumerate((c.coef1, c.coef2)):
+        if u is not None:
+            t = spec.add_tendon(name=f"{c.name}__l{k + 1}")
+            for i, v in enumerate(u):
+                if v:
+                    t.wrap_joint(names[i], float(v))
+            tendons.append(t.name)
+    e.type, e.objtype = mujoco.mjtEq.mjEQ_TENDON, mujoco.mjtObj.mjOBJ_TENDON
+    e.name1 = tendons[0]
+    if len(tendons) > 1:
+        e.name2 = tendons[1]
+        e.data[:5] = shifted_polycoef(c.poly, c.ref1, c.ref2)
+    else:
+        e.data[:5] = [c.ref1 + c.poly[0], 0, 0, 0, 0]
+
+
 def with_constraints(mj: MjcfModel, closure, *, solref=COMPARE_SOLREF, solimp=SOLIMP) -> MjcfModel:
     """Route 1 (``mj``) with the plan's constraints and tendons (``closure``:
     :class:`~urdf2links.scenes.constraints.SceneConstraints`) as MuJoCo equalities and tendons (module doc)."""
@@ -89,6 +110,9 @@ def with_constraints(mj: MjcfModel, closure, *, solref=COMPARE_SOLREF, solimp=SO
                 e.data[:5] = shifted_polycoef(c.poly, c.ref1, c.ref2)
             else:
                 e.data[:5] = [c.ref1 + c.poly[0], 0, 0, 0, 0]
+            continue
+        if c.kind == "tendon":
+            _tendon_equality(spec, e, c, names)
             continue
         s1 = _site(spec, mj, d, c.link1, c.point1, c.frame1, f"{c.name}__1")
         s2 = _site(spec, mj, d, c.link2, c.point2, c.frame2, f"{c.name}__2")

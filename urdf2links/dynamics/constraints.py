@@ -9,7 +9,10 @@ links and the model's coordinates:
   orientation error ``Phi_R = 0.5 vee(R_e - R_e^T)`` of ``R_e = R_1 X_1 (R_2 X_2)^T`` (3 rows; zero
   exactly when the frames agree, near the manifold);
 - ``joint`` (E70): ``q_a - q_a0 = sum_k c_k (q_b - q_b0)^k`` (k = 0..4; 1 row), MuJoCo's polynomial
-  coupling of two coordinates (without ``q_b``: ``q_a - q_a0 = c_0``).
+  coupling of two coordinates (without ``q_b``: ``q_a - q_a0 = c_0``);
+- ``tendon``: the same polynomial law on two fixed tendons' lengths ``l = c . q`` (E76) instead of two
+  coordinates, ``l_1 - l_10 = sum_k c_k (l_2 - l_20)^k`` (1 row), MuJoCo's tendon equality: a joint
+  coupling is the case ``c_1 = e_a``, ``c_2 = e_b``.
 
 One call of the compiled :func:`~urdf2links.dynamics.kernels.kinematics` (without gravity) gives every
 link's pose ``(R, o)``, twist ``(omega, v)``, spatial acceleration at ``q'' = 0`` ``(alpha, a)``
@@ -37,8 +40,9 @@ from .tree_arrays import AC, KL, W_COORD, W_LINK, W_SIZE, WV, nn
 
 __all__ = ["Constraint", "ConstraintSet", "ConstraintTerms", "KINDS", "ROWS", "link_motion"]
 
-KINDS = ("connect", "weld", "joint")
-ROWS = {"connect": ("x", "y", "z"), "weld": ("x", "y", "z", "rx", "ry", "rz"), "joint": ("q",)}
+KINDS = ("connect", "weld", "joint", "tendon")
+ROWS = {"connect": ("x", "y", "z"), "weld": ("x", "y", "z", "rx", "ry", "rz"), "joint": ("q",), "tendon": ("l",)}
+POLYNOMIAL = ("joint", "tendon")
 WORLD = -1
 
 
@@ -68,7 +72,9 @@ class Constraint:
     (3,) in those links' axes (world axes for the world); ``frame1``/``frame2`` (3, 3) the welded
     frames' rotations in the links' axes; ``coord1``/``coord2``: model coordinates of a ``joint``
     (``coord2`` -1: none), ``poly`` (5,) its coefficients, ``ref1``/``ref2`` the reference values
-    ``q_a0``, ``q_b0``; ``source`` where it was read (a scene key, an MJCF element)."""
+    ``q_a0``, ``q_b0``; ``coef1``/``coef2`` (n,) a ``tendon`` equality's lengths ``l = c . q`` (``coef2`` None:
+    none), ``ref1``/``ref2`` then their reference lengths; ``source`` where it was read (a scene key, an MJCF
+    element)."""
 
     name: str
     kind: str
@@ -83,6 +89,8 @@ class Constraint:
     poly: np.ndarray = field(default_factory=lambda: np.array([0.0, 1.0, 0.0, 0.0, 0.0]))
     ref1: float = 0.0
     ref2: float = 0.0
+    coef1: np.ndarray | None = None
+    coef2: np.ndarray | None = None
     source: str = ""
 
     @property
@@ -166,13 +174,13 @@ class ConstraintSet:
         q = model.vector(q, "q")
         qd = np.zeros(model.n) if qd is None else model.vector(qd, "qd")
         nt = self._shapes[1]
-        motion = self._motion(q, qd, t, base) if any(c.kind != "joint" for c in self.constraints) else None
+        motion = self._motion(q, qd, t, base) if any(c.kind not in POLYNOMIAL for c in self.constraints) else None
         phi, Jt, gam = np.zeros(self.m), np.zeros((self.m, nt)), np.zeros(self.m)
         Jm = np.zeros((self.m, model.n))       # joint rows, already in model coordinates
         k = 0
         for c in self.constraints:
-            if c.kind == "joint":
-                phi[k], Jm[k], gam[k] = _joint_row(c, q, qd, model.n)
+            if c.kind in POLYNOMIAL:
+                phi[k], Jm[k], gam[k] = _polynomial_row(c, q, qd, model.n)
             else:
                 r1, J1, v1, a1 = self._point(c.link1, c.point1, motion)
                 r2, J2, v2, a2 = self._point(c.link2, c.point2, motion)
@@ -198,16 +206,29 @@ def _cross(a, b):
     return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
 
 
-def _joint_row(c: Constraint, q, qd, n):
-    """``Phi = q_a - q_a0 - p(q_b - q_b0)``, its row and ``-p''(x) q_b'^2`` (E70)."""
-    a = c.poly
-    row = np.zeros(n)
-    row[c.coord1] = 1.0
+def _lengths(c: Constraint, n):
+    """The two linear functions ``u . q`` a polynomial row couples (n,): unit rows of the coordinates (joint)
+    or the tendons' coefficients (tendon, E76); the second None without one."""
+    if c.kind == "tendon":
+        return np.asarray(c.coef1, float), None if c.coef2 is None else np.asarray(c.coef2, float)
+    u1 = np.zeros(n)
+    u1[c.coord1] = 1.0
     if c.coord2 < 0:
-        return q[c.coord1] - c.ref1 - a[0], row, 0.0
-    x, xd = q[c.coord2] - c.ref2, qd[c.coord2]
+        return u1, None
+    u2 = np.zeros(n)
+    u2[c.coord2] = 1.0
+    return u1, u2
+
+
+def _polynomial_row(c: Constraint, q, qd, n):
+    """``Phi = l_a - l_a0 - p(l_b - l_b0)``, its row ``u_a - p'(x) u_b`` and ``-p''(x) l_b'^2`` (E70), with
+    ``l = u . q`` a coordinate (joint) or a fixed tendon's length (tendon)."""
+    a = c.poly
+    u1, u2 = _lengths(c, n)
+    if u2 is None:
+        return u1 @ q - c.ref1 - a[0], u1, 0.0
+    x, xd = u2 @ q - c.ref2, u2 @ qd
     p = a[0] + x * (a[1] + x * (a[2] + x * (a[3] + x * a[4])))
     dp = a[1] + x * (2 * a[2] + x * (3 * a[3] + x * 4 * a[4]))
     ddp = 2 * a[2] + x * (6 * a[3] + x * 12 * a[4])
-    row[c.coord2] -= dp
-    return q[c.coord1] - c.ref1 - p, row, -ddp * xd * xd
+    return u1 @ q - c.ref1 - p, u1 - dp * u2, -ddp * xd * xd

@@ -119,7 +119,7 @@ class ConstrainedRHS:
         q, qd = y[:n], y[n:2 * n]
         base = self.plan.base_state(t)
         terms_of = lambda x: self.cset.terms(x, t=t, base=base)  # noqa: E731
-        before = float(np.max(np.abs(terms_of(q).phi)))
+        before = float(np.max(np.abs(terms_of(q).phi), initial=0.0))   # 0 rows: fixed tendons alone
         q2, _, _ = project_position(q, terms_of, lambda x: self.mass(t, x), self.keep, rows=self.cset.rows,
                                     where=f"{self.where}: projection at t = {t:.6g} s")
         T = self.cset.terms(q2, qd, t=t, base=base)
@@ -136,7 +136,7 @@ def _initial(rhs, q, qd):
     y, before = rhs.project(0.0, y0)
     n = rhs.model.n
     note = (f"initial state projected onto the constraints: |Phi| {before:.3g} -> "
-            f"{float(np.max(np.abs(rhs.cset.residual(y[:n])))):.3g}; q moved by {np.max(np.abs(y[:n] - q)):.3g}, "
+            f"{float(np.max(np.abs(rhs.cset.residual(y[:n])), initial=0.0)):.3g}; q moved by {np.max(np.abs(y[:n] - q)):.3g}, "
             f"q' by {np.max(np.abs(y[n:2 * n] - qd)):.3g} (max over coordinates)")
     return y, {"note": note, "residual_before": before, "q_moved": float(np.max(np.abs(y[:n] - q))),
                "qd_moved": float(np.max(np.abs(y[n:2 * n] - qd))), "redundant": list(sel.notes),
@@ -203,7 +203,7 @@ def _trajectory(Trajectory, plan, rhs, run, t, Y, steps, drift, initial, wall, s
     for i in range(t.size):
         _, lam[i], T = rhs.solve(t[i], Y[i])
         gen[i] = T.J[rhs.keep].T @ lam[i]
-        res[i], rate[i] = np.max(np.abs(T.phi)), np.max(np.abs(T.rate))
+        res[i], rate[i] = np.max(np.abs(T.phi), initial=0.0), np.max(np.abs(T.rate), initial=0.0)
     info = {"rows": list(rhs.cset.rows), "solved_rows": rhs.kept_rows, "residual": res, "rate_residual": rate,
             "max_residual": float(res.max()), "max_step_drift": float(drift), "lambda": lam, "forces": gen,
             "initial": initial, "method": "DOP853 + projection after every step (E74), interpreted path",

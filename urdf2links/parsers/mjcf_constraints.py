@@ -10,11 +10,13 @@ tendons (E76) when a scene asks (``[constraints] from_file = true``). MuJoCo's o
 - ``weld``: the point ``relpos`` of body 1 on ``anchor`` of body 2, and the orientation ``R_1 R_rel = R_2``
   (``relquat``); ``torquescale`` scales MuJoCo's rotation rows only (0: the orientation is free);
 - ``joint``: ``qpos_1 - qpos0_1 = sum_k c_k (qpos_2 - qpos0_2)^k`` (``polycoef``, ``qpos0``);
+- ``tendon`` (of fixed tendons): the same law on the tendons' lengths, ``tendon_length0`` their lengths at
+  ``qpos0``;
 - a fixed tendon: its joints and coefficients, stiffness, damping, spring length (a range), its limits and
   friction loss (not modelled: noted), and the actuators whose transmission it is.
 
-Site-semantic equalities, ``tendon`` and ``flex`` equalities and spatial tendons are listed with why they
-are not read.
+Site-semantic equalities, ``tendon`` equalities of spatial tendons, ``flex`` equalities and spatial tendons
+are listed with why they are not read.
 """
 
 from __future__ import annotations
@@ -62,8 +64,18 @@ def equality_rows(b) -> tuple[list[dict], list[str]]:
             if any(k not in (2, 3) for k in kinds):       # mjJNT_SLIDE = 2, mjJNT_HINGE = 3
                 row.update(supported=False, why="a joint equality of a ball or free joint (MuJoCo couples qpos "
                                                 "entries of its quaternion; not a coordinate here)")
+        elif kind == "tendon":
+            fixed = [int(m.tendon_num[t]) > 0 and all(int(m.wrap_type[m.tendon_adr[t] + w]) == int(b.mj.mjtWrap.mjWRAP_JOINT)
+                                                       for w in range(int(m.tendon_num[t]))) for t in (o1, o2) if t >= 0]
+            row.update(tendon1=b.name("mjOBJ_TENDON", o1, f"tendon{o1}"),
+                       tendon2=None if o2 < 0 else b.name("mjOBJ_TENDON", o2, f"tendon{o2}"), polycoef=d[:5].tolist(),
+                       length0_1=float(m.tendon_length0[o1]), length0_2=None if o2 < 0 else float(m.tendon_length0[o2]))
+            if not all(fixed):
+                row.update(supported=False, why="a tendon equality on a spatial tendon (fixed tendons only: their "
+                                                "lengths are linear in the coordinates)")
         else:
-            row.update(supported=False, why=f"a {kind} equality is not modelled (connect, weld and joint are)")
+            row.update(supported=False, why=f"a {kind} equality is not modelled (connect, weld, joint and tendon "
+                                            "equalities of fixed tendons are)")
         if not row["supported"]:
             notes.append(f"equality {row['name']!r} ({kind}): {row['why']}")
         rows.append(row)
@@ -108,8 +120,9 @@ def inspect_rows(info: dict) -> tuple[list[tuple], list[tuple]]:
         if r["kind"] in ("connect", "weld") and "body1" in r:
             between = f"{r['body1']} / {r['body2']}"
             nums = f"anchor1 {np.round(r['anchor1'], 6).tolist()}, anchor2 {np.round(r['anchor2'], 6).tolist()}"
-        elif r["kind"] == "joint":
-            between = f"{r['joint1']} / {r['joint2'] or '-'}"
+        elif r["kind"] in ("joint", "tendon") and "polycoef" in r:
+            k = r["kind"]
+            between = f"{r[k + '1']} / {r[k + '2'] or '-'}"
             nums = f"polycoef {np.round(r['polycoef'], 6).tolist()}"
         else:
             between, nums = "-", "-"

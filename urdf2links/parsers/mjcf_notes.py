@@ -48,7 +48,7 @@ def inventory(m, joint_kinds: dict) -> list[str]:
         "[constraints] from_file = true; otherwise MuJoCo's run zeroes their stiffness and damping and disables their "
         "limits")
     add(m.neq, f"{m.neq} equality constraint(s) ({_names(m, 'mjOBJ_EQUALITY', m.neq)})",
-        "connect, weld and joint are read (E68-E70) and act when a scene says [constraints] from_file = true "
+        "connect, weld and joint are read (E68-E70; tendon equalities of fixed tendons too: E70 on their lengths) and act when a scene says [constraints] from_file = true "
         "(urdf2links inspect --scene shows them); otherwise the joints stay independent and MuJoCo's run disables them")
     add(m.nu, f"{m.nu} actuator(s) ({_names(m, 'mjOBJ_ACTUATOR', m.nu)})",
         "scene effects when a scene names them ([[actuator]] name = '...', ctrl = ...: MuJoCo's law on both engines); "

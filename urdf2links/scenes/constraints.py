@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..dynamics.constraints import KINDS, WORLD, Constraint, ConstraintSet
+from ..dynamics.constraints import WORLD, Constraint, ConstraintSet
 from ..dynamics.rotations import rpy_to_matrix
 from ..errors import SceneError
 
@@ -52,6 +52,9 @@ class ConstraintSpec:
     source: str = "scene"
     frames: tuple = ()
     """A weld's two frame rotations (3, 3) in the links' axes, instead of ``rpy`` (an MJCF weld's ``relpose``)."""
+    lengths: tuple = ()
+    """A ``tendon`` equality's (an MJCF file's only) one or two tendon lengths ``l = c . q`` as (n,) vectors of
+    the model's coordinates; ``reference`` their lengths at the reference state."""
 
 
 def constraint_options(r, data: dict) -> dict:
@@ -98,7 +101,7 @@ def parse_constraints(r, data: dict) -> tuple[ConstraintSpec, ...]:
         key = f"constraint[{k}]"
         if not isinstance(item, dict):
             r.fail(key, f"must be a table, got {item!r}")
-        kind = r.choice(item.get("kind"), f"{key}.kind", KINDS)
+        kind = r.choice(item.get("kind"), f"{key}.kind", tuple(_KEYS))
         r.keys(item, _KEYS[kind], key)
         name = item.get("name", f"constraint{k}")
         if not isinstance(name, str) or name in names:
@@ -168,6 +171,10 @@ def _link(model, name, where, key):
 
 def _resolve(spec: ConstraintSpec, model, q0, where, k) -> Constraint:
     key = f"[[constraint]] {spec.name!r}"
+    if spec.kind == "tendon":
+        c1, c2 = (tuple(np.asarray(v, float) for v in spec.lengths) + (None,))[:2]
+        return Constraint(spec.name, "tendon", poly=np.array(spec.coefficients, float), ref1=spec.reference[0],
+                          ref2=spec.reference[1], coef1=c1, coef2=c2, source=spec.source)
     if spec.kind == "joint":
         names = model.coordinate_names
         for c in spec.coordinates:
@@ -238,6 +245,11 @@ def describe_constraints(sc: SceneConstraints | None, model) -> list[str]:
             names = model.coordinate_names
             b = f", {names[c.coord2]}" if c.coord2 >= 0 else ""
             lines.append(f"  constraint {c.name!r} (joint, {c.source}): {names[c.coord1]}{b}, coefficients "
+                         f"{np.round(c.poly, 9).tolist()}, 1 row")
+        elif c.kind == "tendon":
+            ls = [" + ".join(f"{v:g} {nm}" for v, nm in zip(u, model.coordinate_names) if v)
+                  for u in (c.coef1, c.coef2) if u is not None]
+            lines.append(f"  constraint {c.name!r} (tendon, {c.source}): lengths {' / '.join(ls)}, coefficients "
                          f"{np.round(c.poly, 9).tolist()}, 1 row")
         else:
             lines.append(f"  constraint {c.name!r} ({c.kind}, {c.source}): {links[c.link1 + 1]} point "

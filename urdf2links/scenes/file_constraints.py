@@ -1,7 +1,7 @@
 """An MJCF file's equalities and fixed tendons as a scene's constraints (E68)-(E70) and tendons (E76).
 
 ``[constraints] from_file = true`` in a scene of an MJCF robot makes the file's active ``connect``,
-``weld`` and ``joint`` equalities (``model.info["equalities"]``, read by
+``weld``, ``joint`` and ``tendon`` (of fixed tendons: E70 on their lengths) equalities (``model.info["equalities"]``, read by
 :mod:`urdf2links.parsers.mjcf_constraints`) constraints of the run, and its fixed tendons forces, with the
 actuators whose transmission is a tendon when the scene names them (``[[actuator]] name = ...``,
 ``ctrl = ...``; MuJoCo's law (E55) on the tendon's length). A joint equality in MuJoCo's ``qpos`` becomes
@@ -30,8 +30,32 @@ def _coordinate(model, joint, where, eq):
     return c["name"], float(c.get("sign", 1.0)), float(c.get("offset", 0.0))
 
 
+def _length(model, row, where, eq=None):
+    """A fixed tendon ``row``'s length in the model's coordinates: ``(c (n,), o)`` with ``l = c . q + o``
+    (``qpos = (q - offset) / sign``, E76)."""
+    coef, offset = np.zeros(model.n), 0.0
+    for joint, c in row["joints"]:
+        name, s, o = _coordinate(model, joint, where, eq or row["name"])
+        coef[model.coordinate_names.index(name)] += c / s
+        offset -= c * o / s
+    return coef, offset
+
+
+def _tendon_equality(model, row, where) -> ConstraintSpec:
+    """MuJoCo's tendon equality ``l_1 - l0_1 = sum_k c_k (l_2 - l0_2)^k`` as E70 on ``l = c . q + o``."""
+    table = {t["name"]: t for t in model.info.get("tendons", [])}
+    pairs = [(_length(model, table[t], where, row["name"]), l0)
+             for t, l0 in ((row["tendon1"], row["length0_1"]), (row["tendon2"], row["length0_2"])) if t is not None]
+    return ConstraintSpec(row["name"], "tendon", lengths=tuple(c for (c, _), _ in pairs),
+                          coefficients=tuple(float(x) for x in row["polycoef"]),
+                          reference=tuple(l0 - o for (_, o), l0 in pairs) + (0.0,) * (2 - len(pairs)),
+                          source=f"MJCF <tendon> equality {row['name']!r}")
+
+
 def _equality(model, row, where) -> ConstraintSpec:
     src = f"MJCF <{row['kind']}> {row['name']!r}"
+    if row["kind"] == "tendon":
+        return _tendon_equality(model, row, where)
     if row["kind"] == "joint":
         a, sa, oa = _coordinate(model, row["joint1"], where, row["name"])
         c = np.asarray(row["polycoef"], float)
@@ -55,11 +79,7 @@ def tendon_actuator_names(model) -> set:
 
 
 def _tendon(model, row, specs, where) -> FixedTendon:
-    names = model.coordinate_names
-    coef = np.zeros(model.n)
-    for joint, c in row["joints"]:
-        name, s, _ = _coordinate(model, joint, where, row["name"])
-        coef[names.index(name)] += c / s            # qpos = (q - o) / s; the offset only shifts the length
+    coef, offset = _length(model, row, where)      # the offset only shifts the length
     table = {a["name"]: a for a in model.info.get("actuators", [])}
     acts = []
     for spec in specs:
@@ -68,8 +88,6 @@ def _tendon(model, row, specs, where) -> FixedTendon:
             acts.append(Actuator(spec.name, row["name"], -1, a["kind"], a["gain"], tuple(a["bias"]), a["gear"],
                                  spec.ctrl, a["ctrlrange"], a["forcerange"], "file", row["name"], a.get("kp"),
                                  a.get("kv")))
-    offset = sum(c * (-_coordinate(model, j, where, row["name"])[2]) / _coordinate(model, j, where, row["name"])[1]
-                 for j, c in row["joints"])
     a, b = row["lengthspring"]
     return FixedTendon(row["name"], coef, row["stiffness"], row["damping"], (a - offset, b - offset), tuple(acts))
 
