@@ -28,8 +28,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 DOC = ROOT / "docs" / "testing.md"
 BEGIN, END = "<!-- BEGIN suite_durations (benchmarks/suite_durations.py) -->", "<!-- END suite_durations -->"
-_DURATION = re.compile(r"^\s*([0-9.]+)s (call|setup|teardown)\s+(\S+)")
-_TOTAL = re.compile(r"=+ (.*) in ([0-9.]+)s")
+_DURATION = re.compile(r"^\s*([0-9.]+)s (call|setup|teardown)\s+(.+?)\s*$")
+_TOTAL = re.compile(r"^=*\s*(\d+ (?:passed|failed).*?) in ([0-9.]+)s")
 
 
 def run_suite(*, warm: bool, top: int) -> dict:
@@ -46,7 +46,7 @@ def run_suite(*, warm: bool, top: int) -> dict:
         wall = time.perf_counter() - start
     lines = out.stdout.splitlines()
     slowest = [{"s": float(m[1]), "when": m[2], "test": m[3]} for m in map(_DURATION.match, lines) if m]
-    totals = [m for m in map(_TOTAL.search, lines) if m]
+    totals = [m for m in map(_TOTAL.match, lines) if m]
     return {"wall_s": wall, "pytest_s": float(totals[-1][2]) if totals else None,
             "outcome": totals[-1][1] if totals else out.stdout[-500:], "returncode": out.returncode,
             "numba_cache": "warm (the user's)" if warm else "empty (compiled during the run)",
