@@ -63,7 +63,8 @@ def test_a_floating_robots_rotated_twin_lists_only_root_pose(folder):
 
 def test_a_fixed_arms_mount_is_one_difference_that_explains_G(folder):
     urdf = shipped_robots_dir() / "ur5_like.urdf"
-    mjcf = save_mujoco_import(urdf, folder / "ur5_mounted.xml", keep_geometry=False, root_pose=(POS, QUAT)).path
+    mjcf = save_mujoco_import(urdf, folder / "ur5_mounted.xml", keep_geometry=False, root_pose=(POS, QUAT),
+                              keep_frames=True).path
     c = _compare(urdf, mjcf)
     assert [d.kind for d in c.differences] == ["root_pose"]
     assert all(m.sign == 1 for m in c.mapping.matches)
@@ -79,7 +80,7 @@ def test_a_fixed_arms_mount_is_one_difference_that_explains_G(folder):
 @pytest.fixture(scope="module")
 def arm(folder):
     urdf = shipped_robots_dir() / "ur5_like.urdf"
-    return urdf, save_mujoco_import(urdf, folder / "arm.xml", keep_geometry=False).path
+    return urdf, save_mujoco_import(urdf, folder / "arm.xml", keep_geometry=False, keep_frames=True).path
 
 
 def _planted(arm, folder, name, edit):
