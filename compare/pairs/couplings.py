@@ -31,8 +31,10 @@ def couplings(path, *, package_dirs=(), xacro_args=None) -> dict:
                 out[(r["joint1"], r["joint2"])] = (c[1], c[0], tuple(c[2:]))
         return out
     desc = parse_urdf(path, package_dirs=package_dirs, xacro_args=xacro_args)
-    return {(j.name, j.mimic.joint): (float(j.mimic.multiplier), float(j.mimic.offset), ())
-            for j in desc.joints if j.mimic is not None and j.mimic.joint != j.name}
+    moving = {j.name for j in desc.joints if j.type in ("revolute", "continuous", "prismatic")}
+    return {(j.name, j.mimic.joint): (float(j.mimic.multiplier), float(j.mimic.offset), ())  # a mimic of a fixed
+            for j in desc.joints if j.mimic is not None and j.name in moving               # joint, or naming no
+            and j.mimic.joint in moving - {j.name}}                                         # joint, couples nothing
 
 
 def _words(key, c) -> str:
