@@ -235,3 +235,37 @@ def test_a_frame_kept_moved_or_dropped(arm, folder):
     d = _compare(arm[0], dropped).differences
     assert [(x.kind, x.urdf, x.difference) for x in d] == [("frame_missing", "tool0_joint", 1.0)]
     assert "fuses it" in d[0].explanation
+
+
+@pytest.fixture(scope="module")
+def meshed_arm(folder):
+    """ur5_like with the flange's cylinder as an STL mesh (visual and collision), its MuJoCo import, and the URDF
+    with the collision mesh written 10 times the visual (scale 10: the units mistake users hit)."""
+    import trimesh
+
+    trimesh.creation.cylinder(radius=0.045, height=0.06, sections=32).export(folder / "flange.stl")
+    text = (shipped_robots_dir() / "ur5_like.urdf").read_text()
+    old = '<geometry><cylinder radius="0.045" length="0.06"/></geometry>\n    </collision>'
+    assert text.count(old) == 1
+    mesh = '<geometry><mesh filename="flange.stl"{}/></geometry>'
+    visual = '    <visual>\n      <origin xyz="0 0.0523 0" rpy="-1.5707963267948966 0 0"/>\n      {}\n    </visual>'
+    urdfs = {}
+    for label, scale in (("right", ""), ("tenfold", ' scale="10 10 10"')):
+        urdfs[label] = folder / f"ur5_mesh_{label}.urdf"
+        urdfs[label].write_text(text.replace(old, mesh.format(scale) + "\n    </collision>\n"
+                                             + visual.format(mesh.format(""))))
+    return urdfs, save_mujoco_import(urdfs["right"], folder / "ur5_mesh.xml", keep_frames=True).path
+
+
+def test_a_collision_mesh_ten_times_the_visual(meshed_arm):
+    """The collision mesh at scale 10 against MuJoCo's import of the right one: one collision difference at the
+    flange, volume x1000 (relative 0.999), its box 10 times larger; the import itself agrees (the visual geoms,
+    contype 0, are not collision geometry)."""
+    urdfs, mjcf = meshed_arm
+    assert _compare(urdfs["right"], mjcf).differences == []
+    c = _compare(urdfs["tenfold"], mjcf)
+    assert [(d.kind, d.urdf) for d in c.differences] == [("collision", "wrist_3_link")]
+    d = c.differences[0]
+    assert d.urdf_value[0] == pytest.approx(1000 * d.mjcf_value[0], rel=1e-4)     # float32 vertices: 1e-6 measured
+    assert d.difference == pytest.approx(0.999, abs=1e-4)
+    assert c.summary()["description_counts"]["non_dynamic"] == {"count": 1, "kinds": ["collision"]}

@@ -46,7 +46,8 @@ ROUNDING = {"mass": 1e-5, "com": 1e-5, "inertia": 1e-5, "axis": 1e-5, "origin": 
             "link_missing": 0.0, "constraint": 0.0,        # constraint: a loop closed on one side (issue 36)
             "root_pose": 1e-5, "friction": 1e-9, "effort": 1e-5, "velocity": 1e-5,
             "coupling": 1e-5,          # a URDF <mimic> against an MJCF joint equality (couplings.py)
-            "frame_missing": 1e-5}     # a massless welded frame the other side dropped (frames.py)
+            "frame_missing": 1e-5,     # a massless welded frame the other side dropped (frames.py)
+            "collision": 1e-4}         # relative: MuJoCo keeps mesh vertices in float32 (collisions.py)
 KINDS = tuple(ROUNDING)
 
 
