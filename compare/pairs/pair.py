@@ -34,8 +34,8 @@ from .roots import match_bodies
 
 __all__ = ["PairComparison", "compare_descriptions_of", "TERM_KEYS", "check_tolerances", "exceedances", "DYNAMIC_KINDS"]
 
-#: The kinds that change the dynamics (A, G, the joint forces); the others (limits, frames) do not, and
-#: ``root_pose`` is counted apart.
+#: The kinds that change the dynamics (A, G, the joint forces); the others (limits, effort, velocity, frames,
+#: collision geometry) do not, and ``root_pose`` is counted apart.
 DYNAMIC_KINDS = ("mass", "com", "inertia", "origin", "axis", "armature", "damping", "stiffness", "friction", "type",
                  "joint_missing", "link_missing", "constraint", "coupling")
 
