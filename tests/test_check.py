@@ -82,8 +82,9 @@ def test_init_then_check_passes(repo, initialised, capsys):
     config = read_config(repo)
     assert [r.id for r in config.robots] == [URDF, MJCF]
     assert [(p.urdf.id, p.mjcf.id) for p in config.pairs] == [(URDF, MJCF)]      # guessed by the robot's name
-    # MuJoCo's import leaves the URDF's lower = upper = 0 joints unlimited: accepted at init, nothing else
-    assert config.pairs[0].tolerances == {"limits": float("inf")}
+    # MuJoCo's import leaves the URDF's lower = upper = 0 joints unlimited and fuses the massless tip frame:
+    # accepted at init, nothing else
+    assert config.pairs[0].tolerances == {"limits": float("inf"), "frame_missing": 1.5}
     assert [s.id for s in config.scenes] == [URDF, MJCF] and config.baselines.is_file()
     capsys.readouterr()
     assert main(["check", str(repo)]) == 0

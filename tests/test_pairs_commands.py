@@ -24,7 +24,7 @@ ROBOTS = shipped_robots_dir()
 @pytest.fixture(scope="module")
 def faithful(tmp_path_factory):
     folder = tmp_path_factory.mktemp("pairs_cmd")
-    return save_mujoco_import(ROBOTS / "ur5_like.urdf", folder / "ur5_mujoco.xml").path
+    return save_mujoco_import(ROBOTS / "ur5_like.urdf", folder / "ur5_mujoco.xml", keep_frames=True).path
 
 
 @pytest.fixture(scope="module")

@@ -47,6 +47,11 @@ def _self_comparison(path, folder):
     return status, compare_descriptions_of(path, out)
 
 
+def _beyond_frames(c) -> list:
+    """The differences besides the massless frames MuJoCo's import fuses by design (``frame_missing``, explained)."""
+    return [d for d in c.differences if d.kind != "frame_missing"]
+
+
 def test_every_robot_against_mujocos_import_of_itself(tmp_path, capsys):
     files = sorted([*ROOT.rglob("*.urdf"), *ROOT.rglob("*.xacro")])
     rows, compared = [], {}
@@ -62,14 +67,15 @@ def test_every_robot_against_mujocos_import_of_itself(tmp_path, capsys):
             unexplained = [d.label() for d in c.differences if not d.explanation]
             assert not unexplained, f"{rel} ({status}): differences nobody explained: {unexplained}"
             rows.append((rel, status, f"{len(c.differences)} difference(s), all explained" if c.differences else "clean"))
-            if status == "as written" and not c.differences:
+            if status == "as written" and not _beyond_frames(c):
                 # MuJoCo's 6 written digits: A and G agree to rounding (relative, the largest entry)
                 assert c.effects["mapped"]["A"]["max_rel_difference"] < 1e-5, rel
                 assert c.effects["mapped"]["G"]["max_rel_difference"] < 1e-5, rel
             assert c.mapping.mapped_fraction == 1.0, rel
-    clean = sum(not c.differences for _s, c in compared.values())
+    clean = sum(not _beyond_frames(c) for _s, c in compared.values())
+    frames = sum(d.kind == "frame_missing" for _s, c in compared.values() for d in c.differences)
     with capsys.disabled():
-        print(f"\n{len(files)} files, {len(compared)} compared ({clean} clean), "
+        print(f"\n{len(files)} files, {len(compared)} compared ({clean} clean but for {frames} frames MuJoCo fused), "
               f"{sum(s == 'balanced' for s, _ in compared.values())} needed MuJoCo's balancing")
         for r in rows:
             print("  " + " | ".join(r))

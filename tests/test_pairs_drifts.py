@@ -63,7 +63,8 @@ def test_a_floating_robots_rotated_twin_lists_only_root_pose(folder):
 
 def test_a_fixed_arms_mount_is_one_difference_that_explains_G(folder):
     urdf = shipped_robots_dir() / "ur5_like.urdf"
-    mjcf = save_mujoco_import(urdf, folder / "ur5_mounted.xml", keep_geometry=False, root_pose=(POS, QUAT)).path
+    mjcf = save_mujoco_import(urdf, folder / "ur5_mounted.xml", keep_geometry=False, root_pose=(POS, QUAT),
+                              keep_frames=True).path
     c = _compare(urdf, mjcf)
     assert [d.kind for d in c.differences] == ["root_pose"]
     assert all(m.sign == 1 for m in c.mapping.matches)
@@ -79,7 +80,7 @@ def test_a_fixed_arms_mount_is_one_difference_that_explains_G(folder):
 @pytest.fixture(scope="module")
 def arm(folder):
     urdf = shipped_robots_dir() / "ur5_like.urdf"
-    return urdf, save_mujoco_import(urdf, folder / "arm.xml", keep_geometry=False).path
+    return urdf, save_mujoco_import(urdf, folder / "arm.xml", keep_geometry=False, keep_frames=True).path
 
 
 def _planted(arm, folder, name, edit):
@@ -154,3 +155,117 @@ def test_a_joints_effort(arm, folder):
     assert [(d.kind, d.urdf) for d in c.differences] == [("effort", "elbow_joint")]
     assert c.differences[0].difference == pytest.approx(50 / 150)
     assert c.summary()["description_counts"]["non_dynamic"] == {"count": 1, "kinds": ["effort"]}
+
+
+# -- effort and velocity from actuators, couplings, frames (issue 33, part II) ---------------------------------
+def _actuator(spec, joint, *, gear, **attrs):
+    a = spec.add_actuator(name=f"{joint}_act", target=joint, trntype=mujoco.mjtTrn.mjTRN_JOINT)
+    a.gear = [gear, 0, 0, 0, 0, 0]
+    for k, v in attrs.items():
+        setattr(a, k, v)
+    return a
+
+
+@pytest.mark.parametrize("how", ["ctrlrange", "forcerange"])
+def test_a_joints_effort_through_an_actuator(arm, folder, how):
+    """A motor of gear 50 and ctrlrange +-2, or of gear 2 and forcerange +-50: 100 N m at the elbow, under the
+    URDF's 150 (and the import's actuatorfrcrange 150, the smallest counts)."""
+    def edit(spec):
+        if how == "ctrlrange":
+            _actuator(spec, "elbow_joint", gear=50.0, ctrllimited=1, ctrlrange=[-2.0, 2.0])
+        else:
+            _actuator(spec, "elbow_joint", gear=2.0, forcelimited=1, forcerange=[-50.0, 50.0])
+    c = _planted(arm, folder, f"effort_{how}", edit)
+    assert [(d.kind, d.urdf) for d in c.differences] == [("effort", "elbow_joint")]
+    assert c.differences[0].difference == pytest.approx(50 / 150) and c.differences[0].mjcf_value == 100.0
+
+
+def test_a_joints_velocity(arm, folder):
+    """A velocity actuator (kv 20, gear 2, ctrlrange +-5: 2.5 rad/s) at the elbow against <limit velocity="3.15">;
+    the other joints' URDF speeds are then limited on one side only (the file states speeds, not theirs)."""
+    def edit(spec):
+        a = _actuator(spec, "elbow_joint", gear=2.0, ctrllimited=1, ctrlrange=[-5.0, 5.0])
+        a.set_to_velocity(kv=20.0)
+    c = _planted(arm, folder, "velocity", edit)
+    vel = {d.urdf: d for d in c.differences if d.kind == "velocity"}
+    assert {d.kind for d in c.differences} == {"velocity"} and len(vel) == 6
+    assert vel["elbow_joint"].difference == pytest.approx((3.15 - 2.5) / 3.15)
+    assert all(math.isinf(d.difference) for n, d in vel.items() if n != "elbow_joint")
+    assert c.summary()["description_counts"]["non_dynamic"]["kinds"] == ["velocity"]
+
+
+@pytest.fixture(scope="module")
+def mimic_arm(folder):
+    """ur5_like with wrist_3 mimicking wrist_2 (multiplier 2, offset 0.1), and MuJoCo's import of it."""
+    text = (shipped_robots_dir() / "ur5_like.urdf").read_text()
+    head, tail = text.split('<joint name="wrist_3_joint"', 1)
+    limit_end = tail.index("/>", tail.index("<limit")) + 2
+    tail = tail[:limit_end] + '\n    <mimic joint="wrist_2_joint" multiplier="2" offset="0.1"/>' + tail[limit_end:]
+    urdf = folder / "ur5_mimic.urdf"
+    urdf.write_text(head + '<joint name="wrist_3_joint"' + tail)
+    return urdf, save_mujoco_import(urdf, folder / "ur5_mimic.xml", keep_geometry=False, keep_frames=True).path
+
+
+def test_a_coupling(arm, mimic_arm, folder):
+    """MuJoCo's import turns <mimic> into a joint equality (no difference); its multiplier planted 1.5; a joint
+    equality the URDF does not have (1 row); a mimic the MJCF does not have. Coupling changes the motion."""
+    assert [d.kind for d in _compare(*mimic_arm).differences] == []
+
+    def edit(spec):
+        eq = next(iter(spec.equalities))
+        eq.data = np.r_[0.1, 1.5, np.zeros(eq.data.size - 2)]
+    c = _planted(mimic_arm, folder, "coupling", edit)
+    assert [(d.kind, d.urdf) for d in c.differences] == [("coupling", "wrist_3_joint")]
+    assert c.differences[0].difference == pytest.approx(0.5)
+    assert c.summary()["description_counts"]["dynamics"]["kinds"] == ["coupling"]
+    one = _compare(mimic_arm[0], arm[1])                         # the mimic's MJCF side dropped
+    assert [(d.kind, d.urdf, d.difference) for d in one.differences] == [("coupling", "wrist_3_joint", 1.0)]
+
+
+def test_a_frame_kept_moved_or_dropped(arm, folder):
+    """The tool0 frame: kept as a site (nothing), its site moved 1 cm (0.01 m), dropped as MuJoCo's import drops
+    it (1 frame, explained)."""
+    def edit(spec):
+        spec.site("tool0").pos = np.asarray(spec.site("tool0").pos) + [0.0, 0.01, 0.0]
+    c = _planted(arm, folder, "frame", edit)
+    assert [(d.kind, d.urdf) for d in c.differences] == [("frame_missing", "tool0_joint")]
+    assert c.differences[0].difference == pytest.approx(0.01, abs=1e-6) and c.differences[0].unit == "m"
+    assert c.summary()["description_counts"]["non_dynamic"] == {"count": 1, "kinds": ["frame_missing"]}
+    dropped = save_mujoco_import(arm[0], folder / "arm_dropped.xml", keep_geometry=False).path
+    d = _compare(arm[0], dropped).differences
+    assert [(x.kind, x.urdf, x.difference) for x in d] == [("frame_missing", "tool0_joint", 1.0)]
+    assert "fuses it" in d[0].explanation
+
+
+@pytest.fixture(scope="module")
+def meshed_arm(folder):
+    """ur5_like with the flange's cylinder as an STL mesh (visual and collision), its MuJoCo import, and the URDF
+    with the collision mesh written 10 times the visual (scale 10: the units mistake users hit)."""
+    import trimesh
+
+    trimesh.creation.cylinder(radius=0.045, height=0.06, sections=32).export(folder / "flange.stl")
+    text = (shipped_robots_dir() / "ur5_like.urdf").read_text()
+    old = '<geometry><cylinder radius="0.045" length="0.06"/></geometry>\n    </collision>'
+    assert text.count(old) == 1
+    mesh = '<geometry><mesh filename="flange.stl"{}/></geometry>'
+    visual = '    <visual>\n      <origin xyz="0 0.0523 0" rpy="-1.5707963267948966 0 0"/>\n      {}\n    </visual>'
+    urdfs = {}
+    for label, scale in (("right", ""), ("tenfold", ' scale="10 10 10"')):
+        urdfs[label] = folder / f"ur5_mesh_{label}.urdf"
+        urdfs[label].write_text(text.replace(old, mesh.format(scale) + "\n    </collision>\n"
+                                             + visual.format(mesh.format(""))))
+    return urdfs, save_mujoco_import(urdfs["right"], folder / "ur5_mesh.xml", keep_frames=True).path
+
+
+def test_a_collision_mesh_ten_times_the_visual(meshed_arm):
+    """The collision mesh at scale 10 against MuJoCo's import of the right one: one collision difference at the
+    flange, volume x1000 (relative 0.999), its box 10 times larger; the import itself agrees (the visual geoms,
+    contype 0, are not collision geometry)."""
+    urdfs, mjcf = meshed_arm
+    assert _compare(urdfs["right"], mjcf).differences == []
+    c = _compare(urdfs["tenfold"], mjcf)
+    assert [(d.kind, d.urdf) for d in c.differences] == [("collision", "wrist_3_link")]
+    d = c.differences[0]
+    assert d.urdf_value[0] == pytest.approx(1000 * d.mjcf_value[0], rel=1e-4)     # the rounding level (MuJoCo's import: 2.3e-8 on solo12's meshes)
+    assert d.difference == pytest.approx(0.999, abs=1e-4)
+    assert c.summary()["description_counts"]["non_dynamic"] == {"count": 1, "kinds": ["collision"]}

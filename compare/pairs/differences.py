@@ -15,7 +15,12 @@ to the file it came from, unless it merged them wrongly. Compared, for each matc
   both sides have (metres, or radians when it turned more than it moved), so that a moved joint origin is
   named at that joint, and a fixed joint's lost ``rpy`` at that fixed joint (or, where the other side
   merged its child, at the next joint, ``through`` it);
-- ``joint_missing`` and ``link_missing``: what one side has and the other does not.
+- ``joint_missing`` and ``link_missing``: what one side has and the other does not;
+- ``effort`` and ``velocity``: the largest joint force and speed each file states (``parts._actuator_limits``);
+- ``frame_missing``: a massless welded frame the other side keeps neither as a body nor as a site
+  (:mod:`~urdf2links.compare.pairs.frames`). ``coupling`` (:mod:`~urdf2links.compare.pairs.couplings`),
+  ``constraint`` and ``collision`` (:mod:`~urdf2links.compare.pairs.collisions`) are read from the files
+  by :func:`~urdf2links.compare.pairs.pair.compare_descriptions_of`.
 
 Each :class:`Difference` carries how to undo it in the second description (copy the first
 description's value in), which :mod:`urdf2links.compare.pairs.effects` uses to say what it does to
@@ -44,7 +49,11 @@ __all__ = ["Difference", "Side", "side_model", "compare_descriptions", "ROUNDING
 ROUNDING = {"mass": 1e-5, "com": 1e-5, "inertia": 1e-5, "axis": 1e-5, "origin": 1e-5, "armature": 1e-9,
             "damping": 1e-9, "stiffness": 1e-9, "limits": 1e-5, "type": 0.0, "joint_missing": 0.0,
             "link_missing": 0.0, "constraint": 0.0,        # constraint: a loop closed on one side (issue 36)
-            "root_pose": 1e-5, "friction": 1e-9, "effort": 1e-5}
+            "root_pose": 1e-5, "friction": 1e-9, "effort": 1e-5, "velocity": 1e-5,
+            "coupling": 1e-5,          # a URDF <mimic> against an MJCF joint equality (couplings.py)
+            "frame_missing": 1e-5,     # a massless welded frame the other side dropped (frames.py)
+            "collision": 1e-4}         # relative (collisions.py); MuJoCo's import measured 2.1e-6 (ur5_like's 6
+#                                   written digits), 2.3e-8 (solo12's meshes, float32 vertices)
 KINDS = tuple(ROUNDING)
 
 
@@ -230,6 +239,7 @@ class _Comparer:
             if len(JOINT_KINDS[a.kind]) == 1:
                 self._limits(a, b, mt, links)
                 self._effort(a, b, links)
+                self._velocity(a, b, links)
             unit = {"hinge": ("N m s/rad", "N m/rad", "kg m^2", "N m"), "slide": ("N s/m", "N/m", "kg", "N")}.get(
                 a.kind, ("", "", "", ""))
             for kind, attr, u in (("damping", "damping", unit[0]), ("stiffness", "stiffness", unit[1]),
@@ -279,8 +289,9 @@ class _Comparer:
                             what, links))
 
     def _effort(self, a, b, links):
-        """The largest joint force: URDF ``<limit effort>`` against MJCF ``actuatorfrcrange`` (relative; inf when
-        one side only)."""
+        """The largest joint force: URDF ``<limit effort>`` against what the MJCF states (``actuatorfrcrange``,
+        an actuator's ``forcerange`` times its gear, a motor's ``ctrlrange`` times its gear: the smallest;
+        ``parts._actuator_limits``), relative; inf when one side only."""
         if a.effort is None and b.effort is None:
             return
         u = "N m" if a.kind == "hinge" else "N"
@@ -288,8 +299,27 @@ class _Comparer:
             d, what = math.inf, f"joint force limited on one side only: {a.effort} against {b.effort} {u}"
         else:
             d = abs(a.effort - b.effort) / max(a.effort, b.effort, 1e-300)
-            what = f"effort {a.effort:.6g} {u} against actuatorfrcrange +-{b.effort:.6g} {u}"
+            what = f"effort {a.effort:.6g} {u} against +-{b.effort:.6g} {u} (actuatorfrcrange, forcerange, ctrlrange)"
         self.add(Difference("effort", a.name, b.name, a.effort, b.effort, d, "relative", what, links))
+
+    def _velocity(self, a, b, links):
+        """The largest joint speed: URDF ``<limit velocity>`` against an MJCF velocity actuator's ``ctrlrange`` over
+        its gear (relative). One side only is inf when the side without states speeds elsewhere (a URDF, or an
+        MJCF with a velocity actuator on some joint); an MJCF without any velocity actuator cannot state one,
+        and that is counted, not listed (MuJoCo's import keeps no speed limit)."""
+        if a.velocity is None and b.velocity is None:
+            return
+        u = "rad/s" if a.kind == "hinge" else "m/s"
+        if a.velocity is None or b.velocity is None:
+            mute = [p for p, v in ((self.U, a.velocity), (self.M, b.velocity)) if v is None][0]
+            if mute.format == "mjcf" and not mute.velocity_actuators:
+                self.below["velocity"] += 1
+                return
+            d, what = math.inf, f"joint speed limited on one side only: {a.velocity} against {b.velocity} {u}"
+        else:
+            d = abs(a.velocity - b.velocity) / max(a.velocity, b.velocity, 1e-300)
+            what = f"velocity {a.velocity:.6g} {u} against a velocity actuator's ctrlrange +-{b.velocity:.6g} {u}"
+        self.add(Difference("velocity", a.name, b.name, a.velocity, b.velocity, d, "relative", what, links))
 
     # parts: mass, COM, inertia -----------------------------------------------------------------------
     def parts(self):
@@ -488,4 +518,9 @@ def compare_descriptions(U: RobotParts, M: RobotParts, mapping: JointMapping) ->
     c.parts()
     c.origins()
     c.missing()
+    from .frames import frame_differences     # frames.py imports this module's Difference
+
+    frames, kept = frame_differences(U, M, c.WU, c.WM)
+    c.out += frames
+    c.below["frame_missing"] += kept
     return c.out, c.below

@@ -12,7 +12,9 @@ pair (it says what MuJoCo does, not that MuJoCo did it):
 - a body with zero mass but a rotational inertia, welded to its parent: MuJoCo's ``fusestatic`` merges
   masses and drops that inertia, which the project's folding keeps;
 - a URDF ``<limit lower="0" upper="0">``: MuJoCo's import leaves the joint unlimited;
-- armature where a URDF has none: a URDF cannot say it (an expected, deliberate difference).
+- armature where a URDF has none: a URDF cannot say it (an expected, deliberate difference);
+- a massless URDF link on a fixed joint missing on the other side: MuJoCo's import fuses it (``fusestatic``) and
+  keeps no frame of it.
 """
 
 from __future__ import annotations
@@ -86,6 +88,10 @@ def explain(diffs: list[Difference], U: RobotParts, M: RobotParts | None = None)
         elif d.kind == "armature" and U.format == "urdf" and float(d.urdf_value or 0.0) == 0.0:
             d.explanation = ("a URDF has no armature: the motor's rotor inertia reflected through its gears, which an "
                              "MJCF adds to the joint (E49) and the URDF's own dynamics leave out")
+        elif d.kind == "frame_missing" and U.format == "urdf" and d.mjcf is None:
+            d.explanation = (f"{d.links[0]} is a massless link on a fixed joint: MuJoCo's URDF import fuses it "
+                             "(fusestatic) and keeps no frame of it; a site of its name keeps it "
+                             "(save_mujoco_import(keep_frames=True))")
         elif d.kind == "limits" and d.urdf in joints:
             j = joints[d.urdf][0]
             if j.lower is not None and j.lower == j.upper:

@@ -46,11 +46,18 @@ def _with_settings(text: str, extra: dict) -> str:
     return etree.tostring(root, encoding="unicode")
 
 
-def _placed(prepared: str, source: str, *, floating_base: bool, root_pose) -> tuple[mujoco.MjModel, str]:
+def _placed(prepared: str, source: str, *, floating_base: bool, root_pose,
+            keep_frames: bool = False) -> tuple[mujoco.MjModel, str]:
     """MuJoCo's import through ``MjSpec`` with the top-level bodies placed: a free joint added to the one root
     body (``floating_base``), and ``root_pose`` ``(pos (3,), quat (4,) w x y z)`` composed onto every top-level
-    body's pose (a mount, or a floating root's initial pose). The compiled model and the written MJCF."""
+    body's pose (a mount, or a floating root's initial pose); with ``keep_frames`` a site named as each massless
+    welded body (a URDF frame link that ``fusestatic`` fuses: the site moves with the fusion and keeps the frame).
+    The compiled model and the written MJCF."""
     spec = mujoco.MjSpec.from_string(prepared)
+    if keep_frames:
+        for b in list(spec.bodies):
+            if b.parent is not None and not b.joints and b.mass == 0 and not b.explicitinertial:
+                b.add_site(name=b.name)
     tops = list(spec.worldbody.bodies)
     if floating_base:
         if len(tops) != 1:
@@ -71,7 +78,8 @@ def _placed(prepared: str, source: str, *, floating_base: bool, root_pose) -> tu
 
 
 def save_mujoco_import(urdf, out_path, *, fusestatic: bool = True, keep_geometry: bool = True,
-                       balance: bool = False, floating_base: bool = False, root_pose=None) -> ImportResult:
+                       balance: bool = False, floating_base: bool = False, root_pose=None,
+                       keep_frames: bool = False) -> ImportResult:
     """MuJoCo's import of ``urdf`` written to ``out_path`` as MJCF (module doc). ``keep_geometry``: keep
     the ``<visual>``/``<collision>`` geometry (meshes must then resolve from the file's folder);
     ``balance``: let MuJoCo's compiler repair inertias it would refuse; ``floating_base``: a free joint on
@@ -92,8 +100,9 @@ def save_mujoco_import(urdf, out_path, *, fusestatic: bool = True, keep_geometry
     out.parent.mkdir(parents=True, exist_ok=True)
     try:
         with _mujoco_warnings(notes):
-            if floating_base or root_pose is not None:
-                m, xml = _placed(prepared, source, floating_base=floating_base, root_pose=root_pose)
+            if floating_base or root_pose is not None or keep_frames:
+                m, xml = _placed(prepared, source, floating_base=floating_base, root_pose=root_pose,
+                                 keep_frames=keep_frames)
                 out.write_text(xml)
             else:
                 m = mujoco.MjModel.from_xml_string(prepared)

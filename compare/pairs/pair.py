@@ -24,17 +24,20 @@ from urdf2links.console import shown_path
 from urdf2links.parsers.parts import RobotParts, robot_parts
 
 from .constraints import constraint_differences
+from .collisions import collision_differences
+from .couplings import coupling_differences
 from .differences import KINDS, ROUNDING, Difference, compare_descriptions
 from .effects import evaluate_effects, order_differences
 from .explanations import explain
 from .mapping import JointMapping, map_joints
+from .roots import match_bodies
 
 __all__ = ["PairComparison", "compare_descriptions_of", "TERM_KEYS", "check_tolerances", "exceedances", "DYNAMIC_KINDS"]
 
-#: The kinds that change the dynamics (A, G, the joint forces); the others (limits, frames) do not, and
-#: ``root_pose`` is counted apart.
+#: The kinds that change the dynamics (A, G, the joint forces); the others (limits, effort, velocity, frames,
+#: collision geometry) do not, and ``root_pose`` is counted apart.
 DYNAMIC_KINDS = ("mass", "com", "inertia", "origin", "axis", "armature", "damping", "stiffness", "friction", "type",
-                 "joint_missing", "link_missing", "constraint")
+                 "joint_missing", "link_missing", "constraint", "coupling")
 
 #: Tolerances a pair may give besides the kinds: the relative differences of ``A`` and ``G`` (mapped).
 TERM_KEYS = ("A", "G")
@@ -157,7 +160,11 @@ def compare_descriptions_of(urdf, mjcf, *, explicit_map: dict | None = None, loa
     M = robot_parts(mjcf, **{k: v for k, v in load.items() if k != "floating_base"})
     mapping = map_joints(U, M, explicit=explicit_map)
     diffs, below = compare_descriptions(U, M, mapping)
+    bodies = match_bodies(U, M, [(m.urdf, m.mjcf) for m in mapping.matches])
+    collisions, below["collision"] = collision_differences(U, M, bodies, load=load)
+    diffs += collisions
     diffs += constraint_differences(urdf, mjcf)      # issue 36: loops closed on one side only
+    diffs += coupling_differences(urdf, mjcf, mapping, load=load)
     explain(diffs, U, M)
     effects = evaluate_effects(U, M, mapping, diffs, states=states, seed=seed)
     ordered = order_differences(diffs, effects)

@@ -89,7 +89,7 @@ def _verdict(s: dict, failures) -> str:
     if n:
         head += (f"<br><b>{n['dynamics']['count']}</b> change the dynamics (A {fmt(n['dynamics']['effect']['A'])}, "
                  f"G {fmt(n['dynamics']['effect']['G'])} relative); <b>{n['non_dynamic']['count']}</b> do not "
-                 f"(limits, frames); root pose: <b>{n['root_pose']['count']}</b>"
+                 f"({_E(', '.join(n['non_dynamic']['kinds']) or 'limits, frames, collision geometry')}); root pose: <b>{n['root_pose']['count']}</b>"
                  + (" (a floating root's pose at home: a state)" if n['root_pose']['floating'] and
                     n['root_pose']['count'] else "") + ".")
     cls = "box" if not diffs else ("box bad" if failures else "box warn")

@@ -59,7 +59,9 @@ class JointPart:
     """One joint as the file says it (module doc): ``kind`` (:data:`JOINT_KINDS`), unit ``axis`` (3,)
     and ``anchor`` (3,) in the body frame, ``home`` the coordinates' values at the home pose (MJCF
     ``ref``; a free joint's pose), limits (None: unlimited), ``damping``, ``stiffness`` at
-    ``springref``, ``armature`` (E49), ``friction``; ``source_type`` the file's own word for it."""
+    ``springref``, ``armature`` (E49), ``friction``; ``source_type`` the file's own word for it; ``effort`` and
+    ``velocity`` the largest joint force and speed the file states (URDF ``<limit>``; MJCF: module doc of
+    :func:`_actuator_limits`), None when it states none."""
 
     name: str
     kind: str
@@ -76,6 +78,7 @@ class JointPart:
     source_type: str = ""
     written_axis: np.ndarray | None = None
     effort: float | None = None
+    velocity: float | None = None
 
     @property
     def built_axis(self) -> np.ndarray:
@@ -114,7 +117,8 @@ class RobotParts:
     """A description's bodies in tree order (parents first); ``format`` ``"urdf"`` or ``"mjcf"``;
     ``gravity`` (3,) the file's (MJCF ``<option gravity>``; the default for a URDF); ``notes``; ``compiler``:
     the attributes of an MJCF file's top-level ``<compiler>`` (how MuJoCo treats its inertias: ``boundmass``,
-    ``balanceinertia``, ...)."""
+    ``balanceinertia``, ...); ``sites``: an MJCF file's sites as ``(name, body, pose (4, 4) in the body's frame)``;
+    ``velocity_actuators``: the MJCF file states a joint speed through a velocity actuator somewhere."""
 
     name: str
     source: str
@@ -123,6 +127,8 @@ class RobotParts:
     gravity: np.ndarray = field(default_factory=lambda: np.array(DEFAULT_GRAVITY))
     notes: tuple[str, ...] = ()
     compiler: dict = field(default_factory=dict)
+    sites: tuple = ()
+    velocity_actuators: bool = False
 
     def body(self, name: str) -> BodyPart:
         for b in self.bodies:
@@ -188,6 +194,7 @@ def _urdf_parts(path, *, floating_base, package_dirs, strict, xacro_args) -> Rob
         jp = JointPart(j.name, kind, axis=u, home=(0.0,) * len(JOINT_KINDS[kind]), lower=lo, upper=hi,
                        damping=float(j.damping or 0.0), friction=float(j.friction or 0.0), source_type=j.type,
                        effort=float(j.limit_effort) if j.limit_effort else None,
+                       velocity=float(j.limit_velocity) if j.limit_velocity else None,
                        written_axis=None if kind in ("ball", "free") else np.asarray(j.axis, float))
         bodies.append(BodyPart(name, j.parent, pose, H, (jp,)))
     return RobotParts(desc.name, str(desc.source), "urdf", tuple(bodies), notes=tuple(desc.notes))
@@ -198,6 +205,7 @@ def _mjcf_parts(path) -> RobotParts:
 
     notes: list[str] = []
     m, where = compile_mjcf(str(path), notes)
+    effort, speed = _actuator_limits(m)
 
     def name(obj, i, fallback):
         return mujoco.mj_id2name(m, getattr(mujoco.mjtObj, obj), i) or fallback
@@ -227,15 +235,50 @@ def _mjcf_parts(path) -> RobotParts:
                 damping=float(m.dof_damping[da]), stiffness=float(m.jnt_stiffness[j]),
                 springref=float(m.qpos_spring[qa]) if kind in ("hinge", "slide") else 0.0,
                 armature=float(m.dof_armature[da]), friction=float(m.dof_frictionloss[da]), source_type=kind,
-                effort=float(np.max(np.abs(m.jnt_actfrcrange[j]))) if m.jnt_actfrclimited[j] else None))
+                effort=effort.get(j), velocity=speed.get(j)))
         bodies.append(BodyPart(bname, None if parent == 0 else name("mjOBJ_BODY", parent, f"body{parent}"), pose, H,
                                tuple(joints)))
     g = np.array(m.opt.gravity, float)
     if int(m.opt.disableflags) & int(mujoco.mjtDisableBit.mjDSBL_GRAVITY):
         g = np.zeros(3)
     model_name = name("mjOBJ_MODEL", 0, "") or (Path(where).stem if where != "<string>" else "mjcf")
+    sites = tuple((name("mjOBJ_SITE", s, f"site{s}"), name("mjOBJ_BODY", int(m.site_bodyid[s]), "world"),
+                   homogeneous(quat_to_matrix(m.site_quat[s]), np.asarray(m.site_pos[s], float))) for s in range(m.nsite))
     return RobotParts(model_name, where, "mjcf", tuple(bodies), gravity=g, notes=tuple(notes),
-                      compiler=_compiler_settings(path))
+                      compiler=_compiler_settings(path), sites=sites, velocity_actuators=bool(speed))
+
+
+def _actuator_limits(m) -> tuple[dict, dict]:
+    """``({joint id: largest force}, {joint id: largest speed})`` an MJCF model states. The force: the smallest
+    of the joint's ``actuatorfrcrange``, and for each actuator on the joint alone (transmission ``joint``, gear
+    ``g``) ``|g| forcerange`` and, for a motor (force = ctrl: gain 1, no bias), ``|g| ctrlrange``; the largest
+    absolute end of each range. The speed: a velocity actuator's (bias ``-kv qdot``) ``ctrlrange`` over ``|g|``
+    (its control is the transmission's speed ``g qdot``)."""
+    import mujoco
+
+    force, speed = {}, {}
+    for j in range(m.njnt):
+        if m.jnt_actfrclimited[j]:
+            force[j] = float(np.max(np.abs(m.jnt_actfrcrange[j])))
+    for k in range(m.nu):
+        if int(m.actuator_trntype[k]) != int(mujoco.mjtTrn.mjTRN_JOINT):
+            continue
+        j, g = int(m.actuator_trnid[k, 0]), abs(float(m.actuator_gear[k, 0]))
+        if g == 0.0:
+            continue
+        bias, gain = np.asarray(m.actuator_biasprm[k], float), np.asarray(m.actuator_gainprm[k], float)
+        ends = []
+        if m.actuator_forcelimited[k]:
+            ends.append(g * float(np.max(np.abs(m.actuator_forcerange[k]))))
+        motor = int(m.actuator_biastype[k]) == 0 and gain[0] == 1.0 and int(m.actuator_dyntype[k]) == 0
+        if motor and m.actuator_ctrllimited[k]:
+            ends.append(g * float(np.max(np.abs(m.actuator_ctrlrange[k]))))
+        if ends:
+            force[j] = min([force.get(j, np.inf), *ends])
+        velocity = int(m.actuator_biastype[k]) == 1 and bias[2] != 0.0 and bias[1] == 0.0 and gain[0] == -bias[2]
+        if velocity and m.actuator_ctrllimited[k]:
+            speed[j] = float(np.max(np.abs(m.actuator_ctrlrange[k]))) / g
+    return force, speed
 
 
 def _compiler_settings(path) -> dict:
