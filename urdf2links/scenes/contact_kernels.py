@@ -27,17 +27,11 @@ from ..dynamics.kernels import add_wrench
 from ..dynamics.tree_arrays import KL, O_, W_LINK, WV, nn
 from .scene_arrays import S_CONTACT_DATA, S_CONTACT_LINK, S_NCONTACT
 
-__all__ = ["contact_wrenches", "contact_potential", "contact_state", "has_wrenches", "sphere_contact", "normal_force",
+__all__ = ["contact_wrenches", "contact_potential", "contact_state", "sphere_contact", "normal_force",
            "NSTATE"]
 
 KC = 14         # floats per sphere (urdf2links.scenes.contact.KC)
 NSTATE = 10     # contact_state's columns: point (3), depth, depth rate, f_n, slip speed, F (3)
-
-
-@njit(cache=True)
-def has_wrenches(SI):
-    """Whether the scene adds wrenches to links: loads (``[[force]]``, ``[[moment]]``, gravcomp) or contact."""
-    return SI[5] > 0 or SI[S_NCONTACT] > 0
 
 
 @njit(cache=True, inline="always")
