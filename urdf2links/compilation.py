@@ -28,7 +28,7 @@ import threading
 import time
 
 __all__ = ["clock", "ensure", "seconds", "functions", "per_function", "summary", "show_progress", "watch", "WHAT",
-           "one_signature"]
+           "one_signature", "c_function"]
 
 #: How the command line names what is compiled.
 WHAT = "compiling the solver for this machine, first run only"
@@ -62,11 +62,16 @@ class _Tracker:
                 self.ticker = threading.Thread(target=self._tick, name="urdf2links-compiling", daemon=True)
                 self.ticker.start()
 
-    def end(self):
+    def end(self, compiled: str | None = None):
+        """Close the innermost compilation; ``compiled`` names an unnamed one (:func:`c_function`) when
+        it compiled something rather than loading it from the cache."""
         with self.lock:
             self.depth -= 1
             if self.stack:
                 name, start, nested = self.stack.pop()
+                if name is None and compiled:
+                    name = compiled
+                    self.names.append(name)
                 took = time.perf_counter() - start
                 if self.stack:
                     self.stack[-1][2] += took
@@ -169,6 +174,26 @@ def ensure(dispatcher, args) -> None:
         dispatcher.compile(sig)
     finally:
         _T.end()
+
+
+def c_function(pyfunc, signature):
+    """``pyfunc`` compiled (or loaded from the disk cache) as a C function of ``signature`` (numba's
+    ``cfunc``): a first-class function whose type is its signature alone, so that a compiled function
+    it is passed to is compiled once for every such function (the scene's right-hand side of each
+    combination of effects, :func:`urdf2links.scenes.scene_kernels.rhs_function`). numba raises no
+    compile event for a ``cfunc``: its time counts as compilation here, and it is named among the
+    compiled functions when it was not in the cache."""
+    from numba import cfunc
+
+    watch()
+    name = f"{pyfunc.__module__}.{pyfunc.__qualname__}"
+    _T.begin()
+    compiled = None
+    try:
+        compiled = cfunc(signature, cache=True)(pyfunc)
+    finally:
+        _T.end(compiled=name if compiled is not None and not compiled.cache_hits else None)
+    return compiled
 
 
 def per_function() -> dict:

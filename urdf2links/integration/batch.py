@@ -61,12 +61,12 @@ class BatchResult:
 
 
 @njit(cache=True, parallel=True)
-def _sweep_erk(tab, samples, rtol, atol, max_step, Y0, out, nfev, status, I, F, W, SI, SF, X, FX):
+def _sweep_erk(tab, samples, rtol, atol, max_step, Y0, out, nfev, status, I, F, W, SI, SF, X, fn):
     """Each trajectory ``b`` from ``Y0[b]``; states at ``samples`` into ``out[b]`` (m, d)."""
     nb, d = Y0.shape
     m = samples.size
     for b in prange(nb):
-        args = (I, F, W[b], SI, SF, X[b], FX)
+        args = (I, F, W[b], SI, SF, X[b], fn)
         cnt = np.zeros(4, np.int64)
         counters = (cnt, np.zeros(d + 1))
         y = Y0[b].copy()
@@ -193,9 +193,9 @@ def simulate_batch(scene, q0, qd0=None, *, t_end: float | None = None, samples: 
     with record_compilation() as comp:    # one state over a few steps: compiles (or loads) what the sweep calls
         _sweep_erk(tab, ts[:2] * min(1.0, 1e-3 / max(ts[1], 1e-300)), tol_r, tol_a, np.inf, Y0[:1].copy(),
                    np.empty((1, 2, d)), np.zeros(1, np.int64), np.zeros(1, np.int64), rhs.I, rhs.F, W[:1].copy(),
-                   rhs.SI, rhs.SF, X[:1].copy(), rhs.FX)
+                   rhs.SI, rhs.SF, X[:1].copy(), rhs.function)
     start = compilation.clock()
-    _sweep_erk(tab, ts, tol_r, tol_a, np.inf, Y0, out, nfev, status, rhs.I, rhs.F, W, rhs.SI, rhs.SF, X, rhs.FX)
+    _sweep_erk(tab, ts, tol_r, tol_a, np.inf, Y0, out, nfev, status, rhs.I, rhs.F, W, rhs.SI, rhs.SF, X, rhs.function)
     wall = compilation.clock() - start
     return BatchResult(t=ts, q=out[:, :, :n], qd=out[:, :, n:2 * n], work=out[:, :, 2 * n], nfev=nfev,
                        status=status, wall_time=wall, method=method, coordinate_names=model.coordinate_names,

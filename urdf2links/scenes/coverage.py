@@ -114,7 +114,9 @@ def coverage(q, qd, *, model=None, names=None, threshold: float = MOVED) -> Cove
     swing, kmax = None, None
     if model is not None and n:
         pick = np.unique(np.linspace(0, len(q) - 1, min(len(q), MAX_ENERGY_STATES)).round().astype(int))
-        A = model.mass_matrix(q[pick])
+        # one state per call: the batch call's parallel kernel would be compiled for this alone (seconds of
+        # a first report, issue 32), and each state's A is the same to the bit (Model's batch contract)
+        A = np.array([model.mass_matrix(row) for row in q[pick]])
         share = 0.5 * qd[pick] * np.einsum("bij,bj->bi", A, qd[pick])
         swing = share.max(axis=0) - share.min(axis=0)
         kmax = float(share.sum(axis=1).max())

@@ -11,18 +11,24 @@ dense Cholesky of ``C^T A C`` (E46).
 
 **Effects compiled only where a scene has them.** Some terms are large pieces of compiled code that
 most scenes never use: the computed torque (a second O(n) pass), the coupled coordinates' dense
-solve, the actuators and the loads (forces, moments, gravcomp). Each is an *effect*
-(:data:`EFFECTS`): the compiled scene passes one marker per effect in ``FX`` (its last argument), ``1``
-when the scene has it and ``None`` when not, and the code of an effect sits behind ``if marker is not
+solve, the actuators and the loads (forces, moments, gravcomp, contact). Each is an *effect*
+(:data:`EFFECTS`): :func:`_rhs` takes one marker per effect (``FX``, :func:`effects_of`), ``1`` when
+the scene has it and ``None`` when not, and the code of an effect sits behind ``if marker is not
 None:``. numba decides such a test when it compiles (the marker's type is ``none`` or ``int64``) and
 leaves the dead branch out, with every function only it calls: a pendulum's right-hand side never
-compiles the computed torque. Each combination of effects is its own compiled (and cached) variant of
-:func:`scene_rhs` and of the loops that call it.
+compiles the computed torque.
+
+**One compiled loop for every combination.** Each combination of effects is a compiled (and cached)
+variant of :func:`_rhs`, wrapped as a C function (:func:`rhs_function`, numba's ``cfunc``) whose type
+is its signature alone. The integration loops (:mod:`urdf2links.integration.loops`) get it as the last
+of the scene's ``args`` and call it through its address: they are compiled once, not once per
+combination of effects (a report's eleven scenes compiled DOP853's loop six times and Radau5's three
+times when the loops called :func:`_rhs` directly, each time with the whole right-hand side inlined).
+The indirect call costs nanoseconds against the microseconds of an evaluation (docs/speed.md).
 
 To add an effect (a constraint, a contact): its arrays and counts in
 :mod:`urdf2links.scenes.scene_arrays`; its kernel here; its name in :data:`EFFECTS` and its test in
-:func:`effects_of`; one marker argument more in :func:`_rhs` (unpacked from ``FX`` in
-:func:`scene_rhs`), and its call behind ``if marker is not None:`` where it acts (:func:`_rhs` for a
+:func:`effects_of`; one marker argument more in :func:`_rhs` and in :func:`_variant`, and its call behind ``if marker is not None:`` where it acts (:func:`_rhs` for a
 pass of its own, :func:`_applied` for a generalized force).
 """
 
@@ -73,7 +79,7 @@ from .scene_arrays import (
     scratch_size,
 )
 
-__all__ = ["CompiledScene", "scene_rhs", "scene_energies", "fn_eval", "fn_data_eval", "computed_torque", "ct_torque_at",
+__all__ = ["CompiledScene", "scene_rhs", "rhs_function", "rhs_signature", "scene_energies", "fn_eval", "fn_data_eval", "computed_torque", "ct_torque_at",
            "EFFECTS", "effects_of"]
 
 #: The effects compiled only into the scenes that have them (module doc), in the order of ``FX``.
@@ -364,16 +370,51 @@ def _coupled_solve(SI, SF, I, W, X, t, y, out, loads, actuators, ct):
     return pivot, P
 
 
-@one_signature
 @njit(cache=True)
-def scene_rhs(t, y, out, I, F, W, SI, SF, X, FX):
+def scene_rhs(t, y, out, I, F, W, SI, SF, X, rhs):
     """``out = (q', q'', P)`` (2n + 1,) at ``(t, y = (q, q', W))``; ``W`` the tree's scratch, ``X``
-    the scene's (:func:`~urdf2links.scenes.scene_arrays.scratch_size`), ``FX`` the markers of its
-    effects (:func:`effects_of`: only their code is compiled). Returns -1, or the index of the
-    failing pivot (then ``out`` is NaN). ``P`` is the power of the non-potential forces
-    ``q' . (Q + tau - c q' + actuators + computed torque)`` minus the explicit rate ``dE/dt - dV/dt`` of a
-    moving base (see :mod:`urdf2links.scenes.plan`)."""
-    return _rhs(t, y, out, I, F, W, SI, SF, X, FX[0], FX[1], FX[2], FX[3])
+    the scene's (:func:`~urdf2links.scenes.scene_arrays.scratch_size`), ``rhs`` the compiled
+    right-hand side of the scene's effects (:func:`rhs_function`: only their code is compiled).
+    Returns -1, or the index of the failing pivot (then ``out`` is NaN). ``P`` is the power of the
+    non-potential forces ``q' . (Q + tau - c q' + actuators + computed torque)`` minus the explicit
+    rate ``dE/dt - dV/dt`` of a moving base (see :mod:`urdf2links.scenes.plan`). Compiled once: ``rhs``
+    is a C function, typed by its signature alone (module doc)."""
+    return rhs(t, y, out, I, F, W, SI, SF, X)
+
+
+def _variant(loads, actuators, ct, coupled):
+    """The right-hand side of one combination of effects: :func:`_rhs` with its markers fixed (numba
+    takes a closure's variables for constants, and caches each combination apart)."""
+
+    def scene_rhs_of_effects(t, y, out, I, F, W, SI, SF, X):
+        return _rhs(t, y, out, I, F, W, SI, SF, X, loads, actuators, ct, coupled)
+
+    return scene_rhs_of_effects
+
+
+def rhs_signature():
+    """The C signature of every :func:`rhs_function`: ``int64(t, y, out, I, F, W, SI, SF, X)``, each
+    array one-dimensional and contiguous (``I``, ``SI`` of int64, the others of float64)."""
+    from numba import types
+
+    f, i = types.float64[::1], types.int64[::1]
+    return types.int64(types.float64, f, f, i, f, f, i, f, f)
+
+
+_VARIANTS: dict = {}
+
+
+def rhs_function(FX):
+    """The compiled right-hand side of the effects ``FX`` (:func:`effects_of`), as a C function of
+    :func:`rhs_signature` (:func:`urdf2links.compilation.c_function`), compiled or loaded from the
+    cache at its first use in the process. The integration loops receive it as an argument (the
+    last of :attr:`CompiledScene.args`): they are compiled once, whatever the scene's effects."""
+    fn = _VARIANTS.get(FX)
+    if fn is None:
+        from ..compilation import c_function
+
+        fn = _VARIANTS[FX] = c_function(_variant(*FX), rhs_signature())
+    return fn
 
 
 @one_signature
@@ -486,26 +527,34 @@ class CompiledScene:
         self.X = np.zeros(scratch_size(model.n, model.tree.n))
         self.dim = 2 * model.n + 1
         self.FX = effects_of(self.SI)
+        self._function = None
+
+    @property
+    def function(self):
+        """The compiled right-hand side of this scene's effects (:func:`rhs_function`)."""
+        if self._function is None:
+            self._function = rhs_function(self.FX)
+        return self._function
 
     @property
     def args(self):
-        """``(I, F, W, SI, SF, X, FX)``: the arguments of :func:`scene_rhs` after the state."""
-        return (self.I, self.F, self.W, self.SI, self.SF, self.X, self.FX)
+        """``(I, F, W, SI, SF, X, rhs)``: the arguments of :func:`scene_rhs` after the state."""
+        return (self.I, self.F, self.W, self.SI, self.SF, self.X, self.function)
 
     def fresh_args(self):
         """Arguments with their own scratch (for another thread)."""
-        return (self.I, self.F, np.zeros_like(self.W), self.SI, self.SF, np.zeros_like(self.X), self.FX)
+        return (self.I, self.F, np.zeros_like(self.W), self.SI, self.SF, np.zeros_like(self.X), self.function)
 
     def prepare(self, t, y):
-        """Compile (or load from the cache) :func:`scene_rhs` for this scene's effects before a timed
-        run (:func:`urdf2links.compilation.ensure`)."""
+        """Compile (or load from the cache) this scene's right-hand side and :func:`scene_rhs` before a
+        timed run (:func:`urdf2links.compilation.ensure`)."""
         from .. import compilation
 
-        y = np.asarray(y, dtype=float)
+        y = np.ascontiguousarray(y, dtype=float)     # the C function takes contiguous arrays only
         compilation.ensure(scene_rhs, (float(t), y, np.empty(self.dim), *self.args))
 
     def __call__(self, t, y):
-        y = np.asarray(y, dtype=float)
+        y = np.ascontiguousarray(y, dtype=float)     # the C function takes contiguous arrays only
         out = np.empty(self.dim)
         pivot = scene_rhs(float(t), y, out, *self.args)
         if pivot >= 0:
@@ -517,7 +566,7 @@ class CompiledScene:
         n = self.plan.n
         if self.SI[S_CT] == 0:
             return np.zeros(n)
-        I, F, W, SI, SF, X, _ = self.fresh_args()
+        I, F, W, SI, SF, X = self.I, self.F, np.zeros_like(self.W), self.SI, self.SF, np.zeros_like(self.X)
         computed_torque(float(t), I, F, W, SI, SF, X)
         xt = ct_torque_at(n, int(SI[1]))
         return X[xt:xt + n].copy()
@@ -533,7 +582,7 @@ class CompiledScene:
     def check(self, t, y):
         """At a state where the compiled right-hand side failed: raise the model's named
         :class:`~urdf2links.errors.DynamicsError` when A is not positive definite there."""
-        y = np.asarray(y, float)
+        y = np.ascontiguousarray(y, dtype=float)
         if not np.all(np.isfinite(y)):
             return
         if scene_rhs(float(t), y, np.empty(self.dim), *self.fresh_args()) >= 0:

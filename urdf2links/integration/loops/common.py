@@ -1,8 +1,10 @@
 """What every integration loop shares: the evaluation of a compiled scene, norms, the angle guard.
 
 :func:`evaluate` is the one call into the compiled right-hand side
-(:func:`urdf2links.scenes.scene_kernels.scene_rhs`) that every compiled loop makes; it counts the call
-and keeps the state where it failed for the driver's error message.
+(the scene's :func:`urdf2links.scenes.scene_kernels.rhs_function`, the last of its ``args``) that every
+compiled loop makes; it counts the call and keeps the state where it failed for the driver's error
+message. The right-hand side is a C function typed by its signature alone, so every loop is compiled
+once, whatever effects the scene has.
 """
 
 from __future__ import annotations
@@ -11,8 +13,6 @@ import numpy as np
 from numba import njit
 
 from ...compilation import one_signature
-
-from ...scenes.scene_kernels import scene_rhs
 
 __all__ = ["AngleGuard", "evaluate", "rms", "finite", "guard_fires", "EPS"]
 
@@ -32,7 +32,7 @@ class AngleGuard:
         c = np.asarray(cos_min, dtype=float)
         if c.ndim > 1 or (c.ndim == 1 and c.size != self.indices.size) or not np.all((c > 0.0) & (c < 1.0)):
             raise ValueError(f"cos_min must be in (0, 1), one value or one per index, got {cos_min!r}")
-        self.thresholds = np.ascontiguousarray(np.broadcast_to(c, self.indices.shape), dtype=float)
+        self.thresholds = np.array(np.broadcast_to(c, self.indices.shape), dtype=float)   # writable: a read-only array is a type of its own to numba
 
     def __call__(self, t, y) -> bool:
         return bool(self.indices.size) and bool(np.any(np.abs(np.cos(y[self.indices])) < self.thresholds))
@@ -80,8 +80,8 @@ def evaluate(t, y, out, args, counters):
     failure the state goes to ``fail = [t, y]`` for the driver's error, and it returns False."""
     cnt, fail = counters
     cnt[0] += 1
-    I, F, W, SI, SF, X, FX = args
-    pivot = scene_rhs(t, y, out, I, F, W, SI, SF, X, FX)
+    I, F, W, SI, SF, X, rhs = args
+    pivot = rhs(t, y, out, I, F, W, SI, SF, X)
     if pivot < 0 and finite(out):
         return True
     fail[0] = t
