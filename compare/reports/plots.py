@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from ..figures import figure, png_base64
+from ..figures import figure, margins, png_base64
 
 __all__ = ["plot_coordinates", "plot_error", "plot_energy", "plot_terms", "plot_overview"]
 
@@ -45,6 +45,7 @@ def plot_coordinates(c) -> str:
     for ax in axes[-1]:
         ax.set_xlabel("t (s)")
     fig.suptitle("coordinates: urdf2links (solid) and MuJoCo (dashed) from the same initial state", fontsize=11)
+    margins(fig, top=0.75, wspace=1.0, hspace=0.3)     # top: the title, and an axes' offset text (1e-16) under it
     return png_base64(fig)
 
 
@@ -76,6 +77,8 @@ def plot_error(c, summary) -> str:
     ax.legend(loc="lower right", fontsize=8, ncol=2)
     ax.set_title("trajectory difference per coordinate" + (" (chaotic scene: growth is expected)" if c.scene.chaotic else ""),
                  fontsize=11)
+    _log_axis(ax)
+    margins(fig)
     return png_base64(fig)
 
 
@@ -115,6 +118,8 @@ def plot_energy(c, summary) -> str:
     ax.set_xlabel("t (s)")
     ax.grid(alpha=0.3, which="both")
     ax.legend(loc="lower right", fontsize=8)
+    _log_axis(ax)
+    margins(fig, hspace=0.3)
     return png_base64(fig)
 
 
