@@ -152,17 +152,20 @@ def plot_terms(summary) -> str:
     ax.set_xlabel(f"max relative error over {r1['states']} seeded states")
     ax.legend(loc="lower right", fontsize=8)
     ax.grid(alpha=0.3, axis="x", which="both")
+    _log_axis(ax, ax.xaxis, decades=7)
+    margins(fig, left=2.9, top=0.2)         # left: the bars' labels ("route 2 (repaired): e+G vs qfrc_bias")
     return png_base64(fig)
 
 
-def _log_axis(ax) -> None:
-    """A log y axis with a handful of labelled decades and no minor labels (drawing hundreds of tick
-    labels is what made a small figure cost seconds)."""
+def _log_axis(ax, axis=None, *, decades: int = 6) -> None:
+    """A log axis (default: y) with a handful of labelled decades and no minor labels (drawing hundreds
+    of tick labels is what made a small figure cost seconds)."""
     from matplotlib.ticker import LogLocator, NullFormatter
 
-    ax.yaxis.set_major_locator(LogLocator(numticks=6))
-    ax.yaxis.set_minor_locator(LogLocator(subs=(), numticks=6))
-    ax.yaxis.set_minor_formatter(NullFormatter())
+    axis = ax.yaxis if axis is None else axis
+    axis.set_major_locator(LogLocator(numticks=decades))
+    axis.set_minor_locator(LogLocator(subs=(), numticks=decades))
+    axis.set_minor_formatter(NullFormatter())
 
 
 def plot_overview(c, summary) -> str:
