@@ -321,8 +321,10 @@ class _Importer:
         """
         probe = Model(tree)
         rng = np.random.default_rng(0)
-        diag = np.maximum(np.abs(np.diag(probe.mass_matrix(np.zeros(tree.n)))),
-                          np.abs(np.diag(probe.mass_matrix(rng.uniform(-1, 1, tree.n)))))
+        # the numpy oracle: a few milliseconds for a humanoid, and loading a robot compiles nothing (the
+        # compiled form cost a first `simulate` a second of compilation for this check alone, issue 32)
+        diag = np.maximum(np.abs(np.diag(probe.mass_matrix(np.zeros(tree.n), method="numpy"))),
+                          np.abs(np.diag(probe.mass_matrix(rng.uniform(-1, 1, tree.n), method="numpy"))))
         scale = float(diag.max()) if diag.size else 0.0
         out = []
         mass_c = _subtree_mass(tree)

@@ -123,7 +123,14 @@ def fn_data_eval(kind, data, o, t, order):
         if order > 0:
             return 0.0
         t = x[0] if t < x[0] else x[m]
-    i = min(max(np.searchsorted(x, t, side="right") - 1, 0), m - 1)
+    lo, hi = 0, m + 1             # np.searchsorted(x, t, side="right"): how many breakpoints are <= t
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if x[mid] <= t:
+            lo = mid + 1
+        else:
+            hi = mid
+    i = min(max(lo - 1, 0), m - 1)    # (written out: numpy's generic searchsorted compiled for a second)
     s = t - x[i]
     out = 0.0
     for j in range(k + 1):       # c[j, i] (s)^(k - j)
