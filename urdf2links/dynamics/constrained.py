@@ -27,7 +27,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg as sla
 
 from ..errors import DynamicsError
 
@@ -54,6 +53,8 @@ def independent_rows(J: np.ndarray, rows) -> RowSelection:
     m = J.shape[0]
     if m == 0:
         return RowSelection(np.zeros(0, int), np.zeros(0, int), 0, ())
+    import scipy.linalg as sla      # here: 0.16 s of import that only constrained scenes need
+
     _, R, piv = sla.qr(J.T, mode="economic", pivoting=True)
     d = np.abs(np.diag(R))
     scale = d[0] if d.size else 0.0

@@ -28,7 +28,6 @@ from __future__ import annotations
 import time
 
 import numpy as np
-from scipy.integrate import DOP853
 
 from ..console import Progress
 from ..dynamics.constrained import independent_rows, kkt_solve, project_position, project_velocity
@@ -154,6 +153,8 @@ def simulate_constrained(plan, run, q, qd, *, progress=None, max_wall=None, max_
     t_eval = np.linspace(0.0, run.t_end, max(run.samples, 2))
     Y = np.empty((t_eval.size, 2 * n + 1))
     Y[0] = y
+    from scipy.integrate import DOP853      # here: scipy.integrate takes 0.6 s to import, and only this path needs it
+
     solver = DOP853(rhs, 0.0, y, run.t_end, rtol=run.rtol, atol=run.atol)
     bar = Progress(run.t_end, label=f"{plan.scene.name} DOP853+projection", enabled=progress)
     k, steps, drift = 1, 0, 0.0
