@@ -319,12 +319,14 @@ class _Importer:
         "~ 0" is ``A_ii <= 1e-10 max_k A_kk``: below that, the coordinate's acceleration carries a
         condition number above 1e10 (ten digits lost), which no real link should cause.
         """
-        probe = Model(tree)
-        rng = np.random.default_rng(0)
-        # the numpy oracle: a few milliseconds for a humanoid, and loading a robot compiles nothing (the
+        from ..dynamics.oracles.recursive import RecursivePlan, numpy_mass_matrix
+
+        # the numpy oracle's A: a few milliseconds for a humanoid, and loading a robot compiles nothing (the
         # compiled form cost a first `simulate` a second of compilation for this check alone, issue 32)
-        diag = np.maximum(np.abs(np.diag(probe.mass_matrix(np.zeros(tree.n), method="numpy"))),
-                          np.abs(np.diag(probe.mass_matrix(rng.uniform(-1, 1, tree.n), method="numpy"))))
+        probe = RecursivePlan(tree)
+        rng = np.random.default_rng(0)
+        diag = np.maximum(np.abs(np.diag(numpy_mass_matrix(probe, np.zeros(tree.n)))),
+                          np.abs(np.diag(numpy_mass_matrix(probe, rng.uniform(-1, 1, tree.n)))))
         scale = float(diag.max()) if diag.size else 0.0
         out = []
         mass_c = _subtree_mass(tree)

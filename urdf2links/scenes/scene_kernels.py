@@ -424,11 +424,13 @@ def rhs_function(FX):
     return fn
 
 
-@one_signature
-@njit(cache=True)
+@njit(inline="always")
 def _rhs(t, y, out, I, F, W, SI, SF, X, loads, actuators, ct, coupled):
     """:func:`scene_rhs` with the markers of :data:`EFFECTS` as arguments of their own (numba drops
-    the code behind ``if marker is not None`` when a marker is None: module doc)."""
+    the code behind ``if marker is not None`` when a marker is None: module doc). Inlined into each
+    :func:`_variant` (numba's ``inline="always"``, before typing: the markers are the closure's
+    constants there): compiled once per combination, inside its C function, not a second time on its
+    own (every compiled function generates the machine code of all it calls anew)."""
     n, nt = SI[0], SI[1]
     has_base = SI[2] != 0
     applied = SI[6] > 0 or SI[7] > 0 or SI[8] > 0 or loads is not None or actuators is not None or ct is not None

@@ -26,7 +26,7 @@ import numpy as np
 from ..transforms import GENERATORS, elementary
 from .armature import armature_terms
 
-__all__ = ["RecursivePlan", "Kinematics", "numpy_terms"]
+__all__ = ["RecursivePlan", "Kinematics", "numpy_terms", "numpy_mass_matrix"]
 
 _I4 = np.eye(4)
 
@@ -253,3 +253,14 @@ def numpy_terms(plan: RecursivePlan, q, qd, *, base_T=None, gravity_vector=(0.0,
         arm = armature_terms(plan.tree, q, qd)
         out["A"], out["e"], out["E"] = out["A"] + arm["A"], out["e"] + arm["e"], out["E"] + arm["E"]
     return out
+
+
+def numpy_mass_matrix(plan: RecursivePlan, q) -> np.ndarray:
+    """A (E19) alone, armature included (E49), at a tree configuration ``q``: what a check of A needs
+    (the importer's), without the other terms and without compiling anything."""
+    q = np.asarray(q, float)
+    kin = plan.kinematics(q)
+    A = plan.mass_matrix(kin, plan.composite_inertia(kin))
+    if plan.tree.has_armature:
+        A = A + armature_terms(plan.tree, q, np.zeros_like(q))["A"]
+    return A
