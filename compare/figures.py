@@ -40,7 +40,7 @@ def png_base64(fig) -> str:
     fig.savefig(buf, format="png", metadata={"Software": None})
     img = Image.open(io.BytesIO(buf.getvalue())).convert("RGB").quantize(colors=256, method=Image.Quantize.MEDIANCUT)
     small = io.BytesIO()
-    img.save(small, format="PNG", optimize=True)
+    img.save(small, format="PNG")     # optimize=True: 14 % smaller, 8x slower (0.13 s a figure, 6 s of a report)
     if small.tell() < buf.tell():
         buf = small
     return base64.b64encode(buf.getvalue()).decode("ascii")
