@@ -35,7 +35,8 @@ actuators on ball and free joints' ZYX angles (:func:`_ball_servos`).
 
 The callback finds its run through one process-wide header (:data:`HEADER`, int64 slots) whose
 address the compiled code takes from an external symbol registered with LLVM's linker, so the
-callback (:func:`callback_pointer`) is compiled once and then loaded from numba's disk cache like
+callback (:func:`callback_pointer`, one per combination of the effects it carries: only their code is
+compiled) is compiled once and then loaded from numba's disk cache like
 the project's kernels.
 One run is active at a time (MuJoCo's callback is process-global too); the callback leaves any
 other ``MjData`` alone. A failed Cholesky factorization of the robot's block of the mass matrix
@@ -52,17 +53,18 @@ import mujoco
 import numpy as np
 from llvmlite import binding as llvm
 from llvmlite import ir
-from numba import carray, cfunc, njit, types
+from numba import carray, njit, types
 from numba.extending import intrinsic
 
 from urdf2links.dynamics.factor import cholesky, cholesky_solve
+from urdf2links.compilation import c_function
 from urdf2links.integration.simulate import Compilation, record_compilation
 from urdf2links.scenes.scene_arrays import scene_view
 from urdf2links.scenes.scene_kernels import _actuators, computed_torque, ct_torque_at, fn_data_eval
 
 from .contact_inputs import add_contact, contact_index     # issue 37
 
-__all__ = ["CompiledInputs", "LayoutError", "mjdata_offsets", "check_offsets", "callback_pointer", "control",
+__all__ = ["CompiledInputs", "LayoutError", "mjdata_offsets", "check_offsets", "callback_pointer", "control", "CALLBACK_EFFECTS",
            "HEADER_FIELDS"]
 
 
@@ -272,7 +274,7 @@ assert HEADER_FIELDS[CTRL] == "ctrl" and HEADER_FIELDS[N_X] == "nX" and NHEADER 
 HEADER = np.zeros(NHEADER, dtype=np.int64)
 HEADER_SYMBOL = "urdf2links_mjcb_control_header"
 llvm.add_symbol(HEADER_SYMBOL, int(HEADER.ctypes.data))
-_CALLBACK = None
+_CALLBACKS: dict = {}      # effects -> the compiled C callback (callback_pointer)
 
 
 @intrinsic
@@ -287,24 +289,40 @@ def _header_address(typingctx):
     return types.int64(), codegen
 
 
-def _callback(m, d):
-    control(m, d, _header_address())
+#: The effects the callback compiles only for the runs that have them, in the order of ``effects``
+#: (:func:`callback_pointer`): the computed torque, ball and free joints' servos, loads, contact, a
+#: prescribed base.
+CALLBACK_EFFECTS = ("ct", "ball", "loads", "contact", "prescribe")
 
 
-def callback_pointer():
+def _callback_of(ct, ball, loads, contact, prescribe):
+    """The C callback of one combination of effects: :func:`control` with its markers fixed (the
+    closure's constants: numba leaves out the code behind a None, and caches each combination apart)."""
+
+    def urdf2links_control(m, d):
+        control(m, d, _header_address(), ct, ball, loads, contact, prescribe)
+
+    return urdf2links_control
+
+
+def callback_pointer(effects=(1, 1, 1, 1, 1)):
     """``(pointer, compilation)``: the C callback ``void(const mjModel*, mjData*)`` for
     ``mujoco.set_mjcb_control`` (a ctypes function pointer of a numba ``cfunc`` calling
-    :func:`control` on :data:`HEADER`), and the :class:`~urdf2links.integration.simulate.Compilation` of this
-    call: its seconds (compiling, or loading from numba's cache; 0.0 after the first call of a
-    process) and the callback's name when it was compiled rather than loaded."""
-    global _CALLBACK
-    if _CALLBACK is not None:
-        return _CALLBACK.ctypes, Compilation()
-    with record_compilation() as rec:
-        _CALLBACK = cfunc(types.void(types.voidptr, types.voidptr), cache=True)(_callback)
-    if _CALLBACK.cache_hits == 0 and not rec.functions:
-        rec.functions.append("urdf2links.compare.mujoco_side.mujoco_inputs._callback (C callback)")
-    return _CALLBACK.ctypes, rec
+    :func:`control` on :data:`HEADER`) with the code of ``effects`` only (one marker per
+    :data:`CALLBACK_EFFECTS`, ``1`` or ``None``: a run without a computed torque does not compile it,
+    issue 32), and the :class:`~urdf2links.integration.simulate.Compilation` of this call: its seconds
+    (compiling, or loading from numba's cache; 0.0 after the first call of a process for these effects)
+    and the callback's name when it was compiled rather than loaded."""
+    effects = tuple(None if e is None else 1 for e in effects)
+    done = _CALLBACKS.get(effects)
+    if done is not None:
+        return done.ctypes, Compilation()
+    with record_compilation() as rec:      # c_function: its seconds count as compilation (numba raises no event for it)
+        done = _CALLBACKS[effects] = c_function(_callback_of(*effects), types.void(types.voidptr, types.voidptr))
+    if done.cache_hits == 0 and not rec.functions:
+        named = ", ".join(k for k, e in zip(CALLBACK_EFFECTS, effects) if e is not None) or "none"
+        rec.functions.append(f"urdf2links.compare.mujoco_side.mujoco_inputs._callback_of (C callback; effects: {named})")
+    return done.ctypes, rec
 
 
 # --------------------------------------------------------------------------- the callback
@@ -580,11 +598,12 @@ def _ball_servos(H, I, F, t, qfrc):
         qfrc[da + off + 2] += f[c + 2]
 
 
-@njit(cache=True)
-def control(m, d, header_address):
+@njit(inline="always")
+def control(m, d, header_address, ct, ball, loads, contact, prescribe):
     """The control callback's work for ``mjData* d`` (see the module doc): clear ``qfrc_applied``
     and ``xfrc_applied``, then joint torques, the actuators' controls (``d->ctrl``), the computed torque,
-    loads and the prescribed base at ``d->time``."""
+    loads and the prescribed base at ``d->time``. ``ct`` .. ``prescribe``: the markers of
+    :data:`CALLBACK_EFFECTS` (``None``: that code is left out); inlined into each :func:`_callback_of`."""
     H = carray(_voidptr(header_address), NHEADER, np.int64)
     if H[ACTIVE] == 0 or H[DATA] != _address(d):
         return
@@ -608,18 +627,23 @@ def control(m, d, header_address):
         ctrl = carray(_voidptr(H[CTRL]), H[NCTRL], np.float64)
         for k in range(act_fn.size):
             ctrl[act_ctrl[k]] = _fn(H, I, F, act_fn[k], t, 0)
-    if H[CT]:
-        _computed_torque(H, I, t, qfrc)
-    if _int(H, I, I_BALL).size:
-        _ball_servos(H, I, F, t, qfrc)
-    if _int(H, I, I_LOAD_LINK).size:
-        _apply_loads(m, d, H, I, F, t, xfrc, qfrc)
-    if H[CONTACT]:          # issue 37: the scene's contact law on MuJoCo's state (E83)
-        _contact(H, t, qfrc)
-    if H[PRESCRIBE]:
-        if act_fn.size:     # qfrc_actuator of these controls (MuJoCo computes it after this callback)
-            _call_fwdActuation(H[FN_FWDACT], _address(m), _address(d))
-        _prescribe_base(m, d, H, I, F, t, xfrc, qfrc)
+    if ct is not None:
+        if H[CT]:
+            _computed_torque(H, I, t, qfrc)
+    if ball is not None:
+        if _int(H, I, I_BALL).size:
+            _ball_servos(H, I, F, t, qfrc)
+    if loads is not None:
+        if _int(H, I, I_LOAD_LINK).size:
+            _apply_loads(m, d, H, I, F, t, xfrc, qfrc)
+    if contact is not None:
+        if H[CONTACT]:          # issue 37: the scene's contact law on MuJoCo's state (E83)
+            _contact(H, t, qfrc)
+    if prescribe is not None:
+        if H[PRESCRIBE]:
+            if act_fn.size:     # qfrc_actuator of these controls (MuJoCo computes it after this callback)
+                _call_fwdActuation(H[FN_FWDACT], _address(m), _address(d))
+            _prescribe_base(m, d, H, I, F, t, xfrc, qfrc)
 
 
 # --------------------------------------------------------------------------- one run's inputs
@@ -738,6 +762,8 @@ class CompiledInputs:
         for key, arr in zip(("TI", "TF", "W", "SI", "SF", "X"), self.arrays):
             values[f"p{key}"], values[f"n{key}"] = arr.ctypes.data, arr.size
         self.header = np.array([values.get(k, 0) for k in HEADER_FIELDS], dtype=np.int64)
+        present = (ct, len(ints["ball"]) > 0, len(ints["load_link"]) > 0, contact, bool(values.get("prescribe", 0)))
+        self.effects = tuple(1 if p else None for p in present)     # the callback's (CALLBACK_EFFECTS)
         self.compilation = Compilation()
         self.calls = 0
 
@@ -769,7 +795,7 @@ class _Installed:
         self.previous = None
 
     def __enter__(self):
-        pointer, self.inputs.compilation = callback_pointer()
+        pointer, self.inputs.compilation = callback_pointer(self.inputs.effects)
         if HEADER[ACTIVE]:
             raise RuntimeError("another run's compiled control callback is active in this process")
         HEADER[:] = self.inputs.header
