@@ -100,6 +100,31 @@ def test_the_loops_are_compiled_once_whatever_the_effects():
     assert got["erk_chunk"] == 1 and got["initial_step"] == 1, got
 
 
+_CALLBACK = """
+import json
+from numba import cfunc, types
+from urdf2links.compare.mujoco_side import mujoco_inputs as MI
+sig = types.void(types.voidptr, types.voidptr)
+got = {}
+for name, effects in (("none", (None,) * 5), ("ct", (1, None, None, None, None))):
+    cfunc(sig)(MI._callback_of(*effects))       # typed anew here: every callee it reaches gets a variant now
+    got[name] = {f.__name__: len(f.overloads) for f in (MI._computed_torque, MI._ball_servos, MI._apply_loads,
+                                                        MI._contact, MI._prescribe_base)}
+print(json.dumps(got))
+"""
+
+
+def test_mujoco_callback_compiles_only_the_effects_of_its_run():
+    """MuJoCo's control callback for a run without effects reaches none of the computed torque, ball
+    servos, loads, contact or prescribed base; with the computed torque, that one only."""
+    out = _python(_CALLBACK)
+    assert out.returncode == 0, out.stderr
+    got = json.loads(out.stdout.strip().splitlines()[-1])
+    assert not any(got["none"].values()), got
+    assert got["ct"] == {"_computed_torque": 1, "_ball_servos": 0, "_apply_loads": 0, "_contact": 0,
+                         "_prescribe_base": 0}, got
+
+
 def test_clock_stands_still_while_numba_compiles():
     """A duration taken with :func:`compilation.clock` around a first call leaves its compilation out;
     one kernel is compiled once whatever constants its callers pass (:func:`compilation.one_signature`)."""
