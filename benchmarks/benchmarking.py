@@ -150,11 +150,12 @@ def chain(n: int):
 
 
 @njit(cache=True)
-def eval_loop(y, out, reps, I, F, W, SI, SF, X, FX):
+def eval_loop(y, out, reps, I, F, W, SI, SF, X, rhs):
     """``reps`` evaluations of the compiled right-hand side at ``y`` (t moving), inside a compiled loop:
-    ``eval_loop(y, out, reps, *plan.rhs.args)``."""
+    ``eval_loop(y, out, reps, *plan.rhs.args)`` (``rhs``: the scene's C function, called as the
+    integration loops call it)."""
     for r in range(reps):
-        scene_rhs(0.01 * r, y, out, I, F, W, SI, SF, X, FX)
+        scene_rhs(0.01 * r, y, out, I, F, W, SI, SF, X, rhs)
 
 
 def load_models(shipped=(), real=()) -> list:

@@ -94,8 +94,8 @@ STEP_LAMBDA = 1.0
 @njit(cache=True)
 def _central_jacobian(t, y, h, J, yp, fp, fm, args):
     """``J`` (2n, 2n): central differences ``(F(y + h e_j) - F(y - h e_j)) / 2h`` of ``(q', q'')`` over
-    ``(q, q')`` at ``(t, y)``, the scene's compiled right-hand side ``args`` (its ``args``); False when an
-    evaluation failed (A not positive definite)."""
+    ``(q, q')`` at ``(t, y)`` of the scene's compiled right-hand side (``args``: the scene's ``args``); False
+    when an evaluation failed (A not positive definite)."""
     I, F, W, SI, SF, X, rhs = args
     m = J.shape[0]
     for i in range(y.size):
@@ -125,7 +125,7 @@ def stiffest_mode(plan, t, q, qd, *, h: float = 1e-7) -> float:
     yp, fp, fm = np.empty(d), np.empty(d), np.empty(d)
     args = plan.rhs.fresh_args()
     for s in range(len(t)):
-        y = np.ascontiguousarray(np.r_[q[s], qd[s], 0.0])
+        y = np.r_[q[s], qd[s], 0.0]
         if not _central_jacobian(float(t[s]), y, h, J, yp, fp, fm, args):
             for j in range(2 * n):          # raises the model's named error where the evaluation failed
                 e = np.zeros(d)

@@ -762,7 +762,7 @@ class CompiledInputs:
         for key, arr in zip(("TI", "TF", "W", "SI", "SF", "X"), self.arrays):
             values[f"p{key}"], values[f"n{key}"] = arr.ctypes.data, arr.size
         self.header = np.array([values.get(k, 0) for k in HEADER_FIELDS], dtype=np.int64)
-        present = (ct, len(ints["ball"]) > 0, len(ints["load_link"]) > 0, contact, bool(values.get("prescribe", 0)))
+        present = (ct, len(ints["ball"]) > 0, len(ints["load_link"]) > 0, contact, bool(extra["prescribe"]))
         self.effects = tuple(1 if p else None for p in present)     # the callback's (CALLBACK_EFFECTS)
         self.compilation = Compilation()
         self.calls = 0
