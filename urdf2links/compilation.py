@@ -15,7 +15,8 @@ code it times. This module watches numba's ``numba:compile`` events (numba's pub
   14 s"), and :func:`show_progress` turns on a line on stderr that counts the seconds while numba
   compiles (the command line turns it on; the library stays silent); :func:`per_function` the
   seconds of each function (``URDF2LINKS_COMPILE_LOG=FILE`` writes them at exit);
-- :func:`one_signature` compiles a kernel once whatever constants its callers pass.
+- :func:`one_signature` compiles a kernel once whatever constants its callers pass;
+- :func:`kernel` compiles a function that allocates nothing without numba's reference counting.
 
 Nothing here imports numba until a compiled function is about to be used (:func:`watch`, called by
 :mod:`urdf2links.numba_cache` when it installs the cache): ``import urdf2links`` stays fast.
@@ -28,7 +29,7 @@ import threading
 import time
 
 __all__ = ["clock", "ensure", "seconds", "functions", "per_function", "summary", "show_progress", "watch", "WHAT",
-           "one_signature", "c_function"]
+           "one_signature", "c_function", "kernel"]
 
 #: How the command line names what is compiled.
 WHAT = "compiling the solver for this machine, first run only"
@@ -246,3 +247,18 @@ def one_signature(dispatcher):
 
     dispatcher.get_call_template = get_call_template
     return dispatcher
+
+
+def kernel(fn):
+    """``fn`` compiled like ``njit(cache=True)``, without numba's reference counting (its ``_nrt=False``
+    option), for a function that allocates nothing and only reads and writes the arrays it is given
+    (the passes over the tree, the factorizations, the scene's terms). numba otherwise adds an atomic
+    increment and decrement of each array argument's count to a function that loops, and the
+    optimizer removes only some of them: they took about a fifth of the time of one forward-dynamics
+    evaluation of UR5 (0.13 of 0.77 us, ``perf`` on the compiled loop), more in a batch, where the
+    threads share the counts. A function that allocates is refused at compilation ("NRT required but
+    not enabled"), so the option cannot hide a leak. ``tests/test_cold_start.py`` checks that the compiled
+    kernels carry no reference counting."""
+    from numba import njit
+
+    return njit(cache=True, _nrt=False)(fn)

@@ -16,9 +16,8 @@ of ``A`` (``10 eps n max|A_ii|``) as a zero eigenvalue and return its index (els
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
-from ..compilation import one_signature
+from ..compilation import kernel, one_signature
 
 from .tree_arrays import I_ANCIDX, I_ANCPTR, I_ANCROW, I_RUNPTR, I_RUNS, W_A, nn
 
@@ -28,14 +27,14 @@ EPS = 2.220446049250313e-16
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def pivot_floor(scale, n):
     """The rounding level of a matrix whose largest diagonal entry is ``scale``: ``10 eps n scale``."""
     return 10.0 * EPS * max(scale, 1e-300) * n
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def ltdl(TI, W):
     """``A = L^T D L`` in place of the packed ``A`` (E47): ``D[k]`` on the diagonal slot of row ``k``,
     ``L[k, i]`` (unit lower triangular) on its other slots. Returns -1, or the first coordinate (from
@@ -82,7 +81,7 @@ def ltdl(TI, W):
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def ltdl_solve(TI, W, x, ix):
     """Solve ``L^T D L y = x[ix:ix + n]`` in place after :func:`ltdl`. A row whose coordinates are
     one run of consecutive ones (``runs`` of :mod:`urdf2links.dynamics.tree_arrays`: every row of a chain)
@@ -119,7 +118,7 @@ def ltdl_solve(TI, W, x, ix):
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def unpack(TI, W, A):
     """The packed ``A`` (before :func:`ltdl`) as a dense symmetric matrix into ``A`` (n, n); pairs
     that are not ancestor pairs are zero (E25)."""
@@ -138,7 +137,7 @@ def unpack(TI, W, A):
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def cholesky(A, a0, n, Lf, l0):
     """Dense ``A = L L^T`` of the (n, n) row-major ``A[a0:]`` into ``Lf[l0:]`` (lower triangle).
     Returns -1, or the index of the first pivot at or below :func:`pivot_floor` (E46)."""
@@ -167,7 +166,7 @@ def cholesky(A, a0, n, Lf, l0):
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def cholesky_solve(Lf, l0, n, x, x0):
     """Solve ``L L^T y = x[x0:x0 + n]`` in place after :func:`cholesky`."""
     l0, x0 = nn(l0), nn(x0)

@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from ..compilation import one_signature
+from ..compilation import kernel, one_signature
 
 from .kernels import _base_frame, _constant, _rates, _slot, _store, add_wrench, clear_wrenches, dynamics
 from .tree_arrays import (
@@ -50,6 +50,7 @@ from .tree_arrays import (
     W_QD,
     W_SIZE,
     WV,
+    gravity_of,
     nn,
 )
 
@@ -57,7 +58,7 @@ __all__ = ["kinematics_acc", "own_armature", "id_row", "id_one", "id_batch", "id
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def kinematics_acc(TI, TF, W, q, iq, qd, iqd, qdd, iqdd, B, ib, has_base, gx, gy, gz):
     """:func:`~urdf2links.dynamics.kernels.kinematics` with the coordinates' accelerations
     ``qdd[iqdd:iqdd + n]``: every link's spatial acceleration is then the whole one (E33 with
@@ -96,7 +97,7 @@ def kinematics_acc(TI, TF, W, q, iq, qd, iqd, qdd, iqdd, B, ib, has_base, gx, gy
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def own_armature(TI, TF, W, qdd, iqdd):
     """``b_k -= a_k q_k''`` for every coordinate with an armature of its own (E49: ``a_k`` on ``a_kk``);
     a ball link's armature is already in ``b`` through its relative angular acceleration."""
@@ -116,7 +117,7 @@ def inverse_size(nt: int) -> int:
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def id_row(TI, TF, W, X, q, qd, qdd, base, has_base, gx, gy, gz, loads, C, d, coupled, out):
     """``tau = A q'' + e + G - Q`` (E54) into ``out`` (n,) at the model state ``(q, q', q'')``: ``base``
     (18,) when ``has_base``, gravity ``g``, ``loads`` (k, 11) as for
@@ -192,15 +193,17 @@ def id_batch(TI, TF, Q, QD, QDD, BASE, has_base, gx, gy, gz, loads, C, d, couple
 
 @one_signature
 @njit(cache=True)
-def id_plain(TI, TF, g, q, qd, qdd, out):
+def id_plain(TI, TF, q, qd, qdd, out):
     """:func:`id_row` for a fixed base, no loads, no coupling (the hot path of
-    :meth:`~urdf2links.dynamics.model.Model.inverse_dynamics`): the same operations, so the same bits.
-    -2 when a size is wrong, else 0."""
+    :meth:`~urdf2links.dynamics.model.Model.inverse_dynamics`), gravity in ``TF``'s last three
+    entries (:func:`~urdf2links.dynamics.tree_arrays.with_gravity`): the same operations, so the
+    same bits. -2 when a size is wrong, else 0."""
     n = TI[1]
     if q.size != n or qd.size != n or qdd.size != n or out.size != n:
         return -2
     W = np.empty(TI[W_SIZE])
-    kinematics_acc(TI, TF, W, q, 0, qd, 0, qdd, 0, g, 0, False, g[0], g[1], g[2])
+    gx, gy, gz = gravity_of(TF)
+    kinematics_acc(TI, TF, W, q, 0, qd, 0, qdd, 0, TF, 0, False, gx, gy, gz)
     dynamics(TI, TF, W, False, False, False)
     own_armature(TI, TF, W, qdd, 0)
     wb = nn(TI[W_B])

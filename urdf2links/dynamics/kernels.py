@@ -40,7 +40,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..compilation import one_signature
+from ..compilation import kernel, one_signature
 
 from .tree_arrays import (
     AC,
@@ -165,7 +165,7 @@ def _store(W, d, R, o, V, Acc):
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def _base_frame(W, wb, B, ib, has_base, gx, gy, gz):
     """The frame every root link starts from, into the base record: {A} from its six factors
     (``B[ib:ib + 18]``: pose, rate, acceleration) or the identity; its twist and acceleration are
@@ -189,7 +189,7 @@ def _base_frame(W, wb, B, ib, has_base, gx, gy, gz):
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def kinematics(TI, TF, W, q, iq, qd, iqd, moving, B, ib, has_base, gx, gy, gz):
     """Root to leaves (E33): pose ``R, o``, twist ``(omega, v)`` and spatial acceleration at
     ``q'' = 0`` of every link into its record; unit twists ``s`` of every coordinate. The tree's
@@ -229,7 +229,7 @@ def kinematics(TI, TF, W, q, iq, qd, iqd, moving, B, ib, has_base, gx, gy, gz):
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def poses(TI, W, R, o):
     """Copy every link's rotation into ``R`` (L, 3, 3) and origin into ``o`` (L, 3) after :func:`kinematics`."""
     wl = nn(TI[W_LINK])
@@ -335,7 +335,7 @@ def _link_wrench(W, d, wb, momentum):
 
 # -- leaves to root ---------------------------------------------------------------------------------
 @one_signature
-@njit(cache=True)
+@kernel
 def _subtree_sums(TI, W, loads):
     """(E30): every link's (m, c, J), inertial wrench and (with ``loads``) external wrench summed over its subtree."""
     wl = nn(TI[W_LINK])
@@ -353,7 +353,7 @@ def _subtree_sums(TI, W, loads):
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def dynamics(TI, TF, W, want_A, loads, momentum):
     """Leaves to root after :func:`kinematics` (and, with ``loads``, the external wrenches of
     :func:`add_wrench`): ``b = -(e + G)`` (E34), ``Q`` (E36) with ``loads``, and with ``want_A`` the
@@ -414,7 +414,7 @@ def dynamics(TI, TF, W, want_A, loads, momentum):
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def armature(TI, TF, W, want_A):
     """The armature's terms (E49) added to the packed ``A`` (with ``want_A``) and to ``b = -(e + G)``,
     after :func:`dynamics`' own terms. A coordinate of its own: ``a`` on its diagonal. The three
@@ -453,7 +453,7 @@ def armature(TI, TF, W, want_A):
 
 # -- applied wrenches, energies, base power -----------------------------------------------------------
 @one_signature
-@njit(cache=True)
+@kernel
 def clear_wrenches(TI, W):
     wl = nn(TI[W_LINK])
     for p in range(TI[0]):
@@ -462,7 +462,7 @@ def clear_wrenches(TI, W):
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def add_wrench(TI, W, p, F0, F1, F2, M0, M1, M2, r0, r1, r2, local):
     """Add a force ``F`` and a moment ``M`` acting at the point ``r`` (link frame) of link ``p`` to
     its external wrench as ``(F, M + r_N x F)`` about {0} (E36); ``local``: F and M in the link's axes."""
@@ -486,7 +486,7 @@ def add_wrench(TI, W, p, F0, F1, F2, M0, M1, M2, r0, r1, r2, local):
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def energies(TI, TF, W, gx, gy, gz):
     """``(E, V)`` after :func:`kinematics` (E37): ``E = 0.5 sum (m v.v + 2 v.(omega x c) + omega.J omega)``,
     ``V = -g . sum c``."""
@@ -514,7 +514,7 @@ def energies(TI, TF, W, gx, gy, gz):
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def armature_energy(TI, TF, W):
     """The armature's kinetic energy (E49) after :func:`kinematics`: ``0.5 a q'^2`` per coordinate of
     its own, ``0.5 a |omega_p - omega_s|^2`` per ball link."""
@@ -536,7 +536,7 @@ def armature_energy(TI, TF, W):
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def base_power(TI, W, gx, gy, gz):
     """``(dE/dt, dV/dt)`` at fixed ``(q, q')`` due to the base motion alone (E41), after
     :func:`dynamics` with ``momentum``: with the base's twist ``(omega_B, v_B)``, its acceleration

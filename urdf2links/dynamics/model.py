@@ -34,7 +34,7 @@ from .loads import Wrench
 from .rows import NO_LOADS, base_rows, kernel_array, load_rows, state_rows
 from .transforms import resolve_base
 from .tree import LinkTree
-from .tree_arrays import flat_tree
+from .tree_arrays import flat_tree, with_gravity
 
 __all__ = ["Model", "METHODS", "DEFAULT_GRAVITY", "FlatTree"]
 
@@ -42,6 +42,8 @@ METHODS = ("recursive", "numpy", "literal")
 DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
 _NO_C, _NO_D = np.zeros((0, 0)), np.zeros(0)
 _EMPTY, _EMPTY2 = np.empty(0), np.empty((0, 0))        # an absent qd or tau, the unused output of a hot terms call
+_empty = np.empty       # one lookup on the hot path
+_FD = None              # model_kernels.fd_plain frozen, at the first forward_dynamics (_fd)
 
 FlatTree = namedtuple("FlatTree", ["TI", "TF"])
 """The tree flattened for the kernels (:func:`urdf2links.dynamics.tree_arrays.flat_tree`)."""
@@ -74,9 +76,11 @@ class Model:
         self.info = dict(info or {})
         self.compiled = FlatTree(*flat_tree(tree))
         """The tree flattened for the kernels (:class:`FlatTree`)."""
-        self._g, self._g0 = g.copy(), np.zeros(3)      # writable: the frozen kernel takes writable arrays
+        self._g, self._g0 = g.copy(), np.zeros(3)      # writable: the compiled kernels take writable arrays
         self._hot = {}                  # the frozen hot entries this model has called (model_kernels.frozen)
-        self._TI, self._TF = self.compiled.TI, self.compiled.TF     # the hot path's arguments, one lookup each
+        # the hot entries' tree, one lookup each: TI, and TF with this model's gravity or none (with_gravity)
+        self._TI = self.compiled.TI
+        self._TFg, self._TF0 = with_gravity(self.compiled.TF, self._g), with_gravity(self.compiled.TF, self._g0)
         self._nq = tree.n               # the length of q'' on the hot path (no coupling there)
         self._numpy_plan = None
         if coupling is None:
@@ -247,7 +251,7 @@ class Model:
         """A (n, n), or (B, n, n) for q (B, n), (E19): ``a_il = sum_p tr(T_i H T_l^T)``."""
         if self._plain(base, method):
             A = np.empty((self._nq, self._nq))
-            if self._call("terms_plain", self._g0, q, _EMPTY, MK.MASS, A, _EMPTY) == 0:
+            if self._call("terms_plain", self._TF0, q, _EMPTY, MK.MASS, A, _EMPTY) == 0:
                 return A
         self._check_method(method)
         if method != "recursive":
@@ -259,7 +263,7 @@ class Model:
         """e (n,) or (B, n), (E20): velocity terms and base-motion terms (E15); no gravity."""
         if self._plain(base, method):
             v = np.empty(self._nq)
-            if self._call("terms_plain", self._g0, q, qd, MK.BIAS, _EMPTY2, v) == 0:
+            if self._call("terms_plain", self._TF0, q, qd, MK.BIAS, _EMPTY2, v) == 0:
                 return v
         self._check_method(method)
         if method != "recursive":
@@ -271,7 +275,7 @@ class Model:
         """G (n,) or (B, n), (E22): ``g_i = m g e3^T T_i r_C`` summed over links, for ``self.gravity_vector``."""
         if self._plain(base, method):
             v = np.empty(self._nq)
-            if self._call("terms_plain", self._g, q, _EMPTY, MK.BIAS, _EMPTY2, v) == 0:
+            if self._call("terms_plain", self._TFg, q, _EMPTY, MK.BIAS, _EMPTY2, v) == 0:
                 return v
         self._check_method(method)
         if method != "recursive":
@@ -287,7 +291,7 @@ class Model:
         if self._plain(base, method) and loads:
             v = np.empty(self._nq)
             LD = load_rows(self.tree, loads)
-            if self._call("forces_plain", q, LD, v) == 0:
+            if self._call("forces_plain", self._TF0, q, LD, v) == 0:
                 return v
         self._check_method(method)
         if method != "recursive":
@@ -302,7 +306,7 @@ class Model:
         """E (a float, or (B,)), (E17): ``0.5 sum_p tr(T' H T'^T)``, base motion included."""
         if self._plain(base, method):
             out = np.empty(2)
-            if self._call("energy_plain", self._g, q, qd, out) == 0:
+            if self._call("energy_plain", self._TFg, q, qd, out) == 0:
                 return float(out[0])
         self._check_method(method)
         if method != "recursive":
@@ -314,7 +318,7 @@ class Model:
         """V of gravity (a float, or (B,)), (E21): ``sum_p m_p g z_C`` (for ``self.gravity_vector``)."""
         if self._plain(base, method):
             out = np.empty(2)
-            if self._call("energy_plain", self._g, q, _EMPTY, out) == 0:
+            if self._call("energy_plain", self._TFg, q, _EMPTY, out) == 0:
                 return float(out[1])
         self._check_method(method)
         if method != "recursive":
@@ -345,12 +349,11 @@ class Model:
         :class:`~urdf2links.errors.DynamicsError` naming the configuration (and the row of a batch) and
         the coordinates when A is not positive definite.
         """
-        if base is None and not loads and self._C is None and method == "recursive":    # the hot path
-            out = np.empty(self._nq)
-            fd = self._hot.get("fd_plain") or self._hot.setdefault("fd_plain", MK.frozen("fd_plain"))
+        if base is None and not loads and method == "recursive" and self._C is None:    # the hot path
+            out = _empty(self._nq)
             try:        # _call's work inlined: each Python step here is a few percent of the call
-                pivot = fd(self._TI, self._TF, self._g if gravity else self._g0, q, qd, _EMPTY if tau is None else tau,
-                           out)
+                pivot = (_FD or _fd())(self._TI, self._TFg if gravity else self._TF0, q, qd,
+                                       _EMPTY if tau is None else tau, out)
             except TypeError:       # not float64 vectors (or a batch): converted on the general path
                 pivot = -2
             if pivot == -1:
@@ -373,7 +376,7 @@ class Model:
         ``"literal"`` and ``"numpy"`` evaluate ``A q'' + e + G - Q`` from the oracles' terms."""
         if base is None and not loads and self._C is None and method == "recursive":    # the hot path
             out = np.empty(self._nq)
-            if self._call("id_plain", self._g if gravity else self._g0, q, qd, qdd, out) == 0:
+            if self._call("id_plain", self._TFg if gravity else self._TF0, q, qd, qdd, out) == 0:
                 return out
         loads = list(loads)
         if method != "recursive":
@@ -398,14 +401,15 @@ class Model:
         IK.id_one(self.compiled.TI, self.compiled.TF, Q[0], QD[0], QDD[0], BASE[0], *args, OUT[0])
         return OUT[0]
 
-    def _call(self, name, *args):
-        """The frozen hot entry ``name`` on this model's tree; -2 when the arguments are not float64
-        vectors of the right sizes (the caller then takes the general path)."""
+    def _call(self, name, TF, *args):
+        """The frozen hot entry ``name`` on this model's tree, ``TF`` one of its two hot ones (``_TFg``
+        or ``_TF0``); -2 when the arguments are not float64 vectors of the right sizes (the caller then
+        takes the general path)."""
         fn = self._hot.get(name)
         if fn is None:
             fn = self._hot[name] = MK.frozen(name)
         try:
-            return fn(self.compiled.TI, self.compiled.TF, *args)
+            return fn(self._TI, TF, *args)
         except TypeError:       # not float64 vectors (or a batch): converted on the general path
             return -2
 
@@ -495,3 +499,10 @@ def _fmt(q) -> str:
     if q is None:
         return "?"
     return np.array2string(np.asarray(q, float), precision=4, separator=", ", max_line_width=10_000)
+
+
+def _fd():
+    """model_kernels.fd_plain, frozen (compiled or loaded at the first call of the process), kept in ``_FD``."""
+    global _FD
+    _FD = MK.frozen("fd_plain")
+    return _FD

@@ -7,7 +7,9 @@ entries (``*_batch``, numba ``prange`` over chunks of rows, one scratch per chun
 per-state results to the last bit. ``fd_plain``, ``terms_plain``, ``forces_plain``, ``energy_plain`` and
 ``id_plain`` (inverse dynamics, :mod:`urdf2links.dynamics.inverse_kernels`) are the hot
 single-state paths of :class:`~urdf2links.dynamics.model.Model` (fixed base, no loads, no coupling):
-few arguments, since every array argument costs the dispatcher a fraction of a microsecond;
+few arguments, since every array argument costs the dispatcher a fraction of a microsecond (so
+their ``TF`` carries the gravity in its last three entries,
+:func:`~urdf2links.dynamics.tree_arrays.with_gravity`);
 :func:`frozen` gives each with its signatures compiled and compilation switched off, so that an
 argument of another type raises TypeError (the model then converts it) instead of compiling a new
 variant. They compute what the row functions compute, operation for operation (the same bits).
@@ -24,14 +26,14 @@ from __future__ import annotations
 import numpy as np
 from numba import get_num_threads, njit, prange, types
 
-from ..compilation import one_signature
+from ..compilation import kernel, one_signature
 
 from .factor import cholesky, cholesky_solve, ltdl, ltdl_solve, unpack
 from .inverse_kernels import id_plain  # noqa: F401  (a hot entry: frozen() finds it here)
 from .kernels import add_wrench, clear_wrenches, dynamics, energies, kinematics, poses
-from .tree_arrays import I_ANCIDX, I_ANCPTR, W_A, W_B, W_Q, W_SIZE, nn
+from .tree_arrays import I_ANCIDX, I_ANCPTR, W_A, W_B, W_Q, W_SIZE, gravity_of, nn
 
-__all__ = ["coupled_size", "fd_plain_frozen", "frozen", "terms_plain", "forces_plain", "energy_plain", "fd_one", "fd_batch",
+__all__ = ["coupled_size", "frozen", "fd_plain", "terms_plain", "forces_plain", "energy_plain", "fd_one", "fd_batch",
            "terms_one", "terms_batch", "energy_one",
            "energy_batch", "poses_one", "chunks", "MASS", "BIAS", "FORCES"]
 
@@ -39,7 +41,7 @@ MASS, BIAS, FORCES = 0, 1, 2        # what terms_row returns: A, -b (e, or G), Q
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def coupled_size(n_tree, n):
     """Scratch of a coupled row: ``q_tree``, ``q'_tree`` (n_tree,), ``A``, its factor (n, n), ``rhs`` (n,)."""
     return 2 * n_tree + 2 * n * n + n
@@ -47,7 +49,7 @@ def coupled_size(n_tree, n):
 
 # -- one state ----------------------------------------------------------------------------------------
 @one_signature
-@njit(cache=True)
+@kernel
 def _state(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, C, d, coupled):
     """:func:`~urdf2links.dynamics.kernels.kinematics` at the model state ``(q, qd)`` (rates zero unless ``moving``)."""
     if not coupled:
@@ -67,7 +69,7 @@ def _state(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, C, d, couple
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def _terms(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, loads, C, d, coupled, want_A):
     _state(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, C, d, coupled)
     nl = loads.shape[0]
@@ -80,7 +82,7 @@ def _terms(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, loads, C, d,
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def reduce_vector(C, v, iv, out, io, sign):
     """``out[io + i] = sign sum_a C[a, i] v[iv + a]`` (E42)."""
     nt, n = C.shape
@@ -92,7 +94,7 @@ def reduce_vector(C, v, iv, out, io, sign):
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def reduce_mass(TI, W, C, A):
     """``A = C^T A_tree C`` (n, n) from the packed tree matrix (E42); the lower triangle is summed,
     the upper one mirrors it."""
@@ -120,7 +122,7 @@ def reduce_mass(TI, W, C, A):
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def fd_row(TI, TF, W, X, q, qd, tau, has_tau, base, has_base, gx, gy, gz, loads, C, d, coupled, out):
     """q'' (E24) into ``out`` (n,): ``A q'' = Q + tau - e - G``. Returns -1, or the failing pivot."""
     _terms(TI, TF, W, X, q, qd, True, base, has_base, gx, gy, gz, loads, C, d, coupled, True)
@@ -156,7 +158,7 @@ def fd_row(TI, TF, W, X, q, qd, tau, has_tau, base, has_base, gx, gy, gz, loads,
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def terms_row(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, loads, C, d, coupled, what, A, v):
     """``what``: MASS the mass matrix into ``A`` (n, n); BIAS ``-b = e + G`` into ``v`` (n,) (with
     ``g = 0``: e; at rest with gravity: G); FORCES ``Q`` of ``loads`` into ``v``."""
@@ -177,7 +179,7 @@ def terms_row(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, loads, C,
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def energy_row(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, C, d, coupled):
     """``(E, V)`` (E37) at one state."""
     _state(TI, TF, W, X, q, qd, moving, base, has_base, 0.0, 0.0, 0.0, C, d, coupled)
@@ -187,9 +189,10 @@ def energy_row(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, C, d, co
 # -- single-state entries -----------------------------------------------------------------------------
 @one_signature
 @njit(cache=True)
-def fd_plain(TI, TF, g, q, qd, tau, out):
+def fd_plain(TI, TF, q, qd, tau, out):
     """:func:`fd_row` for a fixed base, no loads, no coupling, tau (n,) or (0,) (none: one signature,
-    :data:`_PLAIN_SIGS`); -2 when a size is wrong."""
+    :data:`_PLAIN_SIGS`), gravity in ``TF`` (:func:`~urdf2links.dynamics.tree_arrays.with_gravity`); -2
+    when a size is wrong."""
     n = TI[1]
     if q.size != n or qd.size != n or out.size != n:
         return -2
@@ -197,7 +200,8 @@ def fd_plain(TI, TF, g, q, qd, tau, out):
     if has_tau and tau.size != n:
         return -2
     W = np.empty(TI[W_SIZE])
-    kinematics(TI, TF, W, q, 0, qd, 0, True, g, 0, False, g[0], g[1], g[2])
+    gx, gy, gz = gravity_of(TF)
+    kinematics(TI, TF, W, q, 0, qd, 0, True, TF, 0, False, gx, gy, gz)
     dynamics(TI, TF, W, True, False, False)
     wb = nn(TI[W_B])
     for i in range(n):
@@ -213,9 +217,10 @@ def fd_plain(TI, TF, g, q, qd, tau, out):
 
 @one_signature
 @njit(cache=True)
-def terms_plain(TI, TF, g, q, qd, what, A, v):
+def terms_plain(TI, TF, q, qd, what, A, v):
     """:func:`terms_row` for a fixed base, no loads, no coupling: MASS into ``A`` (n, n); BIAS ``-b``
-    into ``v`` (n,): ``e`` with ``g`` zero, ``G`` with ``qd`` of size 0 (at rest). -2 when a size is wrong, else 0."""
+    into ``v`` (n,): ``e`` with zero gravity in ``TF`` (:func:`~urdf2links.dynamics.tree_arrays.with_gravity`),
+    ``G`` with ``qd`` of size 0 (at rest). -2 when a size is wrong, else 0."""
     n = TI[1]
     if q.size != n:
         return -2
@@ -225,12 +230,13 @@ def terms_plain(TI, TF, g, q, qd, what, A, v):
     elif v.size != n:
         return -2
     W = np.empty(TI[W_SIZE])
+    gx, gy, gz = gravity_of(TF)
     if qd.size == 0:
-        kinematics(TI, TF, W, q, 0, q, 0, False, g, 0, False, g[0], g[1], g[2])
+        kinematics(TI, TF, W, q, 0, q, 0, False, TF, 0, False, gx, gy, gz)
     else:
         if qd.size != n:
             return -2
-        kinematics(TI, TF, W, q, 0, qd, 0, True, g, 0, False, g[0], g[1], g[2])
+        kinematics(TI, TF, W, q, 0, qd, 0, True, TF, 0, False, gx, gy, gz)
     dynamics(TI, TF, W, what == MASS, False, False)
     if what == MASS:
         unpack(TI, W, A)
@@ -245,7 +251,7 @@ def terms_plain(TI, TF, g, q, qd, what, A, v):
 @njit(cache=True)
 def forces_plain(TI, TF, q, loads, v):
     """``Q`` (E23) of ``loads`` (k, 11) into ``v`` (n,) for a fixed base and no coupling (:func:`terms_row`
-    with FORCES). -2 when a size is wrong, else 0."""
+    with FORCES; the gravity in ``TF`` is not used). -2 when a size is wrong, else 0."""
     n = TI[1]
     if q.size != n or v.size != n or loads.shape[1] != 11:
         return -2
@@ -264,20 +270,22 @@ def forces_plain(TI, TF, q, loads, v):
 
 @one_signature
 @njit(cache=True)
-def energy_plain(TI, TF, g, q, qd, out):
-    """``(E, V)`` (E37) into ``out`` (2,) for a fixed base and no coupling; ``qd`` of size 0: at rest
-    (V only is meaningful). -2 when a size is wrong, else 0."""
+def energy_plain(TI, TF, q, qd, out):
+    """``(E, V)`` (E37) into ``out`` (2,) for a fixed base and no coupling, V for the gravity in ``TF``
+    (:func:`~urdf2links.dynamics.tree_arrays.with_gravity`); ``qd`` of size 0: at rest (V only is meaningful).
+    -2 when a size is wrong, else 0."""
     n = TI[1]
     if q.size != n or out.size != 2:
         return -2
     W = np.empty(TI[W_SIZE])
     if qd.size == 0:
-        kinematics(TI, TF, W, q, 0, q, 0, False, g, 0, False, 0.0, 0.0, 0.0)
+        kinematics(TI, TF, W, q, 0, q, 0, False, TF, 0, False, 0.0, 0.0, 0.0)
     else:
         if qd.size != n:
             return -2
-        kinematics(TI, TF, W, q, 0, qd, 0, True, g, 0, False, 0.0, 0.0, 0.0)
-    out[0], out[1] = energies(TI, TF, W, g[0], g[1], g[2])
+        kinematics(TI, TF, W, q, 0, qd, 0, True, TF, 0, False, 0.0, 0.0, 0.0)
+    gx, gy, gz = gravity_of(TF)
+    out[0], out[1] = energies(TI, TF, W, gx, gy, gz)
     return 0
 
 
@@ -287,11 +295,11 @@ _I1 = types.Array(types.int64, 1, "C")
 #: The one signature each hot single-state entry is compiled for (vectors: float64, C-contiguous; an
 #: absent ``qd`` or ``tau`` is an array of size 0, not None, which would be a second compiled variant).
 _PLAIN_SIGS = {
-    "fd_plain": [types.int64(_I1, _F1, _F1, _F1, _F1, _F1, _F1)],
-    "terms_plain": [types.int64(_I1, _F1, _F1, _F1, _F1, types.int64, _F2, _F1)],
+    "fd_plain": [types.int64(_I1, _F1, _F1, _F1, _F1, _F1)],
+    "terms_plain": [types.int64(_I1, _F1, _F1, _F1, types.int64, _F2, _F1)],
     "forces_plain": [types.int64(_I1, _F1, _F1, _F2, _F1)],
-    "energy_plain": [types.int64(_I1, _F1, _F1, _F1, _F1, _F1)],
-    "id_plain": [types.int64(_I1, _F1, _F1, _F1, _F1, _F1, _F1)],
+    "energy_plain": [types.int64(_I1, _F1, _F1, _F1, _F1)],
+    "id_plain": [types.int64(_I1, _F1, _F1, _F1, _F1, _F1)],
 }
 
 _FROZEN: dict = {}
@@ -310,11 +318,6 @@ def frozen(name: str):
         fn.disable_compile()
         _FROZEN[name] = fn
     return fn
-
-
-def fd_plain_frozen():
-    """:func:`fd_plain`, frozen (:func:`frozen`)."""
-    return frozen("fd_plain")
 
 
 @one_signature

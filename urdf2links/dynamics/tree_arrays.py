@@ -31,6 +31,8 @@ Layout (the names are module constants, folded into the compiled code):
   rows of ``anc_idx`` (P,) (factorized in place, :mod:`urdf2links.dynamics.factor`), ``b``, ``Q``, ``x`` (n,),
   the base record (``BASE_*``), and the tree's rates ``q'`` (n,) (written by the kinematics, for the
   armature's energy).
+- The hot single-state entries (:mod:`urdf2links.dynamics.model_kernels`) take ``TF`` with the gravity
+  appended as its last three entries (:func:`with_gravity`, :func:`gravity_of`): one array argument fewer.
 """
 
 from __future__ import annotations
@@ -38,11 +40,12 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..compilation import one_signature
+from ..compilation import kernel, one_signature
 
 from .transforms import elementary
 
-__all__ = ["flat_tree", "HEADER", "CONSTANT", "KS", "KF", "KL", "workspace_size", "nn", "armature_items",
+__all__ = ["flat_tree", "with_gravity", "gravity_of", "HEADER", "CONSTANT", "KS", "KF", "KL", "workspace_size", "nn",
+           "armature_items",
            "ARM_ONE", "ARM_BALL"]
 
 CONSTANT = 6        # seg_slot of a constant transform
@@ -78,13 +81,28 @@ KB = 48
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def nn(k):
     """``max(k, 0)`` of an offset or index that is never negative: it tells the compiler so. An
     integer index of unknown sign makes numba wrap negative values around on every access
     (three instructions, and no vectorization); one ``nn`` where an offset is loaded removes that
     from every access derived from it."""
     return max(k, 0)
+
+
+def with_gravity(TF, g) -> np.ndarray:
+    """The hot entries' ``TF`` (m + 3,): the tree's ``TF`` (m,) 
+    with the gravity ``g`` (3,) appended, read by :func:`gravity_of`; the kernels index ``TF`` at header
+    offsets only, so the three entries at its end change nothing else. A model keeps one with its
+    gravity and one with zeros: one array argument fewer per hot call."""
+    return np.concatenate((TF, np.asarray(g, float)))
+
+
+@njit(cache=True, inline="always")
+def gravity_of(TF):
+    """``(gx, gy, gz)``: the last three entries of a hot entry's ``TF`` (:func:`with_gravity`)."""
+    k = TF.size - 3
+    return TF[k], TF[k + 1], TF[k + 2]
 
 
 def _segments(tree):

@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..compilation import kernel
 from ..dynamics.kernels import add_wrench
 from ..dynamics.tree_arrays import KL, O_, W_LINK, WV, nn
 from .scene_arrays import S_CONTACT_DATA, S_CONTACT_LINK, S_NCONTACT
@@ -84,7 +85,7 @@ def _force(SF, o, depth, rate, v0, v1, v2):
     return fn * n0 + s * t0, fn * n1 + s * t1, fn * n2 + s * t2, fn, el, slip
 
 
-@njit(cache=True)
+@kernel
 def contact_wrenches(SI, SF, TI, W):
     """Every sphere's force (E80) added to its link's external wrench (after :func:`kinematics`, before
     :func:`dynamics` with loads); returns ``sum k d^e d'`` = ``dV_c/dt`` (E81), which the right-hand side
@@ -104,7 +105,7 @@ def contact_wrenches(SI, SF, TI, W):
     return Pel
 
 
-@njit(cache=True)
+@kernel
 def contact_potential(SI, SF, TI, W):
     """``sum k d^(e+1) / (e + 1)`` over the spheres in contact (E81), after :func:`kinematics`."""
     links, o = SI[S_CONTACT_LINK], SI[S_CONTACT_DATA]
@@ -118,7 +119,7 @@ def contact_potential(SI, SF, TI, W):
     return V
 
 
-@njit(cache=True)
+@kernel
 def contact_state(SI, SF, TI, W, out):
     """``out[j] = (p (3), d, d', f_n, slip speed, F (3))`` (k, NSTATE) of every sphere, after :func:`kinematics`."""
     links, o = SI[S_CONTACT_LINK], SI[S_CONTACT_DATA]

@@ -38,7 +38,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..compilation import one_signature
+from ..compilation import kernel, one_signature
 
 from ..dynamics.factor import cholesky, cholesky_solve, ltdl, ltdl_solve
 from ..dynamics.inverse_kernels import kinematics_acc, own_armature
@@ -95,7 +95,7 @@ def effects_of(SI) -> tuple:
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def fn_data_eval(kind, data, o, t, order):
     """``d^order f / dt^order`` at ``t`` of a time function of ``kind`` whose data
     (:func:`urdf2links.scenes.scene_arrays.function_data`) starts at ``data[o]``."""
@@ -146,7 +146,7 @@ def fn_data_eval(kind, data, o, t, order):
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def fn_eval(SI, SF, j, t, order):
     """``d^order f_j / dt^order`` at ``t`` of the scene's time function ``j`` (:func:`fn_data_eval`)."""
     return fn_data_eval(SI[SI[S_FN_KIND] + j], SF, SI[S_FN_DATA] + SI[SI[S_FN_PTR] + j], t, order)
@@ -154,7 +154,7 @@ def fn_eval(SI, SF, j, t, order):
 
 # -- the right-hand side ------------------------------------------------------------------------------
 @one_signature
-@njit(cache=True)
+@kernel
 def _tree_state(SI, SF, q, iq, qd, iqd, sign, X):
     """Coupled coordinates: ``X[0:nt] = C q + d``, ``X[nt:2 nt] = sign C q'`` (E42); ``sign`` -1 or 0
     gives the rates the energy function h needs."""
@@ -171,7 +171,7 @@ def _tree_state(SI, SF, q, iq, qd, iqd, sign, X):
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def _base_values(SI, SF, t, X, xb):
     """``X[xb:xb + 18]``: pose, rate and acceleration of {A} at ``t`` from the base functions."""
     for j in range(6):
@@ -182,7 +182,7 @@ def _base_values(SI, SF, t, X, xb):
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def _apply_loads(SI, SF, I, W, t):
     """Add every load of the scene at time ``t`` to the links' external wrenches (in the tree's link
     frames: ``load_X`` maps the URDF link's axes and point into them)."""
@@ -206,7 +206,7 @@ def _apply_loads(SI, SF, I, W, t):
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def _actuators(SI, SF, t, y, iy, f, jf):
     """Every actuator's generalized force (E55) at ``t``, ``q = y[iy:iy + n]``, ``q' = y[iy + n:]`` added to
     ``f[jf:]``: MuJoCo's order (``mj_fwdActuation``): ctrl clamped to ctrlrange, ``gain c + (b0 + b1 gear q
@@ -228,7 +228,7 @@ def _actuators(SI, SF, t, y, iy, f, jf):
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def _inputs(SI, SF, t, y, iy, f, jf, actuators):
     """Joint torques, dampers ``-c q'`` and (``actuators`` not None: the effect's marker) actuators at
     ``(t, q = y[iy:], q' = y[iy + n:])`` added to ``f[jf:]``."""
@@ -246,7 +246,7 @@ def _inputs(SI, SF, t, y, iy, f, jf, actuators):
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def _springs(SI, SF, y, iy, f, jf):
     """Springs ``-k (q - rest)`` at ``q = y[iy:]`` added to ``f[jf:]``."""
     si, k, rest = SI[S_SPRING_IDX], SI[S_STIFFNESS], SI[S_REST]
@@ -256,7 +256,7 @@ def _springs(SI, SF, y, iy, f, jf):
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def _applied(SI, SF, t, y, Q, iQ, f, jf, X, loads, actuators, ct):
     """``f[jf:jf + n]``: every generalized force the scene applies besides ``-(e + G)``: Q of the
     loads (``Q[iQ:]``, when there are loads), joint torques, dampers ``-c q'``, actuators, the computed
@@ -282,14 +282,14 @@ def _applied(SI, SF, t, y, Q, iQ, f, jf, X, loads, actuators, ct):
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def ct_torque_at(n, nt):
     """Where :func:`computed_torque` leaves the torque in the scene's scratch (scene_arrays.scratch_size)."""
     return 2 * nt + 18 + 2 * n * n + 2 * n + 3 * n + nt
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def computed_torque(t, I, F, W, SI, SF, X):
     """The computed torque at ``t`` (E57) into ``X[ct_torque_at(n, nt):]`` (n,): the inverse dynamics of
     the scene at its reference ``(r, r', r'')(t)`` (every coordinate's ``ct_fn``): ``A r'' + e + G - Q``
@@ -356,7 +356,7 @@ def computed_torque(t, I, F, W, SI, SF, X):
 
 
 @one_signature
-@njit(cache=True)
+@kernel
 def _coupled_solve(SI, SF, I, W, X, t, y, out, loads, actuators, ct):
     """Coupled coordinates: ``A = C^T A_tree C``, ``rhs = C^T (b + Q) + f`` and ``q''`` by a dense
     Cholesky into ``out[n:2 n]``; returns the pivot (scratch layout: :func:`scratch_size`)."""
