@@ -177,13 +177,15 @@ def ensure(dispatcher, args) -> None:
         _T.end()
 
 
-def c_function(pyfunc, signature):
+def c_function(pyfunc, signature, *, refcounts: bool = True):
     """``pyfunc`` compiled (or loaded from the disk cache) as a C function of ``signature`` (numba's
     ``cfunc``): a first-class function whose type is its signature alone, so that a compiled function
     it is passed to is compiled once for every such function (the scene's right-hand side of each
     combination of effects, :func:`urdf2links.scenes.scene_kernels.rhs_function`). numba raises no
     compile event for a ``cfunc``: its time counts as compilation here, and it is named among the
-    compiled functions when it was not in the cache."""
+    compiled functions when it was not in the cache. ``refcounts=False`` compiles it without numba's
+    reference counting, as :func:`kernel`, for a function that allocates nothing and makes no array of
+    a pointer (the scene's right-hand side; MuJoCo's callback makes arrays of MuJoCo's pointers)."""
     from numba import cfunc
 
     watch()
@@ -191,7 +193,7 @@ def c_function(pyfunc, signature):
     _T.begin()
     compiled = None
     try:
-        compiled = cfunc(signature, cache=True)(pyfunc)
+        compiled = cfunc(signature, cache=True, _nrt=refcounts)(pyfunc)
     finally:
         _T.end(compiled=name if compiled is not None and not compiled.cache_hits else None)
     return compiled

@@ -421,7 +421,7 @@ def rhs_function(FX):
     if fn is None:
         from ..compilation import c_function
 
-        fn = _VARIANTS[FX] = c_function(_variant(*FX), rhs_signature())
+        fn = _VARIANTS[FX] = c_function(_variant(*FX), rhs_signature(), refcounts=False)   # allocates nothing
     return fn
 
 
