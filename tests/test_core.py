@@ -274,3 +274,28 @@ def test_explicit_time_rates_of_the_base_against_finite_differences():
     fd_V = _five_point(lambda s: model.potential_energy(q, t=t + s, base=base), 1e-3)
     assert dE == pytest.approx(fd_E, rel=1e-8)
     assert dV == pytest.approx(fd_V, rel=1e-8)
+
+
+def test_with_gravity_reaches_every_call_and_leaves_the_model_alone():
+    """``Model.with_gravity``: every call of the copy, the compiled hot path included (which reads its
+    own copy of the gravity, inside the hot ``TF``), equals a model built with that gravity, to the bit;
+    the original keeps its own; the caller's array stays writable. (The copies the comparison made by
+    setting a private ``_g`` missed the hot ``TF``: G and q'' kept the model's gravity.)"""
+    model = double_pendulum()           # gravity (0, 0, -9.81)
+    g = np.array([0.3, -0.2, -1.62])
+    moon, built = model.with_gravity(g), Model(model.tree, gravity=g)
+    rng = np.random.default_rng(0)
+    q, qd, qdd = rng.uniform(-1, 1, model.n), rng.normal(size=model.n), rng.normal(size=model.n)
+    calls = {"gravity": lambda m: m.gravity(q), "forward_dynamics": lambda m: m.forward_dynamics(q, qd),
+             "inverse_dynamics": lambda m: m.inverse_dynamics(q, qd, qdd),
+             "potential_energy": lambda m: m.potential_energy(q),
+             "gravity (numpy oracle)": lambda m: m.gravity(q, method="numpy")}
+    before = {k: f(model) for k, f in calls.items()}
+    for name, f in calls.items():
+        assert np.array_equal(f(moon), f(built)), name
+        assert not np.allclose(f(moon), before[name]), name
+        assert np.array_equal(f(model), before[name]), name
+    assert g.flags.writeable and np.array_equal(moon.gravity_vector, g)
+    assert model.with_gravity([0.0, 0.0, -9.81]) is model
+    with pytest.raises(ValueError, match="3 finite numbers"):
+        model.with_gravity([0.0, np.nan, 1.0])

@@ -13,7 +13,6 @@ those), labelled as such.
 
 from __future__ import annotations
 
-import copy
 import math
 import tempfile
 import warnings
@@ -54,16 +53,8 @@ def _rel(ours, theirs, floor: float = 0.0) -> float:
 
 
 def _with_gravity(model, gravity):
-    """A shallow copy of ``model`` whose gravity is ``gravity`` (zero when None)."""
-    g = np.zeros(3) if gravity is None else np.asarray(gravity, float)
-    if np.array_equal(np.asarray(model.gravity_vector), g):
-        return model
-    out = copy.copy(model)
-    out._g = g.copy()       # the compiled hot path reads _g: without it, gravity() kept the model's own
-    g = g.copy()
-    g.setflags(write=False)
-    out.gravity_vector = g
-    return out
+    """``model`` under the scene's gravity ``gravity`` (zero when None): :meth:`Model.with_gravity`."""
+    return model.with_gravity(np.zeros(3) if gravity is None else gravity)
 
 
 def _route1_model(model):

@@ -284,11 +284,7 @@ def file_terms(mf: MujocoFile, model, scene, *, states: int = 8, seed: int = 0) 
     (:func:`~urdf2links.scenes.excitation.coordinate_ranges`; ``q'`` standard normal). Returns a
     JSON-ready dict like route 2's for a URDF."""
     g = np.zeros(3) if scene.gravity is None else np.asarray(scene.gravity, float)
-    ours = model if np.array_equal(model.gravity_vector, g) else copy.copy(model)
-    if ours is not model:     # the hot path reads _g (writable), the oracles gravity_vector
-        ours._g = g.copy()
-        g.setflags(write=False)
-        ours.gravity_vector = g
+    ours = model.with_gravity(g)
     m = mf.model
     d = mujoco.MjData(m)
     qmap = model.info["mujoco"]

@@ -23,6 +23,7 @@ extra velocity terms: E42).
 
 from __future__ import annotations
 
+import copy
 from collections import namedtuple
 from typing import Iterable, Sequence
 
@@ -34,7 +35,7 @@ from .loads import Wrench
 from .rows import NO_LOADS, base_rows, kernel_array, load_rows, state_rows
 from .transforms import resolve_base
 from .tree import LinkTree
-from .tree_arrays import flat_tree, with_gravity
+from .tree_arrays import flat_tree, with_gravity as _tf_with_gravity
 
 __all__ = ["Model", "METHODS", "DEFAULT_GRAVITY", "FlatTree"]
 
@@ -65,22 +66,15 @@ class Model:
     def __init__(self, tree: LinkTree, *, gravity=DEFAULT_GRAVITY, coupling=None, name: str = "",
                  source: str | None = None, audit: Sequence = (), info: dict | None = None):
         self.tree = tree
-        g = np.asarray(gravity, float)
-        if g.shape != (3,) or not np.all(np.isfinite(g)):
-            raise ValueError(f"gravity must be 3 finite numbers, got {gravity!r}")
-        g.setflags(write=False)
-        self.gravity_vector = g
         self.name = name
         self.source = source
         self.audit = list(audit)
         self.info = dict(info or {})
         self.compiled = FlatTree(*flat_tree(tree))
         """The tree flattened for the kernels (:class:`FlatTree`)."""
-        self._g, self._g0 = g.copy(), np.zeros(3)      # writable: the compiled kernels take writable arrays
         self._hot = {}                  # the frozen hot entries this model has called (model_kernels.frozen)
-        # the hot entries' tree, one lookup each: TI, and TF with this model's gravity or none (with_gravity)
-        self._TI = self.compiled.TI
-        self._TFg, self._TF0 = with_gravity(self.compiled.TF, self._g), with_gravity(self.compiled.TF, self._g0)
+        self._TI = self.compiled.TI     # the hot entries' tree, one lookup each (and _TFg, _TF0: _set_gravity)
+        self._set_gravity(gravity)
         self._nq = tree.n               # the length of q'' on the hot path (no coupling there)
         self._numpy_plan = None
         if coupling is None:
@@ -97,6 +91,29 @@ class Model:
             self._C, self._d, self._names = C, d, tuple(names)
             # writable C-contiguous copies: a read-only array is another numba type (another compilation)
             self._Ck, self._dk = np.array(C, float, order="C"), np.array(d, float, order="C")
+
+    def _set_gravity(self, gravity) -> None:
+        """``gravity_vector`` (3,), read-only, and the hot path's copies: ``_g`` (writable: the compiled
+        kernels take writable arrays) and the hot entries' ``TF`` with this gravity and with none
+        (:func:`~urdf2links.dynamics.tree_arrays.with_gravity`). The caller's array is copied, not frozen."""
+        g = np.array(gravity, float)
+        if g.shape != (3,) or not np.all(np.isfinite(g)):
+            raise ValueError(f"gravity must be 3 finite numbers, got {gravity!r}")
+        self._g, self._g0 = g.copy(), np.zeros(3)
+        self._TFg, self._TF0 = _tf_with_gravity(self.compiled.TF, self._g), _tf_with_gravity(self.compiled.TF, self._g0)
+        g.setflags(write=False)
+        self.gravity_vector = g
+
+    def with_gravity(self, gravity) -> Model:
+        """This model under the gravity ``gravity`` (3,): a shallow copy sharing the tree (the model itself
+        when its gravity is the same), whose every call, compiled or oracle, uses it. Raises ValueError
+        naming the value when it is not 3 finite numbers."""
+        g = np.asarray(gravity, float)
+        if g.shape == (3,) and np.array_equal(self.gravity_vector, g):
+            return self
+        out = copy.copy(self)
+        out._set_gravity(gravity)
+        return out
 
     # -- identity --------------------------------------------------------------------------------
     @property
