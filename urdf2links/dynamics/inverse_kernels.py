@@ -196,7 +196,7 @@ def id_batch(TI, TF, Q, QD, QDD, BASE, has_base, gx, gy, gz, loads, C, d, couple
 def id_plain(TI, TF, q, qd, qdd, out):
     """:func:`id_row` for a fixed base, no loads, no coupling (the hot path of
     :meth:`~urdf2links.dynamics.model.Model.inverse_dynamics`), gravity in ``TF``'s last three
-    entries (:func:`~urdf2links.dynamics.tree_arrays.with_gravity`): the same operations, so the
+    entries (:func:`~urdf2links.dynamics.tree_arrays.tf_with_gravity`): the same operations, so the
     same bits. -2 when a size is wrong, else 0."""
     n = TI[1]
     if q.size != n or qd.size != n or qdd.size != n or out.size != n:

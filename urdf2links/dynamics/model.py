@@ -35,7 +35,7 @@ from .loads import Wrench
 from .rows import NO_LOADS, base_rows, kernel_array, load_rows, state_rows
 from .transforms import resolve_base
 from .tree import LinkTree
-from .tree_arrays import flat_tree, with_gravity as _tf_with_gravity
+from .tree_arrays import flat_tree, tf_with_gravity
 
 __all__ = ["Model", "METHODS", "DEFAULT_GRAVITY", "FlatTree"]
 
@@ -44,7 +44,7 @@ DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
 _NO_C, _NO_D = np.zeros((0, 0)), np.zeros(0)
 _EMPTY, _EMPTY2 = np.empty(0), np.empty((0, 0))        # an absent qd or tau, the unused output of a hot terms call
 _empty = np.empty       # one lookup on the hot path
-_FD = None              # model_kernels.fd_plain frozen, at the first forward_dynamics (_fd)
+_FROZEN = MK.FROZEN     # the frozen hot entries (model_kernels.frozen), one lookup on the hot path
 
 FlatTree = namedtuple("FlatTree", ["TI", "TF"])
 """The tree flattened for the kernels (:func:`urdf2links.dynamics.tree_arrays.flat_tree`)."""
@@ -72,7 +72,6 @@ class Model:
         self.info = dict(info or {})
         self.compiled = FlatTree(*flat_tree(tree))
         """The tree flattened for the kernels (:class:`FlatTree`)."""
-        self._hot = {}                  # the frozen hot entries this model has called (model_kernels.frozen)
         self._TI = self.compiled.TI     # the hot entries' tree, one lookup each (and _TFg, _TF0: _set_gravity)
         self._set_gravity(gravity)
         self._nq = tree.n               # the length of q'' on the hot path (no coupling there)
@@ -95,12 +94,12 @@ class Model:
     def _set_gravity(self, gravity) -> None:
         """``gravity_vector`` (3,), read-only, and the hot path's copies: ``_g`` (writable: the compiled
         kernels take writable arrays) and the hot entries' ``TF`` with this gravity and with none
-        (:func:`~urdf2links.dynamics.tree_arrays.with_gravity`). The caller's array is copied, not frozen."""
+        (:func:`~urdf2links.dynamics.tree_arrays.tf_with_gravity`). The caller's array is copied, not frozen."""
         g = np.array(gravity, float)
         if g.shape != (3,) or not np.all(np.isfinite(g)):
             raise ValueError(f"gravity must be 3 finite numbers, got {gravity!r}")
         self._g, self._g0 = g.copy(), np.zeros(3)
-        self._TFg, self._TF0 = _tf_with_gravity(self.compiled.TF, self._g), _tf_with_gravity(self.compiled.TF, self._g0)
+        self._TFg, self._TF0 = tf_with_gravity(self.compiled.TF, self._g), tf_with_gravity(self.compiled.TF, self._g0)
         g.setflags(write=False)
         self.gravity_vector = g
 
@@ -369,8 +368,8 @@ class Model:
         if base is None and not loads and method == "recursive" and self._C is None:    # the hot path
             out = _empty(self._nq)
             try:        # _call's work inlined: each Python step here is a few percent of the call
-                pivot = (_FD or _fd())(self._TI, self._TFg if gravity else self._TF0, q, qd,
-                                       _EMPTY if tau is None else tau, out)
+                pivot = (_FROZEN.get("fd_plain") or MK.frozen("fd_plain"))(
+                    self._TI, self._TFg if gravity else self._TF0, q, qd, _EMPTY if tau is None else tau, out)
             except TypeError:       # not float64 vectors (or a batch): converted on the general path
                 pivot = -2
             if pivot == -1:
@@ -422,9 +421,7 @@ class Model:
         """The frozen hot entry ``name`` on this model's tree, ``TF`` one of its two hot ones (``_TFg``
         or ``_TF0``); -2 when the arguments are not float64 vectors of the right sizes (the caller then
         takes the general path)."""
-        fn = self._hot.get(name)
-        if fn is None:
-            fn = self._hot[name] = MK.frozen(name)
+        fn = _FROZEN.get(name) or MK.frozen(name)
         try:
             return fn(self._TI, TF, *args)
         except TypeError:       # not float64 vectors (or a batch): converted on the general path
@@ -516,10 +513,3 @@ def _fmt(q) -> str:
     if q is None:
         return "?"
     return np.array2string(np.asarray(q, float), precision=4, separator=", ", max_line_width=10_000)
-
-
-def _fd():
-    """model_kernels.fd_plain, frozen (compiled or loaded at the first call of the process), kept in ``_FD``."""
-    global _FD
-    _FD = MK.frozen("fd_plain")
-    return _FD

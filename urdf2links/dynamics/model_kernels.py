@@ -9,7 +9,7 @@ per-state results to the last bit. ``fd_plain``, ``terms_plain``, ``forces_plain
 single-state paths of :class:`~urdf2links.dynamics.model.Model` (fixed base, no loads, no coupling):
 few arguments, since every array argument costs the dispatcher a fraction of a microsecond (so
 their ``TF`` carries the gravity in its last three entries,
-:func:`~urdf2links.dynamics.tree_arrays.with_gravity`);
+:func:`~urdf2links.dynamics.tree_arrays.tf_with_gravity`);
 :func:`frozen` gives each with its signatures compiled and compilation switched off, so that an
 argument of another type raises TypeError (the model then converts it) instead of compiling a new
 variant. They compute what the row functions compute, operation for operation (the same bits).
@@ -33,8 +33,8 @@ from .inverse_kernels import id_plain  # noqa: F401  (a hot entry: frozen() find
 from .kernels import add_wrench, clear_wrenches, dynamics, energies, kinematics, poses
 from .tree_arrays import I_ANCIDX, I_ANCPTR, W_A, W_B, W_Q, W_SIZE, gravity_of, nn
 
-__all__ = ["coupled_size", "frozen", "fd_plain", "terms_plain", "forces_plain", "energy_plain", "fd_one", "fd_batch",
-           "terms_one", "terms_batch", "energy_one",
+__all__ = ["coupled_size", "frozen", "FROZEN", "fd_plain", "terms_plain", "forces_plain", "energy_plain", "fd_one",
+           "fd_batch", "terms_one", "terms_batch", "energy_one",
            "energy_batch", "poses_one", "chunks", "MASS", "BIAS", "FORCES"]
 
 MASS, BIAS, FORCES = 0, 1, 2        # what terms_row returns: A, -b (e, or G), Q
@@ -191,7 +191,7 @@ def energy_row(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, C, d, co
 @njit(cache=True)
 def fd_plain(TI, TF, q, qd, tau, out):
     """:func:`fd_row` for a fixed base, no loads, no coupling, tau (n,) or (0,) (none: one signature,
-    :data:`_PLAIN_SIGS`), gravity in ``TF`` (:func:`~urdf2links.dynamics.tree_arrays.with_gravity`); -2
+    :data:`_PLAIN_SIGS`), gravity in ``TF`` (:func:`~urdf2links.dynamics.tree_arrays.tf_with_gravity`); -2
     when a size is wrong."""
     n = TI[1]
     if q.size != n or qd.size != n or out.size != n:
@@ -219,7 +219,7 @@ def fd_plain(TI, TF, q, qd, tau, out):
 @njit(cache=True)
 def terms_plain(TI, TF, q, qd, what, A, v):
     """:func:`terms_row` for a fixed base, no loads, no coupling: MASS into ``A`` (n, n); BIAS ``-b``
-    into ``v`` (n,): ``e`` with zero gravity in ``TF`` (:func:`~urdf2links.dynamics.tree_arrays.with_gravity`),
+    into ``v`` (n,): ``e`` with zero gravity in ``TF`` (:func:`~urdf2links.dynamics.tree_arrays.tf_with_gravity`),
     ``G`` with ``qd`` of size 0 (at rest). -2 when a size is wrong, else 0."""
     n = TI[1]
     if q.size != n:
@@ -272,7 +272,7 @@ def forces_plain(TI, TF, q, loads, v):
 @njit(cache=True)
 def energy_plain(TI, TF, q, qd, out):
     """``(E, V)`` (E37) into ``out`` (2,) for a fixed base and no coupling, V for the gravity in ``TF``
-    (:func:`~urdf2links.dynamics.tree_arrays.with_gravity`); ``qd`` of size 0: at rest (V only is meaningful).
+    (:func:`~urdf2links.dynamics.tree_arrays.tf_with_gravity`); ``qd`` of size 0: at rest (V only is meaningful).
     -2 when a size is wrong, else 0."""
     n = TI[1]
     if q.size != n or out.size != 2:
@@ -302,7 +302,9 @@ _PLAIN_SIGS = {
     "id_plain": [types.int64(_I1, _F1, _F1, _F1, _F1, _F1)],
 }
 
-_FROZEN: dict = {}
+#: The hot entries :func:`frozen` has given in this process, by name (the model's hot path reads it
+#: directly: one dictionary lookup).
+FROZEN: dict = {}
 
 
 def frozen(name: str):
@@ -310,13 +312,13 @@ def frozen(name: str):
     (or loaded from the cache) for its :data:`_PLAIN_SIGS`, with further compilation switched off:
     an argument of another type raises TypeError (the caller then converts it) instead of compiling
     a new variant."""
-    fn = _FROZEN.get(name)
+    fn = FROZEN.get(name)
     if fn is None:
         fn = globals()[name]
         for sig in _PLAIN_SIGS[name]:
             fn.compile(sig)
         fn.disable_compile()
-        _FROZEN[name] = fn
+        FROZEN[name] = fn
     return fn
 
 

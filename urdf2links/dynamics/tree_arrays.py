@@ -32,7 +32,7 @@ Layout (the names are module constants, folded into the compiled code):
   the base record (``BASE_*``), and the tree's rates ``q'`` (n,) (written by the kinematics, for the
   armature's energy).
 - The hot single-state entries (:mod:`urdf2links.dynamics.model_kernels`) take ``TF`` with the gravity
-  appended as its last three entries (:func:`with_gravity`, :func:`gravity_of`): one array argument fewer.
+  appended as its last three entries (:func:`tf_with_gravity`, :func:`gravity_of`): one array argument fewer.
 """
 
 from __future__ import annotations
@@ -44,7 +44,7 @@ from ..compilation import kernel, one_signature
 
 from .transforms import elementary
 
-__all__ = ["flat_tree", "with_gravity", "gravity_of", "HEADER", "CONSTANT", "KS", "KF", "KL", "workspace_size", "nn",
+__all__ = ["flat_tree", "tf_with_gravity", "gravity_of", "HEADER", "CONSTANT", "KS", "KF", "KL", "workspace_size", "nn",
            "armature_items",
            "ARM_ONE", "ARM_BALL"]
 
@@ -90,7 +90,7 @@ def nn(k):
     return max(k, 0)
 
 
-def with_gravity(TF, g) -> np.ndarray:
+def tf_with_gravity(TF, g) -> np.ndarray:
     """The hot entries' ``TF`` (m + 3,): the tree's ``TF`` (m,) 
     with the gravity ``g`` (3,) appended, read by :func:`gravity_of`; the kernels index ``TF`` at header
     offsets only, so the three entries at its end change nothing else. A model keeps one with its
@@ -100,7 +100,7 @@ def with_gravity(TF, g) -> np.ndarray:
 
 @njit(cache=True, inline="always")
 def gravity_of(TF):
-    """``(gx, gy, gz)``: the last three entries of a hot entry's ``TF`` (:func:`with_gravity`)."""
+    """``(gx, gy, gz)``: the last three entries of a hot entry's ``TF`` (:func:`tf_with_gravity`)."""
     k = TF.size - 3
     return TF[k], TF[k + 1], TF[k + 2]
 
