@@ -90,7 +90,8 @@ from ..mujoco_side.mujoco_run import MujocoRun, energy_function
 from ..mujoco_side.stable_run import stable_run
 from .actuator_terms import file_actuators, merged, route1_actuators, route2_actuators
 from .scene_terms import ROUTE1_LABEL, route1_terms, route2_terms
-from .verdict import comparison_verdict, cut_scope
+from .plausibility import file_floors, plausibility
+from .verdict import comparison_verdict, cut_scope, switched_off
 
 __all__ = [
     "SceneComparison",
@@ -240,7 +241,8 @@ class SceneComparison:
         trajectory = trajectory or self._trajectory_summary()
         return comparison_verdict(trajectory["verdict"], scope=self.info["scope"], coverage=self.coverage,
                                   mujoco_integrator=self.run.integrator, mujoco_timestep=float(self.run.timestep),
-                                  blow_ups=dict(self.run.blow_ups), fallback=self.info.get("mujoco_fallback"))
+                                  blow_ups=dict(self.run.blow_ups), fallback=self.info.get("mujoco_fallback"),
+                                  off=self.info.get("switched_off", ()), plausibility=self.info.get("plausibility"))
 
     def _energy_summary(self) -> dict:
         e = self.energy
@@ -332,6 +334,7 @@ class SceneComparison:
                       "max_rel_error_route2": r2.get("max_rel_error"),
                       "route1": r1, "route2": r2},
             "verdict": verdict,
+            "plausibility": self.info["plausibility"].summary() if self.info.get("plausibility") else None,
             "coverage": self.coverage.summary(),
             "trajectory": trajectory,
             "energy": energy,
@@ -444,6 +447,13 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
                          "MJCF file does not take yet: MuJoCo's trajectory is route 1's (the project's tree as MJCF)")
     q0, qd0 = scene.initial_state(model)
     cov = coverage(q_o, qd_o, model=model)
+    floors = file_floors(mf.model) if mf is not None else []    # issue 43: the gate before any verdict
+    info["plausibility"] = plausibility(plan, t=t, runs={"urdf2links": (q_o, qd_o), "MuJoCo": (run.q, run.qd)},
+                                        balances={"urdf2links": energy["ours_balance"],
+                                                  "MuJoCo": energy["mujoco_balance"]},
+                                        energy_scale=info["energy_scale"], t_end=T, qd0=qd0, floors=floors)
+    info.update({"switched_off": switched_off(model, plan, mf.model if mf is not None else None),
+                 "floors": [{"name": nm, "normal": n.tolist(), "height": h} for nm, n, h in floors]})
     info.update({"trajectory_route": FILE_LABEL if file_run else ROUTE1_LABEL, "mujoco_fallback": fallback,
                  "coverage": cov, "scope": cut_scope(model, scene.load_options, plan),
                  "t_end": T, "t_end_note": t_end_note, "effects": plan.terms, "warm_up": warm,

@@ -195,6 +195,9 @@ def check_scene(res: CaseResult, entry: SceneEntry, ctx: RunContext) -> None:
     res.summary = summary
     res.lines.append(f"{entry.id}: t = 0..{summary['t_end']:g} s, terms {get(summary, 'terms.max_rel_error'):.2e}, "
                      f"max |dq| {float(get(summary, 'trajectory.max_abs_error')):.2e}")
+    gate = summary.get("plausibility") or {}
+    if not gate.get("plausible", True):     # issue 43: no figure of an implausible run is evidence
+        res.problems.append(Problem(f"{entry.id}: {gate['text']}"))
     if ctx.writing:
         res.lines.append("accepted as its baseline (--write-baselines)")
         return

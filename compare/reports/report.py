@@ -101,7 +101,8 @@ def _top(s, check, index_link, index_label="all scenes") -> list[str]:
     e = html.escape
     tr, mj, pr = s["trajectory"], s["mujoco"], s["project"]
     title = f"{s['robot']} / {s['scene']}: urdf2links against MuJoCo"
-    verdict_cls = ("box chaos" if s["chaotic"] or weak_evidence(s) else
+    implausible = not (s.get("plausibility") or {}).get("plausible", True)     # issue 43: the gate first
+    verdict_cls = ("box bad" if implausible else "box chaos" if s["chaotic"] or weak_evidence(s) else
                    ("box bad" if tr["divergence_time"] is not None else "box"))
     parts = [f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>{e(title)}</title>"
              f"<style>{_CSS}</style></head><body>",
