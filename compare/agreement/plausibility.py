@@ -2,8 +2,7 @@
 
 Two engines that agree about a robot falling through its floor have checked nothing. Before the
 verdict says "agree" or "DIVERGE", :func:`plausibility` checks each engine's run (urdf2links' at
-MuJoCo's sample times, and MuJoCo's) for (docs/reports.md, "The plausibility gate"; docs/equations.md
-(E85)):
+MuJoCo's sample times, and MuJoCo's) for (docs/reports.md, "The plausibility gate"):
 
 * **penetration**: a ``[[contact]]`` sphere deeper in its ground than :data:`PENETRATION_FRACTION` of
   its radius (E77's depth ``d = h + r - n . x_c``);
@@ -168,7 +167,7 @@ def _slots(model) -> tuple[np.ndarray, tuple[str, ...]]:
 def speed_bounds(plan, qd0, t_end: float) -> tuple[float, float]:
     """``(angular rad/s, linear m/s)``: :data:`ANGULAR_SPEED_BOUND` and :data:`LINEAR_SPEED_BOUND` plus the
     run's free fall ``|g| t_end``, each raised to :data:`SPEED_FACTOR` times the largest initial speed of
-    its kind when the scene starts faster (E85)."""
+    its kind when the scene starts faster."""
     angular, _ = _slots(plan.model)
     qd0 = np.abs(np.asarray(qd0, float))
     g = 0.0 if plan.scene.gravity is None else float(np.linalg.norm(plan.scene.gravity))
