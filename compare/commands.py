@@ -240,7 +240,8 @@ def report_command(args) -> int:
         tr, en = summary["trajectory"], summary["energy"]
         err(f"    done in {clock() - t0:.1f} s: terms {summary['terms']['max_rel_error']:.1e}, "
              f"max |dq| {tr['max_abs_error']:.1e}, drift {en['project_drift_rel']:.1e} / {en['mujoco_drift_rel']:.1e}"
-             + ("" if check is None else f", baseline {'ok' if check.ok else 'FAILED: ' + ', '.join(check.failures)}"))
+             + ("" if check is None else f", baseline {'ok' if check.ok else 'FAILED: ' + ', '.join(check.failures)}")
+             + ("" if summary["verdict"].get("plausible", True) else "; IMPLAUSIBLE RUN (the verdict says why)"))
     note = ""
     if args.t_end is not None:
         note = f"Every scene run for t_end = {args.t_end:g} s (--t-end)."

@@ -170,12 +170,18 @@ def test_check_fails_an_implausible_scene(tmp_path):
 
 def test_a_sound_shipped_scene_still_agrees():
     """The control: the shipped spring arm (torques, springs, dampers, gravity) passes the gate and agrees;
-    its scope names the joint limits both engines leave out."""
+    its scope names the joint limits both engines leave out, and not its springs (the scene's own replace the
+    file's damping)."""
     s = _compare(shipped_robots_dir() / "spring_arm_torques.toml", 1.0)
     assert s["plausibility"]["plausible"] and not s["plausibility"]["findings"], s["plausibility"]["text"]
     assert s["verdict"]["plausible"] and s["verdict"]["text"].startswith("the engines agree to ")
     assert "implausible" not in s["verdict"]["text"]
-    assert s["verdict"]["scope"] == "the whole model" or "switched off on both engines" in s["verdict"]["scope"]
+    # its joints' limits are left out of both engines; its springs and dampers are the scene's own (not "off")
+    off = {x["effect"]: x for x in s["verdict"]["switched_off"]}
+    assert set(off) == {"limits"} and off["limits"]["names"] == ["j1", "j2", "j3"], off
+    assert s["verdict"]["scope"] == ("the model without its joint limits (3 joints: j1, j2, j3) (switched off on both "
+                                     "engines)")
+    assert "without its joint limits (3 joints: j1, j2, j3) (switched off on both engines)" in s["verdict"]["text"]
 
 
 @pytest.mark.parametrize("bound", ["PENETRATION_FRACTION", "BASE_MARGIN", "LIMIT_MARGIN", "ANGULAR_SPEED_BOUND",

@@ -80,7 +80,7 @@ def switched_off(model, plan, file_model=None) -> list[dict]:
     ``{effect, count, names, text}``: ``contact`` (an MJCF file's colliding geoms, its floor among them, in a
     scene without ``[[contact]]``), ``limits`` (joints with limits: neither engine enforces them),
     ``frictionloss`` (Coulomb friction: not modelled), ``springs`` (the file's joint stiffness or damping the
-    scene does not apply), ``actuators`` (an MJCF file's actuators the scene does not name). ``file_model``:
+    scene does not apply, on joints without a ``[[spring]]`` of the scene), ``actuators`` (an MJCF file's actuators the scene does not name). ``file_model``:
     the MJCF file compiled by MuJoCo (its geoms), when there is one."""
     joints = model.info.get("joints", [])
     scene = plan.scene
@@ -100,9 +100,11 @@ def switched_off(model, plan, file_model=None) -> list[dict]:
                                                   and max(abs(j["lower"]), abs(j["upper"])) < _NO_LIMIT], "joint"))
     out.append(_effect("frictionloss", "friction loss (Coulomb friction)", [j["name"] for j in joints
                                                                             if j.get("friction")], "joint"))
-    springs = [] if getattr(scene, "file_springs", False) else [j["name"] for j in joints if j.get("stiffness")]
+    given = {s.coordinate for s in plan.spring_set.springs}     # the scene's own spring replaces the file's
+    own = [j for j in joints if not set(j.get("coordinates") or ()) & given]
+    springs = [] if getattr(scene, "file_springs", False) else [j["name"] for j in own if j.get("stiffness")]
     if not getattr(scene, "urdf_damping", False):
-        springs += [j["name"] for j in joints if j.get("damping") and j["name"] not in springs]
+        springs += [j["name"] for j in own if j.get("damping") and j["name"] not in springs]
     out.append(_effect("springs", "the file's joint springs and dampers", springs, "joint"))
     named = {a.name for a in plan.actuator_set.actuators}
     out.append(_effect("actuators", "the file's actuators", [a["name"] for a in model.info.get("actuators", [])

@@ -285,6 +285,7 @@ def _compared_row(row: dict, s: dict) -> None:
     row["coverage"] = {k: cov.get(k) for k in ("coordinates", "moved", "moved_fraction", "weak_evidence", "text")}
     row["scope"] = verdict.get("scope")
     row["verdict"] = verdict.get("text", tr["verdict"])
+    row["plausible"] = verdict.get("plausible", True)      # issue 43: the gate before the verdict
     row["limit_excursions"] = len(s.get("limit_excursions", []))
     row["mujoco_notes"] = list(s["mujoco"].get("notes", []))
     row["mujoco_blow_ups"] = dict(s["mujoco"]["blow_ups"])

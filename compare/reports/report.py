@@ -96,6 +96,12 @@ def _headline(s) -> list:
     return head
 
 
+def _gate_line(p: dict) -> str:
+    """The plausibility gate in one line: what it checked, and whether both runs passed (docs/reports.md)."""
+    return (("passed" if p["plausible"] else "FAILED (the verdict says why)") + " on both engines' runs: "
+            + "; ".join(p["checks"]))
+
+
 def _top(s, check, index_link, index_label="all scenes") -> list[str]:
     """Title, verdict, notes on the run length and the baseline check, headline figures, setup."""
     e = html.escape
@@ -112,6 +118,8 @@ def _top(s, check, index_link, index_label="all scenes") -> list[str]:
              f"<div class='{verdict_cls}'><b>Trajectories:</b> {e(tr['verdict'])}</div>"]
     if s.get("coverage"):
         parts.append(f"<p class='sub'><b>Coverage:</b> {e(s['coverage']['text'])} (section 4).</p>")
+    if s.get("plausibility"):       # issue 43: what the gate checked, before any verdict
+        parts.append(f"<p class='sub'><b>Plausibility:</b> {e(_gate_line(s['plausibility']))}.</p>")
     if s.get("t_end_note"):
         parts.append(f"<div class='box chaos'>{e(s['t_end_note'])}</div>")
     if check is not None:
@@ -306,7 +314,10 @@ def render_markdown(s: dict) -> str:
     lines = [f"# {s['robot']} / {s['scene']}: urdf2links against MuJoCo", "", s["description"], ""]
     if s.get("t_end_note"):
         lines += [f"> {s['t_end_note']}", ""]
-    lines += [f"**Trajectories:** {tr['verdict']}", "", *coverage_markdown(s),
+    lines += [f"**Trajectories:** {tr['verdict']}", ""]
+    if s.get("plausibility"):       # issue 43: what the gate checked, before any verdict
+        lines += [f"**Plausibility:** {_gate_line(s['plausibility'])}.", ""]
+    lines += [*coverage_markdown(s),
               f"t = 0..{s['t_end']:g} s; urdf2links {pr['method']}"
               + (f" rtol {pr['rtol']:g}" if pr["method"] not in ("RK4", "midpoint") else f" dt {pr['dt']:g}")
               + f"; MuJoCo {mj['integrator']} dt {mj['timestep']:g} s; {s['route_description']}.", "",
