@@ -158,6 +158,21 @@ def test_an_energy_gain_in_a_passive_scene_is_implausible(tmp_path):
     assert "energy grows in a passive scene" in s["verdict"]["text"]
 
 
+def test_an_energy_gain_of_mujocos_run_is_implausible(tmp_path):
+    """The same spring integrated well by urdf2links (DOP853, rtol 1e-10) and by MuJoCo's semi-implicit Euler
+    at dt 0.003 s (omega dt = 0.87: its energy swings by tens of percent, measured 0.77 of the spring's 289 J):
+    the gate names MuJoCo's energy growth (h - h(0): its dissipated work is not measured) and only MuJoCo's."""
+    path = tmp_path / "gain.toml"
+    path.write_text(ENERGY_GAIN.replace('method = "RK4"\ndt = 0.01', 'method = "DOP853"\nrtol = 1e-10\natol = 1e-12'))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        s = compare_scene(path, states=1, progress=False, mujoco_integrator="Euler", mujoco_dt=0.003).summary()
+    assert not s["mujoco"]["blow_ups"] and s["project"]["method"] == "DOP853"
+    found = _implausible(s, "energy_growth")
+    assert [x["engine"] for x in found] == ["MuJoCo"] and found[0]["value"] > 0.1, found
+    assert "MuJoCo: the energy grows in a passive scene: max (h - h(0))" in s["verdict"]["text"]
+
+
 def test_check_fails_an_implausible_scene(tmp_path):
     """``urdf2links check``'s scene case fails with the gate's reasons, even when it writes the baselines."""
     path = tmp_path / "runaway.toml"
