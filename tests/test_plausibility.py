@@ -6,7 +6,9 @@ Planted runs that are not the robot, each run by both engines for real (urdf2lin
 - the shipped quadruped on a ground far too soft for its weight sinks its feet past their radius;
 - a huge constant torque on the UR5-like arm's elbow (limits +-pi in the file, left out of both engines)
   spins it far past its limit;
-- a passive pendulum on a stiff spring integrated by RK4 with a step past its stability bound gains energy.
+- a free box driven by a large force and moment passes the linear and angular speed bounds;
+- a passive pendulum on a stiff spring integrated by RK4 with a step past its stability bound gains energy
+  (urdf2links' run), and by MuJoCo's Euler at a coarse step (MuJoCo's run).
 
 Each gets "implausible run: ..." naming the engine, the part, the value and the bound, never "agree" or
 "DIVERGE", and ``urdf2links check`` fails it. A sound shipped scene still gets "agree" (the control), and
@@ -126,6 +128,8 @@ def test_a_joint_runaway_past_its_limits_is_implausible(tmp_path):
     # whatever the trajectories' sentence says (here they part at the run-away's speeds), the verdict does not
     assert s["verdict"]["agreement"] not in s["verdict"]["text"]
     assert "joint 'elbow_joint' passes its upper limit" in s["verdict"]["text"]
+    speeds = {x["part"] for x in s["plausibility"]["findings"] if x["check"] == "speed" and x["engine"] == "MuJoCo"}
+    assert "elbow_joint" in speeds          # measured ~1e3 rad/s against the 100 rad/s bound
 
 
 ENERGY_GAIN = """description = "planted: a passive stiff spring, RK4 past its stability bound"
@@ -171,6 +175,45 @@ def test_an_energy_gain_of_mujocos_run_is_implausible(tmp_path):
     found = _implausible(s, "energy_growth")
     assert [x["engine"] for x in found] == ["MuJoCo"] and found[0]["value"] > 0.1, found
     assert "MuJoCo: the energy grows in a passive scene: max (h - h(0))" in s["verdict"]["text"]
+
+
+SPIN = """description = "planted: a free box driven by a large moment and force, no gravity"
+[robot]
+shipped = "free_body"
+floating_base = true
+[[moment]]
+link = "body"
+frame = "world"
+value = [0.0, 0.0, 200.0]
+[[force]]
+link = "body"
+point = [0, 0, 0]
+frame = "world"
+value = [300.0, 0.0, 0.0]
+[run]
+t_end = 0.5
+method = "DOP853"
+rtol = 1e-10
+atol = 1e-12
+samples = 101
+"""
+
+
+def test_a_base_twist_past_the_speed_bounds_is_implausible(tmp_path):
+    """The free box (3 kg, I_zz = 0.5 kg m^2, at rest, no gravity) under 300 N and 200 N m for 0.5 s: 50 m/s
+    and 200 rad/s, past the 10 m/s and 100 rad/s bounds; the engines agree to ~1e-12 and the verdict is
+    still not "agree"."""
+    path = tmp_path / "spin.toml"
+    path.write_text(SPIN)
+    s = _compare(path, 0.5)
+    found = _implausible(s, "speed")
+    got = {(x["engine"], x["units"]): x for x in found}
+    assert set(got) == {(e, u) for e in ("urdf2links", "MuJoCo") for u in ("m/s", "rad/s")}
+    for e in ("urdf2links", "MuJoCo"):
+        assert abs(got[(e, "m/s")]["value"] - 50.0) < 1e-6 and got[(e, "m/s")]["bound"] == P.LINEAR_SPEED_BOUND
+        assert abs(got[(e, "rad/s")]["value"] - 200.0) < 1e-6 and got[(e, "rad/s")]["bound"] == P.ANGULAR_SPEED_BOUND
+    assert s["trajectory"]["divergence_time"] is None
+    assert "the floating base body spins at 200 rad/s" in s["verdict"]["text"]
 
 
 def test_check_fails_an_implausible_scene(tmp_path):
