@@ -88,7 +88,7 @@ def compared(name):
 def test_model_compared_with_its_constraints(name, record_figure):
     """The file's equalities and tendons read (MuJoCo's counts), every equality solved and run by MuJoCo's
     file with it on, the tendons with a force acting on both engines (the others have none to drop); the
-    engines within the divergence threshold; the verdict's scope the whole model."""
+    engines within the divergence threshold; nothing cut from the mechanism (verdict.cut)."""
     path, n_eq, n_td, _, _ = MODELS[name]
     m = mujoco.MjModel.from_xml_path(str(path))
     model, cmp = compared(name)

@@ -244,8 +244,8 @@ def _limits(plan, engine, t, q) -> list[Finding]:
         bound = LIMIT_MARGIN * (x.upper - x.lower)
         if x.worst > bound:
             limit = x.lower if x.side == "lower" else x.upper
-            out.append(Finding(engine, "joint_limit", x.joint, float(x.worst), float(bound), x.units, float(x.t_worst),
-                               f"joint {x.joint!r} passes its {x.side} limit {limit:.4g} {x.units} by"))
+            out.append(Finding(engine, "joint_limit", x.joint, float(x.worst), float(bound), x.units,
+                               float(x.t_worst), f"joint {x.joint!r} passes its {x.side} limit {limit:.4g} {x.units} by"))
     return out
 
 
@@ -274,9 +274,9 @@ def _speeds(plan, engine, t, q, qd, bounds) -> list[Finding]:
 def plausibility(plan, *, t, runs: dict, balances: dict, energy_scale: float, t_end: float, qd0,
                  floors=()) -> Plausibility:
     """The gate (module doc) on ``runs`` (``{engine: (q, qd)}``, (m, n) each at times ``t``) and the energy
-    each may not gain (``{engine: (m,)}``: urdf2links' ``h - h(0) - W``, MuJoCo's ``h - h(0)``),
-    ``energy_scale`` (J) the drifts' scale; ``qd0`` the
-    initial rates (the speed bounds), ``floors`` the file's (:func:`file_floors`)."""
+    each may not gain, ``balances`` (``{engine: (values (m,), what)}``: urdf2links' ``h - h(0) - W``, MuJoCo's
+    ``h - h(0)``, ``what`` their formula); ``energy_scale`` (J) the drifts' scale; ``qd0`` the initial rates
+    (the speed bounds); ``floors`` the file's (:func:`file_floors`)."""
     t = np.asarray(t, float)
     bounds = speed_bounds(plan, qd0, t_end)
     passive = passive_scene(plan)
@@ -296,10 +296,10 @@ def plausibility(plan, *, t, runs: dict, balances: dict, energy_scale: float, t_
         findings += _contact(plan, engine, t, q) + _base(plan, engine, t, q, floors) + _limits(plan, engine, t, q)
         findings += _speeds(plan, engine, t, q, qd, bounds)
         if passive and engine in balances:
-            growth = np.asarray(balances[engine], float) / max(energy_scale, 1e-300)
+            values, what = balances[engine]
+            growth = np.asarray(values, float) / max(energy_scale, 1e-300)
             findings += _worst(engine, "energy_growth", "energy", growth, ENERGY_GROWTH_BOUND, t, "",
-                               f"the energy grows in a passive scene: max ({'h - h(0) - W' if engine == 'urdf2links' else 'h - h(0)'}) "
-                               f"over {energy_scale:.3g} J is")
+                               f"the energy grows in a passive scene: max ({what}) over {energy_scale:.3g} J is")
     return Plausibility(findings=tuple(findings), checks=tuple(checks), bounds={
         "penetration_fraction": PENETRATION_FRACTION, "base_margin_m": BASE_MARGIN, "limit_margin": LIMIT_MARGIN,
         "angular_speed_rad_s": bounds[0], "linear_speed_m_s": bounds[1], "energy_growth": ENERGY_GROWTH_BOUND,

@@ -449,8 +449,8 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     cov = coverage(q_o, qd_o, model=model)
     floors = file_floors(mf.model) if mf is not None else []    # issue 43: the gate before any verdict
     info["plausibility"] = plausibility(plan, t=t, runs={"urdf2links": (q_o, qd_o), "MuJoCo": (run.q, run.qd)},
-                                        balances={"urdf2links": energy["ours_balance"],     # its own W
-                                                  "MuJoCo": energy["mujoco_h"] - energy["mujoco_h"][0]},
+                                        balances={"urdf2links": (energy["ours_balance"], "h - h(0) - W"),
+                                                  "MuJoCo": (energy["mujoco_h"] - energy["mujoco_h"][0], "h - h(0)")},
                                         energy_scale=info["energy_scale"], t_end=T, qd0=qd0, floors=floors)
     info.update({"switched_off": switched_off(model, plan, mf.model if mf is not None else None),
                  "floors": [{"name": nm, "normal": n.tolist(), "height": h} for nm, n, h in floors]})
