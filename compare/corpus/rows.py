@@ -292,6 +292,8 @@ def _compared_row(row: dict, s: dict) -> None:
     fallback = s["mujoco"].get("fallback")
     if (verdict.get("cut") or {}).get("cut"):     # the note column says what both engines left out
         row["reason"] = verdict["scope"] + (f"; {row['reason']}" if row.get("reason") else "")
+    if not row["plausible"]:     # issue 43: the note column opens with the gate's reasons
+        row["reason"] = s["plausibility"]["text"] + (f"; {row['reason']}" if row.get("reason") else "")
     if row["mujoco_blow_ups"]:   # the index's note column says it: the difference is MuJoCo's blow-up
         note = instability_note(row["mujoco_blow_ups"], s["mujoco"]["integrator"], s["mujoco"]["timestep"])
         row["reason"] = note + (f"; {row['reason']}" if row.get("reason") else "")
