@@ -250,3 +250,24 @@ def test_every_bound_is_documented(bound):
 
     doc = (checkout_root() / "docs" / "reports.md").read_text()
     assert f"`{bound}`" in doc, bound
+
+
+def test_the_scope_names_what_a_real_mjcf_file_loses(tmp_path):
+    """gymnasium's ant.xml (a floor, 8 joints with limits, 8 motors) under gravity for 0.2 s, in a scene that
+    names no contact and no actuator: the verdict's scope, in the JSON and in the sentence, names the floor and
+    its contact, the limits and the motors as switched off on both engines, never "the whole model"."""
+    import importlib.resources
+
+    ant = importlib.resources.files("gymnasium").joinpath("envs", "mujoco", "assets", "ant.xml")
+    path = tmp_path / "ant_fall.toml"
+    path.write_text(f'description = "the ant under gravity"\n[robot]\nmjcf = "{ant}"\n[gravity]\nmagnitude = 9.81\n'
+                    '[run]\nt_end = 0.2\nsamples = 41\n')
+    s = _compare(path, 0.2)
+    v = s["verdict"]
+    off = {x["effect"]: x for x in v["switched_off"]}
+    assert v["scope"].startswith("the model without its ") and v["scope"].removeprefix("the model ") in v["text"]
+    assert off["limits"]["count"] == 8 and off["actuators"]["count"] == 8, off
+    if "contact" not in s["effects"]:       # the scene applies no contact: the file's is switched off
+        assert off["contact"]["names"][0] == "floor" and "the file's floor 'floor'" in v["scope"]
+    for effect in off:
+        assert off[effect]["text"] in v["text"]
