@@ -80,8 +80,9 @@ def switched_off(model, plan, file_model=None) -> list[dict]:
     ``{effect, count, names, text}``: ``contact`` (an MJCF file's colliding geoms, its floor among them, in a
     scene without ``[[contact]]``), ``limits`` (joints with limits: neither engine enforces them),
     ``frictionloss`` (Coulomb friction: not modelled), ``springs`` (the file's joint stiffness or damping the
-    scene does not apply, on joints without a ``[[spring]]`` of the scene), ``actuators`` (an MJCF file's actuators the scene does not name). ``file_model``:
-    the MJCF file compiled by MuJoCo (its geoms), when there is one."""
+    scene does not apply, on joints without a ``[[spring]]`` of the scene), ``actuators`` (an MJCF file's
+    actuators the scene does not name). ``file_model``: the MJCF file compiled by MuJoCo (its geoms), when
+    there is one."""
     joints = model.info.get("joints", [])
     scene = plan.scene
     out = []
@@ -92,9 +93,9 @@ def switched_off(model, plan, file_model=None) -> list[dict]:
         colliding = [g for g in range(m.ngeom) if m.geom_contype[g] or m.geom_conaffinity[g]]
         name = {g: mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g) or f"geom {g}" for g in colliding}
         planes = [name[g] for g in colliding if int(m.geom_type[g]) == int(mujoco.mjtGeom.mjGEOM_PLANE)]
-        out.append(_effect("contact", "contact" + (f" and the file's floor {', '.join(repr(p) for p in planes)}" if planes
-                                                   else ""), planes + [name[g] for g in colliding if name[g] not in planes],
-                           "colliding geom"))
+        floor = f" and the file's floor {', '.join(repr(p) for p in planes)}" if planes else ""
+        others = [name[g] for g in colliding if name[g] not in planes]
+        out.append(_effect("contact", "contact" + floor, planes + others, "colliding geom"))
     out.append(_effect("limits", "joint limits", [j["name"] for j in joints if j.get("lower") is not None
                                                   and j.get("upper") is not None and j["lower"] < j["upper"]
                                                   and max(abs(j["lower"]), abs(j["upper"])) < _NO_LIMIT], "joint"))
