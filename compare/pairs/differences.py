@@ -40,7 +40,7 @@ from urdf2links.dynamics.inertia import pseudo_inertia
 from urdf2links.parsers.parts import JOINT_KINDS, RobotParts, home_poses, parts_model
 
 from .mapping import JointMapping
-from .roots import alignment, align_second, match_bodies, pose_words, root_pair
+from .roots import alignment, align_second, match_bodies, paired_bodies, pose_words, root_pair
 
 __all__ = ["Difference", "Side", "side_model", "compare_descriptions", "ROUNDING", "KINDS", "split_H"]
 
@@ -200,8 +200,9 @@ def _joint_label(b) -> str:
 class _Comparer:
     def __init__(self, U: RobotParts, M: RobotParts, mapping: JointMapping):
         self.U, self.M, self.mapping = U, M, mapping
-        self.bodies = match_bodies(U, M, [(m.urdf, m.mjcf) for m in mapping.matches])
-        self.root = mapping.root if mapping.root is not None else root_pair(U, M, self.bodies)
+        pairs = [(m.urdf, m.mjcf) for m in mapping.matches]
+        self.root = mapping.root if mapping.root is not None else root_pair(U, M, match_bodies(U, M, pairs))
+        self.bodies = paired_bodies(U, M, pairs, self.root)     # the root pair among them (structure, E63)
         self.pmU, self.pmM = parts_model(U), parts_model(M)
         self.WU = home_poses(U)
         self.WM = self._aligned(M)          # the second's world carried into the first's (E63)
@@ -290,8 +291,8 @@ class _Comparer:
 
     def _effort(self, a, b, links):
         """The largest joint force: URDF ``<limit effort>`` against what the MJCF states (``actuatorfrcrange``,
-        an actuator's ``forcerange`` times its gear, a motor's ``ctrlrange`` times its gear: the smallest;
-        ``parts._actuator_limits``), relative; inf when one side only."""
+        an actuator's ``forcerange`` times its gear, a motor's ``ctrlrange`` times its gear, through a joint or
+        a fixed tendon's coefficient: the smallest; ``parts._actuator_limits``), relative; inf when one side only."""
         if a.effort is None and b.effort is None:
             return
         u = "N m" if a.kind == "hinge" else "N"
@@ -299,7 +300,8 @@ class _Comparer:
             d, what = math.inf, f"joint force limited on one side only: {a.effort} against {b.effort} {u}"
         else:
             d = abs(a.effort - b.effort) / max(a.effort, b.effort, 1e-300)
-            what = f"effort {a.effort:.6g} {u} against +-{b.effort:.6g} {u} (actuatorfrcrange, forcerange, ctrlrange)"
+            src = " against ".join(f"{j.effort_source}" for j in (a, b) if j.effort_source) or "<limit effort>"
+            what = f"effort {a.effort:.6g} {u} against +-{b.effort:.6g} {u} ({src})"
         self.add(Difference("effort", a.name, b.name, a.effort, b.effort, d, "relative", what, links))
 
     def _velocity(self, a, b, links):
