@@ -9,8 +9,10 @@ roles swapped, a tendon actuator holding two joints.
 
 from __future__ import annotations
 
+import contextlib
+import html
+import io
 import json
-import math
 import re
 import warnings
 
@@ -115,3 +117,99 @@ def test_effort_through_a_tendon_actuator(folder):
     for d in eff.values():
         assert d.mjcf_value == pytest.approx(20.0) and d.difference == pytest.approx(8 / 28)
         assert "wrists_act" in d.what and "tendon wrists" in d.what and d.effect["at_rounding"] is True
+
+
+# -- 4. each difference named as its part is called, its effect at rounding or not -------------------------------
+@pytest.fixture(scope="module")
+def edited_arm(folder):
+    """MuJoCo's import of ur5_like with the forearm 1.5 times heavier, the elbow damped (2 N m s/rad), wrist_1's
+    frame moved 0.2 mm, and the upper arm 3e-5 heavier (3 times mass's rounding level: listed, its effect on A and
+    G at rounding)."""
+    urdf = shipped_robots_dir() / "ur5_like.urdf"
+    arm = (urdf, save_mujoco_import(urdf, folder / "arm4.xml", keep_geometry=False, keep_frames=True).path)
+
+    def edit(spec):
+        spec.body("forearm_link").mass *= 1.5
+        spec.body("upper_arm_link").mass *= 1 + 3e-5
+        spec.joint("elbow_joint").damping = [2.0, 0.0, 0.0]
+        spec.body("wrist_1_link").pos = spec.body("wrist_1_link").pos + [0.0, 2e-4, 0.0]
+    return urdf, _edited(arm, folder, "edited4", edit)
+
+
+def test_each_difference_names_its_part_and_says_whether_it_is_at_rounding(edited_arm):
+    c = _compare(*edited_arm)
+    by = {(d.kind, d.urdf): d for d in c.differences}
+    heavy, light = by[("mass", "forearm_link")], by[("mass", "upper_arm_link")]   # links by their links (not
+    assert heavy.mjcf == "forearm_link" and heavy.part == "link"                  # elbow_joint, shoulder_lift_joint)
+    assert not any(d.kind == "mass" and d.urdf.endswith("_joint") for d in c.differences)
+    assert by[("origin", "wrist_1_joint")].part == "joint" and by[("damping", "elbow_joint")].part == "joint"
+    assert heavy.to_json()["part"] == "link"
+    # the forearm's mass changes A and G by about 10 % of their largest entries: not rounding
+    assert heavy.effect["at_rounding"] is False and min(heavy.effect["changes_A"], heavy.effect["changes_G"]) > 0.01
+    # 3e-5 of the upper arm's mass: listed (above mass's 1e-5), but what it does to A and G is under EFFECT_ROUNDING
+    assert light.difference == pytest.approx(3e-5, abs=1e-6)     # the import writes 6 digits: 3.87 kg -> 3.87012
+    assert light.effect["at_rounding"] is True and max(light.effect["changes_A"], light.effect["changes_G"]) <= EFFECT_ROUNDING
+    assert by[("damping", "elbow_joint")].effect["at_rounding"] is True       # no term of A or G
+    origin = by[("origin", "wrist_1_joint")]                                   # 0.2 mm: A changes by ~1e-4
+    assert origin.effect["at_rounding"] is False and origin.effect["changes_A"] > EFFECT_ROUNDING
+
+
+# -- 5, 6. one order, stated wherever the list is printed; the pair's own summary.md and headline ---------------
+@pytest.fixture(scope="module")
+def against_run(edited_arm, tmp_path_factory):
+    out = tmp_path_factory.mktemp("against")
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        code = main(["compare", str(edited_arm[0]), "--against", str(edited_arm[1]), "--t-end", "0.05", "--out",
+                     str(out), "--animation-fps", "0", "--quiet"])
+    assert code == 0
+    return buf.getvalue(), (out / "summary.md").read_text(), (out / "report.html").read_text(), \
+        json.loads((out / "summary.json").read_text())
+
+
+def _effect_of(words: str) -> float:
+    """The number a list's ``effect on A, G`` cell orders by: the larger of A's and G's; 0 at rounding or none."""
+    values = [float(x) for x in re.findall(r"\b[AG] ([-+0-9.e]+)", words)]
+    return max(values, default=0.0)
+
+
+def test_the_order_is_stated_and_kept_wherever_the_list_is_printed(against_run):
+    stdout, md, page, s = against_run
+    listed = [(d["kind"], d["urdf"]) for d in s["description_differences"]]
+    assert len(listed) == 5
+    # stdout: the order in words, then the list in that order, each with its effect on A and G
+    assert ORDER_WORDS in stdout
+    rows = re.findall(r"^    (\w+)\s+(?:link|joint|frame) (\S+) / \S+: .*effect on A, G: (.*?)(?: \(explained\))?$",
+                      stdout, flags=re.M)
+    assert [(k, n) for k, n, _ in rows] == listed
+    effects = [_effect_of(w) for _, _, w in rows]
+    assert effects == sorted(effects, reverse=True) and effects[0] > 0.01
+    assert "at rounding" in stdout and "none: not a term of A or G" in stdout
+    # summary.md: the same words, the same order
+    assert ORDER_WORDS in md
+    md_rows = re.findall(r"^\| (\d+) \| (\w+) \| (\w+) \| (\S+) \| \S+ \| [^|]+ \| ([^|]+) \|", md, flags=re.M)
+    assert [(k, n) for _, k, _, n, _ in md_rows] == listed
+    assert [_effect_of(w) for *_, w in md_rows] == effects
+    # the HTML: the same words (escaped as the page writes them), the same order
+    assert html.escape(ORDER_WORDS) in page
+    table = page[page.index("<h3>Differences</h3>"):]
+    html_rows = re.findall(r"<tr><td>\d+</td><td>(\w+) <span class='small'>\(\w+\)</span></td><td><code>([^<]+)</code>"
+                           r"</td><td><code>[^<]+</code></td><td>[^<]*</td><td>[^<]*</td><td class='num'>[^<]*</td>"
+                           r"<td>([^<]*)</td>", table)
+    assert [(k, n) for k, n, _ in html_rows] == listed
+    assert [_effect_of(w) for *_, w in html_rows] == effects
+
+
+def test_the_pairs_summary_md_lists_the_differences_and_its_page_opens_with_the_pair(against_run):
+    _stdout, md, page, s = against_run
+    assert md.startswith("# ") and "two descriptions of one robot" in md.splitlines()[0]
+    for d in s["description_differences"]:            # every difference a row of summary.md
+        assert f"| {d['kind']} | {d['part']} | {d['urdf']} |" in md, d["kind"]
+    assert md.index("Differences above rounding: 5") < md.index("## ur5_like / default: urdf2links against MuJoCo")
+    body = page[page.index("<body>"):]
+    h1 = re.search(r"<h1>(.*?)</h1>", body).group(1)
+    assert "two descriptions of one robot" in h1
+    first_box = re.search(r"<div class='box[^']*'>(.*?)</div>", body).group(1)
+    assert "5 difference(s) above rounding" in first_box and "Trajectories" not in first_box
+    assert body.index(first_box) < body.index("<b>Trajectories:</b>")
+    assert "The first description against MuJoCo" in body[:body.index("<b>Trajectories:</b>")]

@@ -33,7 +33,7 @@ from .differences import Difference, Side, side_model
 from .mapping import JointMapping, coordinate_map
 
 __all__ = ["evaluate_effects", "seeded_states", "Terms", "effect_size", "order_differences", "ORDER_WORDS",
-           "EFFECT_ROUNDING"]
+           "EFFECT_ROUNDING", "NOT_IN_A_G"]
 
 
 def seeded_states(parts: RobotParts, coordinate_names, mapped: set, *, states: int = 8, seed: int = 0) -> np.ndarray:
@@ -220,14 +220,14 @@ EFFECT_ROUNDING = 1e-5
 
 #: The kinds that are no term of ``A`` or ``G`` (limits, forces, speeds, frames, collision geometry; damping,
 #: stiffness and friction act on the motion, not on A and G): their effect on A and G is nil.
-_NOT_IN_A_G = ("limits", "effort", "velocity", "frame_missing", "collision", "damping", "stiffness", "friction")
+NOT_IN_A_G = ("limits", "effort", "velocity", "frame_missing", "collision", "damping", "stiffness", "friction")
 
 
 def _at_rounding(d: Difference, e: dict) -> bool | None:
     """Whether what ``d`` does to ``A`` and ``G`` is at rounding (:data:`EFFECT_ROUNDING`): the change undoing it
     alone makes, mapped and (with a negated axis) as named; None when it cannot be undone (its effect is in
     ``after_undoing_all``)."""
-    if d.kind in _NOT_IN_A_G:
+    if d.kind in NOT_IN_A_G:
         return True
     changes = [e.get(k) for k in ("changes_A", "changes_G", "as_named_changes_A", "as_named_changes_G") if k in e]
     if d.undo is None or any(c is None for c in changes[:2]):
