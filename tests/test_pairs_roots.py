@@ -16,10 +16,13 @@ import functools
 import math
 import warnings
 
+import mujoco
 import numpy as np
 import pytest
 from lxml import etree
 
+from urdf2links.compare.mujoco_side.mujoco_urdf import MujocoRefused
+from urdf2links.compare.pairs.mujoco_import import save_mujoco_import
 from urdf2links.compare.pairs.differences import compare_descriptions
 from urdf2links.compare.pairs.mapping import map_joints
 from urdf2links.compare.pairs.roots import fixed_root
@@ -142,3 +145,57 @@ def test_the_corpus_has_branching_fixed_roots():
     assert ROOT is not None, "example-robot-data is not installed: it is a test dependency"
     names = " ".join(CASES)
     assert len(CASES) >= 30 and all(k in names for k in ("allegro_right_hand", "solo12", "talos_reduced", "tiago"))
+
+
+# -- MuJoCo's import, mounted as Menagerie mounts its hand, every body and joint renamed --------------------------
+#: Files MuJoCo refuses even with its compiler allowed to balance inertias (docs/pairs.md: "inertia must have
+#: positive eigenvalues"); test_mujoco_refuses_these keeps the list true.
+MUJOCO_REFUSES = {"tiago_description/robots/tiago.urdf", "tiago_description/robots/tiago_dual.urdf",
+                  "tiago_description/robots/tiago_no_hand.urdf", "romeo_description/urdf/romeo_laas_small.urdf"}
+POSE = ((0.1, 0.2, 0.3), (0.0, 1.0, 0.0, 1.0))       # Menagerie's hand: <body name="palm" quat="0 1 0 1">, moved
+
+
+def _import(rel: str, out):
+    try:
+        return save_mujoco_import(ROOT / rel, out, keep_geometry=False, root_pose=POSE)
+    except MujocoRefused:        # e.g. the allegro hand's inertias as written: MuJoCo's compiler balances them
+        return save_mujoco_import(ROOT / rel, out, keep_geometry=False, balance=True, root_pose=POSE)
+
+
+@pytest.mark.usefixtures("corpus_installed")
+@pytest.mark.parametrize("rel", [c for c in CASES if c not in MUJOCO_REFUSES])
+def test_mujocos_import_mounted_rotated_and_renamed_lists_root_pose_and_no_axis_origin_or_sign(rel, tmp_path):
+    """MuJoCo's import fuses the static root into the world (the fingers or legs then hang from the world: no fixed
+    root on that side), its top bodies turned by quat (0 1 0 1) and moved, every body and joint renamed: joints
+    match by structure after the best alignment of a top pair (mapping._top_alignment)."""
+    _import(rel, tmp_path / "import.xml")
+    spec = mujoco.MjSpec.from_file(str(tmp_path / "import.xml"))
+    for b in spec.bodies:
+        if b.name and b.name != "world":
+            b.name = "m_" + b.name
+    for j in spec.joints:
+        j.name = "mj_" + j.name
+    for eq in spec.equalities:        # a <mimic>, imported as a joint equality, names its joints
+        eq.name1, eq.name2 = "mj_" + eq.name1, ("mj_" + eq.name2) if eq.name2 else eq.name2
+    twin = tmp_path / "menagerie_like.xml"
+    twin.write_text(spec.to_xml())
+    U = _parts(rel)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        M = robot_parts(twin)
+        mapping = map_joints(U, M)
+        diffs, _below = compare_descriptions(U, M, mapping)
+    bad = [d.label() for d in diffs if d.kind in ("axis", "origin")]
+    assert not bad, f"{rel}: {len(bad)} axis/origin difference(s): {bad[:6]}"
+    assert mapping.to_json()["negated"] == [] and mapping.mapped_fraction == 1.0, rel
+    wrong = [(m.urdf, m.mjcf) for m in mapping.matches if m.mjcf != "mj_" + m.urdf]
+    assert not wrong, f"{rel}: joints matched to another's twin: {wrong[:5]}"
+    assert [d.kind for d in diffs].count("root_pose") == 1
+
+
+@pytest.mark.usefixtures("corpus_installed")
+def test_mujoco_refuses_these(tmp_path):
+    for rel in sorted(MUJOCO_REFUSES):
+        assert rel in CASES
+        with pytest.raises(MujocoRefused):
+            _import(rel, tmp_path / "refused.xml")
