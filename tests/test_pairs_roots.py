@@ -31,7 +31,7 @@ from urdf2links.locations import example_robot_data_dir
 from urdf2links.parsers.parts import robot_parts
 
 ROOT = example_robot_data_dir()
-XYZ, RPY = (0.1, -0.2, 0.3), (0.4, 1.1, -2.5)      # a turn of 2.7 rad about no particular axis, and a move
+XYZ, RPY = (0.1, -0.2, 0.3), (0.4, 1.1, -2.5)      # a turn of 2.8 rad about no particular axis, and a move
 PREFIX = "twin_"
 
 
