@@ -86,9 +86,14 @@ def effect_words(d: dict) -> str:
         return "at rounding"
     if e.get("at_rounding") is None:
         return "not undoable alone (see after undoing all)" if e else "not evaluated"
-    changes = [(t, e.get(f"changes_{t}"), e.get(f"as_named_changes_{t}")) for t in ("A", "G")]
+    changes = [(t, _number(e.get(f"changes_{t}")), _number(e.get(f"as_named_changes_{t}"))) for t in ("A", "G")]
     return ", ".join(f"{t} {fmt_md(a)}" + (f" (as named {fmt_md(n)})" if n is not None and a is not None and n > a
                                            else "") for t, a, n in changes)
+
+
+def _number(x) -> float | None:
+    """A figure of a summary (``"inf"`` as JSON writes it) as a float; None stays None."""
+    return None if x is None else float(x)
 
 
 def part_words(d: dict) -> str:
