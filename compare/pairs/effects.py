@@ -227,8 +227,8 @@ def _at_rounding(d: Difference, e: dict) -> bool | None:
     """Whether what ``d`` does to ``A`` and ``G`` is at rounding (:data:`EFFECT_ROUNDING`): the change undoing it
     alone makes, mapped and (with a negated axis) as named; None when it cannot be undone (its effect is in
     ``after_undoing_all``)."""
-    if d.kind in NOT_IN_A_G:
-        return True
+    if d.kind in NOT_IN_A_G or (d.kind == "root_pose" and d.undo is None):
+        return True               # a floating root's pose at home is a state: both are evaluated from the same
     changes = [e.get(k) for k in ("changes_A", "changes_G", "as_named_changes_A", "as_named_changes_G") if k in e]
     if d.undo is None or any(c is None for c in changes[:2]):
         return None

@@ -82,6 +82,8 @@ def effect_words(d: dict) -> str:
     e = d.get("effect") or {}
     if d.get("kind") in NOT_IN_A_G:
         return "none: not a term of A or G"
+    if d.get("kind") == "root_pose" and e.get("at_rounding") is True and not e.get("undoable", True):
+        return "none: a floating root's pose is a state"
     if e.get("at_rounding") is True:
         return "at rounding"
     if e.get("at_rounding") is None:
