@@ -102,18 +102,22 @@ def _gate_line(p: dict) -> str:
             + "; ".join(p["checks"]))
 
 
-def _top(s, check, index_link, index_label="all scenes") -> list[str]:
-    """Title, verdict, notes on the run length and the baseline check, headline figures, setup."""
+def _top(s, check, index_link, index_label="all scenes", headline=None) -> list[str]:
+    """Title, verdict, notes on the run length and the baseline check, headline figures, setup. ``headline``
+    (``{"title", "html"}``): the page's own title and headline when the comparison is not its subject (a pair of
+    descriptions): the comparison against MuJoCo follows under its own heading."""
     e = html.escape
     tr, mj, pr = s["trajectory"], s["mujoco"], s["project"]
-    title = f"{s['robot']} / {s['scene']}: urdf2links against MuJoCo"
+    title = headline["title"] if headline else f"{s['robot']} / {s['scene']}: urdf2links against MuJoCo"
     implausible = not (s.get("plausibility") or {}).get("plausible", True)     # issue 43: the gate first
     verdict_cls = ("box bad" if implausible else "box chaos" if s["chaotic"] or weak_evidence(s) else
                    ("box bad" if tr["divergence_time"] is not None else "box"))
     parts = [f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>{e(title)}</title>"
              f"<style>{_CSS}</style></head><body>",
              f"<p class='small'><a href='{e(index_link)}'>&larr; {e(index_label)}</a></p>" if index_link else "",
-             f"<h1>{e(s['robot'])} / {e(s['scene'])}</h1>",
+             *([f"<h1>{e(title)}</h1>", headline["html"],
+                f"<h2>The first description against MuJoCo: {e(s['robot'])} / {e(s['scene'])}</h2>"] if headline else
+               [f"<h1>{e(s['robot'])} / {e(s['scene'])}</h1>"]),
              f"<p class='sub'>{e(s['description'])}</p>",
              f"<div class='{verdict_cls}'><b>Trajectories:</b> {e(tr['verdict'])}</div>"]
     if s.get("coverage"):
@@ -288,7 +292,7 @@ def _closing_sections(s, command) -> list[str]:
 
 def render_html(c, summary: dict, *, command: str | None = None, check: "CheckResult | None" = None,
                 index_link: str | None = None, animation_fps: float = DEFAULT_FPS, index_label: str = "all scenes",
-                light: bool = False, extra_sections=(), first_sections=()) -> str:
+                light: bool = False, extra_sections=(), first_sections=(), headline=None) -> str:
     """The scene's self-contained report page (plots as base64 PNG, the motion section's viewer
     inlined); ``index_link``: relative address of the index page, if any, shown as ``index_label``;
     ``animation_fps``: frames per second of simulated time of the motion section (0: no motion
@@ -296,9 +300,10 @@ def render_html(c, summary: dict, *, command: str | None = None, check: "CheckRe
     (:func:`~urdf2links.compare.reports.plots.plot_overview`: the difference and both energy balances)
     instead of the four plots, for pages made by the dozen (a corpus); ``extra_sections``: HTML
     fragments put after the energy section; ``first_sections``: HTML fragments put first, after the headline
-    figures (a comparison of two descriptions, :mod:`urdf2links.compare.pairs.report`)."""
+    figures (a comparison of two descriptions, :mod:`urdf2links.compare.pairs.report`), whose ``headline``
+    (``{"title", "html"}``) is then the page's own."""
     motion = [] if light else motion_section(c, fps=animation_fps)
-    parts = (_top(summary, check, index_link, index_label) + list(first_sections) + motion + _terms_section(summary, light)
+    parts = (_top(summary, check, index_link, index_label, headline) + list(first_sections) + motion + _terms_section(summary, light)
              + _trajectory_section(c, summary, light) + _energy_section(c, summary, light)
              + coverage_html(summary, 4, _rows) + list(extra_sections)
              + contact_section(c, summary)      # issue 37
@@ -349,13 +354,15 @@ def render_markdown(s: dict) -> str:
 
 def write_report(c, out_dir=None, *, root=None, json_path=None, command: str | None = None,
                  check: "CheckResult | None" = None, index_link: str | None = None,
-                 animation_fps: float = DEFAULT_FPS, first_sections=(), summary_extra: dict | None = None) -> dict:
+                 animation_fps: float = DEFAULT_FPS, first_sections=(), summary_extra: dict | None = None,
+                 headline=None, first_markdown: str | None = None) -> dict:
     """Write ``report.html``, ``summary.json`` and ``summary.md`` for comparison ``c`` into
     ``out_dir`` (default ``<root>/<robot>/<scene>/``, ``root`` default ``out/reports``, whose page then links ``../../index.html``;
     else ``index_link``) and, if given, the summary also to ``json_path``; ``animation_fps`` as
     :func:`render_html`; ``first_sections`` go first on the page and ``summary_extra`` (keys added to the
-    summary) into ``summary.json``: a comparison of two descriptions. Returns ``{"dir", "html", "json", "md",
-    "summary"}``."""
+    summary) into ``summary.json``: a comparison of two descriptions, whose ``headline`` (``{"title", "html"}``)
+    is the page's and whose ``first_markdown`` opens ``summary.md`` (the usual Markdown follows, its headings one
+    level down). Returns ``{"dir", "html", "json", "md", "summary"}``."""
     summary = json_ready({**c.summary(), **(summary_extra or {})})
     if out_dir is None:
         out = Path(DEFAULT_OUT if root is None else root) / summary["robot"] / summary["scene"]
@@ -369,10 +376,13 @@ def write_report(c, out_dir=None, *, root=None, json_path=None, command: str | N
         jp = Path(json_path)
         jp.parent.mkdir(parents=True, exist_ok=True)
         jp.write_text(text)
-    (out / "summary.md").write_text(render_markdown(summary))
+    md = render_markdown(summary)
+    if first_markdown:
+        md = first_markdown.rstrip("\n") + "\n\n" + "\n".join("#" + x if x.startswith("#") else x for x in md.split("\n"))
+    (out / "summary.md").write_text(md)
     (out / "report.html").write_text(render_html(c, summary, command=command, check=check, index_link=index_link,
-                                                 animation_fps=animation_fps, first_sections=first_sections),
-                                     encoding="utf-8")
+                                                 animation_fps=animation_fps, first_sections=first_sections,
+                                                 headline=headline), encoding="utf-8")
     if (out / "tradeoff.json").is_file():  # a work-precision study of this scene (urdf2links tradeoff): its section
         try:
             insert_section(out / "report.html", json.loads((out / "tradeoff.json").read_text()))
