@@ -1,8 +1,9 @@
 """Why a difference is there, when a known conversion step makes it: the explanations a report attaches.
 
 MuJoCo's own URDF import changes a few things on purpose, and an MJCF converted from a URDF carries
-them; each is recognised from the first description's parts alone, so the explanation holds for any
-pair (it says what MuJoCo does, not that MuJoCo did it):
+them; each is recognised from both descriptions as they are now -- the first's values, the second's values
+and ``<compiler>`` settings -- so an explanation is said only while it holds (it says what MuJoCo does, not
+that MuJoCo did it; a later edit of the second file that no longer fits it drops it):
 
 - an inertia that is not physically consistent (a negative principal moment, a triangle inequality
   violated: the audit of :func:`urdf2links.dynamics.inertia.audit_pseudo_inertia`) is refused by MuJoCo's
@@ -11,7 +12,8 @@ pair (it says what MuJoCo does, not that MuJoCo did it):
   ``boundinertia``);
 - a body with zero mass but a rotational inertia, welded to its parent: MuJoCo's ``fusestatic`` merges
   masses and drops that inertia, which the project's folding keeps;
-- a URDF ``<limit lower="0" upper="0">``: MuJoCo's import leaves the joint unlimited;
+- a URDF ``<limit lower="0" upper="0">`` against an unlimited joint: MuJoCo's import leaves such a joint unlimited
+  (said only while the second file's joint is unlimited: each explanation is computed from both files);
 - armature where a URDF has none: a URDF cannot say it (an expected, deliberate difference);
 - a massless URDF link on a fixed joint missing on the other side: MuJoCo's import fuses it (``fusestatic``) and
   keeps no frame of it.
@@ -92,8 +94,9 @@ def explain(diffs: list[Difference], U: RobotParts, M: RobotParts | None = None)
             d.explanation = (f"{d.links[0]} is a massless link on a fixed joint: MuJoCo's URDF import fuses it "
                              "(fusestatic) and keeps no frame of it; a site of its name keeps it "
                              "(save_mujoco_import(keep_frames=True))")
-        elif d.kind == "limits" and d.urdf in joints:
+        elif d.kind == "limits" and d.urdf in joints and U.format == "urdf":
             j = joints[d.urdf][0]
-            if j.lower is not None and j.lower == j.upper:
+            unlimited = d.mjcf_value is None or all(v is None for v in d.mjcf_value)
+            if j.lower is not None and j.lower == j.upper and unlimited:
                 d.explanation = (f"the URDF gives {d.urdf} <limit lower=upper={j.lower:g}>: MuJoCo's import leaves such "
                                  "a joint unlimited")
