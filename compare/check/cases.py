@@ -239,9 +239,8 @@ def check_scene(res: CaseResult, entry: SceneEntry, ctx: RunContext) -> None:
                      f"max |dq| {float(get(summary, 'trajectory.max_abs_error')):.2e}")
     cov = summary.get("coverage") or {}
     if cov.get("weak_evidence"):
-        res.problems.append(Problem(f"{entry.id}: weak evidence: {cov.get('text', '')}; an agreement of such a run "
-                                    "says little: start it where it moves (q0 = \"excite\", the default) or run it "
-                                    "longer (t_end)"))
+        res.problems.append(Problem(f"{entry.id}: weak evidence: {cov.get('text', '')}; start the run where every "
+                                    "coordinate moves (q0 = \"excite\", the default) or run it longer (t_end)"))
     if ctx.writing:
         res.lines.append("accepted as its baseline (--write-baselines)")
         return

@@ -22,6 +22,7 @@ from pathlib import Path
 from lxml import etree
 
 from ..corpus.rows import is_mujoco_document
+from ..pairs.differences import KINDS
 from .accepted import accepted_row, rows_toml, toml_value
 from .config import CONFIG_NAME, DEFAULT_BASELINES, SCENE_T_END, ConfigError, RobotEntry, find_config
 
@@ -78,10 +79,11 @@ def _pair_rows(urdf: RobotEntry, mjcf: RobotEntry) -> tuple[list[str], list[str]
     formats = (desc["urdf"]["format"], desc["mjcf"]["format"])
     floating = bool(summary["description_counts"]["root_pose"]["floating"])
     diffs = [d for d in summary["description_differences"] if not (d["kind"] == "root_pose" and floating)]
-    rows = [accepted_row(d, formats) for d in diffs]
+    rows = sorted((accepted_row(d, formats) for d in diffs), key=lambda r: (KINDS.index(r.kind), r.part))
     kinds = {}
     for d in diffs:
         kinds[d["kind"]] = kinds.get(d["kind"], 0) + 1
+    kinds = dict(sorted(kinds.items(), key=lambda kn: KINDS.index(kn[0])))
     why = [f"# accepted at init: {', '.join(f'{n} {k}' for k, n in kinds.items())} difference(s), each by name"
            ] if kinds else []
     return (rows_toml(rows) if rows else []), why
