@@ -246,6 +246,24 @@ def test_a_configuration_that_cannot_be_used_exits_2_naming_file_and_key(tmp_pat
         assert w in message, (w, message)
 
 
+def test_the_configuration_docs_ci_shows_is_read_as_it_says(tmp_path):
+    """docs/ci.md's configuration, with its files made: the accepted rows by name, A and G only, excited scenes."""
+    doc = (PROJECT / "docs" / "ci.md").read_text()
+    text = re.search(r"```toml\n(.*?)```", doc, re.S).group(1)
+    (tmp_path / "robots").mkdir()
+    (tmp_path / "scenes").mkdir()
+    (tmp_path / "robots/arm.urdf").write_text((PROJECT / "robots" / "double_pendulum.urdf").read_text())
+    (tmp_path / "scenes/swing.toml").write_text("# only found by its glob here, not read\n")
+    save_mujoco_import(tmp_path / "robots/arm.urdf", tmp_path / "robots/arm.xml", keep_geometry=False)
+    (tmp_path / "urdf2links.toml").write_text(text)
+    config = read_config(tmp_path)
+    pair = config.pairs[0]
+    assert pair.tolerances == {"A": 1e-3, "G": 1e-3} and config.tolerances == {"A": 1e-3}
+    assert [(r.kind, r.part, r.mjcf, r.unit, r.tolerance) for r in pair.accepted] == [
+        ("armature", "joint joint1", 0.1, "kg m^2", 1e-6), ("damping", "joint joint1", 1.0, "N m s/rad", 1e-5)]
+    assert [s.q0 for s in config.scenes if s.robot is not None] == ["excite"]
+
+
 def test_the_configuration_in_pyproject(tmp_path):
     (tmp_path / "a.urdf").write_text((PROJECT / "robots" / "double_pendulum.urdf").read_text())
     (tmp_path / "pyproject.toml").write_text('[project]\nname = "x"\n\n[[tool.urdf2links.robots]]\nfiles = "*.urdf"\n')
