@@ -308,8 +308,8 @@ def cases_of(config, *, only=None) -> list[Case]:
             return files(e.robot)
         return {e.path} | _scene_robot_files(e.path, config)
 
-    baselines = Path(config.baselines).resolve() in only   # a changed baselines file: every scene again
-    return [c for c in out if (baselines and c.kind == "scene") or depends(c) & only]
+    baselines = Path(config.baselines).resolve() in only   # a changed baselines file: every scene and robot again
+    return [c for c in out if (baselines and c.kind in ("scene", "robot")) or depends(c) & only]
 
 
 def _scene_robot_files(path: Path, config) -> set:
