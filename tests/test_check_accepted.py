@@ -122,7 +122,7 @@ FP = {"format": "mjcf", "gravity": [0.0, 0.0, -9.81],
       "joints": {"j1": {"body": "b1", "type": "hinge", "axis": [0.0, 0.0, 1.0], "range": "unlimited",
                         "damping": 0.0, "armature": 0.1}},
       "actuators": {"m1": {"target": "joint j1", "gear": [1.0, 0, 0, 0, 0, 0], "ctrlrange": [-1.0, 1.0],
-                           "gain": [0, 1.0, 0.0, 0.0]}}}
+                           "gaintype": "fixed", "gain": [1.0, 0.0, 0.0]}}}
 
 
 def _changed(path, value):
@@ -145,7 +145,8 @@ def _changed(path, value):
     (("joints", "j1", "range"), [-1.0, 1.0], "joint j1", "range"),
     (("joints", "j1", "damping"), 1e-3, "joint j1", "damping"),
     (("joints", "j1", "armature"), 0.05, "joint j1", "armature"),
-    (("actuators", "m1", "gain"), [1, 1.0, 0.0, 0.0], "actuator m1", "gain"),             # another gain type
+    (("actuators", "m1", "gaintype"), "affine", "actuator m1", "gaintype"),
+    (("actuators", "m1", "gain"), [50.0, 0.0, 0.0], "actuator m1", "gain"),
     (("joints", "j2"), {"body": "b1", "type": "hinge"}, "joint j2", ""),                  # added
     (("actuators", "m1"), None, "actuator m1", ""),                                       # removed
     (("gravity",), [0.0, 0.0, -9.8], "the file", "gravity"),

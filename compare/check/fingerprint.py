@@ -10,8 +10,8 @@ dynamics is made of (:func:`fingerprint`, JSON with names, in the baselines file
 * per joint: ``type``, ``axis``, ``anchor`` (m), ``range`` (``"unlimited"`` when none), ``home``, ``damping``,
   ``stiffness``, ``springref``, ``armature``, ``friction``, and the largest ``effort`` and ``velocity`` the file
   states;
-* per MJCF actuator: its ``target``, ``gear``, ``ctrlrange``, ``forcerange``, ``gain``, ``bias`` and
-  ``dynamics`` (type and first three parameters); and the file's ``gravity``.
+* per MJCF actuator: its ``target``, ``gear``, ``ctrlrange``, ``forcerange``, ``gaintype`` and ``gain``,
+  ``biastype`` and ``bias``, ``dyntype`` and ``dynamics`` (the first three parameters); and the file's ``gravity``.
 
 :func:`changes` compares a fingerprint now with the accepted one and names every part and quantity that changed,
 added or removed, with both values. A number is unchanged within ``ABS + REL * its size`` (a vector: the norm of
@@ -70,6 +70,11 @@ def _joint(j, body: str) -> dict:
             "velocity": "none" if j.velocity is None else _r(j.velocity)}
 
 
+def _word(enum, value) -> str:
+    """MuJoCo's name of an enum value, as its XML writes it: ``mjGAIN_FIXED`` -> ``fixed``."""
+    return enum(int(value)).name.split("_", 1)[1].lower()
+
+
 def _actuators(path) -> dict:
     """An MJCF file's actuators by name (module doc), from MuJoCo's compiled model."""
     import mujoco
@@ -80,7 +85,7 @@ def _actuators(path) -> dict:
     out = {}
     for k in range(m.nu):
         name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_ACTUATOR, k) or f"actuator{k}"
-        trn = mujoco.mjtTrn(int(m.actuator_trntype[k])).name.removeprefix("mjTRN_").lower()
+        trn = _word(mujoco.mjtTrn, m.actuator_trntype[k])
         obj = {"joint": mujoco.mjtObj.mjOBJ_JOINT, "tendon": mujoco.mjtObj.mjOBJ_TENDON,
                "site": mujoco.mjtObj.mjOBJ_SITE, "body": mujoco.mjtObj.mjOBJ_BODY}.get(trn.replace("inparent", ""))
         tid = int(m.actuator_trnid[k, 0])
@@ -89,9 +94,9 @@ def _actuators(path) -> dict:
             "target": f"{trn} {target}", "gear": _v(m.actuator_gear[k]),
             "ctrlrange": _v(m.actuator_ctrlrange[k]) if m.actuator_ctrllimited[k] else "unlimited",
             "forcerange": _v(m.actuator_forcerange[k]) if m.actuator_forcelimited[k] else "unlimited",
-            "gain": [int(m.actuator_gaintype[k]), *_v(m.actuator_gainprm[k, :3])],
-            "bias": [int(m.actuator_biastype[k]), *_v(m.actuator_biasprm[k, :3])],
-            "dynamics": [int(m.actuator_dyntype[k]), *_v(m.actuator_dynprm[k, :3])]}
+            "gaintype": _word(mujoco.mjtGain, m.actuator_gaintype[k]), "gain": _v(m.actuator_gainprm[k, :3]),
+            "biastype": _word(mujoco.mjtBias, m.actuator_biastype[k]), "bias": _v(m.actuator_biasprm[k, :3]),
+            "dyntype": _word(mujoco.mjtDyn, m.actuator_dyntype[k]), "dynamics": _v(m.actuator_dynprm[k, :3])}
     return out
 
 
@@ -158,8 +163,6 @@ def _distance(quantity: str, a, b) -> tuple[float, float]:
     if quantity == "rpy":
         R = rpy_to_matrix(x).T @ rpy_to_matrix(y)
         return float(np.arccos(np.clip((np.trace(R) - 1.0) / 2.0, -1.0, 1.0))), ANGLE
-    if quantity in ("gain", "bias", "dynamics") and x[0] != y[0]:
-        return math.inf, 0.0
     moved = 0.0 if np.array_equal(x, y) else float(np.linalg.norm(x - y))
     return moved, ABS + REL * max(float(np.linalg.norm(x)), float(np.linalg.norm(y)))
 
