@@ -21,13 +21,22 @@ def _d(kind, urdf_value, mjcf_value, difference, unit, *, names=("j1", "j1"), li
             "difference": difference, "unit": unit, "what": kind, "links": list(links)}
 
 
+def _origin(u, m, difference, unit, *, turn: float = 0.0) -> dict:
+    """An origin difference: the frames' positions ``u``, ``m`` (m), the second turned by ``turn`` rad about z."""
+    frames = {}
+    for side, p, a in (("urdf", u, 0.0), ("mjcf", m, turn)):
+        c, s = math.cos(a), math.sin(a)
+        frames[side] = [[c, -s, 0.0, p[0]], [s, c, 0.0, p[1]], [0.0, 0.0, 1.0, p[2]], [0.0, 0.0, 0.0, 1.0]]
+    return {**_d("origin", u, m, difference, unit, names=("j2", "j2"), links=("l2", "l2")), "frames": frames}
+
+
 def _summary(*diffs) -> dict:
     return {"descriptions": {"urdf": {"format": "urdf"}, "mjcf": {"format": "mjcf"}},
             "description_counts": {"root_pose": {"floating": False}}, "description_differences": list(diffs)}
 
 
 DAMPING = _d("damping", 0.0, 1.0, 1.0, "N m s/rad")
-ORIGIN = _d("origin", [0.1, 0.0, 0.0], [0.0, 0.0, 0.0], 0.1, "m", names=("j2", "j2"), links=("l2", "l2"))
+ORIGIN = _origin([0.1, 0.0, 0.0], [0.0, 0.0, 0.0], 0.1, "m", turn=0.01)        # moved 0.1 m, turned 0.01 rad
 LIMITS = _d("limits", [-1.0, 1.0], ["nan", "nan"], "inf", "rad")
 
 
@@ -51,14 +60,14 @@ def test_a_new_difference_fails_whatever_its_kind_and_comes_with_the_row_that_ac
 
 @pytest.mark.parametrize("changed, which", [
     (_d("damping", 0.0, 0.5, 0.5, "N m s/rad"), "the difference"),              # halved
-    # moved 1 cm across: the distance grows by only 5e-4 m, the MJCF's value by 1 cm
-    (_d("origin", [0.1, 0.0, 0.0], [0.0, 0.01, 0.0], math.hypot(0.1, 0.01), "m", names=("j2", "j2"),
-        links=("l2", "l2")), "the mjcf value"),
-    # the same distance the other way round: only the values say it moved
-    (_d("origin", [0.1, 0.0, 0.0], [0.2, 0.0, 0.0], 0.1, "m", names=("j2", "j2"), links=("l2", "l2")),
-     "the mjcf value"),
-    (_d("origin", [0.1, 0.0, 0.0], [0.0, 0.0, 0.0], 0.5, "rad", names=("j2", "j2"), links=("l2", "l2")),
-     "its unit changed from m to rad"),
+    # moved 1 cm across: the distance grows by only 5e-4 m, the MJCF's frame by 1 cm
+    (_origin([0.1, 0.0, 0.0], [0.0, 0.01, 0.0], math.hypot(0.1, 0.01), "m", turn=0.01),
+     "the mjcf frame's position"),
+    # the same distance the other way round: only the frames say it moved
+    (_origin([0.1, 0.0, 0.0], [0.2, 0.0, 0.0], 0.1, "m", turn=0.01), "the mjcf frame's position"),
+    # turned 0.02 rad more, still less than it moved: the difference (in m) and the positions stay
+    (_origin([0.1, 0.0, 0.0], [0.0, 0.0, 0.0], 0.1, "m", turn=0.03), "the mjcf frame's rotation"),
+    (_origin([0.1, 0.0, 0.0], [0.0, 0.0, 0.0], 0.5, "rad", turn=0.5), "its unit changed from m to rad"),
     # one-sided: the difference stays inf, the URDF's range moved
     (_d("limits", [-2.0, 2.0], ["nan", "nan"], "inf", "rad"), "the urdf value"),
     # one-sided made two-sided: a limit added on the other side
@@ -82,7 +91,7 @@ def test_a_difference_within_its_rows_tolerance_passes_and_a_gone_one_fails():
 
 
 def test_the_rows_tolerances_catch_a_centimetre_and_a_halving():
-    far = _d("origin", [9.0, 0.0, 0.0], [8.0, 0.0, 0.0], 1.0, "m", names=("j2", "j2"), links=("l2", "l2"))
+    far = _origin([9.0, 0.0, 0.0], [8.0, 0.0, 0.0], 1.0, "m")
     for d in (DAMPING, far, _d("armature", 0.0, 0.1, 0.1, "kg m^2")):
         row = accepted_row(d)
         assert 0 < row.tolerance <= 1e-5 * max(1.0, 9.0), row      # 1e-5 of its size (compare/check/accepted.py)
@@ -97,6 +106,7 @@ def test_rows_written_as_toml_read_back_the_same():
     back = read_rows("x", tomllib.loads(text)["accepted"], lambda w, m: (_ for _ in ()).throw(ConfigError(m)))
     assert back == rows
     assert rows[3].urdf == [1.0, 2.0, 3.0, 0.0, 0.0, 0.0]
+    assert rows[1].mjcf == [0.0, 0.0, 0.0, 0.0, 0.0, 0.01]              # an origin's frame: position, rpy
 
 
 @pytest.mark.parametrize("row, words", [

@@ -8,8 +8,9 @@ and its own ``tolerance``, in that unit. :func:`judge` holds a pair's difference
 
 * a difference no row accepts fails (whatever its kind: no kind is accepted as a whole);
 * a row whose difference moved fails: its difference by more than its tolerance, a file's value by more than its
-  tolerance (or, where the values are in another unit than the difference -- an origin turned in rad, whose
-  values are positions in m -- by more than :data:`VALUE_ROUNDING` in theirs), or its unit changed;
+  tolerance (or, where the values are in another unit than the difference, by more than :data:`VALUE_ROUNDING` in
+  theirs: a frame's pose -- an origin's, a root's -- is ``[x, y, z, roll, pitch, yaw]``, its position held in m
+  and its rotation in rad, each to the row's tolerance when that is the row's unit), or its unit changed;
 * a row whose difference is gone fails too (the pair changed: remove the row).
 
 :func:`accepted_row` writes a row from a difference with the tolerance :func:`row_tolerance` gives: the kind's
@@ -25,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from urdf2links.dynamics.rotations import matrix_to_rpy
+from urdf2links.dynamics.rotations import matrix_to_rpy, rpy_to_matrix
 
 from ..pairs.differences import KINDS, ROUNDING
 
@@ -41,8 +42,8 @@ _JOINT_KINDS = {"axis", "type", "limits", "effort", "velocity", "armature", "dam
                 "joint_missing", "coupling"}
 #: The unit of the two values where it is not the difference's own.
 _VALUE_UNITS = {"mass": "relative", "inertia": "relative", "effort": "relative", "velocity": "relative",
-                "collision": "relative", "com": "m", "origin": "m", "frame_missing": "m", "link_missing": "kg",
-                "axis": "rad"}
+                "collision": "relative", "com": "m", "origin": "pose", "root_pose": "pose", "frame_missing": "m",
+                "link_missing": "kg", "axis": "rad"}
 _WORD = {"urdf": "link", "mjcf": "body"}
 _KEYS = ("kind", "part", "urdf", "mjcf", "difference", "unit", "tolerance")
 
@@ -127,7 +128,8 @@ def _array(v) -> np.ndarray:
 def row_value(kind: str, v):
     """A file's value of a difference as a row keeps it: a number or a flat list (8 significant digits), a name;
     ``"none"`` where the file has none, ``"unlimited"`` for a joint without limits; an inertia tensor as
-    ``[ixx, iyy, izz, ixy, ixz, iyz]`` (kg m^2), a root's pose as ``[x, y, z, roll, pitch, yaw]`` (m, rad)."""
+    ``[ixx, iyy, izz, ixy, ixz, iyz]`` (kg m^2), a frame (an origin's, from the difference's ``frames``; a root's)
+    as ``[x, y, z, roll, pitch, yaw]`` (m, rad)."""
     if v is None:
         return "none"
     if isinstance(v, str) and _num(v) is v:
@@ -170,10 +172,11 @@ def row_tolerance(kind: str, unit: str, difference: float, values=()) -> float:
     """A new row's tolerance (module doc): the kind's rounding, or :data:`REL` of the difference and of the values
     (those in the difference's unit), whichever is larger."""
     sizes = [abs(difference)] if math.isfinite(difference) else []
-    if _VALUE_UNITS.get(kind, unit) == unit and unit != "relative":
+    vunit = _VALUE_UNITS.get(kind, unit)
+    if (vunit == unit or vunit == "pose" and unit == "m") and unit != "relative":
         for v in values:
             if not isinstance(v, str):
-                a = np.abs(np.atleast_1d(np.asarray(v, float)))
+                a = np.abs(np.atleast_1d(np.asarray(v, float)))[:3 if vunit == "pose" else None]
                 sizes += [float(x) for x in a if math.isfinite(x)]
     scale = 1.0 if unit == "relative" else max(sizes, default=0.0)
     return float(f"{max(ROUNDING.get(kind, 0.0), REL * scale):.2g}")
@@ -181,10 +184,20 @@ def row_tolerance(kind: str, unit: str, difference: float, values=()) -> float:
 
 def accepted_row(d: dict, formats=("urdf", "mjcf"), *, tolerance: float | None = None) -> AcceptedRow:
     """The row that accepts the difference ``d`` (its summary JSON) as it is now (module doc)."""
-    u, m = row_value(d["kind"], d.get("urdf_value")), row_value(d["kind"], d.get("mjcf_value"))
+    frames = d.get("frames") or {}
+    u, m = (row_value(d["kind"], frames[s] if s in frames else d.get(f"{s}_value")) for s in ("urdf", "mjcf"))
     diff = _difference(d)
     tol = row_tolerance(d["kind"], d["unit"], diff, (u, m)) if tolerance is None else tolerance
     return AcceptedRow(d["kind"], part_of(d, formats), u, m, _round(diff), d["unit"], tol)
+
+
+def _pose_moves(a, b) -> tuple[float, float]:
+    """How far a pose ``[x, y, z, roll, pitch, yaw]`` moved (m) and turned (rad); inf when it is not one now."""
+    if isinstance(a, str) or isinstance(b, str) or np.shape(a) != (6,) or np.shape(b) != (6,):
+        return (0.0, 0.0) if a == b else (math.inf, math.inf)
+    x, y = np.asarray(a, float), np.asarray(b, float)
+    R = rpy_to_matrix(x[3:]).T @ rpy_to_matrix(y[3:])
+    return float(np.linalg.norm(x[:3] - y[:3])), float(np.arccos(np.clip((np.trace(R) - 1.0) / 2.0, -1.0, 1.0)))
 
 
 def _moved(row: AcceptedRow, now: AcceptedRow) -> tuple[float, float, str]:
@@ -196,7 +209,13 @@ def _moved(row: AcceptedRow, now: AcceptedRow) -> tuple[float, float, str]:
     vunit = _VALUE_UNITS.get(row.kind, row.unit)
     allowed = row.tolerance if vunit == row.unit else VALUE_ROUNDING
     for side in ("urdf", "mjcf"):
-        checks.append((_values_distance(getattr(row, side), getattr(now, side), vunit), allowed, f"the {side} value"))
+        old, new = getattr(row, side), getattr(now, side)
+        if vunit == "pose":
+            for unit, moved in zip(("m", "rad"), _pose_moves(old, new)):
+                checks.append((moved, row.tolerance if unit == row.unit else VALUE_ROUNDING,
+                               f"the {side} frame's {'position' if unit == 'm' else 'rotation'}"))
+        else:
+            checks.append((_values_distance(old, new, vunit), allowed, f"the {side} value"))
     return max(checks, key=lambda c: c[0] / c[1] if c[1] > 0 else (math.inf if c[0] > 0 else 0.0))
 
 
