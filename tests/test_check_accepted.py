@@ -172,3 +172,36 @@ def test_a_fingerprint_sees_through_the_last_digits():
     noisy = _changed(("bodies", "b1", "inertia"), [0.01 * (1 + 1e-12), 0.02, 0.03, 1e-17, 0.0, 0.0])
     noisy["bodies"]["b1"]["xyz"] = [1e-17, 0.0, 0.3 * (1 + 1e-12)]
     assert changes(FP, noisy) == []
+
+
+ARM = """<robot name="arm"><link name="base"/>
+<link name="hub"/>
+<link name="tip"><inertial><origin xyz="0 0 0.1"/><mass value="1"/>
+<inertia ixx="0.01" iyy="0.01" izz="0.001" ixy="0" ixz="0" iyz="0"/></inertial></link>
+<joint name="j1" type="revolute"><parent link="base"/><child link="hub"/><axis xyz="0 0 1"/>
+<limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+<joint name="j2" type="revolute"><parent link="hub"/><child link="tip"/><axis xyz="0 1 0"/>
+<limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>"""
+
+
+def test_an_explanation_is_said_only_while_both_files_fit_it(tmp_path):
+    """The massless moving ``hub``: MuJoCo's balanced import bounds its mass (boundmass 1e-6), and the mass
+    difference is explained so; the MJCF's hub given 0.5 kg by hand is a difference no bound makes: unexplained."""
+    from urdf2links.compare.pairs.mujoco_import import save_mujoco_import
+    from urdf2links.compare.pairs.pair import compare_descriptions_of
+
+    (tmp_path / "arm.urdf").write_text(ARM)
+    xml = save_mujoco_import(tmp_path / "arm.urdf", tmp_path / "arm.xml", keep_geometry=False, balance=True).path
+
+    def hub_mass():
+        c = compare_descriptions_of(tmp_path / "arm.urdf", xml)
+        return next(d for d in c.differences if d.kind == "mass" and "hub" in d.links)
+
+    bounded = hub_mass()
+    assert bounded.mjcf_value == pytest.approx(1e-6) and "boundmass" in bounded.explanation
+    text = xml.read_text()
+    assert text.count('<body name="hub">') == 1                    # no inertial: MuJoCo's compiler bounds it
+    xml.write_text(text.replace('<body name="hub">', '<body name="hub"><inertial pos="0 0 0" mass="0.5" '
+                                                     'diaginertia="0.001 0.001 0.001"/>'))
+    edited = hub_mass()
+    assert edited.mjcf_value == 0.5 and edited.explanation is None
