@@ -9,9 +9,9 @@ problems (a difference not accepted, or an accepted one that moved) and in the M
 parameter, its old and new value, the command that accepts it). A comment added exits 0. ``pytest`` in the
 repository (the plugin, tests/test_check.py has its story) fails the same items.
 
-Every edit is one attribute of one element, made with lxml on the file as init committed it; none of them
-changes what a scene runs in a way both engines would not share, so only the pair and the fingerprint can see
-them (the scenes are run too: they pass or fail as they do, and are not asserted here).
+Every edit changes one element's attributes, made with lxml on the file as init committed it; both engines run
+the edited file alike in a scene, so only the pair and the fingerprint can see them (the scenes, 0.5 s each,
+are run too, as ``check`` runs them: they pass or fail as they do, and are not asserted here).
 """
 
 from __future__ import annotations
@@ -42,31 +42,39 @@ def _body(root, name: str):
     return root.find(f".//body[@name='{name}']")
 
 
-def _scaled(value: str, factor: float) -> str:
-    return " ".join(f"{float(x) * factor:.9g}" for x in value.split())
+def _joint_set(name: str, **attrs):
+    """An edit: the joint's attributes set (``frictionloss="0.5"``)."""
+    return lambda root: [_joint(root, name).set(k, v) for k, v in attrs.items()]
 
 
-def _moved(value: str, by) -> str:
-    return " ".join(f"{float(x) + d:.9g}" for x, d in zip((value or "0 0 0").split(), by))
+def _body_moved(name: str, by):
+    def edit(root):
+        b = _body(root, name)
+        b.set("pos", " ".join(f"{float(x) + d:.9g}" for x, d in zip((b.get("pos") or "0 0 0").split(), by)))
+    return edit
 
 
-#: The edits of issue 42: (id, what it changes, the names the failure must carry).
+def _inertial_scaled(name: str, attr: str, factor: float):
+    def edit(root):
+        e = _body(root, name).find("inertial")
+        e.set(attr, " ".join(f"{float(x) * factor:.9g}" for x in e.get(attr).split()))
+    return edit
+
+
+#: The edits of issue 42: id -> (the edit of the MJCF's XML, the part the failure must name).
 EDITS = {
-    "range narrowed": (lambda r: _joint(r, "panda_joint2").set("range", "-1.5 1.5"), "panda_joint2"),
-    "damping set": (lambda r: _joint(r, "panda_joint5").set("damping", "1"), "panda_joint5"),
-    "damping halved": (lambda r: _joint(r, "panda_joint1").set("damping", "0.5"), "panda_joint1"),
-    "armature set": (lambda r: _joint(r, "panda_joint6").set("armature", "0.1"), "panda_joint6"),
-    "armature halved": (lambda r: _joint(r, "panda_joint1").set("armature", "0.05"), "panda_joint1"),
-    "frictionloss": (lambda r: _joint(r, "panda_joint3").set("frictionloss", "0.5"), "panda_joint3"),
-    "body moved 1 cm": (lambda r: _body(r, "panda_link3").set("pos", _moved(_body(r, "panda_link3").get("pos"),
-                                                                             (0.01, 0, 0))), "panda_link3"),
-    "axis negated": (lambda r: _joint(r, "panda_joint4").set("axis", "0 0 -1"), "panda_joint4"),
-    "inertia x 1.5": (lambda r: _body(r, "panda_link5").find("inertial").set(
-        "diaginertia", _scaled(_body(r, "panda_link5").find("inertial").get("diaginertia"), 1.5)), "panda_link5"),
-    "mass x 1.1": (lambda r: _body(r, "panda_link2").find("inertial").set(
-        "mass", _scaled(_body(r, "panda_link2").find("inertial").get("mass"), 1.1)), "panda_link2"),
-    "limit added to a continuous joint": (lambda r: (_joint(r, "panda_joint7").set("limited", "true"),
-                                                     _joint(r, "panda_joint7").set("range", "-1 1")), "panda_joint7"),
+    "range narrowed": (_joint_set("panda_joint2", range="-1.5 1.5"), "panda_joint2"),
+    "damping set": (_joint_set("panda_joint5", damping="1"), "panda_joint5"),
+    "damping halved": (_joint_set("panda_joint1", damping="0.5"), "panda_joint1"),
+    "armature set": (_joint_set("panda_joint6", armature="0.1"), "panda_joint6"),
+    "armature halved": (_joint_set("panda_joint1", armature="0.05"), "panda_joint1"),
+    "frictionloss": (_joint_set("panda_joint3", frictionloss="0.5"), "panda_joint3"),
+    "body moved 1 cm": (_body_moved("panda_link3", (0.01, 0.0, 0.0)), "panda_link3"),
+    "axis negated": (_joint_set("panda_joint4", axis="0 0 -1"), "panda_joint4"),
+    "inertia x 1.5": (_inertial_scaled("panda_link5", "diaginertia", 1.5), "panda_link5"),
+    "mass x 1.1": (_inertial_scaled("panda_link2", "mass", 1.1), "panda_link2"),
+    # MuJoCo's import writes the continuous joint limited="false": the limit is both attributes
+    "limit added to a continuous joint": (_joint_set("panda_joint7", limited="true", range="-1 1"), "panda_joint7"),
 }
 
 
