@@ -110,7 +110,8 @@ def test_a_planted_mass_fails_the_fingerprint_and_the_pair_naming_the_link_and_b
     cases = etree.parse(str(junit)).getroot().findall(".//testcase")
     assert len(cases) == 5                                   # 2 robots, 1 pair, 2 scenes
     failing = {c.get("classname"): c for c in cases if c.find("failure") is not None or c.find("error") is not None}
-    assert sorted(failing) == ["urdf2links.pair", "urdf2links.robot"] and failing["urdf2links.robot"].get("name") == MJCF
+    assert sorted(failing) == ["urdf2links.pair", "urdf2links.robot"]
+    assert failing["urdf2links.robot"].get("name") == MJCF
     pair = failing["urdf2links.pair"].find("failure").get("message")
     robot = failing["urdf2links.robot"].find("failure").get("message")
     summary = md.read_text()

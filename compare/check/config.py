@@ -29,7 +29,7 @@ level; every path is relative to the configuration's folder, docs/ci.md)::
     states = 8                                # seeded states of the A and G comparison
     seed = 0
     accepted = [                              # each difference accepted by name (compare/check/accepted.py)
-      { kind = "damping", part = "joint j1", urdf = 0.0, mjcf = 1.0, difference = 1.0, unit = "N m s/rad", tolerance = 1e-05 },
+      { kind = "damping", part = "joint j1", urdf = 0, mjcf = 1, difference = 1, unit = "N m s/rad", tolerance = 1e-5 },
     ]
 
     [[tool.urdf2links.scenes]]

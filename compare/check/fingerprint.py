@@ -137,7 +137,8 @@ class Change:
 
     def text(self, file: str) -> str:
         if self.quantity == "":
-            what = "added (not in its accepted fingerprint)" if self.old is None else "removed (in its accepted fingerprint)"
+            what = ("added (not in its accepted fingerprint)" if self.old is None
+                    else "removed (in its accepted fingerprint)")
             return f"{file}: {self.part} {what}; {ACCEPT}"
         unit = UNITS.get(self.quantity, "")
         by = "" if not math.isfinite(self.moved) else f" (changed by {self.moved:.3g} > {self.allowed:.2g})"
