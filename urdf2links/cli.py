@@ -560,11 +560,11 @@ def _check_parser(sub) -> None:
     p = sub.add_parser("check", help="check a repository's robots, pairs and scenes (urdf2links.toml or "
                                      "[tool.urdf2links]) for CI: exit 0, 1 when a check falls short, 2 when unusable",
                        description="Read the configuration ([tool.urdf2links] of pyproject.toml, or urdf2links.toml, "
-                                   "in PATH or above): load every robot (a load error or an inertia finding not "
-                                   "allowed fails), compare every pair part by part against its tolerances, run every "
-                                   "scene with urdf2links and MuJoCo against its baselines. Exit 0 when all hold, 1 "
-                                   "when a check falls short, 2 when the configuration or a file cannot be used "
-                                   "(docs/ci.md).")
+                                   "in PATH or above): load every robot (a load error, an inertia finding not allowed "
+                                   "or a change since its accepted fingerprint fails), compare every pair part by part "
+                                   "(a difference not accepted by name fails), run every scene against its baselines. "
+                                   "Exit 0 when all hold, 1 when a check falls short, 2 when the configuration or a "
+                                   "file cannot be used (docs/ci.md).")
     p.add_argument("path", nargs="?", default=".", help="the repository's folder, or its configuration file "
                    "(default: here)")
     p.add_argument("--junit", metavar="FILE", help="also write JUnit XML: one test case per robot, pair and scene")
@@ -573,9 +573,9 @@ def _check_parser(sub) -> None:
     p.add_argument("--changed-since", metavar="GIT_REF", help="check only what depends on files changed since this "
                    "commit (the robot files, their meshes and xacro includes, scene files)")
     p.add_argument("--jobs", type=int, help="run the checks in N processes (default 1: here)")
-    p.add_argument("--write-baselines", action="store_true", help="accept this run's scene figures as the baselines")
+    p.add_argument("--write-baselines", action="store_true", help="accept this run (scene figures, fingerprints)")
     p.add_argument("--init", action="store_true", help="write urdf2links.toml for PATH: every robot found, pairs "
-                   "guessed by robot name, the current state accepted (baselines written)")
+                   "guessed by robot name, the current state accepted (differences by name, baselines written)")
     p.add_argument("--write-workflow", nargs="?", const=True, metavar="FILE", help="write the CI workflow (docs/ci.md) "
                    "to .github/workflows/urdf2links-check.yml (or FILE)")
     p.add_argument("--quiet", action="store_true", help="no line per check while it runs")

@@ -23,6 +23,7 @@ from ..reports.baselines import load_baselines, write_baselines
 from .cases import Case, CaseResult, RunContext, cases_of, run_case
 from .config import CheckConfig, ConfigError, read_config
 from .depends import changed_files
+from .fingerprint import write_fingerprints
 from .outputs import exit_status, ordered, verdict, write_junit, write_markdown
 
 __all__ = ["CheckRun", "run_check", "run_cases", "check_command"]
@@ -30,7 +31,9 @@ __all__ = ["CheckRun", "run_check", "run_cases", "check_command"]
 _BASELINES_ABOUT = (
     "Accepted figures of the scenes of `urdf2links check` (key: the scene file, or the robot file of a default "
     "scene): a scene fails when a figure grows past factor x max(baseline, floor) or its divergence comes earlier "
-    "than the baseline's by more than ln(factor) / growth rate. `urdf2links check --write-baselines` accepts a run's.")
+    "than the baseline's by more than ln(factor) / growth rate. fingerprints: each robot file's dynamic parameters "
+    "by name (compare/check/fingerprint.py); a robot fails when one changed. `urdf2links check --write-baselines` "
+    "accepts a run's.")
 
 
 @dataclass
@@ -92,6 +95,8 @@ def run_check(path=".", *, changed_since: str | None = None, jobs: int = 1, writ
     if write:
         accepted = [r.summary for r in run.results if r.summary is not None]
         run.baselines = write_baselines(accepted, config.baselines, factor=config.factor, about=_BASELINES_ABOUT)
+        write_fingerprints(run.baselines, {r.case.entry.id: r.fingerprint for r in run.results
+                                           if r.fingerprint is not None})
     return run
 
 
@@ -126,7 +131,8 @@ def check_command(args) -> int:
     err(f"urdf2links check: {run.note}")
     if run.baselines is not None:
         err(f"wrote {shown_path(run.baselines)}: the accepted figures of "
-            f"{sum(r.summary is not None for r in run.results)} scene(s)")
+            f"{sum(r.summary is not None for r in run.results)} scene(s), the fingerprints of "
+            f"{sum(r.fingerprint is not None for r in run.results)} robot file(s)")
     if args.junit:
         err(f"wrote {shown_path(write_junit(run.results, args.junit))}")
     if args.markdown:

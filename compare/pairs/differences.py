@@ -71,7 +71,8 @@ class Difference:
     joint names it), both values, ``difference`` (a number in ``unit``), ``what`` it is in words,
     ``links`` (the bodies), ``through`` (fixed joints of the first description merged on the other side),
     ``explanation`` (why it is expected, when known), ``undo`` (second side -> second side with this one
-    difference undone; None when it cannot be), ``effect`` (filled by the attribution)."""
+    difference undone; None when it cannot be), ``effect`` (filled by the attribution), ``frames`` (an origin's
+    frames (4, 4) on both sides, relative to the same reference: its move in m and its turn in rad apart)."""
 
     kind: str
     urdf: str | None
@@ -86,6 +87,7 @@ class Difference:
     explanation: str | None = None
     undo: Callable | None = None
     effect: dict | None = None
+    frames: tuple | None = None
 
     @property
     def ratio(self) -> float:
@@ -114,6 +116,8 @@ class Difference:
             out["explanation"] = self.explanation
         if self.effect is not None:
             out["effect"] = self.effect
+        if self.frames is not None:
+            out["frames"] = {"urdf": _plain(self.frames[0]), "mjcf": _plain(self.frames[1])}
         return out
 
 
@@ -434,7 +438,7 @@ class _Comparer:
                     + (f" (through {', '.join(through)}, merged on the other side)" if through else ""))
             self.add(Difference("origin", _joint_label(self.bu[bU]), lm.get(bM, self.bm[bM].fixed_joint or bM),
                                 PU[:3, 3], PM[:3, 3], d, unit, what, (bU, bM), tuple(through),
-                                undo=self._undo_origin(bU, bM, refU, refM)))
+                                undo=self._undo_origin(bU, bM, refU, refM), frames=(PU, PM)))
 
     def _is_ancestor(self, anc: str, body: str) -> bool:
         p = self.bm[body].parent
