@@ -143,3 +143,39 @@ def init_config(folder, *, t_end: float = SCENE_T_END, log=print) -> Path:
     log(f"wrote {path}: {len(loaded)} robot(s), {len(pairs)} pair(s), {len(scenes) - bool(scene_paths)} default "
         f"scene(s), {len(scene_paths)} scene file(s)")
     return path
+
+
+def no_evidence(summary: dict | None) -> str | None:
+    """Why a scene's run is no evidence to accept (the plausibility gate failed, or weak evidence, E67), or None."""
+    if summary is None:
+        return None
+    gate = summary.get("plausibility") or {}
+    if not gate.get("plausible", True):
+        return gate.get("text", "implausible run")
+    cov = summary.get("coverage") or {}
+    return f"weak evidence: {cov.get('text', '')}" if cov.get("weak_evidence") else None
+
+
+def leave_out_scenes(path: Path, reasons: dict[str, str], *, log=print) -> None:
+    """Comment out, in the configuration ``path`` that --init wrote, the default scene of each robot in ``reasons``
+    (robot file -> why its run is no evidence): --init accepts the current state, and a run that is not the robot
+    (a joint flying past its limits, a body through its floor) or that moves nothing is no state to accept. The
+    block stays in the file as comments under the reason, so that a user who makes the scene plausible (a scene
+    file that holds the joints, a shorter run) sees what to bring back."""
+    lines, out, i = path.read_text().splitlines(), [], 0
+    while i < len(lines):
+        block = lines[i:i + 2]
+        robot = block[1].split("=", 1)[1].strip().strip('"') if (
+            len(block) == 2 and block[0] == "[[scenes]]" and block[1].startswith("robot = ")) else None
+        if robot not in reasons:
+            out.append(lines[i])
+            i += 1
+            continue
+        end = i + 1
+        while end < len(lines) and lines[end].strip() and not lines[end].startswith("["):
+            end += 1
+        out += [f"# left out at init: the default scene of {robot} is no evidence to accept: "
+                f"{reasons[robot][:600]}"] + [f"# {x}" for x in lines[i:end]]
+        log(f"--init: left out the default scene of {robot}: {reasons[robot][:300]}")
+        i = end
+    path.write_text("\n".join(out) + "\n")
