@@ -68,6 +68,7 @@ from urdf2links.integration.simulate import Compilation
 
 from .mjcf import INTEGRATORS, MjcfModel
 from .mujoco_inputs import CompiledInputs
+from .tendon_controls import tendon_actuators
 
 __all__ = ["MujocoRun", "run_mujoco", "mujoco_accelerations", "robot_energy", "energy_function", "ENERGY_COLUMNS",
            "PythonInputs", "INPUTS", "TIMED_REGION", "instability_note", "implicit_note"]
@@ -483,8 +484,9 @@ def _scene_inputs(mj, scene, q0, qd0, t_end, samples, base, torques, loads, ctrl
     nl = len(plan.loads) - (plan.n_gravcomp if mj.gravcomp_in_bodies else 0)
     if loads is None and nl:
         loads = plan.wrenches if nl == len(plan.loads) else (lambda t: plan.wrenches(t)[:nl])
-    if ctrl is None and plan.actuator_set.actuators:
-        ctrl = plan.ctrl
+    tas = tendon_actuators(plan)    # issue 43: the file's actuators on fixed tendons, after the scene's (with_constraints)
+    if ctrl is None and (plan.actuator_set.actuators or tas):
+        ctrl = (lambda t: np.r_[plan.ctrl(t), [ta.actuator.ctrl(t) for ta in tas]]) if tas else plan.ctrl
     return plan, q0, qd0, t_end, samples, base, torques, loads, ctrl
 
 
