@@ -12,6 +12,7 @@ control and the comparison said "DIVERGE at t = 0.001 s" (planted below: the sam
 from __future__ import annotations
 
 import dataclasses
+import importlib.resources
 from pathlib import Path
 
 import numpy as np
@@ -22,6 +23,7 @@ from urdf2links.compare.agreement.trajectory import DIVERGENCE_THRESHOLD, compar
 from urdf2links.compare.mujoco_side.mjcf import mjcf_from_scene
 from urdf2links.compare.mujoco_side.mujoco_constraints import with_constraints
 from urdf2links.compare.mujoco_side.mujoco_mjcf import mujoco_from_mjcf, run_file
+from urdf2links.compare.mujoco_side.mujoco_run import run_mujoco
 from urdf2links.compare.mujoco_side.tendon_controls import tendon_actuators
 from urdf2links.errors import SceneError
 from urdf2links.scenes.plan import as_plan
@@ -117,3 +119,49 @@ def test_parallel_gripper_with_tendon_actuator_agrees(tmp_path):
     off = run_file(mf, plan, t_end=0.3, samples=len(c.t))
     for run in (unfed, off):
         assert float(np.max(np.abs(run.q - c.q_ours))) > 10 * DIVERGENCE_THRESHOLD
+    mj = with_constraints(mjcf_from_scene(plan.scene, plan.model), plan.constraints)    # route 1 gets it too
+    r1 = run_mujoco(mj, plan, t_end=0.3, samples=len(c.t))
+    assert r1.inputs == "compiled" and float(np.max(np.abs(r1.q - c.q_ours))) < DIVERGENCE_THRESHOLD
+
+
+DM = importlib.resources.files("dm_control")
+#: dm_control's planar manipulator: its hand's thumb and finger pulled by the motor 'grasp' (gear 2, ctrlrange
+#: [-1, 1]) on the fixed tendon 'grasp' (0.5 thumb + 0.5 finger), held together by a tendon equality 'coupling'.
+#: Its fingers are light: a control of 0.02 turns them ~6 rad in 0.1 s (with the arm and hand moving from the
+#: start, as in tests/test_constraints_models.py).
+MANIPULATOR = DM / "suite/manipulator.xml"
+_HAND = {"arm_shoulder": 1.0, "arm_elbow": -1.5, "thumb": 2.0, "finger": 2.0}
+
+
+def _manipulator(amplitude: float):
+    from urdf2links.scenes.scene import scene_from_dict
+
+    data = {"robot": {"mjcf": str(MANIPULATOR)}, "gravity": {"magnitude": 9.81}, "constraints": {"from_file": True},
+            "actuator": [{"name": "grasp", "ctrl": {"sines": [[amplitude, 3.0, 0.0]]}}],
+            "initial": {"qd": dict(_HAND)}, "run": {"t_end": 0.1, "samples": 21}}
+    return scene_from_dict(data, where="manipulator_grasp.toml")
+
+
+def test_dm_control_manipulator_grasp_on_its_tendon():
+    """A public MJCF with a tendon actuator (dm_control's manipulator.xml, 'grasp'): MuJoCo's actuator_force and
+    qfrc_actuator equal ours at identical states, the control clamped by its ctrlrange over most of the run
+    (amplitude 1.5 against [-1, 1]); the engines agree over 0.1 s with the scene's control, and MuJoCo's run of the file without that
+    control (planted: the behaviour before issue 43) does not."""
+    import warnings
+
+    import urdf2links
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")     # the import's audit findings on this file (its notes)
+        model = urdf2links.load_mjcf(MANIPULATOR)
+    wide = as_plan(_manipulator(1.5), model=model)
+    assert [ta.name for ta in tendon_actuators(wide)] == ["grasp"]
+    r = file_actuators(wide, mujoco_from_mjcf(wide), states=16, seed=2)
+    assert r["tendon_actuators"] == 1 and r["max_rel_error_actuator"] < ROUNDING
+    c = compare_scene(_manipulator(0.02), model=model, progress=False, mujoco_fallback=False)
+    err = float(np.max(c.error))
+    assert err < DIVERGENCE_THRESHOLD and c.summary_route() == "route 2" and c.run.callback_calls > 0
+    plan = as_plan(c.scene, model=model)
+    mf = mujoco_from_mjcf(plan)
+    unfed = run_file(dataclasses.replace(mf, tendon_actuator_ids=()), plan, t_end=0.1, samples=len(c.t))
+    assert float(np.max(np.abs(unfed.q - c.q_ours))) > 10 * DIVERGENCE_THRESHOLD

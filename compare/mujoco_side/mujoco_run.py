@@ -65,6 +65,7 @@ from urdf2links.compilation import clock as _clock  # durations without numba's 
 from urdf2links.dynamics.loads import Wrench
 from urdf2links.dynamics.transforms import BaseState
 from urdf2links.integration.simulate import Compilation
+from urdf2links.scenes.file_constraints import tendon_actuator_names
 
 from .mjcf import INTEGRATORS, MjcfModel
 from .mujoco_inputs import CompiledInputs
@@ -567,7 +568,8 @@ def _check_scene(mj: MjcfModel, scene) -> None:
         raise ValueError("the scene's springs are not the MJCF model's: build it with mjcf_from_scene")
     if (scene.base is not None) and not mj.moving_base:
         raise ValueError("the scene moves the base but the MJCF model has no base_A: build it with mjcf_from_scene")
-    if [a.name for a in mj.actuators] != [a.name for a in scene.actuators]:
+    on_tendons = tendon_actuator_names(mj.source)   # issue 43: with_constraints writes those (tendon_controls)
+    if [a.name for a in mj.actuators] != [a.name for a in scene.actuators if a.name not in on_tendons]:
         raise ValueError("the scene's actuators are not the MJCF model's: build it with mjcf_from_scene")
 
 
