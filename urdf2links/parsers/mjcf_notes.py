@@ -67,7 +67,8 @@ def inventory(m, joint_kinds: dict) -> list[str]:
         "connect, weld and joint are read (E68-E70; tendon equalities of fixed tendons too: E70 on their lengths) and act when a scene says [constraints] from_file = true "
         "(urdf2links inspect --scene shows them); otherwise the joints stay independent and MuJoCo's run disables them")
     add(m.nu, f"{m.nu} actuator(s) ({_names(m, 'mjOBJ_ACTUATOR', m.nu)})",
-        "scene effects when a scene names them ([[actuator]] name = '...', ctrl = ...: MuJoCo's law on both engines); "
+        "scene effects when a scene names them ([[actuator]] name = '...', ctrl = ...: MuJoCo's law on both engines; "
+        "one on a fixed tendon with [constraints] from_file = true; one on a site or a spatial tendon is refused); "
         "the others act on neither engine (MuJoCo's run switches them off)")
     add(m.nsensor, f"{m.nsensor} sensor(s)", "not used (they do not change the dynamics)")
     add(m.nsite, f"{m.nsite} site(s)", "not used (frames only)")
