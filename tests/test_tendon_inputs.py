@@ -81,8 +81,9 @@ def test_fixed_tendon_transmission_forces_at_identical_states(tmp_path):
 
 
 def test_site_transmission_and_tendon_without_from_file_are_refused(tmp_path):
-    """Site transmissions are not modelled: a scene naming one is refused by name (both engines would
-    otherwise differ); so is a fixed tendon's actuator in a scene whose tendons do not act (no from_file)."""
+    """Site transmissions and spatial tendons are not modelled: a scene naming such an actuator is refused by
+    name (both engines would otherwise differ); so is a fixed tendon's actuator in a scene whose tendons do not
+    act (no from_file)."""
     xml = tmp_path / "site_arm.xml"
     xml.write_text("""<mujoco model="site_arm"><compiler angle="radian"/><worldbody><body name="arm">
       <joint name="j" type="hinge" axis="0 1 0"/><inertial pos="0 0 -0.2" mass="1" diaginertia="0.01 0.01 0.01"/>
@@ -91,6 +92,14 @@ def test_site_transmission_and_tendon_without_from_file_are_refused(tmp_path):
     scene = tmp_path / "push.toml"
     scene.write_text(f'[robot]\nmjcf = "{xml.as_posix()}"\n\n[[actuator]]\nname = "push"\nctrl = 1.0\n')
     with pytest.raises(SceneError, match=r"'push'.*transmission is a site"):
+        as_plan(scene)
+    spatial = tmp_path / "spatial_arm.xml"      # an actuator on a spatial tendon: refused too
+    spatial.write_text(xml.read_text().replace('<site name="tip" pos="0 0 -0.4"/>', '<site name="tip" pos="0 0 -0.4"/>'
+                       '<site name="mid" pos="0 0 -0.2"/>').replace("<actuator>", '<tendon><spatial name="rope">'
+                       '<site site="mid"/><site site="tip"/></spatial></tendon><actuator>').replace(
+                       'site="tip" gear="1 0 0 0 0 0"', 'tendon="rope"'))
+    scene.write_text(f'[robot]\nmjcf = "{spatial.as_posix()}"\n\n[[actuator]]\nname = "push"\nctrl = 1.0\n')
+    with pytest.raises(SceneError, match=r"'push'.*transmission is a spatial tendon"):
         as_plan(scene)
     no_file = _scene(tmp_path, TENDON.replace("from_file = true", "from_file = false"), "nofile")
     with pytest.raises(SceneError, match=r"'fingers_actuator' drives the file's fixed tendon 'split'.*from_file = true"):

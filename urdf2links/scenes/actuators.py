@@ -226,8 +226,10 @@ def file_actuator(row: dict) -> str | None:
     or None when it can: a joint transmission on a hinge or slide, no activation dynamics, a fixed
     gain, an affine (or no) bias, no delay, no damping or armature of its own."""
     why = []
-    if row["trntype"] not in ("joint", "jointinparent"):
-        why.append(f"its transmission is a {row['trntype']} (only joint transmissions are modelled)")
+    if row["trntype"] == "tendon":      # a fixed tendon's acts through it (resolve_actuators): this one is spatial
+        why.append("its transmission is a spatial tendon (only joints and fixed tendons are modelled)")
+    elif row["trntype"] not in ("joint", "jointinparent"):
+        why.append(f"its transmission is a {row['trntype']} (only joints and fixed tendons are modelled)")
     elif row["joint_type"] not in ("hinge", "slide"):
         why.append(f"it drives a {row['joint_type']} joint, whose MuJoCo transmission (length = the rotation's "
                    "axis-angle . gear) is not a linear map of the ZYX angles: out of scope; drive the joint's "
