@@ -116,6 +116,7 @@ def test_parallel_gripper_with_tendon_actuator_agrees(tmp_path):
     err = float(np.max(c.error))
     assert err < DIVERGENCE_THRESHOLD, s["trajectory"]["verdict"]
     assert "agree" in s["trajectory"]["verdict"] and "DIVERGE" not in s["trajectory"]["verdict"]
+    assert [(a["name"], a["coordinate"]) for a in s["actuators"]] == [("fingers_actuator", "split")]   # reported
     assert c.summary_route() == "route 2" and c.run.inputs == "compiled" and c.run.callback_calls > 0
     moved = float(np.ptp(c.q_ours[:, 1]))           # the fingers moved: the actuator acted (not weak evidence)
     assert moved > 0.05

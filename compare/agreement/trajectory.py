@@ -448,7 +448,7 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     info.update({"trajectory_route": FILE_LABEL if file_run else ROUTE1_LABEL, "mujoco_fallback": fallback,
                  "coverage": cov, "scope": cut_scope(model, scene.load_options, plan),
                  "t_end": T, "t_end_note": t_end_note, "effects": plan.terms, "warm_up": warm,
-                 "actuators": plan.actuator_set.actuators,
+                 "actuators": plan.actuator_set.actuators + tuple(ta.actuator for ta in tendon_actuators(plan)),
                  "q0": dict(zip(model.coordinate_names, q0.tolist())),
                  "qd0": dict(zip(model.coordinate_names, qd0.tolist())),
                  "total_s": clock() - start})
