@@ -132,6 +132,8 @@ def test_parallel_gripper_with_tendon_actuator_agrees(tmp_path):
     mj = with_constraints(mjcf_from_scene(plan.scene, plan.model), plan.constraints)    # route 1 gets it too
     r1 = run_mujoco(mj, plan, t_end=0.3, samples=len(c.t))
     assert r1.inputs == "compiled" and float(np.max(np.abs(r1.q - c.q_ours))) < DIVERGENCE_THRESHOLD
+    py = run_mujoco(mj, plan, t_end=0.3, samples=len(c.t), inputs="python")     # its oracle: the Python callback
+    assert float(np.max(np.abs(py.q - r1.q))) < 1e-12     # the same controls at the same stages: rounding only
 
 
 DM = importlib.resources.files("dm_control")
