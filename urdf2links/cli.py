@@ -130,7 +130,7 @@ def _joint_lines(joints) -> list[str]:
 
 def _inspect(args) -> int:
     from .scenes.plan import compile_plan
-    from .scenes.scene_toml import hold_of, load_options_of, scene_or_robot, scene_toml
+    from .scenes.scene_toml import hold_of, load_options_of, scene_or_robot, scene_with_plan
 
     if args.scene or str(args.file).endswith(".toml"):
         scene = scene_or_robot(args.file, q0=args.q0, seed=args.seed, t_end=args.t_end, load=load_options_of(args),
@@ -142,9 +142,7 @@ def _inspect(args) -> int:
             from .scenes.contact import with_ground
 
             scene = with_ground(scene, model)
-        if scene.path is None:
-            print(scene_toml(scene))
-        print(compile_plan(scene, model).describe())
+        print(scene_with_plan(scene, compile_plan(scene, model).describe()))     # a default scene: TOML that parses
         return 0
     from .parsers.robot_file import load_robot
 

@@ -82,6 +82,7 @@ from urdf2links.scenes.scene import Scene, load_scene, robot_label
 from ..mujoco_side.mjcf import MjcfModel, mjcf_from_scene
 from ..mujoco_side.mujoco_mjcf import FILE_LABEL, file_route_inputs, file_runner, file_terms, mujoco_from_mjcf
 from ..mujoco_side.mujoco_constraints import with_constraints
+from ..mujoco_side.tendon_controls import tendon_actuators
 from .constraint_agreement import run_notes as constraint_run_notes
 from ..mujoco_side.mujoco_run import TIMED_REGION as MUJOCO_REGION
 from ..mujoco_side.contact_inputs import contact_energy, contact_timestep
@@ -395,7 +396,7 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     else:
         route2 = route2_terms(scene, states=states, seed=seed, model=model)
     terms = {"route1": route1_terms(mj, model, scene, states=states, seed=seed), "route2": route2}
-    if plan.actuator_set.actuators:     # the actuators' forces at identical states, on both routes
+    if plan.actuator_set.actuators or tendon_actuators(plan):   # the actuators' forces at identical states, both routes
         terms["route1"] = merged(terms["route1"], route1_actuators(plan, mj, states=states, seed=seed))
         act2 = (file_actuators(plan, mf, states=states, seed=seed) if mf is not None else
                 route2_actuators(plan, scene.robot, states=states, seed=seed) if not is_xacro_path(scene.robot)
@@ -457,7 +458,7 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     info.update({"trajectory_route": FILE_LABEL if file_run else ROUTE1_LABEL, "mujoco_fallback": fallback,
                  "coverage": cov, "scope": cut_scope(model, scene.load_options, plan),
                  "t_end": T, "t_end_note": t_end_note, "effects": plan.terms, "warm_up": warm,
-                 "actuators": plan.actuator_set.actuators,
+                 "actuators": plan.actuator_set.actuators + tuple(ta.actuator for ta in tendon_actuators(plan)),
                  "q0": dict(zip(model.coordinate_names, q0.tolist())),
                  "qd0": dict(zip(model.coordinate_names, qd0.tolist())),
                  "total_s": clock() - start})
@@ -533,8 +534,9 @@ def _project_at(traj, plan, t, T):
 def _energy_balances(scene, plan, mj, run, traj, EV_o, h_o, W) -> tuple[dict, dict]:
     """Both engines' balances ``h - h(0) - W`` (MuJoCo's without ``W`` when no work acts), the
     energy arrays for the report, and what the summary says about them."""
-    work_terms = any(term in plan.terms for term in ("Q", "tau", "damper", "base", "gravcomp", "actuator",
-                                                   "computed_torque", "contact"))
+    tendon_work = any(td.damping or td.actuators for td in (plan.constraints.tendons if plan.constraints else ()))
+    work_terms = tendon_work or any(term in plan.terms for term in ("Q", "tau", "damper", "base", "gravcomp", "actuator",
+                                                                    "computed_torque", "contact"))
     # issue 37: the contact's elastic energy (E81) at MuJoCo's states, which MuJoCo's own energy does not count
     V_c = contact_energy(plan, run.t, run.q) if "contact" in plan.terms else 0.0
     EV_m = run.total_energy + V_c
@@ -550,7 +552,8 @@ def _energy_balances(scene, plan, mj, run, traj, EV_o, h_o, W) -> tuple[dict, di
         what = [w for w, on in (("contact", "contact" in plan.terms), ("forces/moments", "Q" in plan.terms), ("joint torques", "tau" in plan.terms),
                                 ("dampers", "damper" in plan.terms), ("the moving base", "base" in plan.terms),
                                 ("gravcomp", "gravcomp" in plan.terms), ("actuators", "actuator" in plan.terms),
-                                ("the computed torque", "computed_torque" in plan.terms)) if on]
+                                ("the computed torque", "computed_torque" in plan.terms),
+                                ("tendons' dampers and actuators", tendon_work)) if on]     # issue 43
         note = (f"work terms present ({', '.join(what)}): both drifts use the project's work W "
                 f"(integrated along the project's trajectory): max |{sym} - {sym}(0) - W|")
         if scene.base is not None:

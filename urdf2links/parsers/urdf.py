@@ -102,9 +102,20 @@ class _Reader:
             self.fail(el, what, problem, fix + _TOLERATED, cls)
         self.note(el, what, f"{problem}; {done}")
 
+    def misspelt(self, el, attr: str, what: str) -> None:
+        """When ``el`` lacks the required ``attr`` but has an unknown attribute spelt like it (``valeu`` for
+        ``value``), the error names that attribute with a did-you-mean (issue 43)."""
+        if el is None:
+            return
+        near = difflib.get_close_matches(attr, [a for a in el.attrib if a != attr], n=1, cutoff=0.6)
+        if near:
+            self.fail(el, f"{what} {near[0]}=\"{el.get(near[0])}\"", f"{near[0]}: did you mean {attr}? (the "
+                      f"'{attr}' attribute is missing)", f"rename {near[0]} to {attr}")
+
     def text(self, el, attr: str, what: str) -> str:
         value = el.get(attr)
         if value is None or not value.strip():
+            self.misspelt(el, attr, what)
             self.fail(el, what, f"the '{attr}' attribute is missing or empty",
                       f"add {attr}=\"...\"")
         return value.strip()
@@ -116,6 +127,7 @@ class _Reader:
         raw = el.get(attr) if el is not None else None
         if raw is None:
             if default is None:
+                self.misspelt(el, attr, what)
                 self.fail(el, f"{what} {attr}", "the attribute is missing",
                           f"add {attr}=\"{' '.join(['0'] * n)}\" ({n} numbers)")
             return np.array(default, dtype=float)
