@@ -165,6 +165,8 @@ def compare_command(args) -> int:
     paths = write_report(c, args.out, json_path=args.json, command=_compare_cmd(args), check=check,
                          animation_fps=args.animation_fps)
     _print_headline(paths["summary"])
+    for note in c.model.info.get("missing_files", ()):     # issue 42: a mesh whose file was not found, named
+        print(f"  note       {note}")
     print(f"  report     {shown_path(paths['html'])} (summary.json, summary.md)" + (f"; JSON also {args.json}" if args.json else ""))
     if check is not None:
         print(check.text())
