@@ -73,7 +73,8 @@ def report_t_end(scene, *, t_end: float | None, cap: float) -> tuple[float, str 
     return float(scene.run.t_end), None
 
 
-def _print_headline(s: dict, stream=sys.stdout) -> None:
+def _print_headline(s: dict, stream=None) -> None:
+    stream = stream or sys.stdout       # the stdout of the call, not the one of the first import (a test's capture)
     tr, en, te, wt = s["trajectory"], s["energy"], s["terms"], s["wall_time"]
     r2 = te["route2"]
     print(f"{s['key']}: t = 0..{s['t_end']:g} s, urdf2links {s['project']['method']} vs MuJoCo "
