@@ -26,7 +26,7 @@ from pathlib import Path
 from urdf2links.compilation import clock  # durations without numba's compilation
 from urdf2links.console import err, shown_path
 from urdf2links.integration.integrators import METHODS
-from urdf2links.locations import DEFAULT_OUT, default_baselines, report_scene_files, report_scenes, shipped_robots_dir
+from urdf2links.locations import DEFAULT_OUT, default_baselines, report_scenes, shipped_robots_dir
 from urdf2links.scenes.scene import load_scene
 from urdf2links.scenes.scene_toml import load_options_of, override_loading, scene_from_args, write_scene_option
 
@@ -45,9 +45,9 @@ REPORT_CAP_S = 0.0
 
 
 def shipped_scenes() -> list[Path]:
-    """The shipped scene files ``urdf2links report`` runs (``robots/*.toml`` and ``robots/loops/*.toml`` of the
-    installed package)."""
-    return report_scene_files(shipped_robots_dir())
+    """The shipped open-tree scene files (``robots/*.toml`` of the installed package; ``urdf2links report`` also
+    runs the closed loops, :func:`urdf2links.locations.report_scene_files`)."""
+    return sorted(shipped_robots_dir().glob("*.toml"))
 
 
 def _driven(scene) -> list[str]:
