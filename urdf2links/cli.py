@@ -197,7 +197,7 @@ def _simulate(args) -> int:
         print(f"  methods: {s['methods_used']}")
         for line in describe_stretches(s["stretches"]):
             print(f"    {line}")
-    for note in s["spring_notes"]:
+    for note in [*model.info.get("missing_files", ()), *s["spring_notes"]]:     # issue 42: a missing mesh named
         print(f"  note: {note}")
     for e in s["limit_excursions"]:
         print(f"  note: {LimitExcursion(**e).text()}")

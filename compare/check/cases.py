@@ -27,7 +27,7 @@ import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from urdf2links.errors import DescriptionError, DynamicsError, IntegrationError, SceneError
+from urdf2links.errors import DescriptionError, DynamicsError, IntegrationError, SceneError, URDFError
 
 from ..formatting import get, json_ready
 from .config import PairEntry, RobotEntry, SceneEntry
@@ -112,6 +112,8 @@ def check_robot(res: CaseResult, robot: RobotEntry, ctx: RunContext = RunContext
     model = _load(robot)
     res.lines.append(f"{robot.id}: robot {model.name!r}, {model.tree.n_links} links, {model.n} coordinates, "
                      f"{len(model.audit)} inertia finding(s)")
+    for text in model.info.get("missing_files", ()):      # issue 42: a mesh the file names that is not there
+        res.problems.append(Problem(text))
     for r in model.audit:
         allowed = robot.allow is True or r.link in (robot.allow or ())
         line = f"{robot.id}: link {r.link}: inertia {r.kind}: {r.message}" + (f" ({r.fix})" if r.fix else "")
@@ -272,13 +274,25 @@ def run_case(case: Case, ctx: RunContext = RunContext()) -> CaseResult:
         res.status = "fail" if res.problems else "pass"
     except _FILE_ERRORS as exc:
         res.status = "error"
-        res.problems.append(Problem(f"{case.file}: cannot be used: {type(exc).__name__}: {exc}"))
+        res.problems.append(Problem(f"{_blamed(case, exc)}: cannot be used: {type(exc).__name__}: {exc}"))
     except Exception as exc:  # noqa: BLE001 -- one case's fault must not hide the others
         res.status = "error"
         tb = "".join(traceback.format_exception(exc)[-4:])
         res.problems.append(Problem(f"{case.file}: internal error of urdf2links ({type(exc).__name__}: {exc})\n{tb}"))
     res.seconds = time.perf_counter() - start
     return res
+
+
+def _blamed(case: Case, exc: BaseException) -> str:
+    """The file an error of ``case`` belongs to: for a pair, the description its message names (a URDF's missing
+    mesh is the URDF's, issue 42), the URDF for an error of the URDF reader; else the case's file."""
+    if case.kind != "pair":
+        return case.file
+    text = str(exc)
+    for r in (case.entry.urdf, case.entry.mjcf):
+        if str(r.path) in text or r.id in text:
+            return r.id
+    return case.entry.urdf.id if isinstance(exc, URDFError) else case.file
 
 
 def cases_of(config, *, only=None) -> list[Case]:

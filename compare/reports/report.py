@@ -32,6 +32,7 @@ from .contact_section import contact_markdown, contact_section
 from .coverage import coverage_cell, coverage_html, coverage_markdown, weak_evidence
 from .motion import motion_section
 from .plots import plot_coordinates, plot_energy, plot_error, plot_overview, plot_terms
+from .stops import stops_html, stops_md
 
 __all__ = ["write_report", "render_html", "render_markdown", "write_index"]
 
@@ -392,11 +393,13 @@ def write_report(c, out_dir=None, *, root=None, json_path=None, command: str | N
             "summary": summary}
 
 
-def write_index(entries, out_root, *, note: str = "", command: str | None = None, corpus_link: str | None = None) -> dict:
+def write_index(entries, out_root, *, note: str = "", command: str | None = None, corpus_link: str | None = None,
+                stopped=()) -> dict:
     """``index.html`` and ``index.md`` in ``out_root``: one row per (summary, link, check) entry,
     ``entries`` a list of dicts ``{"summary": ..., "link": relative path of report.html, "check":
     CheckResult or None}``; ``corpus_link``: relative address of a corpus report
-    (``urdf2links report --corpus``), linked under the title."""
+    (``urdf2links report --corpus``), linked under the title; ``stopped``: the hard cases that stopped by
+    design (:mod:`urdf2links.compare.reports.stops`), in a section of their own."""
     root = Path(out_root)
     root.mkdir(parents=True, exist_ok=True)
     e = html.escape
@@ -452,7 +455,7 @@ def write_index(entries, out_root, *, note: str = "", command: str | None = None
              (f"<p><b><a href='{e(corpus_link)}'>Corpus report</a></b>: every robot of a corpus of real robot "
               "descriptions against MuJoCo, each in its default scene (<code>urdf2links report --corpus</code>).</p>"
               if corpus_link else ""),
-             _rows(rows, header, num_cols=(3, 4, 5, 7, 8, 9, 11, 12)),
+             _rows(rows, header, num_cols=(3, 4, 5, 7, 8, 9, 11, 12)), stops_html(list(stopped)),
              "<p class='small'>terms: max |ours &minus; MuJoCo| / max |MuJoCo| of A (mj_fullM) and e + G (qfrc_bias) at "
              "seeded random states; route 1 = the project's tree as MJCF, route 2 = MuJoCo's own URDF import (fixed base "
              "only; \"repaired\" when MuJoCo refused the file). Trajectory errors in rad (m for translations). Energy drift: "
@@ -467,6 +470,7 @@ def write_index(entries, out_root, *, note: str = "", command: str | None = None
     md_link = corpus_link.removesuffix("index.html") + "corpus.md" if corpus_link else None
     corpus_md = [f"Corpus report: [{md_link}]({md_link}) and {corpus_link} (every robot of a corpus against MuJoCo, "
                  "each in its default scene).", ""] if corpus_link else []
-    md_text = "\n".join(["# urdf2links against MuJoCo", "", (note + "\n") if note else "", *corpus_md, *md, ""])
+    md_text = "\n".join(["# urdf2links against MuJoCo", "", (note + "\n") if note else "", *corpus_md, *md,
+                         *stops_md(list(stopped)), ""])
     (root / "index.md").write_text(md_text)
-    return {"html": root / "index.html", "md": root / "index.md", "table": "\n".join(md)}
+    return {"html": root / "index.html", "md": root / "index.md", "table": "\n".join([*md, *stops_md(list(stopped))])}

@@ -35,7 +35,7 @@ import numpy as np
 from lxml import etree
 
 from ..dynamics.rotations import matrix_to_rpy
-from ..errors import URDFError, URDFStructureError, URDFValueError
+from ..errors import MeshError, URDFError, URDFStructureError, URDFValueError
 from ..ranges import out_of_range
 from .description import (
     JOINT_TYPES,
@@ -48,7 +48,7 @@ from .description import (
     RobotDescription,
 )
 from .inventory import inventory_notes, joint_value_notes
-from .mesh_paths import require_mesh, resolve_mesh_path
+from .mesh_paths import missing_mesh, require_mesh, resolve_mesh_path
 from .source import read_source
 from .xacro_input import is_xacro_path
 
@@ -254,7 +254,7 @@ def _geometry_strict(r: _Reader, el, what: str, directory, package_dirs) -> Geom
     origin = r.origin(el, what)
     shape = _shape(r, el, what)
     kind = etree.QName(shape).localname
-    what = f"{what} <geometry><{kind}>"
+    element, what = what, f"{what} <geometry><{kind}>"
     if kind not in GEOMETRY_KINDS:
         r.fail(shape, what, f"unknown shape <{kind}>", f"use one of {', '.join(GEOMETRY_KINDS)}")
 
@@ -276,7 +276,13 @@ def _geometry_strict(r: _Reader, el, what: str, directory, package_dirs) -> Geom
     filename = r.text(shape, "filename", what)
     scale = r.floats(shape, "scale", 3, what, (1.0, 1.0, 1.0), allow_one=True, quantity="scale")
     path = resolve_mesh_path(filename, directory=directory, package_dirs=package_dirs)
-    return Geometry(kind, origin, filename=filename, path=path, scale=scale)
+    missing = ""
+    if path is None:     # issue 42: named (file, link, element, paths looked for); strict: refused
+        m = missing_mesh(filename, source=r.label, directory=directory, package_dirs=package_dirs)
+        r.tolerate(shape, what, m.problem, "kept without its file: the dynamics does not use it, and what does (an "
+                   "inertia from geometry, a drawing, compare --against) refuses it by name", m.fix, MeshError)
+        missing = m.text(f"{r.label}: {element}")
+    return Geometry(kind, origin, filename=filename, path=path, scale=scale, missing=missing)
 
 
 def _geometry(r: _Reader, el, what: str, directory, package_dirs) -> Geometry:

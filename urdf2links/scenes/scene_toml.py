@@ -20,6 +20,7 @@ from .contact import contact_toml, with_ground
 from ..errors import SceneError, URDFError
 from ..parsers.xacro_input import parse_xacro_arg
 from .constraints import constraint_toml
+from .expect import expect_toml
 from .scene import RunSettings, Scene, default_scene, load_scene
 
 __all__ = ["scene_toml", "scene_with_plan", "write_scene", "scene_or_robot", "scene_from_args", "write_scene_option", "xacro_args_of",
@@ -112,6 +113,7 @@ def scene_toml(scene: Scene, *, folder=None) -> str:
     out += _run_lines(scene.run) + [""]
     if scene.link_poses:
         out += ["[record]", f"link_poses = {_value(list(scene.link_poses))}", ""]
+    out += expect_toml(scene.expected_stop, _value)     # issue 42: a hard case that stops by design
     return "\n".join(out)
 
 
