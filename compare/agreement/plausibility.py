@@ -131,8 +131,10 @@ class Plausibility:
 
 
 def passive_scene(plan) -> bool:
-    """No input does work (:data:`INPUT_TERMS`): only gravity, springs, dampers and the contact act."""
-    return not any(term in plan.terms for term in INPUT_TERMS)
+    """No input does work (:data:`INPUT_TERMS`, and no actuator on a tendon (E76)): only gravity, springs,
+    dampers and the contact act."""
+    tendons = plan.constraints.tendons if plan.constraints is not None else ()
+    return not (any(term in plan.terms for term in INPUT_TERMS) or any(t.actuators for t in tendons))
 
 
 def file_floors(m) -> list[tuple[str, np.ndarray, float]]:
