@@ -19,12 +19,12 @@ A case never raises: a file that cannot be used is an ``error`` (exit 2), a chec
 from __future__ import annotations
 
 import math
-import time
 import traceback
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from urdf2links import compilation
 from urdf2links.errors import DescriptionError, DynamicsError, IntegrationError, SceneError
 
 from ..formatting import get, json_ready
@@ -62,7 +62,9 @@ class Problem:
 @dataclass
 class CaseResult:
     """A case's outcome: ``status`` (:data:`STATUSES`), its ``problems``, ``lines`` (what was checked),
-    ``seconds`` and, for a scene, its comparison ``summary`` (the baselines' entry)."""
+    ``seconds`` (numba's compilation left out: :func:`urdf2links.compilation.clock`), ``compiled`` (the
+    seconds and functions numba compiled during the case, shown apart, once) and, for a scene, its comparison
+    ``summary`` (the baselines' entry)."""
 
     case: Case
     status: str = "pass"
@@ -70,6 +72,7 @@ class CaseResult:
     lines: list[str] = field(default_factory=list)
     seconds: float = 0.0
     summary: dict | None = None
+    compiled: tuple = (0.0, [])
 
     @property
     def worst(self) -> float:
@@ -212,7 +215,7 @@ def check_scene(res: CaseResult, entry: SceneEntry, ctx: RunContext) -> None:
 def run_case(case: Case, ctx: RunContext = RunContext()) -> CaseResult:
     """Run one case (module doc); never raises."""
     res = CaseResult(case)
-    start = time.perf_counter()
+    start, before = compilation.clock(), compilation.snapshot()     # the user's seconds leave compilation out
     try:
         if case.kind == "robot":
             check_robot(res, case.entry)
@@ -228,7 +231,8 @@ def run_case(case: Case, ctx: RunContext = RunContext()) -> CaseResult:
         res.status = "error"
         tb = "".join(traceback.format_exception(exc)[-4:])
         res.problems.append(Problem(f"{case.file}: internal error of urdf2links ({type(exc).__name__}: {exc})\n{tb}"))
-    res.seconds = time.perf_counter() - start
+    res.seconds = compilation.clock() - start
+    res.compiled = before.since()
     return res
 
 
