@@ -7,11 +7,18 @@ kernel compiled), then three times warm (the same folder), each with ``--jobs 2`
 row, must stay within the warm runs' spread; the compilation is shown apart, in one line, and is far larger than
 that spread, so a time that included it would fail.
 
-Measured on the 2-core machine shared with other work (issue 42): warm, the pair 1.5-1.6 s and the scene
-0.4-0.6 s over three runs; cold, the pair 1.4-1.9 s and the scene 0.3-0.5 s, while compilation took 77-122 s
-(the pair's case 36 s of it, the scene's 41 s). The bound, 2 x the slowest warm run + 0.5 s, leaves room for a
-loaded machine's spread (a cold run read 0.3 s above the slowest warm one) and is 10 x smaller than the
-compilation it must keep out.
+Measured on the 2-core machine shared with other work (issue 42), three warm runs each time:
+
+| load | pair warm | pair cold | scene warm | scene cold | compilation (cold) |
+|---|---|---|---|---|---|
+| heavy, --jobs 1 | 1.5-1.6 s | 1.4-1.9 s | 0.4-0.6 s | 0.3-0.5 s | 77-122 s (pair 36 s, scene 41 s) |
+| heavy, --jobs 2 | 1.02-1.17 s | 0.35 s | 0.51-1.37 s | 1.37 s | 88 s |
+| light, --jobs 2 | 0.171-0.182 s | 0.203 s | 0.223-0.234 s | 0.292 s | 26 s |
+
+A warm run's case also loads the compiled code from the cache (no compilation, but time), a cold one does not:
+either may be the slower. The bound, 2 x the slowest warm run + 0.5 s, leaves room for a loaded machine's
+spread (a cold case read up to 0.3 s above the slowest warm one, and one warm run 2.7 x another) and is still
+5 x smaller than the compilation it must keep out (asserted: the test can fail).
 """
 
 from __future__ import annotations
@@ -42,7 +49,11 @@ robot = "robots/pendulum.urdf"
 t_end = 0.5
 """
 WARM_RUNS = 3
-FIGURE_BOUNDS = {"compilation": "> 5 x every case's bound (a time that held it would fail)"}
+_CASE_BOUND = "cold <= 2 x slowest warm + 0.5 s"
+FIGURE_BOUNDS = {"compilation": "> 5 x every case's bound (a time that held it would fail)",
+                 "robot robots/pendulum.urdf": _CASE_BOUND, "robot robots/pendulum.xml": _CASE_BOUND,
+                 "pair robots/pendulum.urdf against robots/pendulum.xml": _CASE_BOUND,
+                 "scene robots/pendulum.urdf (default scene)": _CASE_BOUND}
 LINE = re.compile(r"^(?:ok|FAIL|ERROR)\s+(robot|pair|scene)\s+(.+) \(([0-9.]+) s\)$", re.M)
 COMPILED = re.compile(r": ([0-9.]+) s \((\d+) compiled functions")
 
@@ -93,7 +104,6 @@ def test_cold_times_stay_within_the_warm_spread(tmp_path, record_figure):
     for name in sorted(names):
         spread = [run["junit"][name] for run in warm]
         bound = _bound(spread)
-        FIGURE_BOUNDS.setdefault(name, "cold <= 2 x slowest warm + 0.5 s")
         record_figure(name, "warm (s)", f"{min(spread):.3f}-{max(spread):.3f}")
         record_figure(name, "cold (s)", cold["junit"][name], "{:.3f}")
         assert compiled > 5 * bound, (compiled, name, bound)
