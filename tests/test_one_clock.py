@@ -16,9 +16,10 @@ Measured on the 2-core machine shared with other work (issue 42), three warm run
 | light, --jobs 2 | 0.171-0.182 s | 0.203 s | 0.223-0.234 s | 0.292 s | 26 s |
 
 A warm run's case also loads the compiled code from the cache (no compilation, but time), a cold one does not:
-either may be the slower. The bound, 2 x the slowest warm run + 0.5 s, leaves room for a loaded machine's
-spread (a cold case read up to 0.3 s above the slowest warm one, and one warm run 2.7 x another) and is still
-5 x smaller than the compilation it must keep out (asserted: the test can fail).
+either may be the slower. The bound, 2 x the slowest warm run + 1 s, leaves room for a loaded machine's
+spread (a cold case read up to 0.3 s above the slowest warm one; the warm runs of one case spread over up to
+0.86 s, one 2.7 x another) and is still 5 x smaller than the compilation it must keep out (asserted: the test
+can fail).
 """
 
 from __future__ import annotations
@@ -49,7 +50,7 @@ robot = "robots/pendulum.urdf"
 t_end = 0.5
 """
 WARM_RUNS = 3
-_CASE_BOUND = "cold <= 2 x slowest warm + 0.5 s"
+_CASE_BOUND = "cold <= 2 x slowest warm + 1 s"
 FIGURE_BOUNDS = {"compilation": "> 5 x every case's bound (a time that held it would fail)",
                  "robot robots/pendulum.urdf": _CASE_BOUND, "robot robots/pendulum.xml": _CASE_BOUND,
                  "pair robots/pendulum.urdf against robots/pendulum.xml": _CASE_BOUND,
@@ -60,7 +61,7 @@ COMPILED = re.compile(r": ([0-9.]+) s \((\d+) compiled functions")
 
 def _bound(warm: list[float]) -> float:
     """The largest time a case may show: the module doc's bound."""
-    return 2 * max(warm) + 0.5
+    return 2 * max(warm) + 1.0
 
 
 def _run(repo: Path, cache: Path, n: int, *extra: str) -> dict:
