@@ -104,8 +104,8 @@ def _environment(tmp_path: Path) -> dict:
     PATH, so that the steps' ``python`` and ``urdf2links`` are its own."""
     venv = tmp_path / "venv"
     subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, capture_output=True)
-    purelib = subprocess.run([venv / "bin" / "python", "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
-                             check=True, capture_output=True, text=True).stdout.strip()
+    purelib = subprocess.run([venv / "bin" / "python", "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"
+                              ], check=True, capture_output=True, text=True).stdout.strip()
     running = [p for p in sys.path if p and Path(p).is_dir() and "site-packages" in p]
     assert sysconfig.get_paths()["purelib"] in running
     Path(purelib, "zz_running_environment.pth").write_text("\n".join(running) + "\n")

@@ -13,8 +13,9 @@ code it times. This module watches numba's ``numba:compile`` events (numba's pub
 - :func:`seconds` and :func:`functions` say how much was compiled in this process; :func:`elsewhere`
   adds what worker processes compiled (``check --jobs``, a sweep on a Dask cluster: their durations
   leave it out with their own clock); :func:`summary` is the one line the command prints, once
-  ("compiling the solver for this machine, first run only: 14 s"), and :func:`show_progress` turns on a line on stderr that counts the seconds while numba
-  compiles (the command line turns it on; the library stays silent); :func:`per_function` the
+  ("compiling the solver for this machine, first run only: 14 s"), and :func:`show_progress` turns on
+  a line on stderr that counts the seconds while numba compiles (the command line turns it on; the
+  library stays silent); :func:`per_function` the
   seconds of each function (``URDF2LINKS_COMPILE_LOG=FILE`` writes them at exit);
 - :func:`one_signature` compiles a kernel once whatever constants its callers pass;
 - :func:`kernel` compiles a function that allocates nothing without numba's reference counting.

@@ -123,8 +123,8 @@ def check_command(args) -> int:
         print(f"wrote {shown_path(target)}: commit it; the check runs on every push and pull request (docs/ci.md)")
         if src.placeholder:
             err(f"urdf2links check: {shown_path(target)} installs urdf2links from URDF2LINKS_SOURCE, which is a "
-                "placeholder (SET-ME): set it to urdf2links' repository at a commit, or write the file again with "
-                "--from GIT_URL@COMMIT or --from PATH (docs/ci.md)")
+                "placeholder (SET-ME): set it to urdf2links' repository at a commit, or remove the file and write it "
+                "again with --from GIT_URL@COMMIT or --from PATH (docs/ci.md)")
         else:
             print(f"it installs {src.requirement} (from {src.how})")
         if not args.init:

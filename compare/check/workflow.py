@@ -198,8 +198,9 @@ def derived_source() -> Source:
         remote, head = _git(here, "remote", "get-url", "origin"), _git(here, "rev-parse", "HEAD")
         url = _git_url(remote or "")
         if url and head:
-            dirty = " (its work tree has changes that commit does not hold)" if _git(here, "status", "--porcelain") else ""
-            return Source(f"urdf2links @ git+{url}@{head}", f"this checkout's origin at HEAD{dirty}")
+            dirty = _git(here, "status", "--porcelain")
+            said = " (its work tree has changes that commit does not hold)" if dirty else ""
+            return Source(f"urdf2links @ git+{url}@{head}", f"this checkout's origin at HEAD{said}")
     return Source(PLACEHOLDER, "nowhere: set it in the file, or give --from", placeholder=True)
 
 

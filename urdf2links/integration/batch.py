@@ -146,10 +146,9 @@ def _warm_workers(client, scene, model, Q0, QD0, options, run_id) -> Compilation
     its seconds here (the slowest worker's, the wait before the timed round) and the functions compiled."""
     workers = list(client.scheduler_info().get("workers", {})) or [None]
     start = time.perf_counter()
+    pinned = [{"workers": [w], "allow_other_workers": False} if w else {} for w in workers]
     futures = [client.submit(_warm_chunk, scene, model, Q0[:1], QD0[:1], options, pure=False,
-                             key=f"urdf2links-sweep-warm-{run_id}-{k}", **({"workers": [w], "allow_other_workers": False}
-                                                                           if w else {}))
-               for k, w in enumerate(workers)]
+                             key=f"urdf2links-sweep-warm-{run_id}-{k}", **where) for k, where in enumerate(pinned)]
     compiled = client.gather(futures)
     out = Compilation(seconds=time.perf_counter() - start)
     out.functions.extend(sorted({f for _, names in compiled for f in names}))
