@@ -104,11 +104,8 @@ def _print_headline(s: dict, stream=None) -> None:
         print(f"  verdict    {s['verdict']['text']}", file=stream)
     print(f"  wall time  urdf2links {wt['project_s']:.3g} s (integrator), MuJoCo {wt['mujoco_s']:.3g} s (engine, "
           f"mj_step nstep); whole calls {wt['project_run_s']:.3g} s / {wt['mujoco_harness_s']:.3g} s", file=stream)
-    if wt["project_compiled"]:
-        print(f"  compiled   urdf2links: numba compiled {len(wt['project_compiled'])} function(s) in "
-              f"{wt['project_warmup_s']:.1f} s before the timed run (cached for the next runs)", file=stream)
-    if wt["mujoco_callback_compiled"]:
-        print(f"  compiled   MuJoCo's control callback in {wt['mujoco_callback_load_s']:.1f} s (cached)", file=stream)
+    # compilation is shown apart, once: the command's last line (urdf2links.compilation.summary); the report
+    # and summary.json keep this scene's share (project_compiled, mujoco_callback_compiled)
 
 
 def _compare_cmd(args) -> str:

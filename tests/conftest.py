@@ -69,12 +69,34 @@ def record_figure(request):
     return record
 
 
+#: What a skipped test or module says instead: the suite never skips (docs/testing.md, issue 42).
+NEVER_SKIP = ("the suite never skips: a missing test dependency is a broken install (pip install -e \".[test]\" "
+              "installs every one); fix the install, or make the test fail naming what it needs")
+
+
+def _refuse_skip(report) -> None:
+    """A skip (pytest.skip, importorskip, skipif, an xfail that ran) turned into a failure that says why."""
+    if report.skipped:
+        reason = report.longrepr[2] if isinstance(report.longrepr, tuple) else str(report.longrepr)
+        report.outcome, report.longrepr = "failed", f"skipped or xfailed ({reason}): {NEVER_SKIP}"
+        if hasattr(report, "wasxfail"):
+            del report.wasxfail
+
+
 @pytest.hookimpl(hookwrapper=True)
 def pytest_runtest_makereport(item, call):
     outcome = yield
     report = outcome.get_result()
+    _refuse_skip(report)
     if report.failed:
         _FAILED.add(item.nodeid)
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_make_collect_report(collector):
+    """A module that skips at import (``pytest.importorskip`` at its top) fails its collection instead."""
+    outcome = yield
+    _refuse_skip(outcome.get_result())
 
 
 def _command(config, stem):

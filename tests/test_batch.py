@@ -102,6 +102,8 @@ def test_sweep_on_a_dask_cluster_is_the_one_machine_sweep(dask_client):
     here = simulate_batch(scene, q0, qd0, t_end=0.3, samples=7, model=model)
     there = simulate_batch(scene, q0, qd0, t_end=0.3, samples=7, model=model, client=dask_client, chunks=3)
     assert [c["rows"] for c in there.chunks] == [[0, 2], [2, 5], [5, 7]] and here.chunks == ()
+    # every worker warmed before the timed round (one clock: the sweep's wall time leaves compilation out)
+    assert there.compilation is not None and there.compilation.seconds > 0 and there.wall_time > 0
     for name in ("t", "q", "qd", "work", "nfev", "status"):
         assert np.array_equal(getattr(here, name), getattr(there, name)), name
 

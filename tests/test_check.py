@@ -27,7 +27,6 @@ from urdf2links.cli import main
 from urdf2links.compare.check.command import run_check
 from urdf2links.compare.check.config import ConfigError, read_config
 from urdf2links.compare.check.depends import robot_files
-from urdf2links.compare.check.workflow import WORKFLOW
 from urdf2links.compare.pairs.mujoco_import import save_mujoco_import
 from urdf2links.pytest_plugin import _configured
 
@@ -292,18 +291,6 @@ def test_dependencies_count_meshes_and_includes(tmp_path):
                                       '</asset><include file="body.xml"/></mujoco>')
     files = robot_files(tmp_path / "arm.xml")
     assert files == {tmp_path / "arm.xml", tmp_path / "body.xml", tmp_path / "assets" / "m.stl"}
-
-
-def test_write_workflow_writes_the_file_docs_ci_shows(tmp_path, capsys):
-    assert main(["check", str(tmp_path), "--write-workflow"]) == 0
-    written = (tmp_path / ".github/workflows/urdf2links-check.yml").read_text()
-    assert written == WORKFLOW
-    doc = (PROJECT / "docs" / "ci.md").read_text()
-    block = re.search(r"```yaml\n(.*?)```", doc, re.S).group(1)
-    assert block == WORKFLOW, "docs/ci.md shows another workflow than `urdf2links check --write-workflow` writes"
-    for step in ("pip install urdf2links", "actions/cache", "URDF2LINKS_CACHE_DIR", "urdf2links check",
-                 "--junit", "upload-artifact", "GITHUB_STEP_SUMMARY", "gh pr comment"):
-        assert step in written, step
 
 
 def test_the_plugin_is_inactive_in_this_repository():

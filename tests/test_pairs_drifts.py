@@ -16,6 +16,7 @@ import mujoco
 import numpy as np
 import pytest
 
+from corpus import needs_corpus
 from urdf2links.compare.pairs.mujoco_import import save_mujoco_import
 from urdf2links.compare.pairs.pair import compare_descriptions_of
 from urdf2links.locations import example_robot_data_dir, shipped_robots_dir
@@ -37,7 +38,7 @@ def _compare(urdf, mjcf, **load):
 
 
 # -- the roots ----------------------------------------------------------------------------------------------
-@pytest.mark.skipif(ROOT is None, reason="example-robot-data is not installed (test extra)")
+@needs_corpus       # a test extra: missing fails naming it (tests/corpus.py), never a skip
 def test_a_floating_robots_rotated_twin_lists_only_root_pose(folder):
     urdf = ROOT / "solo_description/robots/solo12.urdf"
     same = save_mujoco_import(urdf, folder / "solo_same.xml", keep_geometry=False, floating_base=True,
@@ -127,7 +128,7 @@ def test_a_joints_type(arm, folder):
 
 
 # -- a representative sample of the sweep (benchmarks/pairs_rotated_roots.py runs all 68) -------------------------
-@pytest.mark.skipif(ROOT is None, reason="example-robot-data is not installed (test extra)")
+@needs_corpus       # a test extra: missing fails naming it (tests/corpus.py), never a skip
 @pytest.mark.parametrize("rel", ["allegro_hand_description/urdf/allegro_right_hand.urdf",   # a hand, balanced
                                  "go1_description/urdf/go1.urdf",                            # a quadruped
                                  "talos_data/robots/talos_reduced.urdf"])                    # a humanoid, 32 joints

@@ -576,6 +576,7 @@ def _check_parser(sub) -> None:
                    "guessed by robot name, the current state accepted (differences by name, baselines written)")
     p.add_argument("--write-workflow", nargs="?", const=True, metavar="FILE", help="write the CI workflow (docs/ci.md) "
                    "to .github/workflows/urdf2links-check.yml (or FILE)")
+    p.add_argument("--from", dest="source", metavar="GIT_URL@COMMIT|PATH", help="where the workflow installs urdf2links")
     p.add_argument("--quiet", action="store_true", help="no line per check while it runs")
     p.set_defaults(func=_check)
 
@@ -659,11 +660,10 @@ def main(argv=None) -> int:
 def _say_compilation() -> None:
     """The command's one line about numba's compilation, when it compiled anything (stderr)."""
     from . import compilation
-
-    if compilation.functions():
-        from .numba_cache import cache_dir
-
-        print(compilation.summary(cache_dir()), file=sys.stderr)
+    from .numba_cache import cache_dir
+    line = compilation.summary(cache_dir())      # None when nothing compiled, here or in a worker process
+    if line:
+        print(line, file=sys.stderr)
 
 
 if __name__ == "__main__":

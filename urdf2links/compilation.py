@@ -10,10 +10,12 @@ code it times. This module watches numba's ``numba:compile`` events (numba's pub
 - :func:`ensure` compiles, or loads from the cache, a compiled function for the arguments it is about
   to get, before a timed region (loading a large function takes tens of milliseconds, and raises no
   event), and adds that time to the compilation too;
-- :func:`seconds` and :func:`functions` say how much was compiled in this process; :func:`summary`
-  is the one line the command prints ("compiling the solver for this machine, first run only:
-  14 s"), and :func:`show_progress` turns on a line on stderr that counts the seconds while numba
-  compiles (the command line turns it on; the library stays silent); :func:`per_function` the
+- :func:`seconds` and :func:`functions` say how much was compiled in this process; :func:`elsewhere`
+  adds what worker processes compiled (``check --jobs``, a sweep on a Dask cluster: their durations
+  leave it out with their own clock); :func:`summary` is the one line the command prints, once
+  ("compiling the solver for this machine, first run only: 14 s"), and :func:`show_progress` turns on
+  a line on stderr that counts the seconds while numba compiles (the command line turns it on; the
+  library stays silent); :func:`per_function` the
   seconds of each function (``URDF2LINKS_COMPILE_LOG=FILE`` writes them at exit);
 - :func:`one_signature` compiles a kernel once whatever constants its callers pass;
 - :func:`kernel` compiles a function that allocates nothing without numba's reference counting.
@@ -29,7 +31,7 @@ import threading
 import time
 
 __all__ = ["clock", "ensure", "seconds", "functions", "per_function", "summary", "show_progress", "watch", "WHAT",
-           "one_signature", "c_function", "kernel"]
+           "one_signature", "c_function", "kernel", "elsewhere", "Snapshot", "snapshot"]
 
 #: How the command line names what is compiled.
 WHAT = "compiling the solver for this machine, first run only"
@@ -50,6 +52,7 @@ class _Tracker:
         self.progress = None        # the stream of the progress line, or None
         self.ticker = None
         self.shown = False          # a progress line is on the screen
+        self.other = [0.0, []]      # compilation in worker processes: seconds, names (elsewhere)
 
     def begin(self, name: str | None = None):
         with self.lock:
@@ -162,6 +165,31 @@ def functions() -> list[str]:
     return list(dict.fromkeys(_T.names))
 
 
+class Snapshot:
+    """What this process had compiled at one moment (:func:`snapshot`); ``since()`` what it compiled after:
+    ``(seconds, functions)``, for a worker process to send back with its result (:func:`elsewhere`)."""
+
+    def __init__(self):
+        self.seconds, self.count = seconds(), len(_T.names)
+
+    def since(self) -> tuple[float, list[str]]:
+        return seconds() - self.seconds, list(dict.fromkeys(_T.names[self.count:]))
+
+
+def snapshot() -> Snapshot:
+    """:class:`Snapshot` of this process's compilation now."""
+    return Snapshot()
+
+
+def elsewhere(seconds_: float, names=()) -> None:
+    """Count compilation done in other processes (a ``check --jobs`` worker, a Dask worker): ``seconds_``
+    and the ``names`` of the functions compiled there. It never touches :func:`clock` (that compilation
+    did not happen here); :func:`summary` shows it, once, with this process's own."""
+    with _T.lock:
+        _T.other[0] += float(seconds_)
+        _T.other[1].extend(names)
+
+
 def ensure(dispatcher, args) -> None:
     """Compile, or load from the disk cache, ``dispatcher`` for the types of ``args`` (a tuple of the
     arguments of its next call) unless it has that variant already; the time counts as compilation
@@ -219,12 +247,17 @@ def _write_log() -> None:
 
 
 def summary(cache_folder=None) -> str | None:
-    """The command's one line about compilation: None when nothing was compiled in this process."""
-    names = functions()
+    """The command's one line about compilation: None when nothing was compiled, here or in a worker
+    process (:func:`elsewhere`)."""
+    with _T.lock:
+        other_s, other_names = _T.other[0], list(_T.other[1])
+    names = list(dict.fromkeys(functions() + other_names))
     if not names:
         return None
     where = f"; cached in {cache_folder}: `urdf2links cache --list`" if cache_folder else ""
-    return f"{WHAT}: {seconds():.1f} s ({len(names)} compiled functions{where}; no reported time includes it)"
+    workers = f", {other_s:.1f} s of it in worker processes" if other_names else ""
+    return (f"{WHAT}: {seconds() + other_s:.1f} s ({len(names)} compiled functions{workers}{where}; "
+            "no reported time includes it)")
 
 
 def show_progress(on: bool = True, *, stream=None) -> None:

@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import sys
-import time
 from pathlib import Path
+
+from .compilation import clock     # the elapsed seconds shown leave numba's compilation out (one clock)
 
 __all__ = ["Progress", "TaskBar", "err", "shown_path"]
 
@@ -31,13 +32,13 @@ class Progress:
         self.stream = stream or sys.stderr
         self.enabled = (self.stream.isatty() if enabled is None else enabled)
         self.t_end, self.label = t_end, label
-        self.start = time.perf_counter()
+        self.start = clock()
         self.last = 0.0
 
     def __call__(self, t, y=None):
         if not self.enabled:
             return
-        now = time.perf_counter()
+        now = clock()
         if now - self.last < 0.1 and t < self.t_end:
             return
         self.last = now
@@ -63,7 +64,7 @@ class TaskBar:
         self.enabled = bool(enabled)
         self.bar = self.enabled and self.stream.isatty()
         self.total, self.label, self.done = int(total), label, 0
-        self.start = time.perf_counter()
+        self.start = clock()
         self._draw()
 
     def _draw(self) -> None:
@@ -71,7 +72,7 @@ class TaskBar:
             return
         frac = self.done / self.total if self.total else 1.0
         self.stream.write(f"\r{self.label} [{'#' * int(30 * frac):<30}] {self.done}/{self.total}  "
-                          f"{time.perf_counter() - self.start:.0f} s")
+                          f"{clock() - self.start:.0f} s")
         self.stream.flush()
 
     def line(self, text: str, *, advance: bool = True) -> None:

@@ -21,12 +21,12 @@ A case never raises: a file that cannot be used is an ``error`` (exit 2), a chec
 from __future__ import annotations
 
 import math
-import time
 import traceback
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from urdf2links import compilation
 from urdf2links.errors import DescriptionError, DynamicsError, IntegrationError, SceneError, URDFError
 
 from ..formatting import get, json_ready
@@ -64,7 +64,9 @@ class Problem:
 @dataclass
 class CaseResult:
     """A case's outcome: ``status`` (:data:`STATUSES`), its ``problems``, ``lines`` (what was checked),
-    ``seconds``, for a scene its comparison ``summary`` (the baselines' entry), for a robot its ``fingerprint``."""
+    ``seconds`` (numba's compilation left out: :func:`urdf2links.compilation.clock`), ``compiled`` (the
+    seconds and functions numba compiled during the case, shown apart, once), for a scene its comparison
+    ``summary`` (the baselines' entry), for a robot its ``fingerprint``."""
 
     case: Case
     status: str = "pass"
@@ -73,6 +75,7 @@ class CaseResult:
     seconds: float = 0.0
     summary: dict | None = None
     fingerprint: dict | None = None
+    compiled: tuple = (0.0, [])
 
     @property
     def worst(self) -> float:
@@ -263,7 +266,7 @@ def check_scene(res: CaseResult, entry: SceneEntry, ctx: RunContext) -> None:
 def run_case(case: Case, ctx: RunContext = RunContext()) -> CaseResult:
     """Run one case (module doc); never raises."""
     res = CaseResult(case)
-    start = time.perf_counter()
+    start, before = compilation.clock(), compilation.snapshot()     # the user's seconds leave compilation out
     try:
         if case.kind == "robot":
             check_robot(res, case.entry, ctx)
@@ -279,7 +282,8 @@ def run_case(case: Case, ctx: RunContext = RunContext()) -> CaseResult:
         res.status = "error"
         tb = "".join(traceback.format_exception(exc)[-4:])
         res.problems.append(Problem(f"{case.file}: internal error of urdf2links ({type(exc).__name__}: {exc})\n{tb}"))
-    res.seconds = time.perf_counter() - start
+    res.seconds = compilation.clock() - start
+    res.compiled = before.since()
     return res
 
 

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
+from urdf2links import compilation
 from urdf2links.console import err, shown_path
 
 from ..reports.baselines import load_baselines, write_baselines
@@ -55,7 +56,9 @@ class CheckRun:
 
 def run_cases(cases: list[Case], ctx: RunContext, *, jobs: int = 1,
               on_result: Callable[[CaseResult], None] | None = None) -> list[CaseResult]:
-    """Every case, in this process (``jobs`` 1) or in ``jobs`` fresh processes; results in the cases' order."""
+    """Every case, in this process (``jobs`` 1) or in ``jobs`` fresh processes; results in the cases' order.
+    A worker process's compilation is counted with this process's (:func:`urdf2links.compilation.elsewhere`),
+    so that the command shows it once; each case's seconds leave it out."""
     done = on_result or (lambda r: None)
     if jobs <= 1 or len(cases) <= 1:
         out = []
@@ -68,6 +71,7 @@ def run_cases(cases: list[Case], ctx: RunContext, *, jobs: int = 1,
         out = []
         for f in futures:
             out.append(f.result())
+            compilation.elsewhere(*out[-1].compiled)
             done(out[-1])
         return out
 
@@ -122,11 +126,25 @@ def _leave_out_no_evidence(run: CheckRun) -> None:
 def check_command(args) -> int:
     """``urdf2links check`` (module doc)."""
     folder = Path(args.path)
+    if getattr(args, "source", None) and not args.write_workflow:
+        err("urdf2links check: error: --from goes with --write-workflow (where the workflow installs urdf2links)")
+        return 2
     if args.write_workflow:
         from .workflow import write_workflow
 
-        target = write_workflow(folder, None if args.write_workflow is True else args.write_workflow)
+        try:
+            target, src = write_workflow(folder, None if args.write_workflow is True else args.write_workflow,
+                                         source=getattr(args, "source", None))
+        except ValueError as exc:
+            err(f"urdf2links check: error: {exc}")
+            return 2
         print(f"wrote {shown_path(target)}: commit it; the check runs on every push and pull request (docs/ci.md)")
+        if src.placeholder:
+            err(f"urdf2links check: {shown_path(target)} installs urdf2links from URDF2LINKS_SOURCE, which is a "
+                "placeholder (SET-ME): set it to urdf2links' repository at a commit, or remove the file and write it "
+                "again with --from GIT_URL@COMMIT or --from PATH (docs/ci.md)")
+        else:
+            print(f"it installs {src.requirement} (from {src.how})")
         if not args.init:
             return 0
     write = bool(args.write_baselines)

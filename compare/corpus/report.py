@@ -286,7 +286,9 @@ def render_index(data: dict, *, figure_file: str | None = "corpus.png") -> str:
     setup = (f"Each robot in its default scene ({e(st['scene'])}), t = 0..{st['t_end']:g} s, seed {st['seed']}; terms "
              f"at {st['states']} seeded states; MuJoCo {e(st['mujoco_integrator'])} dt {st['mujoco_dt']:g} s against "
              f"urdf2links {e(_PROJECT_RUN)} (the methods each robot's run used are in its page). "
-             f"Ran {e(run.get('how', ''))} in {run.get('wall_s', 0):.0f} s.")
+             f"Ran {e(run.get('how', ''))} in {run.get('wall_s', 0):.0f} s"
+             + (f" (the warm-up before the first robot, {run['warm_up_s']:.0f} s, numba's compilation in a fresh "
+                "installation, left out)." if run.get("warm_up_s") else "."))
     parts = [f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>urdf2links corpus against MuJoCo"
              f"</title><style>{_CSS}</style></head><body>",
              "<p class='small'><a href='../index.html'>&larr; all reports</a></p>" if data.get("nested") else "",

@@ -26,7 +26,7 @@ from numba import njit, prange
 from .. import compilation
 from ..scenes.plan import as_plan
 from .constrained import refuse_constrained
-from .simulate import record_compilation
+from .simulate import Compilation, record_compilation
 from .loops import TABLEAUX, erk_chunk, evaluate, initial_step
 
 __all__ = ["BatchResult", "simulate_batch", "sweep_states", "split_rows"]
@@ -51,7 +51,9 @@ class BatchResult:
     chunks: tuple = ()
     compilation: object = None
     """:class:`~urdf2links.integration.simulate.Compilation` of the warm-up call before the timed one
-    (numba's compilation, or loading from its cache, kept out of ``wall_time``); None on a cluster."""
+    (numba's compilation, or loading from its cache, kept out of ``wall_time``); on a cluster, the warm-up
+    of every worker before the timed round (its seconds the wait for it, its functions those the workers
+    compiled)."""
     notes: tuple = ()
     """What the sweep did differently from the scene: its method when the scene's has no batch loop."""
 
@@ -128,23 +130,52 @@ def _chunk(scene, model, q0, qd0, options: dict) -> BatchResult:
         return simulate_batch(scene, q0, qd0, model=model, **options)
 
 
+def _warm_chunk(scene, model, q0, qd0, options: dict):
+    """One state over a few steps in this worker process: compiles, or loads from the cache, all that the
+    sweep's chunks call here (the plan's right-hand side stays loaded in the process). Returns the
+    compilation's ``(seconds, functions)`` of this process."""
+    before = compilation.snapshot()
+    _chunk(scene, model, q0, qd0, {**options, "t_end": 1e-3 * (options.get("t_end") or scene.run.t_end),
+                                   "samples": 2})
+    return before.since()
+
+
+def _warm_workers(client, scene, model, Q0, QD0, options, run_id) -> Compilation:
+    """Every worker warmed before the timed sweep (:func:`_warm_chunk`, one task pinned to each): the
+    sweep's wall time leaves numba's compilation out, as on one machine (:func:`urdf2links.compilation.clock`);
+    its seconds here (the slowest worker's, the wait before the timed round) and the functions compiled."""
+    workers = list(client.scheduler_info().get("workers", {})) or [None]
+    start = time.perf_counter()
+    pinned = [{"workers": [w], "allow_other_workers": False} if w else {} for w in workers]
+    futures = [client.submit(_warm_chunk, scene, model, Q0[:1], QD0[:1], options, pure=False,
+                             key=f"urdf2links-sweep-warm-{run_id}-{k}", **where) for k, where in enumerate(pinned)]
+    compiled = client.gather(futures)
+    out = Compilation(seconds=time.perf_counter() - start)
+    out.functions.extend(sorted({f for _, names in compiled for f in names}))
+    compilation.elsewhere(sum(s for s, _ in compiled), out.functions)      # shown once by the command
+    return out
+
+
 def _on_cluster(client, scene, model, Q0, QD0, chunks, options) -> BatchResult:
-    """The sweep split into chunks run on the client's workers, put back together in order."""
+    """The sweep split into chunks run on the client's workers, put back together in order; every worker
+    warmed first (:func:`_warm_workers`), so that the wall time is the sweep's and not numba's."""
     from .distributed import worker_count
 
     bounds = split_rows(len(Q0), chunks or worker_count(client))
     run_id = uuid.uuid4().hex[:8]
-    start = time.perf_counter()
+    comp = _warm_workers(client, scene, model, Q0, QD0, options, run_id)
+    start = compilation.clock()
     futures = [client.submit(_chunk, scene, model, Q0[i0:i1], QD0[i0:i1], options, pure=False,
                              key=f"urdf2links-sweep-{run_id}-{k}") for k, (i0, i1) in enumerate(bounds)]
     parts = client.gather(futures)
-    wall = time.perf_counter() - start
+    wall = compilation.clock() - start
     first = parts[0]
     return BatchResult(t=first.t, q=np.concatenate([p.q for p in parts]), qd=np.concatenate([p.qd for p in parts]),
                        work=np.concatenate([p.work for p in parts]), nfev=np.concatenate([p.nfev for p in parts]),
                        status=np.concatenate([p.status for p in parts]), wall_time=wall, method=first.method,
                        coordinate_names=first.coordinate_names,
-                       chunks=tuple({"rows": [i0, i1], "wall_time": p.wall_time} for (i0, i1), p in zip(bounds, parts)))
+                       chunks=tuple({"rows": [i0, i1], "wall_time": p.wall_time} for (i0, i1), p in zip(bounds, parts)),
+                       compilation=comp)
 
 
 def simulate_batch(scene, q0, qd0=None, *, t_end: float | None = None, samples: int | None = None,

@@ -70,11 +70,11 @@ coordinate) would change meaning with the chart: such links are not re-charted
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import compilation
 from ..dynamics.model import Model
 from ..dynamics.rotations import matrix_to_xyz_angles, xyz_angles_to_matrix
 from ..dynamics.transforms import PARAMETERS
@@ -343,7 +343,7 @@ def integrate_charted(original: Model, make_plan, y0, t_span, *, t_eval, method,
     raise :class:`~urdf2links.errors.DynamicsError` at ``|cos phi_y| < SINGULAR_COS_MIN``. ``base_state(t)``: the base for the reported condition
     numbers. ``max_steps`` and ``max_wall`` bound the whole run (all segments). Other arguments as
     :func:`~urdf2links.integration.integrators.integrate`."""
-    run_start, busy = time.perf_counter(), 0.0
+    run_start, busy = compilation.clock(), 0.0
     t0, t1 = float(t_span[0]), float(t_span[1])
     t_eval = np.asarray(t_eval, float)
     links = floating_links(original)
@@ -362,21 +362,21 @@ def integrate_charted(original: Model, make_plan, y0, t_span, *, t_eval, method,
     while True:
         # the budgets bound the whole run: a run that re-charts at every step (rates of ~1e6 rad/s) has
         # segments of one step each, every one inside its own integrate() budget
-        if segments and max_wall is not None and time.perf_counter() - run_start > max_wall:
+        if segments and max_wall is not None and compilation.clock() - run_start > max_wall:
             success, message = False, wall_message(max_wall, float(t), nsteps)
             break
         if segments and max_steps is not None and nsteps >= max_steps:
             success, message = False, f"max_steps={max_steps} reached at t={float(t)!r}"
             break
         if movable and _due(movable, y, cos_min):  # at the start of a segment: switch at once
-            start = time.perf_counter()
+            start = compilation.clock()
             chart, y = _switch(original, chart, movable, t, y, cos_min, recharts, base_state)
-            busy += time.perf_counter() - start
+            busy += compilation.clock() - start
             continue
         plan = make_plan(chart.model)
         te = t_eval[(t_eval >= t) if not segments else (t_eval > t)]
         budget = {"max_steps": None if max_steps is None else max(1, max_steps - nsteps),
-                  "max_wall": None if max_wall is None else max(1e-3, max_wall - (time.perf_counter() - run_start))}
+                  "max_wall": None if max_wall is None else max(1e-3, max_wall - (compilation.clock() - run_start))}
         res = integrate(plan.rhs, (t, t1), y, method=method, rtol=rtol, atol=atol, dt=dt, t_eval=te,
                         dense=True, callback=callback, stop=guard, **budget)
         nfev, nsteps, njev, busy = nfev + res.nfev, nsteps + res.nsteps, njev + res.njev, busy + res.wall_time
@@ -395,9 +395,9 @@ def integrate_charted(original: Model, make_plan, y0, t_span, *, t_eval, method,
         stuck = _due(fixed, y, SINGULAR_COS_MIN)
         if stuck:
             raise _singular(original, chart, stuck[0], t, y, recharting=recharting, base_state=base_state)
-        start = time.perf_counter()
+        start = compilation.clock()
         chart, y = _switch(original, chart, movable, t, y, cos_min, recharts, base_state)
-        busy += time.perf_counter() - start
+        busy += compilation.clock() - start
     ts, ys, yc, seg_of, anchors = _samples_in_original(original, segments, pieces, links, y0, t_eval.size,
                                                        run_start=run_start, max_wall=max_wall)
     sol = segments[0].result.sol if len(segments) == 1 else ChartedSolution(segments, links, anchors)
@@ -436,7 +436,7 @@ def _samples_in_original(original: Model, segments, pieces, links, y0, n_eval: i
     for k, (seg, (tk, yk)) in enumerate(zip(segments, pieces)):
         at, ay = [seg.t0], [_convert(seg, links, seg.result.sol(seg.t0), y_prev)]
         for i, (ti, yi) in enumerate(zip(tk, yk)):
-            if i % 1000 == 999 and max_wall is not None and time.perf_counter() - run_start > max_wall:
+            if i % 1000 == 999 and max_wall is not None and compilation.clock() - run_start > max_wall:
                 raise IntegrationError(f"model {original.name!r}: max_wall={max_wall:g} s spent while converting the "
                                        f"samples back to the loaded chart's angles ({len(ts)} of {n_eval} done; "
                                        f"{len(segments)} charts): fewer samples would do")

@@ -27,15 +27,14 @@ samples, and the initial projection.
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 
+from .. import compilation
 from ..console import Progress
 from ..dynamics.constrained import independent_rows, kkt_solve, project_position, project_velocity
 from ..errors import IntegrationError
-from .trajectory import Trajectory
 from .constrained_steps import check_constrained_method, constrained_stepper
+from .trajectory import Trajectory
 
 __all__ = ["ConstrainedRHS", "simulate_constrained", "refuse_constrained"]
 
@@ -148,7 +147,7 @@ def _initial(rhs, q, qd):
 
 def simulate_constrained(plan, run, q, qd, *, progress=None, max_wall=None, max_steps=10_000_000):
     """The run of a plan with constraints (module doc) -> :class:`~urdf2links.integration.trajectory.Trajectory`."""
-    started = time.perf_counter()
+    started, compiled0 = compilation.clock(), compilation.seconds()    # numba's compilation left out (one clock)
     rhs = ConstrainedRHS(plan)
     method = check_constrained_method(run, rhs.where)      # refused before any work: the method, scene, accepted
     model, n = plan.model, plan.model.n
@@ -159,7 +158,7 @@ def simulate_constrained(plan, run, q, qd, *, progress=None, max_wall=None, max_
     solver, label = constrained_stepper(rhs, y, run, rhs.where)
     bar = Progress(run.t_end, label=f"{plan.scene.name} {method}+projection", enabled=progress)
     k, steps, drift = 1, 0, 0.0
-    t0 = time.perf_counter()
+    t0 = compilation.clock()
     try:
         while solver.status == "running":
             msg = solver.step()
@@ -181,14 +180,15 @@ def simulate_constrained(plan, run, q, qd, *, progress=None, max_wall=None, max_
             _limits(rhs, steps, max_steps, started, max_wall, solver.t)
     finally:
         bar.close()
-    wall = time.perf_counter() - t0
-    return _trajectory(Trajectory, plan, rhs, run, t_eval, Y, steps, drift, initial, wall, started, method=method)
+    wall = compilation.clock() - t0
+    return _trajectory(Trajectory, plan, rhs, run, t_eval, Y, steps, drift, initial, wall, (started, compiled0),
+                       method=method)
 
 
 def _limits(rhs, steps, max_steps, started, max_wall, t):
     if steps > max_steps:
         raise IntegrationError(f"{rhs.where}: more than max_steps = {max_steps} steps at t = {t:.6g} s")
-    if max_wall is not None and time.perf_counter() - started > max_wall:
+    if max_wall is not None and compilation.clock() - started > max_wall:
         raise IntegrationError(f"{rhs.where}: max_wall = {max_wall:g} s spent at t = {t:.6g} s")
 
 
@@ -216,7 +216,7 @@ def _trajectory(Trajectory, plan, rhs, run, t, Y, steps, drift, initial, wall, s
              "stretches": [], "methods_used": f"{method} with projection", "wall_time": wall, "terms": plan.terms, "success": True, "message": "",
              "recharting": False, "n_recharts": 0, "recharts": [], "segments": 1, "limit_excursions": [],
              "spring_notes": list(plan.spring_set.notes), "constraints": info,
-             "run_s": time.perf_counter() - started}
+             "run_s": compilation.clock() - started[0], "compile_s": compilation.seconds() - started[1]}
     poses = {}
     if plan.scene.link_poses:       # [record] link_poses
         from .charts import link_poses

@@ -13,7 +13,6 @@ storage and asks a Python ``stop``, then resume from the state they left. Status
 
 from __future__ import annotations
 
-import time
 import types
 from collections import namedtuple
 
@@ -123,7 +122,7 @@ def wall_message(max_wall: float, t: float, steps: int) -> str:
 
 class _Driver:
     """One run's shared bookkeeping: counters, budget, the guard, the callback and a Python stop.
-    ``wall`` is None or ``(deadline, max_wall)`` (``time.perf_counter()`` seconds), asked after each chunk."""
+    ``wall`` is None or ``(deadline, max_wall)`` (:func:`urdf2links.compilation.clock` seconds), asked after each chunk."""
 
     def __init__(self, rhs, d, *, callback, max_steps, stop, chunk, wall=None):
         self.compiled = isinstance(rhs, CompiledScene)
@@ -157,7 +156,7 @@ class _Driver:
         if status == 0 and self.stop is not None and self.cnt[1] > 0 and self.stop(t, y):
             self.stopped = True
             return True
-        if status == 0 and self.wall is not None and time.perf_counter() > self.wall[0]:
+        if status == 0 and self.wall is not None and compilation.clock() > self.wall[0]:
             self.out_of_time = True
             return True
         return status != 0 or self.cnt[1] >= self.budget
