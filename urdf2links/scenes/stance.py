@@ -41,7 +41,7 @@ from .functions import Constant, Sines
 __all__ = ["StandingStart", "stance_pose", "choose_feet", "sway_amplitudes", "standing_start", "with_ground",
            "ground_for", "file_floor", "STANCE_MARGIN",
            "FOOT_BAND", "REACH_SAMPLES", "SWAY", "SWAY_HZ", "TWIST", "STAND_STIFFNESS", "STAND_DAMPING",
-           "FOOT_NAMES"]
+           "FOOT_NAMES", "StanceFigures", "stance_figures"]
 
 #: The stance keeps each limited joint this fraction of its range inside its limits.
 STANCE_MARGIN = 0.1
@@ -330,3 +330,32 @@ def ground_for(scene, model, *, ground: bool = False, floor: bool = True, q0: st
     why = ("--no-floor: the file's floor {!r} dropped: the robot has no ground" if not floor else
            "the file's floor {!r} is not used: the robot has no floating base (a free joint) for it to carry")
     return dataclasses.replace(scene, notes=tuple(scene.notes) + (why.format(plane["name"]),))
+
+
+@dataclass(frozen=True)
+class StanceFigures:
+    """How a run on the ground kept its stance (:func:`stance_figures`): the base's height above the ground at
+    the start and its lowest (m), the base's largest tilt (rad: roll or pitch), and the joints' largest
+    excursion past their limits (rad or m; negative: within them by that much)."""
+
+    start_height: float
+    min_height: float
+    max_tilt: float
+    max_past_limit: float
+
+    def standing(self, *, margin: float, keep: float = 0.5, tilt: float = 0.5) -> bool:
+        """On its feet: the base above ``keep`` of its starting height, tilted less than ``tilt`` rad, no joint
+        past a limit by more than ``margin``."""
+        return (self.min_height > keep * self.start_height and self.max_tilt < tilt
+                and self.max_past_limit <= margin)
+
+
+def stance_figures(model, q, *, ground: float) -> StanceFigures:
+    """:class:`StanceFigures` of the samples ``q`` (m, n) of a floating robot on a ground at height ``ground``."""
+    root = _root_slots(model)
+    r = coordinate_ranges(model)
+    q = np.asarray(q, float)
+    z = q[:, root["z"]] - ground
+    past = np.maximum(q - r.upper, r.lower - q)[:, r.limited]
+    return StanceFigures(float(z[0]), float(z.min()), float(np.abs(q[:, [root["phi_x"], root["phi_y"]]]).max()),
+                         float(past.max()) if past.size else -np.inf)
