@@ -172,3 +172,24 @@ def test_compare_keeps_the_floor_and_prints_each_engines_base_height():
     assert diff == pytest.approx(native - ours, abs=1e-4) and ours > 0.1
     # measured 2e-12 rad; the divergence threshold is 1e-3
     assert s["trajectory"]["max_abs_error"] < 1e-6
+
+
+def test_two_feet_fall_onto_every_candidate_and_no_gravity_is_refused(tmp_path):
+    """gymnasium's humanoid stands on two ball feet, which cannot carry it unaided: every collision sphere and
+    capsule end then touches its floor, and the notes say why; a floor without gravity is refused by name."""
+    import gymnasium
+
+    from urdf2links.errors import SceneError
+
+    path = Path(gymnasium.__file__).parent / "envs/mujoco/assets/humanoid.xml"
+    scene = default_scene(path, t_end=T_END)
+    model = scene.model()
+    ground = ground_for(scene, model)
+    assert len(ground.contacts[0].spheres) > 20
+    assert "2 feet cannot carry the robot unaided" in " ".join(ground.notes)
+    weightless = _ant(tmp_path).read_text().replace("<option ", '<option gravity="0 0 0" ', 1)
+    assert 'gravity="0 0 0"' in weightless
+    (tmp_path / "ant0.xml").write_text(weightless)
+    scene = default_scene(tmp_path / "ant0.xml", t_end=T_END)
+    with pytest.raises(SceneError, match="ant0.xml.*no gravity"):
+        ground_for(scene, scene.model())

@@ -214,7 +214,7 @@ def _static_loads(model, q, feet) -> tuple[np.ndarray, np.ndarray]:
     return f, G - Qf @ f
 
 
-def standing_start(model, *, height: float, depth: float, excite: bool, seed: int, t_end: float) -> StandingStart:
+def standing_start(model, *, height: float, depth: float, excite: bool, seed: int) -> StandingStart:
     """The standing start on a ground at ``height`` (m, normal +z), the lowest foot ``depth`` (m) into it
     (the law's static depth); ``excite``: the joints' sway and the base's twist (module doc)."""
     q = stance_pose(model)
@@ -246,7 +246,7 @@ def standing_start(model, *, height: float, depth: float, excite: bool, seed: in
         for slot in ("phi_x", "phi_y", "phi_z"):
             qd[root[slot]] = rng.uniform(-TWIST, TWIST)
     feet_names = ", ".join(s.link for s in feet)
-    text = (f"standing on {len(feet)} feet ({feet_names}), the base {depth * 1e3:.3g} mm into the ground at the "
+    text = (f"standing on {len(feet)} feet ({feet_names}), the lowest {depth * 1e3:.3g} mm into the ground at the "
             f"stance, its joints held by servos (kp {kp:.4g}, kv {kv:.4g}, with the static torques)"
             + (f", swaying up to {SWAY:g} rad at {SWAY_HZ[0]:g}..{SWAY_HZ[1]:g} Hz, the base twisting up to "
                f"{TWIST:g} rad/s (seed {seed})" if excite else ", at rest"))
@@ -290,8 +290,10 @@ def with_ground(scene, model=None, *, q0: str = "excite", seed: int = 0, floor: 
                          "floating robots: add --floating (a URDF), or use an MJCF file with a free joint")
     plane = file_floor(model) if floor else None
     height = plane["height"] if plane else 0.0
-    start = standing_start(model, height=height, depth=SETTLE, excite=q0 == "excite", seed=seed,
-                           t_end=scene.run.t_end)
+    if not np.any(model.gravity_vector):
+        raise SceneError(f"--ground: robot {model.name!r} ({scene.robot}) has no gravity (the file's is off or 0): "
+                         "nothing would hold it on the ground")
+    start = standing_start(model, height=height, depth=SETTLE, excite=q0 == "excite", seed=seed)
     if not start.feet:
         raise SceneError(f"--ground: robot {model.name!r} ({scene.robot}) has no link to stand on")
     spheres, notes = start.feet, list(start.notes)
