@@ -50,7 +50,7 @@ FOOT_BAND = 0.01
 #: Configurations drawn within the joints' sway to find what can reach the ground.
 REACH_SAMPLES = 128
 #: The joints' sway: at most this amplitude (rad or m) about the stance, and half the distance to a limit.
-SWAY = 0.15
+SWAY = 0.1
 #: The sway's frequencies (Hz), drawn uniformly between these.
 SWAY_HZ = (1.0, 2.0)
 #: The base's initial twist: each of its angles' rates drawn within +- this (rad/s).
