@@ -195,3 +195,26 @@ def test_two_feet_fall_onto_every_candidate_and_no_gravity_is_refused(tmp_path):
     scene = default_scene(tmp_path / "ant0.xml", t_end=T_END)
     with pytest.raises(SceneError, match="ant0.xml.*no gravity"):
         ground_for(scene, scene.model())
+
+
+@pytest.mark.usefixtures("corpus_installed")
+def test_a_collision_sphere_elsewhere_does_not_hide_the_named_feet(tmp_path):
+    """Planted: solo12 (meshes only) with a collision sphere added under its base. The feet are still its four
+    links named FOOT (spheres at their origins), not the base's sphere, which cannot reach the ground."""
+    from corpus import ROOT
+
+    src = ROOT / "solo_description/robots/solo12.urdf"
+    text = src.read_text()
+    anchor = "    <!-- BASE LINK VISUAL -->"
+    assert text.count(anchor) == 1
+    text = text.replace(anchor, '    <collision><origin xyz="0 0 -0.05"/><geometry><sphere radius="0.03"/></geometry>'
+                                "</collision>\n" + anchor)
+    path = tmp_path / "solo12_sphere.urdf"
+    path.write_text(text)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scene = default_scene(path, floating=True, t_end=T_END)
+        model = scene.model()
+    assert [s[0] for s in model.info["collision_spheres"]] == ["base_link"]
+    ground = with_ground(scene, model)
+    assert sorted(s.link for s in ground.contacts[0].spheres) == ["FL_FOOT", "FR_FOOT", "HL_FOOT", "HR_FOOT"]

@@ -7,8 +7,9 @@ stance instead (docs/contact.md, "--ground"):
 - **the stance** (:func:`stance_pose`): the joints at the file's home keyframe, else its qpos0 (MJCF) or
   0 (URDF), each kept :data:`STANCE_MARGIN` of its range inside its limits; the floating base level
   (roll and pitch 0), its yaw and x, y as the file puts them;
-- **the feet** (:func:`choose_feet`): of the robot's collision spheres and capsule ends (else spheres of
-  ``FALLBACK_RADIUS`` at the origins of its links named ``foot`` or ``toe``, else of its leaf links),
+- **the feet** (:func:`choose_feet`): of the robot's collision spheres and capsule ends, and spheres of
+  ``FALLBACK_RADIUS`` at the origins of its links named ``foot`` or ``toe`` that carry none (else at the
+  origins of its leaf links),
   those that can reach the ground within the run's reach: whose lowest point, over the stance and
   :data:`REACH_SAMPLES` seeded configurations within the joints' sway (:func:`sway_amplitudes`), comes
   within :data:`FOOT_BAND` of the lowest point at the stance;
@@ -114,16 +115,18 @@ def sway_amplitudes(model, q_stance) -> np.ndarray:
 
 
 def _candidates(model):
-    """The spheres a foot is chosen from, and how they were found."""
+    """The spheres a foot is chosen from (the robot's collision spheres and capsule ends, and spheres at the
+    origins of its links named foot or toe that carry none; else at its leaf links), and how they were found."""
     spheres = _robot_spheres(model)
-    if spheres:
-        return spheres, "its collision spheres and capsule ends"
     frame_of = model.info.get("frame_of") or {nm: (nm, None) for nm in model.link_names}
-    named = [k for k in frame_of if any(w in k.lower() for w in FOOT_NAMES)]
-    if named:
-        return ([ContactSphere(k, np.zeros(3), FALLBACK_RADIUS, f"foot link origin (r = {FALLBACK_RADIUS:g} m)")
-                 for k in named], f"no collision spheres: spheres of {FALLBACK_RADIUS:g} m at its links named "
-                + " or ".join(FOOT_NAMES))
+    own = {s.link for s in spheres}
+    named = [k for k in frame_of if any(w in k.lower() for w in FOOT_NAMES) and k not in own]
+    extra = [ContactSphere(k, np.zeros(3), FALLBACK_RADIUS, f"foot link origin (r = {FALLBACK_RADIUS:g} m)")
+             for k in named]
+    hows = (["its collision spheres and capsule ends"] if spheres else ["no collision spheres"]) + (
+        [f"spheres of {FALLBACK_RADIUS:g} m at its links named {' or '.join(FOOT_NAMES)} without one"] if extra else [])
+    if spheres or extra:
+        return spheres + extra, "; ".join(hows)
     tree = model.tree
     has_child = {int(p) for p in tree.parent if p >= 0}
     leaves = [k for k, (t, _) in frame_of.items() if tree.link_index(t) not in has_child]
