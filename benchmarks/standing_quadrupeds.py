@@ -3,7 +3,7 @@ files with a floor (gymnasium's ant, dm_control's quadruped) in theirs, compared
 
 Per robot: the feet chosen, the base's height above the ground at the start and its lowest (both engines), its
 largest tilt, the joints' largest excursion past their limits (negative: inside), the engines' agreement
-(max |dq|), the verdict, MuJoCo's step and the wall times (compare_scene's whole call, the project's
+(max |dq|), the deepest foot (the law's; against the smallest foot's radius), the verdict, MuJoCo's step and the wall times (compare_scene's whole call, the project's
 integrator, MuJoCo's engine). Writes ``reports/benchmarks/standing_quadrupeds.md`` (docs/contact.md shows it).
 
     python benchmarks/standing_quadrupeds.py [--t-end 1.0]
@@ -55,10 +55,12 @@ def one(path: Path, urdf: bool, t_end: float) -> dict:
     s = c.summary()
     ground = float(scene.contacts[0].height)
     ours, theirs = (stance_figures(model, q, ground=ground) for q in (c.q_ours, c.q_mujoco))
+    depth = float(max(c.info["contact_series"]["depth_ours"]))
+    radius = min(sp.radius for sp in scene.contacts[0].spheres)
     return {"feet": ", ".join(sp.link for sp in scene.contacts[0].spheres), "start": ours.start_height,
             "min_ours": ours.min_height, "min_mujoco": theirs.min_height, "tilt": max(ours.max_tilt, theirs.max_tilt),
             "past": max(ours.max_past_limit, theirs.max_past_limit), "dq": s["trajectory"]["max_abs_error"],
-            "verdict": s["verdict"]["text"], "dt": s["mujoco"]["timestep"], "wall": wall,
+            "depth": depth, "radius": radius, "verdict": s["verdict"]["text"], "dt": s["mujoco"]["timestep"], "wall": wall,
             "project": s["wall_time"]["project_s"], "mujoco": s["wall_time"]["mujoco_s"]}
 
 
@@ -78,11 +80,12 @@ def main(argv=None) -> int:
              "(the same contact law in both); wall: compare_scene's whole call (terms, both runs, MuJoCo's native "
              "contact), then the project's integrator and MuJoCo's engine. One run on a shared 2-core machine.", "",
              "| robot | feet | base at start (m) | lowest: urdf2links / MuJoCo (m) | max tilt (rad) | past limit (rad) "
-             "| max \\|dq\\| | MuJoCo dt (s) | wall (s): compare / integrator / MuJoCo |",
-             "|---|---|---|---|---|---|---|---|---|"]
+             "| deepest foot (mm; / radius) | max \\|dq\\| | MuJoCo dt (s) | wall (s): compare / integrator / MuJoCo |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for name, r in rows:
         lines.append(f"| {name} | {r['feet']} | {r['start']:.3f} | {r['min_ours']:.3f} / {r['min_mujoco']:.3f} | "
-                     f"{r['tilt']:.3f} | {r['past']:+.3f} | {r['dq']:.1e} | {r['dt']:g} | "
+                     f"{r['tilt']:.3f} | {r['past']:+.3f} | {1e3 * r['depth']:.1f}; {r['depth'] / r['radius']:.2f} | "
+                     f"{r['dq']:.1e} | {r['dt']:g} | "
                      f"{r['wall']:.1f} / {r['project']:.2f} / {r['mujoco']:.2f} |")
     lines += ["", "Verdicts:", ""] + [f"- {name}: {r['verdict']}" for name, r in rows] + [""]
     OUT.parent.mkdir(parents=True, exist_ok=True)
