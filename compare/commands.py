@@ -114,7 +114,9 @@ def _compare_cmd(args) -> str:
     parts = ["urdf2links compare", shown_path(args.scene)]
     parts += [f for f, on in (("--floating", args.floating), (f"--q0 {args.q0}", args.q0 != "excite"),
                               (f"--inertia {args.inertia}", args.inertia), (f"--mimic {args.mimic}", args.mimic),
-                              ("--strict", args.strict)) if on]
+                              ("--strict", args.strict), ("--hold", getattr(args, "hold", False)),
+                              ("--ground", getattr(args, "ground", False)),     # issue 43: and the file's floor
+                              ("--no-floor", getattr(args, "no_floor", False))) if on]
     parts += [f"--package-dir {shown_path(d)}" for d in args.package_dir] + [f"--xacro-arg {a}" for a in args.xacro_arg]
     for flag, value, default in (("--t-end", args.t_end, None), ("--mujoco-integrator", args.mujoco_integrator, "RK4"),
                                  ("--mujoco-dt", args.mujoco_dt, 1e-4), ("--method", args.method, None),

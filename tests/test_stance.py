@@ -218,3 +218,17 @@ def test_a_collision_sphere_elsewhere_does_not_hide_the_named_feet(tmp_path):
     assert [s[0] for s in model.info["collision_spheres"]] == ["base_link"]
     ground = with_ground(scene, model)
     assert sorted(s.link for s in ground.contacts[0].spheres) == ["FL_FOOT", "FR_FOOT", "HL_FOOT", "HR_FOOT"]
+
+
+def test_no_floor_drops_the_files_floor_and_says_so(tmp_path):
+    """`compare ant.xml --no-floor`: no ground (no contact line), stderr names the dropped floor, and the
+    report's command to regenerate it keeps --no-floor (planted: the run without it has a contact line)."""
+    import gymnasium
+    from cli_runner import run_cli
+
+    ant = Path(gymnasium.__file__).parent / "envs/mujoco/assets/ant.xml"
+    r = run_cli("compare", str(ant), "--no-floor", "--t-end", "0.05", "--out", str(tmp_path))
+    assert r.returncode == 0, r.stderr
+    assert "--no-floor: the file's floor 'floor' dropped" in r.stderr
+    assert not any(x.strip().startswith("contact") for x in r.stdout.splitlines())
+    assert "--no-floor" in (tmp_path / "report.html").read_text()
