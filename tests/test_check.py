@@ -2,15 +2,18 @@
 example-robot-data robot (the double pendulum without meshes: two joints, fast) and MuJoCo's saved import of it
 (:func:`~urdf2links.compare.pairs.mujoco_import.save_mujoco_import`) as its MJCF.
 
-The story: ``check --init`` accepts the current state and ``check`` passes (exit 0); a mass planted in the MJCF
-makes ``check`` exit 1 with exactly one failing JUnit case, which, like the Markdown, names the link and both
-masses; ``pytest`` in that repository fails the same single item beside the repository's own test;
-``--changed-since HEAD~1`` checks only what depends on the changed MJCF. The checks run in this process
-(``main``); only the pytest plugin runs in a subprocess (``sys.executable``: this environment).
+The story: ``check --init`` accepts the current state (each difference of the pair by name, each file's
+fingerprint) and ``check`` passes (exit 0); a mass planted in the MJCF makes ``check`` exit 1 with two failing JUnit
+cases (the MJCF's fingerprint and the pair), which, like the Markdown, name the link and both masses; ``pytest`` in
+that repository fails the same two items beside the repository's own test; ``--changed-since HEAD~1`` checks only
+what depends on the changed MJCF; a limit added to a joint the URDF gives ``lower = upper = 0`` fails, and is no
+longer explained by MuJoCo's import (issue 42). The checks run in this process (``main``); only the pytest plugin
+runs in a subprocess (``sys.executable``: this environment). The Panda's edits one by one: tests/test_check_edits.py.
 """
 
 from __future__ import annotations
 
+import json
 import re
 import shutil
 import subprocess
@@ -83,38 +86,53 @@ def test_init_then_check_passes(repo, initialised, capsys):
     assert [r.id for r in config.robots] == [URDF, MJCF]
     assert [(p.urdf.id, p.mjcf.id) for p in config.pairs] == [(URDF, MJCF)]      # guessed by the robot's name
     # MuJoCo's import leaves the URDF's lower = upper = 0 joints unlimited and fuses the massless tip frame:
-    # accepted at init, nothing else
-    assert config.pairs[0].tolerances == {"limits": float("inf"), "frame_missing": 1.5}
-    assert [s.id for s in config.scenes] == [URDF, MJCF] and config.baselines.is_file()
+    # accepted at init by name, nothing else, and no kind as a whole
+    pair = config.pairs[0]
+    assert pair.tolerances == {}
+    assert [(r.kind, r.part, r.urdf, r.mjcf) for r in pair.accepted] == [
+        ("limits", "joint joint1", [0.0, 0.0], "unlimited"), ("limits", "joint joint2", [0.0, 0.0], "unlimited"),
+        ("frame_missing", "frame link3", "link3", "none")]
+    assert all(0 < r.tolerance <= 1e-5 for r in pair.accepted)       # the kinds' rounding (compare/check/accepted.py)
+    assert [(s.id, s.q0) for s in config.scenes] == [(URDF, "excite"), (MJCF, "excite")] and config.baselines.is_file()
+    fingerprints = json.loads(config.baselines.read_text())["fingerprints"]
+    assert sorted(fingerprints) == [URDF, MJCF]
+    assert fingerprints[MJCF]["bodies"]["link2"]["mass"] == 0.3 and fingerprints[URDF]["joints"]["joint2"]["range"] == [
+        0.0, 0.0] and fingerprints[MJCF]["joints"]["joint2"]["range"] == "unlimited"
     capsys.readouterr()
     assert main(["check", str(repo)]) == 0
     assert "all 5 checks hold" in capsys.readouterr().out
 
 
 @needs_corpus
-def test_a_planted_mass_fails_one_case_naming_the_link_and_both_masses(planted, tmp_path, capsys):
+def test_a_planted_mass_fails_the_fingerprint_and_the_pair_naming_the_link_and_both_masses(planted, tmp_path, capsys):
     junit, md = tmp_path / "check.xml", tmp_path / "check.md"
     assert main(["check", str(planted), "--junit", str(junit), "--markdown", str(md), "--quiet"]) == 1
     cases = etree.parse(str(junit)).getroot().findall(".//testcase")
     assert len(cases) == 5                                   # 2 robots, 1 pair, 2 scenes
-    failing = [c for c in cases if c.find("failure") is not None or c.find("error") is not None]
-    assert len(failing) == 1 and failing[0].get("classname") == "urdf2links.pair"
-    message = failing[0].find("failure").get("message")
+    failing = {c.get("classname"): c for c in cases if c.find("failure") is not None or c.find("error") is not None}
+    assert sorted(failing) == ["urdf2links.pair", "urdf2links.robot"]
+    assert failing["urdf2links.robot"].get("name") == MJCF
+    pair = failing["urdf2links.pair"].find("failure").get("message")
+    robot = failing["urdf2links.robot"].find("failure").get("message")
     summary = md.read_text()
-    for text in (message, summary):
+    for text in (pair, summary):
         assert re.search(r"mass of link link2\b.*0\.3 in robots/double_pendulum\.urdf, 0\.35 in "
                          r"robots/double_pendulum\.xml", text), text
-    assert "1 failed" in capsys.readouterr().out
+        assert "not accepted" in text and 'kind = "mass"' in text        # and the row that would accept it
+    # the MJCF against its own accepted state: the body, the quantity, both values, the command that accepts it
+    m = re.search(r"robots/double_pendulum\.xml: body link2: mass was (\S+), now (\S+) kg .*--write-baselines", robot)
+    assert m and (float(m[1]), float(m[2])) == (0.3, 0.35), robot
+    assert "2 failed" in capsys.readouterr().out
 
 
 @needs_corpus
-def test_pytest_in_the_repository_shows_the_same_single_failure(planted):
+def test_pytest_in_the_repository_shows_the_same_failures(planted):
     run = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-rf"], cwd=planted,
                          capture_output=True, text=True, timeout=300)
     out = run.stdout
     assert run.returncode == 1, out + run.stderr
-    assert "1 failed, 5 passed" in out, out               # the repository's own test and 4 checks pass
-    assert f"FAILED {MJCF}::pair[{URDF}]" in out, out
+    assert "2 failed, 4 passed" in out, out               # the repository's own test and 3 checks pass
+    assert f"FAILED {MJCF}::pair[{URDF}]" in out and f"FAILED {MJCF}::robot" in out, out
     assert re.search(r"mass of link link2\b.*0\.3 in .*0\.35 in", out), out
 
 
@@ -123,8 +141,32 @@ def test_changed_since_checks_only_what_depends_on_the_changed_file(planted):
     run = run_check(planted, changed_since="HEAD~1", jobs=2)      # two processes: the same cases, same verdicts
     ran = [(r.case.kind, r.case.file) for r in run.results]
     assert ran == [("robot", MJCF), ("pair", MJCF), ("scene", MJCF)], ran
-    assert [r.status for r in run.results] == ["pass", "fail", "pass"]
+    assert [r.status for r in run.results] == ["fail", "fail", "pass"]       # its fingerprint, the pair
     assert ("robot", URDF) in [(c.kind, c.file) for c in run.skipped]
+
+
+@needs_corpus
+def test_a_limit_added_after_init_fails_and_is_no_longer_explained_by_the_import(initialised, repo, tmp_path, capsys):
+    """Issue 42: the URDF's joint2 has ``lower = upper = 0`` and MuJoCo's import leaves it unlimited (accepted at
+    init by name). ``limited="true" range="-0.3 0.3"`` added to the MJCF's joint2 fails the pair, naming the joint
+    and both ranges, and the MJCF's fingerprint; "MuJoCo's import leaves such a joint unlimited" is not said any
+    more (explanations are computed from both files). The MJCF is taken as init committed it."""
+    copy = shutil.copytree(repo, tmp_path / "copy")
+    init = subprocess.run(["git", "log", "--format=%H", "-1", "--grep", "urdf2links check --init"], cwd=copy,
+                          capture_output=True, text=True, check=True).stdout.strip()
+    text = subprocess.run(["git", "show", f"{init}:{MJCF}"], cwd=copy, capture_output=True, text=True,
+                          check=True).stdout
+    edited = re.sub(r'(<joint name="joint2"[^>]*?) limited="false"', r'\1 limited="true" range="-0.3 0.3"', text)
+    assert edited.count('range="-0.3 0.3"') == 1                 # MuJoCo's writer said limited="false"
+    (copy / MJCF).write_text(edited)
+    capsys.readouterr()
+    assert main(["check", str(copy)]) == 1
+    out = capsys.readouterr().out
+    pair = re.search(r"robots/double_pendulum\.xml: limits of joint joint2: \[0, 0\] in robots/double_pendulum\.urdf, "
+                     r"\[-0\.3, 0\.3\] in robots/double_pendulum\.xml .*accepted \[0, 0\] and unlimited", out)
+    assert pair, out
+    assert re.search(r"robots/double_pendulum\.xml: joint joint2: range was unlimited, now \[-0\.3, 0\.3\]", out), out
+    assert "leaves such a joint unlimited" not in out, out
 
 
 @needs_corpus
@@ -143,6 +185,24 @@ def test_a_scene_that_grew_past_its_baseline_fails(initialised, repo, tmp_path):
     assert "trajectory.max_abs_error" in scenes[0].message() and "allowed" in scenes[0].message()
 
 
+@needs_corpus
+def test_a_scene_with_weak_evidence_fails_and_says_so(initialised, repo, tmp_path, capsys):
+    """The MJCF's default scene at rest (``q0 = "rest"``: the pendulum balanced upright, where nothing moves in
+    0.5 s) fails, saying weak evidence, even while --write-baselines accepts its figures; the excited default
+    scene of the same file (init's, ``test_init_then_check_passes``) passes."""
+    copy = shutil.copytree(repo, tmp_path / "copy")
+    config = copy / "urdf2links.toml"
+    text = config.read_text()
+    assert text.count('q0 = "excite"') == 2
+    config.write_text(text.replace('q0 = "excite"', 'q0 = "rest"'))
+    capsys.readouterr()
+    assert main(["check", str(copy), "--write-baselines"]) == 1
+    out = capsys.readouterr().out
+    for robot in (URDF, MJCF):
+        assert re.search(rf"^FAIL  scene {re.escape(robot)} \(default scene\).*\n        {re.escape(robot)}: weak "
+                         r"evidence: .*q0 = \"excite\"", out, re.M), out
+
+
 def test_a_robot_that_cannot_be_loaded_or_has_inertia_findings(tmp_path, capsys):
     """A load error is an error (exit 2, a JUnit <error>); an inertia finding fails unless allowed."""
     bad_inertia = ('<robot name="r"><link name="base"/><link name="arm"><inertial><mass value="1"/>'
@@ -154,6 +214,9 @@ def test_a_robot_that_cannot_be_loaded_or_has_inertia_findings(tmp_path, capsys)
     assert main(["check", str(tmp_path), "--quiet"]) == 1
     assert "link arm: inertia triangle_inequality" in capsys.readouterr().out
     (tmp_path / "urdf2links.toml").write_text('[[robots]]\nfiles = ["*.urdf"]\nallow_inertia_findings = ["arm"]\n')
+    assert main(["check", str(tmp_path), "--quiet"]) == 1          # no fingerprint accepted yet: it says how
+    assert "no accepted fingerprint" in capsys.readouterr().out
+    assert main(["check", str(tmp_path), "--quiet", "--write-baselines"]) == 0
     assert main(["check", str(tmp_path), "--quiet"]) == 0
     (tmp_path / "broken.urdf").write_text("<robot name='b'><link name='x'>")
     junit = tmp_path / "j.xml"
@@ -165,7 +228,12 @@ def test_a_robot_that_cannot_be_loaded_or_has_inertia_findings(tmp_path, capsys)
 @pytest.mark.parametrize("text, words", [
     ('[[robots]]\nfiles = ["*.urdf"]\ncolour = "red"\n', ["[robots 1]", "colour"]),
     ('[[robots]]\nfiles = ["nothing/*.urdf"]\n', ["[robots 1]", "nothing/*.urdf", "matches no"]),
-    ('tolerances = { weight = 1 }\n[[robots]]\nfiles = ["*.urdf"]\n', ["unknown kind 'weight'", "mass"]),
+    ('tolerances = { weight = 1 }\n[[robots]]\nfiles = ["*.urdf"]\n', ["unknown key 'weight'", "A and G"]),
+    ('tolerances = { limits = inf }\n[[robots]]\nfiles = ["*.urdf"]\n', ["tolerances.limits", "a whole kind",
+                                                                          "accepted"]),
+    ('[[pairs]]\nurdf = "a.urdf"\nmjcf = "a.urdf"\naccepted = [{ kind = "limits", part = "joint j", urdf = 0, '
+     'mjcf = "none", difference = inf, unit = "rad", tolerance = inf }]\n', ["[pairs 1]", "accepted[0]",
+                                                                           "limits of joint j", "tolerance = inf"]),
     ('[[pairs]]\nurdf = "a.urdf"\nmjcf = "missing.xml"\n', ["[pairs 1]", "missing.xml", "does not exist"]),
 ])
 def test_a_configuration_that_cannot_be_used_exits_2_naming_file_and_key(tmp_path, capsys, text, words):
@@ -177,6 +245,24 @@ def test_a_configuration_that_cannot_be_used_exits_2_naming_file_and_key(tmp_pat
     message = capsys.readouterr().err
     for w in [str(tmp_path / "urdf2links.toml"), *words]:
         assert w in message, (w, message)
+
+
+def test_the_configuration_docs_ci_shows_is_read_as_it_says(tmp_path):
+    """docs/ci.md's configuration, with its files made: the accepted rows by name, A and G only, excited scenes."""
+    doc = (PROJECT / "docs" / "ci.md").read_text()
+    text = re.search(r"```toml\n(.*?)```", doc, re.S).group(1)
+    (tmp_path / "robots").mkdir()
+    (tmp_path / "scenes").mkdir()
+    (tmp_path / "robots/arm.urdf").write_text((PROJECT / "robots" / "double_pendulum.urdf").read_text())
+    (tmp_path / "scenes/swing.toml").write_text("# only found by its glob here, not read\n")
+    save_mujoco_import(tmp_path / "robots/arm.urdf", tmp_path / "robots/arm.xml", keep_geometry=False)
+    (tmp_path / "urdf2links.toml").write_text(text)
+    config = read_config(tmp_path)
+    pair = config.pairs[0]
+    assert pair.tolerances == {"A": 1e-3, "G": 1e-3} and config.tolerances == {"A": 1e-3}
+    assert [(r.kind, r.part, r.mjcf, r.unit, r.tolerance) for r in pair.accepted] == [
+        ("armature", "joint joint1", 0.1, "kg m^2", 1e-6), ("damping", "joint joint1", 1.0, "N m s/rad", 1e-5)]
+    assert [s.q0 for s in config.scenes if s.robot is not None] == ["excite"]
 
 
 def test_the_configuration_in_pyproject(tmp_path):

@@ -88,7 +88,7 @@ def compared(name):
 def test_model_compared_with_its_constraints(name, record_figure):
     """The file's equalities and tendons read (MuJoCo's counts), every equality solved and run by MuJoCo's
     file with it on, the tendons with a force acting on both engines (the others have none to drop); the
-    engines within the divergence threshold; the verdict's scope the whole model."""
+    engines within the divergence threshold; nothing cut from the mechanism (verdict.cut)."""
     path, n_eq, n_td, _, _ = MODELS[name]
     m = mujoco.MjModel.from_xml_path(str(path))
     model, cmp = compared(name)
@@ -146,7 +146,8 @@ def test_what_is_not_modelled_is_named_in_the_scope(tmp_path):
     s = cmp.summary()
     plan = as_plan(_scene(file, None, _HAND), model=model)
     assert [c.name for c in plan.constraints.cset.constraints] == ["coupling"]
-    assert s["verdict"]["scope"] == "open tree of a closed mechanism (0 constraints, 1 tendon dropped)"
+    assert s["verdict"]["cut"]["text"] == "open tree of a closed mechanism (0 constraints, 1 tendon dropped)"
+    assert s["verdict"]["scope"].startswith(s["verdict"]["cut"]["text"])   # then what is switched off (issue 43)
     assert "not the whole mechanism" in s["verdict"]["text"] and s["trajectory"]["max_abs_error"] < 1e-8
 
 

@@ -169,7 +169,10 @@ def test_a_closed_mechanism_cut_to_an_open_tree_says_so(tmp_path):
     res = evaluate_robot(find_robots([f])[0], CorpusSettings(t_end=0.1, states=1, pages=False))
     row, s = res.row, res.summary
     scope = "open tree of a closed mechanism (1 constraint, 1 tendon dropped)"
-    assert s["verdict"]["scope"] == scope and row["scope"] == scope and row["reason"].startswith(scope)
+    assert s["verdict"]["cut"]["text"] == scope and row["reason"].startswith(scope)
+    # issue 43: the scope goes on to name what both engines switch off (the file's limits and contact)
+    assert s["verdict"]["scope"].startswith(scope) and row["scope"] == s["verdict"]["scope"]
+    assert "joint limits (2 joints: j1, j2)" in s["verdict"]["scope"]
     assert s["trajectory"]["verdict"].startswith("the engines agree") and scope in s["trajectory"]["verdict"]
     assert row["coverage"]["moved"] == 2 and not row["coverage"]["weak_evidence"]
     weak = dict(row, file="weak.xml", coverage=dict(row["coverage"], moved=0, moved_fraction=0.0, weak_evidence=True))

@@ -225,7 +225,7 @@ def test_report_in_a_checkout_runs_its_scenes_and_checks_its_baselines(tmp_path)
     first = run("report", "--t-end", "0.05", "--animation-fps", "0", "--quiet", "--out", "reports",
                 "--write-baselines", cwd=tmp_path)
     assert first.returncode == 0, first.stderr
-    assert f"scenes: 1 from robots/*.toml of the checkout {tmp_path}" in first.stderr
+    assert f"scenes: 1 from robots/*.toml and robots/loops/*.toml of the checkout {tmp_path}" in first.stderr
     assert "this run's figures are accepted into reports/baselines.json" in first.stderr
     again = run("report", "--t-end", "0.05", "--animation-fps", "0", "--quiet", cwd=tmp_path)
     assert again.returncode == 0, again.stderr

@@ -30,7 +30,7 @@ def _driven(scene) -> bool:
 
 def shipped_driven_scenes():
     out = []
-    for f in sorted(ROBOTS.glob("*.toml")) + sorted((ROBOTS / "hard").glob("*.toml")):
+    for f in [*sorted(ROBOTS.glob("*.toml")), *sorted((ROBOTS / "hard").glob("*.toml")), *sorted((ROBOTS / "loops").glob("*.toml"))]:
         scene = load_scene(f)
         # a [[contact]] scene's law runs only in the compiled callback (tests/test_contact_mujoco.py checks it)
         if _driven(scene) and not scene.contacts:

@@ -51,6 +51,7 @@ def test_a_floating_robots_rotated_twin_lists_only_root_pose(folder):
     assert c.mapping.to_json()["negated"] == [] and all(m.sign == 1 for m in c.mapping.matches)
     rp = c.differences[0]
     assert rp.difference == pytest.approx(2 * math.acos(QUAT[0] / np.linalg.norm(QUAT)), abs=1e-6)
+    assert rp.effect["at_rounding"] is True and rp.part == "link"      # a state: it changes neither A nor G
     # the residual is the untouched import's: MuJoCo's 6 written digits (1.8e-6 measured on both)
     for term in ("A", "G"):
         assert c.effects["after_undoing_all"][term] < 1e-5

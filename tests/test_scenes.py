@@ -16,7 +16,7 @@ from scipy.special import ellipk
 from urdf2links.scenes import python_plan as python_plan_module
 from urdf2links.dynamics.oracles import recursive
 from urdf2links.scenes.python_plan import PythonPlan
-from urdf2links.locations import shipped_robots_dir
+from urdf2links.locations import report_scene_files, shipped_robots_dir
 from urdf2links.errors import SceneError
 from urdf2links.scenes.plan import compile_plan
 from urdf2links.scenes.scene import load_scene
@@ -256,10 +256,16 @@ def test_trajectory_files_and_cli(tmp_path):
     assert "terms computed: A, e, G" in inspect.stdout
 
 
-@pytest.mark.parametrize("scene_file", sorted(p.name for p in ROBOTS.glob("*.toml")))
+@pytest.mark.parametrize("scene_file", [p.relative_to(ROBOTS).as_posix() for p in report_scene_files(ROBOTS)])
 def test_shipped_scenes_run_and_balance_energy(scene_file):
-    """Every shipped scene runs (first second) with the power balance holding."""
+    """Every scene ``urdf2links report`` runs (robots/*.toml, robots/loops/*.toml) runs its first second with the
+    power balance holding; a hard case that stops by design (its [expect]) stops with the error it names."""
     scene = load_scene(ROBOTS / scene_file)
+    if scene.expected_stop is not None:
+        with pytest.raises(Exception) as info:
+            simulate(scene, t_end=min(1.0, scene.run.t_end), samples=101, progress=False)
+        assert scene.expected_stop.matches(info.value), info.value
+        return
     traj = simulate(scene, t_end=min(1.0, scene.run.t_end), samples=101, progress=False)
     assert traj.stats["success"]
     # the scenes run DOP853 at rtol <= 1e-9: the balance holds far below that
@@ -282,7 +288,7 @@ def test_progress_bar_draws_only_when_enabled():
     assert quiet.getvalue() == ""
 
 
-@pytest.mark.parametrize("path", sorted(shipped_robots_dir().glob("*.toml")), ids=lambda p: p.stem)
+@pytest.mark.parametrize("path", report_scene_files(shipped_robots_dir()), ids=lambda p: p.stem)
 def test_compiled_rhs_equals_python_rhs(path):
     """plan.rhs (numba) against plan.python_rhs (numpy) at random states and times of every
     shipped scene: the same sums in another order, so equal to ~cond(A) eps (bound 1e-11 relative

@@ -130,7 +130,7 @@ def _joint_lines(joints) -> list[str]:
 
 def _inspect(args) -> int:
     from .scenes.plan import compile_plan
-    from .scenes.scene_toml import ground_of, hold_of, load_options_of, scene_or_robot, scene_toml
+    from .scenes.scene_toml import ground_of, hold_of, load_options_of, scene_or_robot, scene_with_plan
 
     if args.scene or str(args.file).endswith(".toml"):
         scene = scene_or_robot(args.file, q0=args.q0, seed=args.seed, t_end=args.t_end, load=load_options_of(args),
@@ -139,9 +139,7 @@ def _inspect(args) -> int:
             warnings.simplefilter("ignore")
             model = scene.model()
         scene = ground_of(args, scene, model)     # issues 37, 43: --ground, the file's floor
-        if scene.path is None:
-            print(scene_toml(scene))
-        print(compile_plan(scene, model).describe())
+        print(scene_with_plan(scene, compile_plan(scene, model).describe()))     # a default scene: TOML that parses
         return 0
     from .parsers.robot_file import load_robot
 
@@ -196,7 +194,7 @@ def _simulate(args) -> int:
         print(f"  methods: {s['methods_used']}")
         for line in describe_stretches(s["stretches"]):
             print(f"    {line}")
-    for note in s["spring_notes"]:
+    for note in [*model.info.get("missing_files", ()), *s["spring_notes"]]:     # issue 42: a missing mesh named
         print(f"  note: {note}")
     for e in s["limit_excursions"]:
         print(f"  note: {LimitExcursion(**e).text()}")
@@ -557,11 +555,11 @@ def _check_parser(sub) -> None:
     p = sub.add_parser("check", help="check a repository's robots, pairs and scenes (urdf2links.toml or "
                                      "[tool.urdf2links]) for CI: exit 0, 1 when a check falls short, 2 when unusable",
                        description="Read the configuration ([tool.urdf2links] of pyproject.toml, or urdf2links.toml, "
-                                   "in PATH or above): load every robot (a load error or an inertia finding not "
-                                   "allowed fails), compare every pair part by part against its tolerances, run every "
-                                   "scene with urdf2links and MuJoCo against its baselines. Exit 0 when all hold, 1 "
-                                   "when a check falls short, 2 when the configuration or a file cannot be used "
-                                   "(docs/ci.md).")
+                                   "in PATH or above): load every robot (a load error, an inertia finding not allowed "
+                                   "or a change since its accepted fingerprint fails), compare every pair part by part "
+                                   "(a difference not accepted by name fails), run every scene against its baselines. "
+                                   "Exit 0 when all hold, 1 when a check falls short, 2 when the configuration or a "
+                                   "file cannot be used (docs/ci.md).")
     p.add_argument("path", nargs="?", default=".", help="the repository's folder, or its configuration file "
                    "(default: here)")
     p.add_argument("--junit", metavar="FILE", help="also write JUnit XML: one test case per robot, pair and scene")
@@ -570,9 +568,9 @@ def _check_parser(sub) -> None:
     p.add_argument("--changed-since", metavar="GIT_REF", help="check only what depends on files changed since this "
                    "commit (the robot files, their meshes and xacro includes, scene files)")
     p.add_argument("--jobs", type=int, help="run the checks in N processes (default 1: here)")
-    p.add_argument("--write-baselines", action="store_true", help="accept this run's scene figures as the baselines")
+    p.add_argument("--write-baselines", action="store_true", help="accept this run (scene figures, fingerprints)")
     p.add_argument("--init", action="store_true", help="write urdf2links.toml for PATH: every robot found, pairs "
-                   "guessed by robot name, the current state accepted (baselines written)")
+                   "guessed by robot name, the current state accepted (differences by name, baselines written)")
     p.add_argument("--write-workflow", nargs="?", const=True, metavar="FILE", help="write the CI workflow (docs/ci.md) "
                    "to .github/workflows/urdf2links-check.yml (or FILE)")
     p.add_argument("--quiet", action="store_true", help="no line per check while it runs")

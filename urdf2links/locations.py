@@ -10,7 +10,8 @@ from importlib.metadata import PackageNotFoundError, distribution
 from pathlib import Path
 
 __all__ = ["shipped_robots_dir", "example_robot_data_dir", "Shipped", "shipped", "find_input", "InputNotFound",
-           "DESCRIPTION_SUFFIXES", "DEFAULT_OUT", "checkout_root", "report_scenes", "default_baselines"]
+           "DESCRIPTION_SUFFIXES", "DEFAULT_OUT", "checkout_root", "report_scenes", "default_baselines",
+           "REPORT_FOLDERS", "report_scene_files"]
 
 #: Suffixes of the files a command reads: scenes, and robot descriptions.
 DESCRIPTION_SUFFIXES = (".toml", ".urdf", ".xacro", ".xml")
@@ -144,15 +145,25 @@ def checkout_root(start=None) -> Path | None:
     return None
 
 
+#: The folders of ``robots/`` whose scenes ``urdf2links report`` runs: the shipped scenes and the closed loops
+#: (issue 42); ``robots/hard/`` is run by its own tests and docs/hard-cases.md.
+REPORT_FOLDERS = ("", "loops")
+
+
+def report_scene_files(folder: Path) -> list[Path]:
+    """The scene files ``urdf2links report`` runs in the robots folder ``folder`` (:data:`REPORT_FOLDERS`)."""
+    return [p for sub in REPORT_FOLDERS for p in sorted((folder / sub).glob("*.toml"))]
+
+
 def report_scenes() -> tuple[list[Path], str]:
     """``(scene files, where)`` that ``urdf2links report`` runs by default: a checkout's own
-    ``robots/*.toml`` when run inside one (an edit there counts without reinstalling), else the
-    installed package's; ``where`` says which, for the run's first line."""
+    ``robots/*.toml`` and ``robots/loops/*.toml`` when run inside one (an edit there counts without
+    reinstalling), else the installed package's; ``where`` says which, for the run's first line."""
     root = checkout_root()
     if root is not None:
-        return sorted((root / "robots").glob("*.toml")), f"robots/*.toml of the checkout {root}"
+        return report_scene_files(root / "robots"), f"robots/*.toml and robots/loops/*.toml of the checkout {root}"
     folder = shipped_robots_dir()
-    return sorted(folder.glob("*.toml")), f"the shipped scenes installed with urdf2links ({folder})"
+    return report_scene_files(folder), f"the shipped scenes installed with urdf2links ({folder}, loops/ included)"
 
 
 def default_baselines(out: Path, *, sub: str = "") -> tuple[Path | None, list[Path]]:

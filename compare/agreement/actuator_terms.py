@@ -7,6 +7,10 @@ at seeded states ``(t, q, q')`` the project's ``plan.actuator_forces(t, q, q')``
 ``d.ctrl`` set to the controls at ``t`` (MuJoCo clamps and applies its own law). States: ``q`` uniform in
 [-1, 1] around the model's ``q0`` (wide enough to cross ctrlrange and forcerange clamps), ``q'`` standard
 normal, ``t`` uniform over the run. The figure is ``max |ours - MuJoCo| / max(max |MuJoCo|, 1 N)``.
+
+Issue 43: the file's actuators on fixed tendons (``[constraints] from_file``; their law on the tendon's length,
+E76) are compared too, on both routes, and every actuator's scalar force (MuJoCo's ``actuator_force``: the
+law's ``f`` after both clamps) beside the generalized forces: ``max_rel_error_actuator`` covers both.
 """
 
 from __future__ import annotations
@@ -18,6 +22,8 @@ import numpy as np
 
 from urdf2links.compilation import clock  # durations without numba's compilation
 
+from ..mujoco_side.tendon_controls import tendon_actuator_ids, tendon_actuators
+
 __all__ = ["actuator_terms", "route1_actuators", "route2_actuators", "file_actuators", "merged"]
 
 
@@ -25,17 +31,19 @@ def actuator_terms(plan, m, set_state, to_project, actuator_ids, *, label: str, 
                    seed: int = 0) -> dict:
     """The comparison (module doc) on MuJoCo model ``m``: ``set_state(d, q, qd)`` writes a project state,
     ``to_project(qfrc)`` maps MuJoCo's generalized forces to the project's coordinates, ``actuator_ids[k]``
-    is MuJoCo's actuator of the plan's ``k``-th (-1: not a MuJoCo actuator, left out of both sides). A
-    JSON-ready dict."""
+    is MuJoCo's actuator of the plan's ``k``-th (-1: not a MuJoCo actuator, left out of both sides); the
+    plan's actuators on fixed tendons are ``m``'s of the same name. A JSON-ready dict."""
     from urdf2links.scenes.actuators import actuator_forces
 
     start = clock()
     acts = [a for a, i in zip(plan.actuator_set.actuators, actuator_ids) if i >= 0]
+    joint_ids = [i for i in actuator_ids if i >= 0]
+    tendons, tendon_ids = tendon_actuators(plan), tendon_actuator_ids(plan, m)     # issue 43
     rng = np.random.default_rng(seed)
     d = mujoco.MjData(m)
     q0 = plan.model.info.get("q0")
     q0 = np.zeros(plan.n) if q0 is None else np.asarray(q0, float)
-    worst, per_state = 0.0, []
+    worst, worst_f, per_state = 0.0, 0.0, []
     for _ in range(states):
         t = float(rng.uniform(0.0, plan.scene.run.t_end))
         q, qd = q0 + rng.uniform(-1.0, 1.0, plan.n), rng.standard_normal(plan.n)
@@ -45,18 +53,26 @@ def actuator_terms(plan, m, set_state, to_project, actuator_ids, *, label: str, 
         for k, a in enumerate(actuator_ids):
             if a >= 0:
                 d.ctrl[m.actuator_ctrladr[a]] = ctrl[k]
+        for ta, a in zip(tendons, tendon_ids):
+            d.ctrl[m.actuator_ctrladr[a]] = float(ta.actuator.ctrl(t))
         mujoco.mj_forward(m, d)
         theirs = np.asarray(to_project(np.array(d.qfrc_actuator)), float)
-        ours = actuator_forces(acts, t, q, qd, plan.n)
+        ours = actuator_forces(acts, t, q, qd, plan.n) + sum((ta.generalized(t, q, qd) for ta in tendons), np.zeros(plan.n))
+        f_ours = [a.force(t, float(q[a.index]), float(qd[a.index])) for a in acts] + [ta.force(t, q, qd) for ta in tendons]
+        f_theirs = np.asarray(d.actuator_force)[joint_ids + tendon_ids]
         scale = max(float(np.abs(theirs).max()) if theirs.size else 0.0, 1.0)
         err = float(np.abs(ours - theirs).max()) / scale if theirs.size else 0.0
-        per_state.append(err)
-        worst = max(worst, err)
+        err_f = (float(np.abs(np.asarray(f_ours) - f_theirs).max()) / max(float(np.abs(f_theirs).max()), 1.0)
+                 if f_theirs.size else 0.0)
+        per_state.append(max(err, err_f))
+        worst, worst_f = max(worst, err), max(worst_f, err_f)
     left = len(actuator_ids) - len(acts)
-    return {"label": label, "max_rel_error_actuator": worst, "states": states, "seed": seed, "actuators": len(acts),
-            "not_mujoco_actuators": left,
+    return {"label": label, "max_rel_error_actuator": max(worst, worst_f), "max_rel_error_qfrc_actuator": worst,
+            "max_rel_error_actuator_force": worst_f, "states": states, "seed": seed,
+            "actuators": len(acts) + len(tendons), "tendon_actuators": len(tendons), "not_mujoco_actuators": left,
             "per_state": per_state, "wall_time_s": clock() - start,
-            "mapping": "the project's actuator law (E55) vs MuJoCo's qfrc_actuator with d.ctrl at the same t"}
+            "mapping": "the project's actuator law (E55; on a fixed tendon's length, E76) vs MuJoCo's qfrc_actuator and "
+                       "actuator_force with d.ctrl at the same t"}
 
 
 def route1_actuators(plan, mj, *, states: int = 8, seed: int = 0) -> dict:
@@ -92,7 +108,7 @@ def route2_actuators(plan, robot, *, states: int = 8, seed: int = 0) -> dict:
 def file_actuators(plan, mf, *, states: int = 8, seed: int = 0) -> dict:
     """Route 2 for an MJCF file: MuJoCo's run of the file (its actuators the scene names, the scene's own
     added), through the state map: ``tau = J^T qfrc_actuator`` (E50)."""
-    if not any(i >= 0 for i in mf.actuator_ids):
+    if not any(i >= 0 for i in mf.actuator_ids) and not mf.tendon_actuator_ids:
         return {"label": "route 2", "skipped": "no MuJoCo actuator in the file's run (see its notes)"}
     qmap = plan.model.info["mujoco"]
     last = {}

@@ -82,6 +82,7 @@ from urdf2links.scenes.scene import Scene, load_scene, robot_label
 from ..mujoco_side.mjcf import MjcfModel, mjcf_from_scene
 from ..mujoco_side.mujoco_mjcf import FILE_LABEL, file_route_inputs, file_runner, file_terms, mujoco_from_mjcf
 from ..mujoco_side.mujoco_constraints import with_constraints
+from ..mujoco_side.tendon_controls import tendon_actuators
 from .constraint_agreement import run_notes as constraint_run_notes
 from ..mujoco_side.mujoco_run import TIMED_REGION as MUJOCO_REGION
 from ..mujoco_side.contact_inputs import contact_energy, contact_timestep
@@ -90,7 +91,8 @@ from ..mujoco_side.mujoco_run import MujocoRun, energy_function
 from ..mujoco_side.stable_run import stable_run
 from .actuator_terms import file_actuators, merged, route1_actuators, route2_actuators
 from .scene_terms import ROUTE1_LABEL, route1_terms, route2_terms
-from .verdict import comparison_verdict, cut_scope
+from .plausibility import file_floors, plausibility
+from .verdict import comparison_verdict, cut_scope, switched_off
 
 __all__ = [
     "SceneComparison",
@@ -240,7 +242,8 @@ class SceneComparison:
         trajectory = trajectory or self._trajectory_summary()
         return comparison_verdict(trajectory["verdict"], scope=self.info["scope"], coverage=self.coverage,
                                   mujoco_integrator=self.run.integrator, mujoco_timestep=float(self.run.timestep),
-                                  blow_ups=dict(self.run.blow_ups), fallback=self.info.get("mujoco_fallback"))
+                                  blow_ups=dict(self.run.blow_ups), fallback=self.info.get("mujoco_fallback"),
+                                  off=self.info.get("switched_off", ()), plausibility=self.info.get("plausibility"))
 
     def _energy_summary(self) -> dict:
         e = self.energy
@@ -332,6 +335,7 @@ class SceneComparison:
                       "max_rel_error_route2": r2.get("max_rel_error"),
                       "route1": r1, "route2": r2},
             "verdict": verdict,
+            "plausibility": self.info["plausibility"].summary() if self.info.get("plausibility") else None,
             "coverage": self.coverage.summary(),
             "trajectory": trajectory,
             "energy": energy,
@@ -392,7 +396,7 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     else:
         route2 = route2_terms(scene, states=states, seed=seed, model=model)
     terms = {"route1": route1_terms(mj, model, scene, states=states, seed=seed), "route2": route2}
-    if plan.actuator_set.actuators:     # the actuators' forces at identical states, on both routes
+    if plan.actuator_set.actuators or tendon_actuators(plan):   # the actuators' forces at identical states, both routes
         terms["route1"] = merged(terms["route1"], route1_actuators(plan, mj, states=states, seed=seed))
         act2 = (file_actuators(plan, mf, states=states, seed=seed) if mf is not None else
                 route2_actuators(plan, scene.robot, states=states, seed=seed) if not is_xacro_path(scene.robot)
@@ -444,10 +448,17 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
                          "MJCF file does not take yet: MuJoCo's trajectory is route 1's (the project's tree as MJCF)")
     q0, qd0 = scene.initial_state(model)
     cov = coverage(q_o, qd_o, model=model)
+    floors = file_floors(mf.model) if mf is not None else []    # issue 43: the gate before any verdict
+    info["plausibility"] = plausibility(plan, t=t, runs={"urdf2links": (q_o, qd_o), "MuJoCo": (run.q, run.qd)},
+                                        balances={"urdf2links": (energy["ours_balance"], "h - h(0) - W"),
+                                                  "MuJoCo": (energy["mujoco_h"] - energy["mujoco_h"][0], "h - h(0)")},
+                                        energy_scale=info["energy_scale"], t_end=T, qd0=qd0, floors=floors)
+    info.update({"switched_off": switched_off(model, plan, mf.model if mf is not None else None),
+                 "floors": [{"name": nm, "normal": n.tolist(), "height": h} for nm, n, h in floors]})
     info.update({"trajectory_route": FILE_LABEL if file_run else ROUTE1_LABEL, "mujoco_fallback": fallback,
                  "coverage": cov, "scope": cut_scope(model, scene.load_options, plan),
                  "t_end": T, "t_end_note": t_end_note, "effects": plan.terms, "warm_up": warm,
-                 "actuators": plan.actuator_set.actuators,
+                 "actuators": plan.actuator_set.actuators + tuple(ta.actuator for ta in tendon_actuators(plan)),
                  "q0": dict(zip(model.coordinate_names, q0.tolist())),
                  "qd0": dict(zip(model.coordinate_names, qd0.tolist())),
                  "total_s": clock() - start})
@@ -524,8 +535,9 @@ def _project_at(traj, plan, t, T):
 def _energy_balances(scene, plan, mj, run, traj, EV_o, h_o, W) -> tuple[dict, dict]:
     """Both engines' balances ``h - h(0) - W`` (MuJoCo's without ``W`` when no work acts), the
     energy arrays for the report, and what the summary says about them."""
-    work_terms = any(term in plan.terms for term in ("Q", "tau", "damper", "base", "gravcomp", "actuator",
-                                                   "computed_torque", "contact"))
+    tendon_work = any(td.damping or td.actuators for td in (plan.constraints.tendons if plan.constraints else ()))
+    work_terms = tendon_work or any(term in plan.terms for term in ("Q", "tau", "damper", "base", "gravcomp", "actuator",
+                                                                    "computed_torque", "contact"))
     # issue 37: the contact's elastic energy (E81) at MuJoCo's states, which MuJoCo's own energy does not count
     V_c = contact_energy(plan, run.t, run.q) if "contact" in plan.terms else 0.0
     EV_m = run.total_energy + V_c
@@ -541,7 +553,8 @@ def _energy_balances(scene, plan, mj, run, traj, EV_o, h_o, W) -> tuple[dict, di
         what = [w for w, on in (("contact", "contact" in plan.terms), ("forces/moments", "Q" in plan.terms), ("joint torques", "tau" in plan.terms),
                                 ("dampers", "damper" in plan.terms), ("the moving base", "base" in plan.terms),
                                 ("gravcomp", "gravcomp" in plan.terms), ("actuators", "actuator" in plan.terms),
-                                ("the computed torque", "computed_torque" in plan.terms)) if on]
+                                ("the computed torque", "computed_torque" in plan.terms),
+                                ("tendons' dampers and actuators", tendon_work)) if on]     # issue 43
         note = (f"work terms present ({', '.join(what)}): both drifts use the project's work W "
                 f"(integrated along the project's trajectory): max |{sym} - {sym}(0) - W|")
         if scene.base is not None:

@@ -4,9 +4,14 @@
 the trajectory's agreement with what qualifies it, each stated in the verdict itself (not only in the
 notes):
 
-* **scope** (:func:`cut_scope`): a model whose equality constraints, tendons or mimic couplings were
-  dropped on both sides runs as the open tree of a closed (or coupled) mechanism: "open tree of a
-  closed mechanism (N constraints, M tendons dropped)";
+* **plausibility first** (:mod:`urdf2links.compare.agreement.plausibility`): a run that fails the gate on
+  either engine (a body through its ground, a joint far past a limit, a speed no robot reaches, energy
+  gained in a passive scene) gets "implausible run: <reasons>", never "agree" or "DIVERGE";
+* **scope** (:func:`cut_scope`, :func:`switched_off`, :func:`run_scope`): a model whose equality
+  constraints, tendons or mimic couplings were dropped on both sides runs as the open tree of a closed (or
+  coupled) mechanism: "open tree of a closed mechanism (N constraints, M tendons dropped)"; every effect of
+  the file switched off on both engines (contact, joint limits, friction loss, the file's springs and
+  dampers, its actuators) is named: "the model without its joint limits (6 joints: ...), ...";
 * **weak evidence** (E67, :mod:`urdf2links.scenes.coverage`): fewer than half of the coordinates moved;
 * **MuJoCo's blow-up** and the stable setting that replaced it
   (:func:`urdf2links.compare.mujoco_side.stable_run.stable_run`), or a blow-up that nothing replaced.
@@ -19,10 +24,14 @@ from __future__ import annotations
 
 from ..mujoco_side.mujoco_run import instability_note
 
-__all__ = ["cut_scope", "comparison_verdict", "FULL_SCOPE"]
+__all__ = ["cut_scope", "switched_off", "run_scope", "comparison_verdict", "FULL_SCOPE"]
 
-#: ``verdict.scope`` of a model that nothing was cut from.
+#: ``verdict.scope`` of a model that nothing was cut from and nothing switched off in.
 FULL_SCOPE = "the whole model"
+#: Names listed per switched-off effect in the scope (the JSON's ``switched_off`` lists them all).
+SHOWN_NAMES = 4
+#: Limits at or beyond this magnitude are "no limit" (as :data:`urdf2links.scenes.excitation.NO_LIMIT`).
+_NO_LIMIT = 1e6
 
 
 def cut_scope(model, load_options: dict | None = None, plan=None) -> dict:
@@ -58,6 +67,62 @@ def cut_scope(model, load_options: dict | None = None, plan=None) -> dict:
     return out
 
 
+def _effect(effect: str, words: str, names: list[str], unit: str) -> dict | None:
+    if not names:
+        return None
+    shown = ", ".join(names[:SHOWN_NAMES]) + (", ..." if len(names) > SHOWN_NAMES else "")
+    return {"effect": effect, "count": len(names), "names": list(names),
+            "text": f"{words} ({len(names)} {unit}{'s' * (len(names) != 1)}: {shown})"}
+
+
+def switched_off(model, plan, file_model=None) -> list[dict]:
+    """Every effect of the robot's file that both engines leave out of this run (issue 43), each
+    ``{effect, count, names, text}``: ``contact`` (an MJCF file's colliding geoms, its floor among them, in a
+    scene without ``[[contact]]``), ``limits`` (joints with limits: neither engine enforces them),
+    ``frictionloss`` (Coulomb friction: not modelled), ``springs`` (the file's joint stiffness or damping the
+    scene does not apply, on joints without a ``[[spring]]`` of the scene), ``actuators`` (an MJCF file's
+    actuators the scene does not name). ``file_model``: the MJCF file compiled by MuJoCo (its geoms), when
+    there is one."""
+    joints = model.info.get("joints", [])
+    scene = plan.scene
+    out = []
+    if file_model is not None and not plan.contact_set:
+        import mujoco
+
+        m = file_model
+        colliding = [g for g in range(m.ngeom) if m.geom_contype[g] or m.geom_conaffinity[g]]
+        name = {g: mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g) or f"geom {g}" for g in colliding}
+        planes = [name[g] for g in colliding if int(m.geom_type[g]) == int(mujoco.mjtGeom.mjGEOM_PLANE)]
+        floor = f" and the file's floor {', '.join(repr(p) for p in planes)}" if planes else ""
+        others = [name[g] for g in colliding if name[g] not in planes]
+        out.append(_effect("contact", "contact" + floor, planes + others, "colliding geom"))
+    out.append(_effect("limits", "joint limits", [j["name"] for j in joints if j.get("lower") is not None
+                                                  and j.get("upper") is not None and j["lower"] < j["upper"]
+                                                  and max(abs(j["lower"]), abs(j["upper"])) < _NO_LIMIT], "joint"))
+    out.append(_effect("frictionloss", "friction loss (Coulomb friction)", [j["name"] for j in joints
+                                                                            if j.get("friction")], "joint"))
+    given = {s.coordinate for s in plan.spring_set.springs}     # the scene's own spring replaces the file's
+    own = [j for j in joints if not set(j.get("coordinates") or ()) & given]
+    springs = [] if getattr(scene, "file_springs", False) else [j["name"] for j in own if j.get("stiffness")]
+    if not getattr(scene, "urdf_damping", False):
+        springs += [j["name"] for j in own if j.get("damping") and j["name"] not in springs]
+    out.append(_effect("springs", "the file's joint springs and dampers", springs, "joint"))
+    named = {a.name for a in plan.actuator_set.actuators}
+    out.append(_effect("actuators", "the file's actuators", [a["name"] for a in model.info.get("actuators", [])
+                                                             if a.get("name") not in named], "actuator"))
+    return [x for x in out if x]
+
+
+def run_scope(cut: dict, off: list[dict]) -> str:
+    """The scope in words: :data:`FULL_SCOPE`, or the cut mechanism (:func:`cut_scope`) and the effects
+    :func:`switched_off` names: "the model without its joint limits (6 joints: ...), ... (switched off on
+    both engines)"."""
+    if not cut["cut"] and not off:
+        return FULL_SCOPE
+    head = cut["text"] if cut["cut"] else "the model"
+    return head + (f" without its {', '.join(x['text'] for x in off)} (switched off on both engines)" if off else "")
+
+
 def _mujoco_part(run_integrator: str, run_timestep: float, blow_ups: dict, fallback: dict | None) -> str | None:
     """The verdict's words on MuJoCo's stability: the fallback that replaced a blow-up, or the blow-up."""
     if fallback and fallback.get("chosen"):
@@ -73,18 +138,25 @@ def _mujoco_part(run_integrator: str, run_timestep: float, blow_ups: dict, fallb
 
 
 def comparison_verdict(agreement: str, *, scope: dict, coverage, mujoco_integrator: str, mujoco_timestep: float,
-                       blow_ups: dict, fallback: dict | None) -> dict:
+                       blow_ups: dict, fallback: dict | None, off: list[dict] = (), plausibility=None) -> dict:
     """The verdict (module doc): ``agreement`` (the trajectories' sentence), ``scope`` (:func:`cut_scope`),
-    ``weak_evidence`` and ``coverage`` (:class:`~urdf2links.scenes.coverage.Coverage`'s line), ``mujoco``
-    (the fallback or blow-up sentence, or None) and ``text``, all of them in one paragraph."""
-    parts = [agreement.rstrip(".")]
+    ``off`` (:func:`switched_off`), ``weak_evidence`` and ``coverage``
+    (:class:`~urdf2links.scenes.coverage.Coverage`'s line), ``mujoco`` (the fallback or blow-up sentence, or
+    None), ``plausible`` and ``text``, all of them in one paragraph. With a ``plausibility``
+    (:class:`~urdf2links.compare.agreement.plausibility.Plausibility`) that found something, the paragraph
+    opens with "implausible run: <reasons>" in place of the agreement."""
+    implausible = plausibility is not None and not plausibility.plausible
+    parts = [plausibility.text() if implausible else agreement.rstrip(".")]
     if scope["cut"]:
         parts.append(f"as the {scope['text']}, not the whole mechanism")
+    if off:
+        parts.append(f"without its {', '.join(x['text'] for x in off)} (switched off on both engines)")
     mj = _mujoco_part(mujoco_integrator, mujoco_timestep, blow_ups, fallback)
     if mj:
         parts.append(mj)
     if coverage.weak:
         parts.append(f"WEAK EVIDENCE: {coverage.text().split(':')[0]}")
-    return {"text": "; ".join(parts) + ".", "agreement": agreement, "scope": scope["text"], "cut": scope,
+    return {"text": "; ".join(parts) + ".", "agreement": agreement, "scope": run_scope(scope, list(off)), "cut": scope,
+            "switched_off": list(off), "plausible": not implausible,
             "weak_evidence": bool(coverage.weak), "coverage": coverage.text(), "moved_fraction": coverage.moved_fraction,
             "mujoco": mj}

@@ -1,16 +1,18 @@
 """The cases of ``urdf2links check``: one per robot, pair and scene, each run alone into a :class:`CaseResult`.
 
 * a **robot** (:func:`check_robot`): loaded with its options (:func:`urdf2links.parsers.robot_file.load_robot`);
-  an error if it cannot be, a failure for each inertia finding of the audit its entry does not allow;
+  an error if it cannot be, a failure for each inertia finding of the audit its entry does not allow, and for
+  each dynamic parameter that changed since its fingerprint was accepted
+  (:mod:`~urdf2links.compare.check.fingerprint`, the baselines' ``fingerprints``);
 * a **pair** (:func:`check_pair`): both files compared part by part
-  (:func:`~urdf2links.compare.pairs.pair.compare_descriptions_of`); a failure for each difference past its
-  tolerance (:func:`~urdf2links.compare.pairs.pair.exceedances`: every kind the comparison reports, the
-  difference kinds of the pair comparison as they are, and A, G), naming the link or joint and both values;
+  (:func:`~urdf2links.compare.pairs.pair.compare_descriptions_of`); a failure for each difference its
+  ``accepted`` table does not accept by name, each accepted one that moved past its own tolerance, each accepted
+  one that is gone (:func:`~urdf2links.compare.check.accepted.judge`), and the mapped terms A, G past theirs;
 * a **scene** (:func:`check_scene`): a scene file, or a robot's default scene
-  (:func:`urdf2links.scenes.scene.default_scene`), run by both engines
+  (:func:`urdf2links.scenes.scene.default_scene`, ``q0 = "excite"`` unless the entry says), run by both engines
   (:func:`~urdf2links.compare.agreement.trajectory.compare_scene`) and checked against its accepted figures
   (:func:`~urdf2links.compare.reports.baselines.check_baseline`, key: the case's file); a scene without one
-  fails, unless the run writes the baselines.
+  fails, unless the run writes the baselines; a run with weak evidence (E67: most coordinates barely moved) fails.
 
 A case never raises: a file that cannot be used is an ``error`` (exit 2), a check that falls short a ``fail``
 (exit 1). Every problem carries its ``ratio`` (value over tolerance), the order of the summaries.
@@ -25,13 +27,13 @@ import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from urdf2links.errors import DescriptionError, DynamicsError, IntegrationError, SceneError
+from urdf2links.errors import DescriptionError, DynamicsError, IntegrationError, SceneError, URDFError
 
 from ..formatting import get, json_ready
 from .config import PairEntry, RobotEntry, SceneEntry
 
-__all__ = ["Case", "CaseResult", "Problem", "RunContext", "run_case", "cases_of", "pair_exceedances", "check_robot", "check_pair",
-           "check_scene", "STATUSES"]
+__all__ = ["Case", "CaseResult", "Problem", "RunContext", "run_case", "cases_of", "pair_summary", "check_robot",
+           "check_pair", "check_scene", "STATUSES"]
 
 #: What a case's ``status`` can be, worst last.
 STATUSES = ("pass", "fail", "error")
@@ -62,7 +64,7 @@ class Problem:
 @dataclass
 class CaseResult:
     """A case's outcome: ``status`` (:data:`STATUSES`), its ``problems``, ``lines`` (what was checked),
-    ``seconds`` and, for a scene, its comparison ``summary`` (the baselines' entry)."""
+    ``seconds``, for a scene its comparison ``summary`` (the baselines' entry), for a robot its ``fingerprint``."""
 
     case: Case
     status: str = "pass"
@@ -70,6 +72,7 @@ class CaseResult:
     lines: list[str] = field(default_factory=list)
     seconds: float = 0.0
     summary: dict | None = None
+    fingerprint: dict | None = None
 
     @property
     def worst(self) -> float:
@@ -103,11 +106,14 @@ def _load(robot: RobotEntry, **extra):
         return load_robot(robot.path, **load, **extra)
 
 
-def check_robot(res: CaseResult, robot: RobotEntry) -> None:
-    """A robot loads, and its inertia audit finds nothing its entry does not allow."""
+def check_robot(res: CaseResult, robot: RobotEntry, ctx: RunContext = RunContext()) -> None:
+    """A robot loads, its inertia audit finds nothing its entry does not allow, and its dynamic parameters are
+    those of its accepted fingerprint."""
     model = _load(robot)
     res.lines.append(f"{robot.id}: robot {model.name!r}, {model.tree.n_links} links, {model.n} coordinates, "
                      f"{len(model.audit)} inertia finding(s)")
+    for text in model.info.get("missing_files", ()):      # issue 42: a mesh the file names that is not there
+        res.problems.append(Problem(text))
     for r in model.audit:
         allowed = robot.allow is True or r.link in (robot.allow or ())
         line = f"{robot.id}: link {r.link}: inertia {r.kind}: {r.message}" + (f" ({r.fix})" if r.fix else "")
@@ -115,6 +121,24 @@ def check_robot(res: CaseResult, robot: RobotEntry) -> None:
             res.lines.append(f"allowed: {line}")
         else:
             res.problems.append(Problem(line + " (allow it with allow_inertia_findings)"))
+    _check_fingerprint(res, robot, ctx)
+
+
+def _check_fingerprint(res: CaseResult, robot: RobotEntry, ctx: RunContext) -> None:
+    from .fingerprint import ACCEPT, changes, fingerprint
+
+    res.fingerprint = now = fingerprint(robot.path, load=robot.load)
+    if ctx.writing:
+        res.lines.append(f"{robot.id}: its fingerprint accepted (--write-baselines)")
+        return
+    old = ((ctx.baselines or {}).get("fingerprints") or {}).get(robot.id)
+    if old is None:
+        res.problems.append(Problem(f"{robot.id}: no accepted fingerprint of its dynamic parameters in "
+                                    f"{ctx.source or 'the baselines'}: {ACCEPT}"))
+        return
+    found = changes(old, now)
+    res.lines.append(f"{robot.id}: {len(found)} change(s) since its fingerprint was accepted")
+    res.problems += [Problem(c.text(robot.id), c.ratio) for c in found]
 
 
 def _value(v, unit: str) -> str:
@@ -125,51 +149,71 @@ def _value(v, unit: str) -> str:
     return str(v)
 
 
-def _where(d: dict) -> str:
-    links = [n for n in dict.fromkeys(d.get("links") or ()) if n]
-    joints = [n for n in dict.fromkeys((d.get("urdf"), d.get("mjcf"))) if n]
-    out = f"link {' / '.join(links)}" if links else ""
-    if joints and joints != links:
-        out += (" (joint " if out else "joint ") + " / ".join(joints) + (")" if out else "")
-    return out or "-"
+def _row(row) -> str:
+    from .accepted import rows_toml
+
+    return rows_toml([row], indent="")[1].rstrip(",")
 
 
-def _difference_text(e: dict, pair: PairEntry) -> str:
-    """A difference past its tolerance in words: the kind, where, both values and their files, the tolerance."""
-    d = e["difference"]
-    unit = d.get("unit", "")
-    text = (f"{pair.mjcf.id}: {d['kind']} of {_where(d)}: {_value(d.get('urdf_value'), '')} in {pair.urdf.id}, "
-            f"{_value(d.get('mjcf_value'), '')} in {pair.mjcf.id} ({d.get('what', '')}); difference "
-            f"{e['value']:.4g} {unit} > tolerance {e['limit']:g}")
+def _row_text(p, pair: PairEntry) -> str:
+    """A pair's problem (:class:`~urdf2links.compare.check.accepted.RowProblem`) in words: the kind, the part,
+    both values and their files, what moved, and the row that accepts it now."""
+    u, m = pair.urdf.id, pair.mjcf.id
+    if p.what == "gone":
+        r = p.row
+        return (f"{m}: the accepted {r.kind} of {r.part} ({_value(r.urdf, '')} in {u}, {_value(r.mjcf, '')} in {m}) "
+                f"is gone: the files agree there now; remove its row from the pair's accepted table")
+    d, now = p.difference, p.replacement
+    head = f"{m}: {d['kind']} of {now.part}: {_value(now.urdf, '')} in {u}, {_value(now.mjcf, '')} in {m} ({d['what']})"
+    if p.what == "new":
+        text = (f"{head}; difference {_value(now.difference, '')} {now.unit}, not accepted; to accept it, add to "
+                f"the pair's accepted table: {_row(now)}")
+    else:
+        r = p.row
+        text = (f"{head}; accepted {_value(r.urdf, '')} and {_value(r.mjcf, '')}, difference "
+                f"{_value(r.difference, '')} {r.unit}: {p.detail} moved by {p.moved:.4g} > its tolerance "
+                f"{p.allowed:g}; to accept it, replace its row with: {_row(now)}")
     return text + (f"; known cause: {d['explanation']}" if d.get("explanation") else "")
 
 
-def pair_exceedances(pair: PairEntry) -> tuple[dict, list[dict]]:
-    """Both descriptions of ``pair`` compared part by part: the summary (JSON-ready) and what exceeds the pair's
-    tolerances (:func:`~urdf2links.compare.pairs.pair.exceedances`)."""
-    from ..pairs.pair import compare_descriptions_of, exceedances
+def pair_summary(pair: PairEntry) -> dict:
+    """Both descriptions of ``pair`` compared part by part: the summary (JSON-ready,
+    :meth:`~urdf2links.compare.pairs.pair.PairComparison.summary`)."""
+    from ..pairs.pair import compare_descriptions_of
 
     load = {k: v for k, v in pair.urdf.load.items() if k in ("floating_base", "package_dirs", "strict", "xacro_args")}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         p = compare_descriptions_of(pair.urdf.path, pair.mjcf.path, explicit_map=pair.map, load=load,
                                     states=pair.states, seed=pair.seed)
-    summary = json_ready(p.summary())
-    return summary, exceedances(summary, pair.tolerances)
+    return json_ready(p.summary())
 
 
 def check_pair(res: CaseResult, pair: PairEntry) -> None:
-    """Both descriptions compared part by part; every difference past its tolerance is a problem."""
-    summary, past = pair_exceedances(pair)
+    """Both descriptions compared part by part, against the accepted differences and the terms' tolerances."""
+    from ..pairs.differences import ROUNDING
+    from .accepted import judge
+
+    summary = pair_summary(pair)
     jm = summary["joint_mapping"]
     res.lines.append(f"{pair.urdf.id} against {pair.mjcf.id}: {len(jm['matched'])} joints matched, "
-                     f"{len(summary['description_differences'])} difference(s) above rounding")
-    for e in past:
-        limit = e["limit"]
-        ratio = math.inf if limit == 0 else e["value"] / limit
-        text = (_difference_text(e, pair) if "difference" in e
-                else f"{pair.mjcf.id}: {e['text']} (against {pair.urdf.id})")
-        res.problems.append(Problem(text, ratio))
+                     f"{len(summary['description_differences'])} difference(s) above rounding, "
+                     f"{len(pair.accepted)} accepted")
+    for p in judge(summary, pair.accepted):
+        if p.what == "new":
+            tol, diff = ROUNDING.get(p.replacement.kind, 0.0), p.replacement.difference
+            ratio = diff / tol if tol > 0 and math.isfinite(diff) else math.inf
+        else:
+            ratio = p.ratio
+        res.problems.append(Problem(_row_text(p, pair), ratio))
+    eff = summary["description_effects"]["mapped"]
+    for term, limit in pair.tolerances.items():
+        value = eff[term]["max_rel_difference"]
+        value = math.inf if value in ("inf", "nan") else float(value)
+        if not value <= limit:
+            res.problems.append(Problem(f"{pair.mjcf.id}: {term} (mapped, against {pair.urdf.id}): max relative "
+                                        f"difference {value:.4g} > tolerance {limit:g}",
+                                        math.inf if limit == 0 else value / limit))
 
 
 def _scene(entry: SceneEntry):
@@ -195,6 +239,13 @@ def check_scene(res: CaseResult, entry: SceneEntry, ctx: RunContext) -> None:
     res.summary = summary
     res.lines.append(f"{entry.id}: t = 0..{summary['t_end']:g} s, terms {get(summary, 'terms.max_rel_error'):.2e}, "
                      f"max |dq| {float(get(summary, 'trajectory.max_abs_error')):.2e}")
+    gate = summary.get("plausibility") or {}
+    if not gate.get("plausible", True):     # issue 43: no figure of an implausible run is evidence
+        res.problems.append(Problem(f"{entry.id}: {gate['text']}"))
+    cov = summary.get("coverage") or {}
+    if cov.get("weak_evidence"):
+        res.problems.append(Problem(f"{entry.id}: weak evidence: {cov.get('text', '')}; start the run where every "
+                                    "coordinate moves (q0 = \"excite\", the default) or run it longer (t_end)"))
     if ctx.writing:
         res.lines.append("accepted as its baseline (--write-baselines)")
         return
@@ -215,7 +266,7 @@ def run_case(case: Case, ctx: RunContext = RunContext()) -> CaseResult:
     start = time.perf_counter()
     try:
         if case.kind == "robot":
-            check_robot(res, case.entry)
+            check_robot(res, case.entry, ctx)
         elif case.kind == "pair":
             check_pair(res, case.entry)
         else:
@@ -223,13 +274,25 @@ def run_case(case: Case, ctx: RunContext = RunContext()) -> CaseResult:
         res.status = "fail" if res.problems else "pass"
     except _FILE_ERRORS as exc:
         res.status = "error"
-        res.problems.append(Problem(f"{case.file}: cannot be used: {type(exc).__name__}: {exc}"))
+        res.problems.append(Problem(f"{_blamed(case, exc)}: cannot be used: {type(exc).__name__}: {exc}"))
     except Exception as exc:  # noqa: BLE001 -- one case's fault must not hide the others
         res.status = "error"
         tb = "".join(traceback.format_exception(exc)[-4:])
         res.problems.append(Problem(f"{case.file}: internal error of urdf2links ({type(exc).__name__}: {exc})\n{tb}"))
     res.seconds = time.perf_counter() - start
     return res
+
+
+def _blamed(case: Case, exc: BaseException) -> str:
+    """The file an error of ``case`` belongs to: for a pair, the description its message names (a URDF's missing
+    mesh is the URDF's, issue 42), the URDF for an error of the URDF reader; else the case's file."""
+    if case.kind != "pair":
+        return case.file
+    text = str(exc)
+    for r in (case.entry.urdf, case.entry.mjcf):
+        if str(r.path) in text or r.id in text:
+            return r.id
+    return case.entry.urdf.id if isinstance(exc, URDFError) else case.file
 
 
 def cases_of(config, *, only=None) -> list[Case]:
@@ -262,8 +325,8 @@ def cases_of(config, *, only=None) -> list[Case]:
             return files(e.robot)
         return {e.path} | _scene_robot_files(e.path, config)
 
-    baselines = Path(config.baselines).resolve() in only   # a changed baselines file: every scene again
-    return [c for c in out if (baselines and c.kind == "scene") or depends(c) & only]
+    baselines = Path(config.baselines).resolve() in only   # a changed baselines file: every scene and robot again
+    return [c for c in out if (baselines and c.kind in ("scene", "robot")) or depends(c) & only]
 
 
 def _scene_robot_files(path: Path, config) -> set:

@@ -23,6 +23,8 @@ from ..reports.baselines import load_baselines, write_baselines
 from .cases import Case, CaseResult, RunContext, cases_of, run_case
 from .config import CheckConfig, ConfigError, read_config
 from .depends import changed_files
+from .fingerprint import write_fingerprints
+from .init import leave_out_scenes, no_evidence
 from .outputs import exit_status, ordered, verdict, write_junit, write_markdown
 
 __all__ = ["CheckRun", "run_check", "run_cases", "check_command"]
@@ -30,7 +32,9 @@ __all__ = ["CheckRun", "run_check", "run_cases", "check_command"]
 _BASELINES_ABOUT = (
     "Accepted figures of the scenes of `urdf2links check` (key: the scene file, or the robot file of a default "
     "scene): a scene fails when a figure grows past factor x max(baseline, floor) or its divergence comes earlier "
-    "than the baseline's by more than ln(factor) / growth rate. `urdf2links check --write-baselines` accepts a run's.")
+    "than the baseline's by more than ln(factor) / growth rate. fingerprints: each robot file's dynamic parameters "
+    "by name (compare/check/fingerprint.py); a robot fails when one changed. `urdf2links check --write-baselines` "
+    "accepts a run's.")
 
 
 @dataclass
@@ -90,8 +94,10 @@ def run_check(path=".", *, changed_since: str | None = None, jobs: int = 1, writ
     run = CheckRun(config, skipped=[c for c in every if c not in cases], note=note)
     run.results = run_cases(cases, _context(config, write), jobs=jobs, on_result=on_result)
     if write:
-        accepted = [r.summary for r in run.results if r.summary is not None]
+        accepted = [r.summary for r in run.results if r.summary is not None and no_evidence(r.summary) is None]
         run.baselines = write_baselines(accepted, config.baselines, factor=config.factor, about=_BASELINES_ABOUT)
+        write_fingerprints(run.baselines, {r.case.entry.id: r.fingerprint for r in run.results
+                                           if r.fingerprint is not None})
     return run
 
 
@@ -99,6 +105,18 @@ def _line(r: CaseResult) -> str:
     mark = {"pass": "ok   ", "fail": "FAIL ", "error": "ERROR"}[r.status]
     head = f"{mark} {r.case.kind:<5} {r.case.name} ({r.seconds:.1f} s)"
     return head + "".join(f"\n        {p.text}" for p in sorted(r.problems, key=lambda p: -p.ratio))
+
+
+def _leave_out_no_evidence(run: CheckRun) -> None:
+    """After --init: the default scenes whose runs are no evidence (:func:`~.init.no_evidence`) are left out of
+    the configuration just written, said, and not counted in this run's verdict."""
+    why = {r.case.entry.robot.id: no_evidence(r.summary) for r in run.results
+           if r.case.kind == "scene" and r.case.entry.robot is not None and no_evidence(r.summary)}
+    if why:
+        leave_out_scenes(run.config.source, why, log=err)
+        run.results = [r for r in run.results if not (r.case.kind == "scene" and r.case.entry.robot is not None
+                                                      and r.case.entry.robot.id in why)]
+        run.note += f"; {len(why)} default scene(s) left out (no evidence to accept)"
 
 
 def check_command(args) -> int:
@@ -123,10 +141,13 @@ def check_command(args) -> int:
     except ConfigError as exc:
         err(f"urdf2links check: error: {exc}")
         return 2
+    if args.init:
+        _leave_out_no_evidence(run)
     err(f"urdf2links check: {run.note}")
     if run.baselines is not None:
         err(f"wrote {shown_path(run.baselines)}: the accepted figures of "
-            f"{sum(r.summary is not None for r in run.results)} scene(s)")
+            f"{sum(r.summary is not None for r in run.results)} scene(s), the fingerprints of "
+            f"{sum(r.fingerprint is not None for r in run.results)} robot file(s)")
     if args.junit:
         err(f"wrote {shown_path(write_junit(run.results, args.junit))}")
     if args.markdown:

@@ -9,7 +9,7 @@ level; every path is relative to the configuration's folder, docs/ci.md)::
     [tool.urdf2links]
     baselines = "urdf2links-baselines.json"   # the scenes' accepted figures (check --write-baselines)
     factor = 10                               # allowed growth of a scene's figure over its baseline
-    tolerances = { mass = 1e-3 }              # every pair's tolerances per difference kind (pairs add theirs)
+    tolerances = { A = 1e-3 }                 # every pair's bounds on the mapped terms A and G (pairs add theirs)
 
     [[tool.urdf2links.robots]]
     files = ["robots/*.urdf", "robots/**/*.xml"]   # globs of .urdf, .xacro and MJCF .xml files
@@ -25,15 +25,18 @@ level; every path is relative to the configuration's folder, docs/ci.md)::
     urdf = "robots/arm.urdf"                  # the first description
     mjcf = "robots/arm.xml"                   # the second
     map = { shoulder = "joint1" }             # joints whose names differ
-    tolerances = { limits = inf, A = 1e-3 }   # per difference kind (docs/pairs.md), A and G
+    tolerances = { A = 1e-3 }                 # A and G: the mapped terms' largest relative difference
     states = 8                                # seeded states of the A and G comparison
     seed = 0
+    accepted = [                              # each difference accepted by name (compare/check/accepted.py)
+      { kind = "damping", part = "joint j1", urdf = 0, mjcf = 1, difference = 1, unit = "N m s/rad", tolerance = 1e-5 },
+    ]
 
     [[tool.urdf2links.scenes]]
     files = ["scenes/*.toml"]                 # scene files, or:
     robot = "robots/arm.urdf"                 # a robot file's default scene (its loading options from robots)
     t_end = 0.5
-    q0 = "random"
+    q0 = "excite"                             # excite (every coordinate travels its range) | random | rest
     seed = 0
 """
 
@@ -51,6 +54,7 @@ from ..corpus.rows import is_mujoco_document
 from ..pairs.differences import KINDS
 from ..pairs.pair import TERM_KEYS
 from ..reports.baselines import DEFAULT_FACTOR
+from .accepted import AcceptedRow, read_rows
 
 __all__ = ["ConfigError", "CheckConfig", "RobotEntry", "PairEntry", "SceneEntry", "find_config", "read_config",
            "CONFIG_NAME", "DEFAULT_BASELINES", "ROBOT_SUFFIXES", "SCENE_T_END"]
@@ -63,6 +67,8 @@ DEFAULT_BASELINES = "urdf2links-baselines.json"
 ROBOT_SUFFIXES = (".urdf", ".xacro", ".xml")
 #: Run length (s) of a robot's default scene unless the entry says.
 SCENE_T_END = 0.5
+#: The initial states a robot's default scene may start from (urdf2links.scenes.scene.Q0_CHOICES).
+SCENE_Q0 = ("excite", "random", "rest", "zero")
 _LOAD_KEYS = ("floating_base", "package_dirs", "xacro_args", "inertia", "mimic", "strict")
 _TOP_KEYS = ("baselines", "factor", "tolerances", "robots", "pairs", "scenes")
 
@@ -85,8 +91,9 @@ class RobotEntry:
 
 @dataclass(frozen=True)
 class PairEntry:
-    """One pair: the two robots, the joint ``map``, ``tolerances`` (the configuration's, then the pair's),
-    ``states`` and ``seed`` of the A and G comparison."""
+    """One pair: the two robots, the joint ``map``, ``tolerances`` of the terms A and G (the configuration's, then
+    the pair's), ``states`` and ``seed`` of the A and G comparison, the ``accepted`` differences by name
+    (:class:`~urdf2links.compare.check.accepted.AcceptedRow`)."""
 
     urdf: RobotEntry
     mjcf: RobotEntry
@@ -94,6 +101,7 @@ class PairEntry:
     tolerances: dict = field(default_factory=dict)
     states: int = 8
     seed: int = 0
+    accepted: tuple[AcceptedRow, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -105,7 +113,7 @@ class SceneEntry:
     path: Path | None = None
     robot: RobotEntry | None = None
     t_end: float = SCENE_T_END
-    q0: str = "random"
+    q0: str = "excite"
     seed: int = 0
 
 
@@ -173,12 +181,18 @@ def _number(where: str, key: str, v, *, low: float = 0.0) -> float:
 
 
 def _tolerances(where: str, value) -> dict:
-    """A ``{kind: number}`` table; the kinds are the pair comparison's own (issue 33's new kinds included)."""
+    """A ``{A | G: number}`` table: the mapped terms' bounds. A difference kind is refused: differences are
+    accepted by name (``accepted``), never a whole kind at once."""
     if not isinstance(value, dict):
-        _fail(where, f"tolerances must be a table {{kind = number}}, got {value!r}")
+        _fail(where, f"tolerances must be a table {{A = number, G = number}}, got {value!r}")
     for k in value:
-        if k not in KINDS and k not in TERM_KEYS:
-            _fail(where, f"tolerances: unknown kind {k!r}; the kinds are {', '.join(KINDS)}, and A, G for the terms")
+        if k in KINDS:
+            _fail(where, f"tolerances.{k}: a whole kind of difference cannot be accepted at once; accept each "
+                         "difference by name in the pair's accepted table (a failing `urdf2links check` prints the "
+                         "row to add; `urdf2links check --init` in a folder without a configuration writes them all)")
+        if k not in TERM_KEYS:
+            _fail(where, f"tolerances: unknown key {k!r}; give A and G, the mapped terms' largest relative "
+                         f"difference (differences of kind {', '.join(KINDS)} are accepted by name: accepted)")
     return {k: _number(where, f"tolerances.{k}", v) for k, v in value.items()}
 
 
@@ -259,9 +273,9 @@ def _pairs(source, root, entries, robots, tolerances) -> list[PairEntry]:
     out = []
     for i, e in enumerate(entries):
         where = _where(source, f"pairs {i + 1}")
-        bad = [k for k in e if k not in ("urdf", "mjcf", "map", "tolerances", "states", "seed")]
+        bad = [k for k in e if k not in ("urdf", "mjcf", "map", "tolerances", "states", "seed", "accepted")]
         if bad:
-            _fail(where, f"unknown key(s) {bad}; allowed: urdf, mjcf, map, tolerances, states, seed")
+            _fail(where, f"unknown key(s) {bad}; allowed: urdf, mjcf, map, tolerances, states, seed, accepted")
         mp = e.get("map", {})
         if not isinstance(mp, dict) or not all(isinstance(v, str) for v in mp.values()):
             _fail(where, "map must be a table {urdf_joint = \"mjcf_joint\"}")
@@ -269,7 +283,8 @@ def _pairs(source, root, entries, robots, tolerances) -> list[PairEntry]:
         out.append(PairEntry(_robot(robots, root, where, "urdf", e.get("urdf")),
                              _robot(robots, root, where, "mjcf", e.get("mjcf")), dict(mp), tol,
                              int(_number(where, "states", e.get("states", 8), low=1)),
-                             int(_number(where, "seed", e.get("seed", 0)))))
+                             int(_number(where, "seed", e.get("seed", 0))),
+                             read_rows(where, e.get("accepted", []), _fail)))
     return out
 
 
@@ -285,9 +300,10 @@ def _scenes(source, root, entries, robots) -> list[SceneEntry]:
             out += [SceneEntry(_relative(p, root), path=p) for pattern in _globs(where, e["files"])
                     for p in _expand(root, where, pattern, (".toml",))]
             continue
-        q0 = e.get("q0", "random")
-        if q0 not in ("zero", "random"):
-            _fail(where, f"q0 = {q0!r}: give \"zero\" or \"random\"")
+        q0 = e.get("q0", "excite")
+        if q0 not in SCENE_Q0:
+            _fail(where, f"q0 = {q0!r}: give one of {', '.join(SCENE_Q0)} (excite: every coordinate travels a good "
+                         "part of its range)")
         robot = _robot(robots, root, where, "robot", e["robot"])
         out.append(SceneEntry(robot.id, robot=robot, t_end=_number(where, "t_end", e.get("t_end", SCENE_T_END)),
                               q0=q0, seed=int(_number(where, "seed", e.get("seed", 0)))))

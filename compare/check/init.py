@@ -4,14 +4,16 @@
 folders and virtual environments skipped) and every scene file (a ``.toml`` with a ``[robot]`` table), loads
 each robot (a file that cannot be loaded is left out, and said), and guesses the pairs by robot name: a URDF
 or xacro file and an MJCF file whose ``<robot name>`` and ``<mujoco model>`` agree. The current state is
-accepted: a robot's inertia findings are allowed by link, a pair's tolerances are set just above the
-differences it has now (so a new or grown difference fails), and every scene -- each scene file and each
-robot's default scene -- is run and written as the baselines. The result is ``urdf2links.toml`` (docs/ci.md).
+accepted: a robot's inertia findings are allowed by link, each difference a pair has now is accepted by name as
+a row of its ``accepted`` table (:mod:`~urdf2links.compare.check.accepted`: kind, part, both values, its own
+tolerance; any other difference, or one that moves, fails), and the run that follows writes the baselines: every
+robot's fingerprint (:mod:`~urdf2links.compare.check.fingerprint`) and every scene -- each scene file and each
+robot's default scene, excited (``q0 = "excite"``) -- run by both engines. The result is ``urdf2links.toml``
+(docs/ci.md).
 """
 
 from __future__ import annotations
 
-import math
 import os
 import tomllib
 import warnings
@@ -20,6 +22,8 @@ from pathlib import Path
 from lxml import etree
 
 from ..corpus.rows import is_mujoco_document
+from ..pairs.differences import KINDS
+from .accepted import accepted_row, rows_toml, toml_value
 from .config import CONFIG_NAME, DEFAULT_BASELINES, SCENE_T_END, ConfigError, RobotEntry, find_config
 
 __all__ = ["find_robot_files", "robot_name", "guess_pairs", "init_config", "toml_value"]
@@ -65,42 +69,30 @@ def guess_pairs(robots: list[Path]) -> list[tuple[Path, Path]]:
     return [(u, m) for m in robots if m.name.endswith(".xml") for u in firsts if robot_name(u) == robot_name(m)]
 
 
-def toml_value(v) -> str:
-    """A TOML value: strings, booleans, numbers (``inf``), lists, inline tables."""
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, (int, float)):
-        return "inf" if v == math.inf else repr(v)
-    if isinstance(v, str):
-        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
-    if isinstance(v, dict):
-        return "{ " + ", ".join(f"{k} = {toml_value(x)}" for k, x in v.items()) + " }" if v else "{}"
-    return "[" + ", ".join(toml_value(x) for x in v) + "]"
-
-
-def _above(value: float) -> float:
-    """A tolerance just above ``value``: 1.5 times it, two significant digits (inf stays inf)."""
-    return math.inf if not math.isfinite(value) else float(f"{1.5 * value:.2g}")
-
-
-def _pair_tolerances(urdf: RobotEntry, mjcf: RobotEntry) -> tuple[dict, list[str]]:
-    """The tolerances that accept a pair as it is now, and a comment line per kind that differs."""
-    from .cases import pair_exceedances
+def _pair_rows(urdf: RobotEntry, mjcf: RobotEntry) -> tuple[list[str], list[str]]:
+    """The ``accepted`` table that accepts a pair as it is now (its lines), and a comment line per kind."""
+    from .cases import pair_summary
     from .config import PairEntry
 
-    _summary, past = pair_exceedances(PairEntry(urdf, mjcf))   # held to rounding: every difference it has now
-    now: dict[str, float] = {}
-    for e in past:
-        now[e["kind"]] = max(now.get(e["kind"], 0.0), e["value"])
-    why = [f"# accepted at init: {kind} differs now (largest {v:.3g}); its tolerance just above that"
-           for kind, v in now.items()]
-    return {kind: _above(v) for kind, v in now.items()}, why
+    summary = pair_summary(PairEntry(urdf, mjcf))
+    desc = summary["descriptions"]
+    formats = (desc["urdf"]["format"], desc["mjcf"]["format"])
+    floating = bool(summary["description_counts"]["root_pose"]["floating"])
+    diffs = [d for d in summary["description_differences"] if not (d["kind"] == "root_pose" and floating)]
+    rows = sorted((accepted_row(d, formats) for d in diffs), key=lambda r: (KINDS.index(r.kind), r.part))
+    kinds = {}
+    for d in diffs:
+        kinds[d["kind"]] = kinds.get(d["kind"], 0) + 1
+    kinds = dict(sorted(kinds.items(), key=lambda kn: KINDS.index(kn[0])))
+    why = [f"# accepted at init: {', '.join(f'{n} {k}' for k, n in kinds.items())} difference(s), each by name"
+           ] if kinds else []
+    return (rows_toml(rows) if rows else []), why
 
 
-def _lines(table: str, entries: list[tuple[list[str], dict]]) -> list[str]:
+def _lines(table: str, entries: list[tuple[list[str], dict, list[str]]]) -> list[str]:
     out = []
-    for comments, e in entries:
-        out += ["", *comments, f"[[{table}]]"] + [f"{k} = {toml_value(v)}" for k, v in e.items()]
+    for comments, e, extra in entries:
+        out += ["", *comments, f"[[{table}]]"] + [f"{k} = {toml_value(v)}" for k, v in e.items()] + extra
     return out
 
 
@@ -133,21 +125,57 @@ def init_config(folder, *, t_end: float = SCENE_T_END, log=print) -> Path:
             plain.append(rel[p])
             continue
         robots.append(([f"# accepted at init: {len(model.audit)} inertia finding(s) of {rel[p]}"],
-                       {"files": [rel[p]], "allow_inertia_findings": links}))
-    robots = [([], {"files": plain})] * bool(plain) + robots
+                       {"files": [rel[p]], "allow_inertia_findings": links}, []))
+    robots = [([], {"files": plain}, [])] * bool(plain) + robots
     pairs = []
     for u, m in guess_pairs(loaded):
-        tol, why = _pair_tolerances(RobotEntry(rel[u], u), RobotEntry(rel[m], m))
+        rows, why = _pair_rows(RobotEntry(rel[u], u), RobotEntry(rel[m], m))
         pairs.append(([f"# guessed at init: both files describe robot {robot_name(u)!r}", *why],
-                      {"urdf": rel[u], "mjcf": rel[m], **({"tolerances": tol} if tol else {})}))
-    scenes = [([], {"files": [rel[p] for p in scene_paths]})] * bool(scene_paths)
-    scenes += [([], {"robot": rel[p], "t_end": t_end, "q0": "random", "seed": 0}) for p in loaded]
+                      {"urdf": rel[u], "mjcf": rel[m]}, rows))
+    scenes = [([], {"files": [rel[p] for p in scene_paths]}, [])] * bool(scene_paths)
+    scenes += [([], {"robot": rel[p], "t_end": t_end, "q0": "excite", "seed": 0}, []) for p in loaded]
     text = ["# urdf2links check: robots, pairs and scenes checked on every change (docs/ci.md).",
             "# Written by `urdf2links check --init`, accepting the current state; edit freely.",
-            f"baselines = {toml_value(DEFAULT_BASELINES)}", "factor = 10.0", "tolerances = {}"]
+            f"baselines = {toml_value(DEFAULT_BASELINES)}", "factor = 10.0"]
     text += _lines("robots", robots) + _lines("pairs", pairs) + _lines("scenes", scenes)
     path = folder / CONFIG_NAME
     path.write_text("\n".join(text) + "\n")
     log(f"wrote {path}: {len(loaded)} robot(s), {len(pairs)} pair(s), {len(scenes) - bool(scene_paths)} default "
         f"scene(s), {len(scene_paths)} scene file(s)")
     return path
+
+
+def no_evidence(summary: dict | None) -> str | None:
+    """Why a scene's run is no evidence to accept (the plausibility gate failed, or weak evidence, E67), or None."""
+    if summary is None:
+        return None
+    gate = summary.get("plausibility") or {}
+    if not gate.get("plausible", True):
+        return gate.get("text", "implausible run")
+    cov = summary.get("coverage") or {}
+    return f"weak evidence: {cov.get('text', '')}" if cov.get("weak_evidence") else None
+
+
+def leave_out_scenes(path: Path, reasons: dict[str, str], *, log=print) -> None:
+    """Comment out, in the configuration ``path`` that --init wrote, the default scene of each robot in ``reasons``
+    (robot file -> why its run is no evidence): --init accepts the current state, and a run that is not the robot
+    (a joint flying past its limits, a body through its floor) or that moves nothing is no state to accept. The
+    block stays in the file as comments under the reason, so that a user who makes the scene plausible (a scene
+    file that holds the joints, a shorter run) sees what to bring back."""
+    lines, out, i = path.read_text().splitlines(), [], 0
+    while i < len(lines):
+        block = lines[i:i + 2]
+        robot = block[1].split("=", 1)[1].strip().strip('"') if (
+            len(block) == 2 and block[0] == "[[scenes]]" and block[1].startswith("robot = ")) else None
+        if robot not in reasons:
+            out.append(lines[i])
+            i += 1
+            continue
+        end = i + 1
+        while end < len(lines) and lines[end].strip() and not lines[end].startswith("["):
+            end += 1
+        out += [f"# left out at init: the default scene of {robot} is no evidence to accept: "
+                f"{reasons[robot][:600]}"] + [f"# {x}" for x in lines[i:end]]
+        log(f"--init: left out the default scene of {robot}: {reasons[robot][:300]}")
+        i = end
+    path.write_text("\n".join(out) + "\n")

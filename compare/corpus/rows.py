@@ -285,12 +285,15 @@ def _compared_row(row: dict, s: dict) -> None:
     row["coverage"] = {k: cov.get(k) for k in ("coordinates", "moved", "moved_fraction", "weak_evidence", "text")}
     row["scope"] = verdict.get("scope")
     row["verdict"] = verdict.get("text", tr["verdict"])
+    row["plausible"] = verdict.get("plausible", True)      # issue 43: the gate before the verdict
     row["limit_excursions"] = len(s.get("limit_excursions", []))
     row["mujoco_notes"] = list(s["mujoco"].get("notes", []))
     row["mujoco_blow_ups"] = dict(s["mujoco"]["blow_ups"])
     fallback = s["mujoco"].get("fallback")
     if (verdict.get("cut") or {}).get("cut"):     # the note column says what both engines left out
         row["reason"] = verdict["scope"] + (f"; {row['reason']}" if row.get("reason") else "")
+    if not row["plausible"]:     # issue 43: the note column opens with the gate's reasons
+        row["reason"] = s["plausibility"]["text"] + (f"; {row['reason']}" if row.get("reason") else "")
     if row["mujoco_blow_ups"]:   # the index's note column says it: the difference is MuJoCo's blow-up
         note = instability_note(row["mujoco_blow_ups"], s["mujoco"]["integrator"], s["mujoco"]["timestep"])
         row["reason"] = note + (f"; {row['reason']}" if row.get("reason") else "")

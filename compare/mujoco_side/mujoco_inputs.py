@@ -63,6 +63,7 @@ from urdf2links.scenes.scene_arrays import scene_view
 from urdf2links.scenes.scene_kernels import _actuators, computed_torque, ct_torque_at, fn_data_eval
 
 from .contact_inputs import add_contact, contact_index     # issue 37
+from .tendon_controls import add_tendon_controls     # issue 43: actuators on fixed tendons
 
 __all__ = ["CompiledInputs", "LayoutError", "mjdata_offsets", "check_offsets", "callback_pointer", "control", "CALLBACK_EFFECTS",
            "HEADER_FIELDS"]
@@ -328,8 +329,7 @@ def callback_pointer(effects=(1, 1, 1, 1, 1)):
 # --------------------------------------------------------------------------- the callback
 
 
-#: Scratch of the loads beyond the two Jacobians (6 nv): R, Rl (18), o, val, pt, x, w (15).
-_LOAD_SCRATCH = 33
+_LOAD_SCRATCH = 33      # scratch of the loads beyond the two Jacobians (6 nv): R, Rl (18), o, val, pt, x, w (15)
 
 
 @njit(cache=True, inline="always")
@@ -693,8 +693,8 @@ class CompiledInputs:
         floats = {"params": np.asarray(tree.params, float), "load_X": sc.load_X[:nl], "load_point": sc.load_point[:nl],
                   "fn_data": sc.fn_data, "scratch": np.zeros(6 * nv + _LOAD_SCRATCH + nv * nv + 2 * nv + 2 * n + 2 * n * n + 6),
                   "ball_ref": np.zeros(0), "ystate": np.zeros(0), "fball": np.zeros(0)}
-        if len(sc.act_fn) != m.nu:
-            raise ValueError(f"the MJCF model has {m.nu} actuators, the scene {len(sc.act_fn)}: build it with mjcf_from_scene")
+        if len(sc.act_fn) + len(add_tendon_controls(plan, m, ints, floats)) != m.nu:     # issue 43: tendons' too
+            raise ValueError(f"the MJCF model has {m.nu} actuators, not the scene's: build it with mjcf_from_scene")
         self._build(plan, m, d, ints, floats, offsets, extra={
             "nv": nv, "nq": m.nq, "nbody": m.nbody, "n": n, "L": L, "base_body": mj.base_body,
             "prescribe": int(mj.moving_base)})
@@ -731,8 +731,9 @@ class CompiledInputs:
                          "coord_qpos": cq, "coord_dof": cd})
             floats.update({"ball_ref": [q0[list(j.coordinates)[-3:]] for j in balls], "ystate": np.zeros(2 * model.n),
                            "fball": np.zeros(model.n)})
-        self._build(plan, m, d, ints, floats, offsets, extra={"nv": m.nv, "nq": m.nq, "nbody": m.nbody, "n": 0,
-                                                                "L": 0, "base_body": -1, "prescribe": 0}, file=True)
+        add_tendon_controls(plan, m, ints, floats)     # issue 43: the file's actuators on fixed tendons
+        self._build(plan, m, d, ints, floats, offsets, file=True, extra=dict(nv=m.nv, nq=m.nq, nbody=m.nbody, n=0, L=0,
+                                                                            base_body=-1, prescribe=0))
         return self
 
     def _build(self, plan, m, d, ints, floats, offsets, *, extra: dict, file: bool = False):
@@ -764,8 +765,7 @@ class CompiledInputs:
         self.header = np.array([values.get(k, 0) for k in HEADER_FIELDS], dtype=np.int64)
         present = (ct, len(ints["ball"]) > 0, len(ints["load_link"]) > 0, contact, bool(extra["prescribe"]))
         self.effects = tuple(1 if p else None for p in present)     # the callback's (CALLBACK_EFFECTS)
-        self.compilation = Compilation()
-        self.calls = 0
+        self.compilation, self.calls = Compilation(), 0
 
     def installed(self):
         return _Installed(self)

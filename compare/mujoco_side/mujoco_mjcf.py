@@ -7,7 +7,8 @@ run the same physics (:data:`urdf2links.parsers.mjcf_notes.MUJOCO_OFF`): contact
 (equality, limits, friction loss), actuation unless the scene names actuators (then the file's actuators
 it names keep their law, its own ``[[actuator]]`` blocks are added to the file's joints through
 ``MjSpec``, the others get zero gain and bias, and the controls come from the compiled control callback,
-:meth:`~urdf2links.compare.mujoco_side.mujoco_inputs.CompiledInputs.for_file`); tendons' stiffness and
+:meth:`~urdf2links.compare.mujoco_side.mujoco_inputs.CompiledInputs.for_file`, which feeds the file's actuators
+on fixed tendons too, issue 43: :mod:`~urdf2links.compare.mujoco_side.tendon_controls`); tendons' stiffness and
 damping, fluid forces (density, viscosity, wind) set to 0. The joints' springs and dampers are the scene's
 (:meth:`~urdf2links.scenes.scene.Scene.springs_for`: the file's own in the default scene) written into
 ``jnt_stiffness``, ``qpos_spring`` and ``dof_damping`` of hinges and slides (0 elsewhere, ball and
@@ -44,6 +45,7 @@ from .mjcf import INTEGRATORS
 from .mujoco_constraints import route2_constraints
 from .mujoco_inputs import CompiledInputs
 from .mujoco_run import _INTEGRATOR_ENUM, MujocoRun, _blow_ups, implicit_note, instability_note
+from .tendon_controls import tendon_actuators
 
 __all__ = ["MujocoFile", "mujoco_from_mjcf", "file_terms", "run_file", "file_runner", "FILE_LABEL",
            "file_route_inputs"]
@@ -65,6 +67,10 @@ class MujocoFile:
     actuator_ids: tuple = ()
     """MuJoCo's actuator id of each of the plan's actuators (the scene's own added after the file's), -1 for
     those on a ball's or free joint's angles (applied through the control callback); empty: no actuators."""
+    tendon_actuator_ids: tuple = ()
+    """MuJoCo's actuator id of each of the plan's actuators on fixed tendons (issue 43:
+    :func:`~urdf2links.compare.mujoco_side.tendon_controls.tendon_actuators`; their controls come from the
+    control callback too)."""
 
     @property
     def n(self) -> int:
@@ -204,6 +210,7 @@ def mujoco_from_mjcf(plan, *, timestep: float | None = None, integrator: str | N
                      + (", ..." if len(via_callback) > 6 else "") + "): no MuJoCo joint actuator acts on ZYX angles; "
                      "the project's law is applied through qfrc_applied from the control callback (f = E^-T tau, E50)")
     carried_acts = [a for a in acts if _carried(plan, a)]
+    tendon_acts = [ta.actuator for ta in tendon_actuators(plan)]     # issue 43: fed their controls too
     own = [a for a in carried_acts if a.source != "file"]
     table = scene.gravcomp_table(model)
     m, where = compile_mjcf(str(scene.robot), notes, edit=_edit(own, table, notes) if own or table else None)
@@ -211,10 +218,11 @@ def mujoco_from_mjcf(plan, *, timestep: float | None = None, integrator: str | N
     m.opt.gravity[:] = g
     for name in ("mjDSBL_GRAVITY", "mjDSBL_SPRING", "mjDSBL_DAMPER", "mjDSBL_ACTUATION", "mjDSBL_CLAMPCTRL"):
         m.opt.disableflags &= ~int(getattr(mujoco.mjtDisableBit, name))    # the scene says (the file's flags notwithstanding)
-    off_flags = [n for n in MUJOCO_OFF if not (acts and n == "mjDSBL_ACTUATION")]
+    off_flags = [n for n in MUJOCO_OFF if not ((acts or tendon_acts) and n == "mjDSBL_ACTUATION")]
     for name in off_flags:
         m.opt.disableflags |= int(getattr(mujoco.mjtDisableBit, name))
-    ids = dict(zip((a.name for a in carried_acts), _actuation(m, carried_acts, notes))) if acts else {}
+    kept = carried_acts + tendon_acts
+    ids = dict(zip((a.name for a in kept), _actuation(m, kept, notes))) if kept else {}
     actuator_ids = [ids.get(a.name, -1) for a in acts]
     springs = plan.spring_set.springs
     if not any(s.stiffness > 0 for s in springs) and not table:     # MuJoCo's mj_passive skips gravcomp too
@@ -250,7 +258,7 @@ def mujoco_from_mjcf(plan, *, timestep: float | None = None, integrator: str | N
         m.body_gravcomp[b] = table.get(mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, b) or f"body{b}", 0.0)
     if not np.array_equal(before, m.body_gravcomp):
         notes.append("body gravcomp set to the scene's [gravcomp]" + ("" if table else " (none: the scene does not ask)"))
-    if table and np.any(m.jnt_actgravcomp) and not acts:
+    if table and np.any(m.jnt_actgravcomp) and not (acts or tendon_acts):
         notes.append("joints with actuatorgravcomp: MuJoCo routes their gravcomp through actuation, which this run "
                      "switches off (the scene names no actuator): MuJoCo applies no gravcomp on them, the project does")
     if timestep is not None:
@@ -266,7 +274,8 @@ def mujoco_from_mjcf(plan, *, timestep: float | None = None, integrator: str | N
                     or "none") + ")"
                  + (f"; {', '.join(changed)} set to 0" if changed else "")
                  + (f"; fluid {', '.join(fluid)} set to 0" if fluid else ""))
-    return MujocoFile(model=m, source=model, gravity=g, path=where, notes=notes, actuator_ids=tuple(actuator_ids))
+    return MujocoFile(model=m, source=model, gravity=g, path=where, notes=notes, actuator_ids=tuple(actuator_ids),
+                      tendon_actuator_ids=tuple(ids[a.name] for a in tendon_acts))
 
 
 def _rel(ours, theirs, floor: float = 0.0) -> float:
@@ -339,7 +348,8 @@ def run_file(mf: MujocoFile, plan, *, t_end: float, samples: int, reference=None
     S = len(ks)
     qpos, qvel, ts = np.empty((S, m.nq)), np.empty((S, m.nv)), np.empty(S)
     engine, done = 0.0, 0
-    inputs = CompiledInputs.for_file(plan, m, d, mf.actuator_ids) if mf.actuator_ids else None
+    fed = mf.actuator_ids or mf.tendon_actuator_ids     # issue 43: controls of actuators on tendons too
+    inputs = CompiledInputs.for_file(plan, m, d, mf.actuator_ids) if fed else None
     with (inputs.installed() if inputs is not None else contextlib.nullcontext()):
         for j in range(S):
             k = int(ks[j])

@@ -65,9 +65,11 @@ from urdf2links.compilation import clock as _clock  # durations without numba's 
 from urdf2links.dynamics.loads import Wrench
 from urdf2links.dynamics.transforms import BaseState
 from urdf2links.integration.simulate import Compilation
+from urdf2links.scenes.file_constraints import tendon_actuator_names
 
 from .mjcf import INTEGRATORS, MjcfModel
 from .mujoco_inputs import CompiledInputs
+from .tendon_controls import tendon_actuators
 
 __all__ = ["MujocoRun", "run_mujoco", "mujoco_accelerations", "robot_energy", "energy_function", "ENERGY_COLUMNS",
            "PythonInputs", "INPUTS", "TIMED_REGION", "instability_note", "implicit_note"]
@@ -483,8 +485,9 @@ def _scene_inputs(mj, scene, q0, qd0, t_end, samples, base, torques, loads, ctrl
     nl = len(plan.loads) - (plan.n_gravcomp if mj.gravcomp_in_bodies else 0)
     if loads is None and nl:
         loads = plan.wrenches if nl == len(plan.loads) else (lambda t: plan.wrenches(t)[:nl])
-    if ctrl is None and plan.actuator_set.actuators:
-        ctrl = plan.ctrl
+    tas = tendon_actuators(plan)    # issue 43: the file's actuators on fixed tendons, after the scene's (with_constraints)
+    if ctrl is None and (plan.actuator_set.actuators or tas):
+        ctrl = (lambda t: np.r_[plan.ctrl(t), [ta.actuator.ctrl(t) for ta in tas]]) if tas else plan.ctrl
     return plan, q0, qd0, t_end, samples, base, torques, loads, ctrl
 
 
@@ -565,7 +568,8 @@ def _check_scene(mj: MjcfModel, scene) -> None:
         raise ValueError("the scene's springs are not the MJCF model's: build it with mjcf_from_scene")
     if (scene.base is not None) and not mj.moving_base:
         raise ValueError("the scene moves the base but the MJCF model has no base_A: build it with mjcf_from_scene")
-    if [a.name for a in mj.actuators] != [a.name for a in scene.actuators]:
+    on_tendons = tendon_actuator_names(mj.source)   # issue 43: with_constraints writes those (tendon_controls)
+    if [a.name for a in mj.actuators] != [a.name for a in scene.actuators if a.name not in on_tendons]:
         raise ValueError("the scene's actuators are not the MJCF model's: build it with mjcf_from_scene")
 
 

@@ -31,7 +31,9 @@ from .mapping import parse_map
 from .motion import pair_animation, run_pair_motion
 from .pair import check_tolerances, compare_descriptions_of
 from .pairs_file import read_pairs_file
-from .report import description_sections, write_pair_page, write_pairs_index
+from .effects import ORDER_WORDS
+from .report import (description_sections, effect_words, pair_headline, pair_markdown, part_words,
+                     write_pair_page, write_pairs_index)
 
 __all__ = ["compare_against_command", "report_pairs_command", "find_pairs_file"]
 
@@ -48,10 +50,10 @@ def _headline(s: dict, label: str) -> None:
         print(f"  counts     {n['dynamics']['count']} change the dynamics (A {float(n['dynamics']['effect']['A']):.2e}, "
               f"G {float(n['dynamics']['effect']['G']):.2e}), {n['non_dynamic']['count']} do not, root pose "
               f"{n['root_pose']['count']}")
-    print(f"  parts      {len(diffs)} difference(s) above rounding" + "".join(
-        f"\n    {d['kind']:<10} {d['urdf'] or '-'} / {d['mjcf'] or '-'}: {float(d['difference']):.3g} {d['unit']}"
-        + (" (explained)" if d.get("explanation") else "") for d in diffs[:8])
-          + (f"\n    ... {len(diffs) - 8} more" if len(diffs) > 8 else ""))
+    print(f"  parts      {len(diffs)} difference(s) above rounding" + (f"; order: {ORDER_WORDS}" if diffs else "")
+          + "".join(f"\n    {d['kind']:<10} {part_words(d)}: {float(d['difference']):.3g} {d['unit']}; effect on A, G: "
+                    f"{effect_words(d)}" + (" (explained)" if d.get("explanation") else "") for d in diffs[:8])
+          + (f"\n    ... {len(diffs) - 8} more (summary.md)" if len(diffs) > 8 else ""))
     for term in ("A", "G"):
         by = eff[term].get("explained_by")
         print(f"  {term:<10} max relative difference {float(eff[term]['max_rel_difference']):.2e}"
@@ -107,12 +109,14 @@ def compare_against_command(args) -> int:
                       max_wall=args.max_wall)
     folder = (Path(args.out) if args.out else
               DEFAULT_OUT / c.summary()["robot"] / f"{scene.name}-against-{Path(against).stem}")
-    first = description_sections(summary, animation_html=anim)
+    first = description_sections(summary, animation_html=anim, verdict=False)   # the page's headline is the pair's
     cmd = (f"urdf2links compare {shown_path(args.scene)} --against {shown_path(against)}"
            + "".join(f" --map {m}" for m in args.map or ()))
     extra = {k: summary[k] for k in summary}
+    head = pair_headline(summary)
     paths = write_report(c, folder, json_path=args.json, command=cmd, animation_fps=args.animation_fps,
-                         first_sections=first, summary_extra=extra)
+                         first_sections=first, summary_extra=extra, headline=head,
+                         first_markdown=pair_markdown(summary, title=head["title"]))
     _headline(summary, "descriptions")
     s = paths["summary"]
     print(f"  usual      the first description against MuJoCo: terms {s['terms']['max_rel_error']:.2e}, trajectory "

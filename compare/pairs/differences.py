@@ -40,9 +40,9 @@ from urdf2links.dynamics.inertia import pseudo_inertia
 from urdf2links.parsers.parts import JOINT_KINDS, RobotParts, home_poses, parts_model
 
 from .mapping import JointMapping
-from .roots import alignment, align_second, match_bodies, pose_words, root_pair
+from .roots import alignment, align_second, match_bodies, paired_bodies, pose_words, root_pair
 
-__all__ = ["Difference", "Side", "side_model", "compare_descriptions", "ROUNDING", "KINDS", "split_H"]
+__all__ = ["Difference", "Side", "side_model", "compare_descriptions", "ROUNDING", "KINDS", "PARTS", "split_H"]
 
 #: Below these a difference is rounding (MuJoCo's XML writer prints 6 significant digits): relative for
 #: mass and inertia, m for com and origin, rad for axis and turned frames, the joints' own units else.
@@ -56,6 +56,14 @@ ROUNDING = {"mass": 1e-5, "com": 1e-5, "inertia": 1e-5, "axis": 1e-5, "origin": 
 #                                   written digits), 2.3e-8 (solo12's meshes, float32 vertices)
 KINDS = tuple(ROUNDING)
 
+#: What each kind's ``urdf`` and ``mjcf`` names are: a link's (a body's) differences name it by its link, a joint's
+#: by its joint (each as its own file calls it).
+PARTS = {"mass": "link", "com": "link", "inertia": "link", "link_missing": "link", "collision": "link",
+         "root_pose": "link", "origin": "joint", "axis": "joint", "type": "joint", "limits": "joint",
+         "armature": "joint", "damping": "joint", "stiffness": "joint", "friction": "joint", "effort": "joint",
+         "velocity": "joint", "joint_missing": "joint", "coupling": "joint", "frame_missing": "frame",
+         "constraint": "equality"}
+
 
 @dataclass
 class Difference:
@@ -63,7 +71,8 @@ class Difference:
     joint names it), both values, ``difference`` (a number in ``unit``), ``what`` it is in words,
     ``links`` (the bodies), ``through`` (fixed joints of the first description merged on the other side),
     ``explanation`` (why it is expected, when known), ``undo`` (second side -> second side with this one
-    difference undone; None when it cannot be), ``effect`` (filled by the attribution)."""
+    difference undone; None when it cannot be), ``effect`` (filled by the attribution), ``frames`` (an origin's
+    frames (4, 4) on both sides, relative to the same reference: its move in m and its turn in rad apart)."""
 
     kind: str
     urdf: str | None
@@ -78,12 +87,18 @@ class Difference:
     explanation: str | None = None
     undo: Callable | None = None
     effect: dict | None = None
+    frames: tuple | None = None
 
     @property
     def ratio(self) -> float:
         """How many times the rounding level it is (the order among differences of no effect)."""
         tol = ROUNDING.get(self.kind, 0.0)
         return math.inf if tol == 0 else self.difference / tol
+
+    @property
+    def part(self) -> str:
+        """What ``urdf`` and ``mjcf`` name (:data:`PARTS`): ``link``, ``joint``, ``frame`` or ``equality``."""
+        return PARTS.get(self.kind, "part")
 
     def label(self) -> str:
         names = " / ".join(n for n in (self.urdf, self.mjcf) if n) or "-"
@@ -92,7 +107,7 @@ class Difference:
     def to_json(self) -> dict:
         out = {"kind": self.kind, "urdf": self.urdf, "mjcf": self.mjcf, "urdf_value": _plain(self.urdf_value),
                "mjcf_value": _plain(self.mjcf_value), "difference": float(self.difference), "unit": self.unit,
-               "what": self.what}
+               "what": self.what, "part": self.part}
         if self.links:
             out["links"] = list(self.links)
         if self.through:
@@ -101,6 +116,8 @@ class Difference:
             out["explanation"] = self.explanation
         if self.effect is not None:
             out["effect"] = self.effect
+        if self.frames is not None:
+            out["frames"] = {"urdf": _plain(self.frames[0]), "mjcf": _plain(self.frames[1])}
         return out
 
 
@@ -200,8 +217,9 @@ def _joint_label(b) -> str:
 class _Comparer:
     def __init__(self, U: RobotParts, M: RobotParts, mapping: JointMapping):
         self.U, self.M, self.mapping = U, M, mapping
-        self.bodies = match_bodies(U, M, [(m.urdf, m.mjcf) for m in mapping.matches])
-        self.root = mapping.root if mapping.root is not None else root_pair(U, M, self.bodies)
+        pairs = [(m.urdf, m.mjcf) for m in mapping.matches]
+        self.root = mapping.root if mapping.root is not None else root_pair(U, M, match_bodies(U, M, pairs))
+        self.bodies = paired_bodies(U, M, pairs, self.root)     # the root pair among them (structure, E63)
         self.pmU, self.pmM = parts_model(U), parts_model(M)
         self.WU = home_poses(U)
         self.WM = self._aligned(M)          # the second's world carried into the first's (E63)
@@ -290,8 +308,8 @@ class _Comparer:
 
     def _effort(self, a, b, links):
         """The largest joint force: URDF ``<limit effort>`` against what the MJCF states (``actuatorfrcrange``,
-        an actuator's ``forcerange`` times its gear, a motor's ``ctrlrange`` times its gear: the smallest;
-        ``parts._actuator_limits``), relative; inf when one side only."""
+        an actuator's ``forcerange`` times its gear, a motor's ``ctrlrange`` times its gear, through a joint or
+        a fixed tendon's coefficient: the smallest; ``parts._actuator_limits``), relative; inf when one side only."""
         if a.effort is None and b.effort is None:
             return
         u = "N m" if a.kind == "hinge" else "N"
@@ -299,7 +317,8 @@ class _Comparer:
             d, what = math.inf, f"joint force limited on one side only: {a.effort} against {b.effort} {u}"
         else:
             d = abs(a.effort - b.effort) / max(a.effort, b.effort, 1e-300)
-            what = f"effort {a.effort:.6g} {u} against +-{b.effort:.6g} {u} (actuatorfrcrange, forcerange, ctrlrange)"
+            src = " against ".join(f"{j.effort_source}" for j in (a, b) if j.effort_source) or "<limit effort>"
+            what = f"effort {a.effort:.6g} {u} against +-{b.effort:.6g} {u} ({src})"
         self.add(Difference("effort", a.name, b.name, a.effort, b.effort, d, "relative", what, links))
 
     def _velocity(self, a, b, links):
@@ -335,8 +354,7 @@ class _Comparer:
             mm, cm, Im = split_H(gm[bM])
             folded = [b.name for b in self.U.bodies if b.name != bU and not b.joints and b.name not in self.keep_u
                       and self._onto(b.name) == bU]
-            names = (_joint_label(self.bu[bU]), self._mj_label(bM))
-            links = (bU, bM)
+            names = links = (bU, bM)          # a link's mass, COM and inertia: named by its link on each side
             rel = abs(mu - mm) / max(mu, mm, 1e-300)
             self.add(Difference("mass", *names, mu, mm, rel if abs(mu - mm) > 1e-12 else 0.0, "relative",
                                 f"mass {mu:.6g} against {mm:.6g} kg" + (f" (with {', '.join(folded)} folded in)"
@@ -369,10 +387,6 @@ class _Comparer:
                 return False
             b = self.bu.get(b.parent) if b.parent is not None else None
         return True
-
-    def _mj_label(self, bM: str) -> str:
-        b = self.bm[bM]
-        return b.joints[-1].name if b.joints else bM
 
     def _fix(self, body, key, value):
         keep = set(self.keep_m)
@@ -424,7 +438,7 @@ class _Comparer:
                     + (f" (through {', '.join(through)}, merged on the other side)" if through else ""))
             self.add(Difference("origin", _joint_label(self.bu[bU]), lm.get(bM, self.bm[bM].fixed_joint or bM),
                                 PU[:3, 3], PM[:3, 3], d, unit, what, (bU, bM), tuple(through),
-                                undo=self._undo_origin(bU, bM, refU, refM)))
+                                undo=self._undo_origin(bU, bM, refU, refM), frames=(PU, PM)))
 
     def _is_ancestor(self, anc: str, body: str) -> bool:
         p = self.bm[body].parent

@@ -32,7 +32,8 @@ from urdf2links.parsers.parts import JOINT_KINDS, RobotParts, parts_model
 from .differences import Difference, Side, side_model
 from .mapping import JointMapping, coordinate_map
 
-__all__ = ["evaluate_effects", "seeded_states", "Terms"]
+__all__ = ["evaluate_effects", "seeded_states", "Terms", "effect_size", "order_differences", "ORDER_WORDS",
+           "EFFECT_ROUNDING", "NOT_IN_A_G"]
 
 
 def seeded_states(parts: RobotParts, coordinate_names, mapped: set, *, states: int = 8, seed: int = 0) -> np.ndarray:
@@ -85,11 +86,14 @@ class Terms:
         dA = dG = 0.0
         sA = sG = 0.0
         worst_A = worst_G = None
+        mapped_A, mapped_G = [], []
         for k, q in enumerate(self.Q):
             qm = q0.copy()
             qm[im] = s * q[iu] + c
             Am = m.mass_matrix(qm)[np.ix_(im, im)] * np.outer(s, s)
             Gm = m.gravity(qm)[im] * s
+            mapped_A.append(Am)
+            mapped_G.append(Gm)
             Au, Gu = self.A[k][np.ix_(iu, iu)], self.G[k][iu]
             sA += float(np.sum((Au - Am) ** 2))
             sG += float(np.sum((Gu - Gm) ** 2))
@@ -108,7 +112,7 @@ class Terms:
         return {"A": dA / scale_A if scale_A > 0 else (0.0 if dA == 0 else np.inf),
                 "G": dG / scale_G if scale_G > 0 else (0.0 if dG == 0 else np.inf),
                 "worst_A": worst_A, "worst_G": worst_G, "scale_A": scale_A, "scale_G": scale_G,
-                "sq_A": sA, "sq_G": sG}
+                "sq_A": sA, "sq_G": sG, "terms": (np.array(mapped_A), np.array(mapped_G), tuple(im))}
 
 
 def _home(parts: RobotParts, names) -> np.ndarray:
@@ -137,8 +141,20 @@ def _attribute(terms: Terms, M: RobotParts, diffs: list[Difference], *, signs: b
         after = terms.compare(d.undo(Side(M)), signs=signs)
         rows.append({"index": i, "A_after": after["A"], "G_after": after["G"],
                      "explains_A": _explained(base["sq_A"], after["sq_A"]),
-                     "explains_G": _explained(base["sq_G"], after["sq_G"])})
+                     "explains_G": _explained(base["sq_G"], after["sq_G"]),
+                     "changes_A": _change(base, after, 0), "changes_G": _change(base, after, 1)})
     return base, rows
+
+
+def _change(base: dict, after: dict, k: int) -> float:
+    """What undoing one difference alone changes in ``A`` (``k`` 0) or ``G`` (1): the largest change of an entry
+    over the states, relative to the first description's largest entry (as the figures of :meth:`Terms.compare`);
+    inf when the undo changes which coordinates map."""
+    (b, a), scale = (base["terms"][k], after["terms"][k]), base["scale_A" if k == 0 else "scale_G"]
+    if base["terms"][2] != after["terms"][2] or b.shape != a.shape:
+        return np.inf
+    d = float(np.max(np.abs(b - a))) if b.size else 0.0
+    return d / scale if scale > 0 else (0.0 if d == 0 else np.inf)
 
 
 #: The order in which every difference is undone at once: frames before what is expressed in them (an axis is
@@ -175,7 +191,8 @@ def evaluate_effects(U: RobotParts, M: RobotParts, mapping: JointMapping, diffs:
     is set), and what is left with every difference undone (module doc). JSON-ready."""
     terms = Terms(U, mapping, states=states, seed=seed)
     base, rows = _attribute(terms, M, diffs, signs=True)
-    effects = {i: {"A_after": None, "G_after": None, "explains_A": 0.0, "explains_G": 0.0} for i in range(len(diffs))}
+    effects = {i: {"A_after": None, "G_after": None, "explains_A": 0.0, "explains_G": 0.0, "changes_A": None,
+                   "changes_G": None} for i in range(len(diffs))}
     for r in rows:
         effects[r["index"]] = {k: v for k, v in r.items() if k != "index"}
     out = {"states": states, "seed": seed, "gravity": terms.gravity.tolist(),
@@ -187,30 +204,55 @@ def evaluate_effects(U: RobotParts, M: RobotParts, mapping: JointMapping, diffs:
         for r in rows_n:
             e = effects[r["index"]]
             e["as_named_explains_A"], e["as_named_explains_G"] = r["explains_A"], r["explains_G"]
+            e["as_named_changes_A"], e["as_named_changes_G"] = r["changes_A"], r["changes_G"]
     for i, d in enumerate(diffs):
         e = effects[i]
         e["undoable"] = d.undo is not None
+        e["at_rounding"] = _at_rounding(d, e)
         d.effect = e
     return out
 
 
-def effect_size(d: Difference, effects: dict) -> float:
-    """The share of ``A`` or ``G``'s difference (mapped, or as named) that undoing ``d`` removes, times the size
-    of that difference: the order of :func:`order_differences`."""
+#: An effect on ``A`` or ``G`` at or below this (relative to the term's largest entry) is rounding: MuJoCo's XML
+#: writer keeps 6 significant digits, and a URDF against MuJoCo's import of itself agrees to it
+#: (tests/test_pairs_corpus.py: below 1e-5 for every robot imported as written).
+EFFECT_ROUNDING = 1e-5
+
+#: The kinds that are no term of ``A`` or ``G`` (limits, forces, speeds, frames, collision geometry; damping,
+#: stiffness and friction act on the motion, not on A and G): their effect on A and G is nil.
+NOT_IN_A_G = ("limits", "effort", "velocity", "frame_missing", "collision", "damping", "stiffness", "friction")
+
+
+def _at_rounding(d: Difference, e: dict) -> bool | None:
+    """Whether what ``d`` does to ``A`` and ``G`` is at rounding (:data:`EFFECT_ROUNDING`): the change undoing it
+    alone makes, mapped and (with a negated axis) as named; None when it cannot be undone (its effect is in
+    ``after_undoing_all``)."""
+    if d.kind in NOT_IN_A_G or (d.kind == "root_pose" and d.undo is None):
+        return True               # a floating root's pose at home is a state: both are evaluated from the same
+    changes = [e.get(k) for k in ("changes_A", "changes_G", "as_named_changes_A", "as_named_changes_G") if k in e]
+    if d.undo is None or any(c is None for c in changes[:2]):
+        return None
+    return bool(all(c <= EFFECT_ROUNDING for c in changes if c is not None))
+
+
+def effect_size(d: Difference, effects: dict | None = None) -> float:
+    """What undoing ``d`` alone changes in ``A`` or ``G`` (the larger, relative to the term's largest entry; mapped,
+    and as named with a negated axis), 0 when that is at rounding (:data:`EFFECT_ROUNDING`), nil, or not known (a
+    type, a missing joint or link, a coupling: they cannot be undone alone): the order of :func:`order_differences`.
+    ``effects`` is not needed (kept for callers that pass it)."""
     e = d.effect or {}
-    best = 0.0
-    for view, key in (("mapped", ""), ("as_named", "as_named_")):
-        if view not in effects:
-            continue
-        for term in ("A", "G"):
-            x = e.get(f"{key}explains_{term}") or 0.0
-            size = effects[view][term]["max_rel_difference"]
-            if np.isfinite(size):
-                best = max(best, x * size)
-    return best
+    values = [e.get(k) for k in ("changes_A", "changes_G", "as_named_changes_A", "as_named_changes_G")]
+    best = max([float(v) for v in values if v is not None] + [0.0])
+    return 0.0 if best <= EFFECT_ROUNDING else best
 
 
-def order_differences(diffs: list[Difference], effects: dict | None) -> list[Difference]:
-    """Largest first: by what undoing each does to ``A`` and ``G``, then by how many times its rounding level
-    it is (damping, limits and the like change no term)."""
-    return sorted(diffs, key=lambda d: (-(effect_size(d, effects) if effects else 0.0), -d.ratio))
+#: The order of every printed list of differences, in words (stdout, summary.md, the HTML).
+ORDER_WORDS = ("largest effect on A and G first (what undoing each alone changes in A or G, relative to the "
+               "term's largest entry; 0 at rounding or when it cannot be undone alone), then by how many times its "
+               "rounding level the difference is")
+
+
+def order_differences(diffs: list[Difference], effects: dict | None = None) -> list[Difference]:
+    """:data:`ORDER_WORDS`: by :func:`effect_size`, then by :attr:`Difference.ratio` (damping, limits and the like
+    change no term), then by kind and names (a stable order)."""
+    return sorted(diffs, key=lambda d: (-effect_size(d), -d.ratio, d.kind, str(d.urdf), str(d.mjcf)))

@@ -6,7 +6,9 @@ first description (``urdf``: the file given first) to those of the second (``mjc
 with ``--against``): first the pairs ``--map urdf_joint=mjcf_joint`` gives, then equal names, then by
 structure: an unmatched joint whose nearest moving ancestor joint is matched takes the unmatched joint
 of the same kind under the matched ancestor whose axis and anchor at home are nearest (both
-descriptions' home poses, in the world), rounds repeated until nothing more matches.
+descriptions' home poses, in the world aligned at the root pair, :mod:`~urdf2links.compare.pairs.roots`),
+rounds repeated until nothing more matches. Before any joint matches, the root pair is the fixed roots when
+both sides have one, else the pair of top bodies whose alignment lets every joint match best.
 
 A matched pair of one-coordinate joints maps its coordinate as ``q_mjcf = sign q_urdf + offset``
 (docs/equations.md (E52)): ``sign`` -1 when the axes point opposite ways in the world at home (a negated
@@ -152,12 +154,31 @@ def map_joints(urdf: RobotParts, mjcf: RobotParts, *, explicit: dict | None = No
             taken.add(a)
     WU, WM = home_poses(urdf), home_poses(mjcf)
     root = root_pair(urdf, mjcf, match_bodies(urdf, mjcf, [(a, b) for a, (b, _) in pairs.items()]))
-    axes_u = _world_axes(urdf, W=WU)
-    axes_m = _world_axes(mjcf, alignment(urdf, mjcf, root, WU, WM), W=WM)
-    reach = max([float(np.linalg.norm(p)) for _, p in axes_u.values()] + [1e-3])
     parent_u = {a: moving_parent(urdf, a) for a in ju}
     parent_m = {b: moving_parent(mjcf, b) for b in jm}
-    changed = True
+    axes_u = _world_axes(urdf, W=WU)
+    if root.urdf is None:               # nothing matched yet, no fixed roots on both sides: the best top pair
+        root = _top_alignment(urdf, mjcf, (pairs, taken), ju, jm, parent_u, parent_m, axes_u, WU, WM)
+    axes_m = _world_axes(mjcf, alignment(urdf, mjcf, root, WU, WM), W=WM)
+    _by_structure(pairs, taken, ju, jm, parent_u, parent_m, axes_u, axes_m)
+    final = root_pair(urdf, mjcf, match_bodies(urdf, mjcf, [(a, b) for a, (b, _) in pairs.items()]))
+    if final != root:
+        axes_m = _world_axes(mjcf, alignment(urdf, mjcf, final, WU, WM), W=WM)
+    matches = []
+    for a in ju:                       # in the first description's tree order
+        if a in pairs:
+            b, by = pairs[a]
+            s, c = _sign_offset(ju[a], jm[b], axes_u[a][0], axes_m[b][0])
+            matches.append(JointMatch(a, b, by, ju[a].kind, jm[b].kind, s, c))
+    return JointMapping(tuple(matches), tuple(a for a in ju if a not in pairs), tuple(b for b in jm if b not in taken),
+                        final)
+
+
+def _by_structure(pairs: dict, taken: set, ju, jm, parent_u, parent_m, axes_u, axes_m) -> float:
+    """Match by structure, rounds repeated until nothing more matches (module doc): ``pairs`` and ``taken`` are
+    filled in; the summed score of the matches made (angle between the axes + anchors' distance over the reach)."""
+    reach = max([float(np.linalg.norm(p)) for _, p in axes_u.values()] + [1e-3])
+    total, changed = 0.0, True
     while changed:
         changed = False
         for a in ju:
@@ -175,20 +196,30 @@ def map_joints(urdf: RobotParts, mjcf: RobotParts, *, explicit: dict | None = No
                 return angle + float(np.linalg.norm(pa - pb)) / reach
 
             best = min(cands, key=score)
+            total += score(best)
             pairs[a] = (best, "structure")
             taken.add(best)
             changed = True
-    final = root_pair(urdf, mjcf, match_bodies(urdf, mjcf, [(a, b) for a, (b, _) in pairs.items()]))
-    if final != root:
-        axes_m = _world_axes(mjcf, alignment(urdf, mjcf, final, WU, WM), W=WM)
-    matches = []
-    for a in ju:                       # in the first description's tree order
-        if a in pairs:
-            b, by = pairs[a]
-            s, c = _sign_offset(ju[a], jm[b], axes_u[a][0], axes_m[b][0])
-            matches.append(JointMatch(a, b, by, ju[a].kind, jm[b].kind, s, c))
-    return JointMapping(tuple(matches), tuple(a for a in ju if a not in pairs), tuple(b for b in jm if b not in taken),
-                        final)
+    return total
+
+
+def _top_alignment(urdf, mjcf, matched, ju, jm, parent_u, parent_m, axes_u, WU, WM) -> RootPair:
+    """With nothing matched and no fixed root on both sides (MuJoCo's import fuses a hand's static palm into the
+    world: its fingers hang from the world), the pair of bodies of the first description's first top joint and
+    one of the second's top joints whose alignment (E63) lets every joint match by structure best (``matched``:
+    the pairs and taken joints so far, copied for each trial)."""
+    tops = [a for a in ju if parent_u[a] is None]
+    if not tops:
+        return RootPair(None, None)
+    body_u, body_m = {j.name: b.name for j, b in urdf.joints}, {j.name: b.name for j, b in mjcf.joints}
+    best, best_score = RootPair(None, None), np.inf
+    for b in (b for b in jm if parent_m[b] is None and jm[b].kind == ju[tops[0]].kind):
+        trial = RootPair(body_u[tops[0]], body_m[b])
+        axes_m = _world_axes(mjcf, alignment(urdf, mjcf, trial, WU, WM), W=WM)
+        score = _by_structure(dict(matched[0]), set(matched[1]), ju, jm, parent_u, parent_m, axes_u, axes_m)
+        if score < best_score:
+            best, best_score = trial, score
+    return best
 
 
 def coordinate_map(urdf: RobotParts, mjcf: RobotParts, mapping: JointMapping, *, signs: bool = True):

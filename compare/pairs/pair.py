@@ -30,7 +30,7 @@ from .differences import KINDS, ROUNDING, Difference, compare_descriptions
 from .effects import evaluate_effects, order_differences
 from .explanations import explain
 from .mapping import JointMapping, map_joints
-from .roots import match_bodies
+from .roots import paired_bodies
 
 __all__ = ["PairComparison", "compare_descriptions_of", "TERM_KEYS", "check_tolerances", "exceedances", "DYNAMIC_KINDS"]
 
@@ -160,7 +160,7 @@ def compare_descriptions_of(urdf, mjcf, *, explicit_map: dict | None = None, loa
     M = robot_parts(mjcf, **{k: v for k, v in load.items() if k != "floating_base"})
     mapping = map_joints(U, M, explicit=explicit_map)
     diffs, below = compare_descriptions(U, M, mapping)
-    bodies = match_bodies(U, M, [(m.urdf, m.mjcf) for m in mapping.matches])
+    bodies = paired_bodies(U, M, [(m.urdf, m.mjcf) for m in mapping.matches], mapping.root)
     collisions, below["collision"] = collision_differences(U, M, bodies, load=load)
     diffs += collisions
     diffs += constraint_differences(urdf, mjcf)      # issue 36: loops closed on one side only

@@ -5,7 +5,10 @@
   motion" (both robots animated, their divergence): the first sections of ``urdf2links compare A
   --against B``'s report (the usual report of the first file against MuJoCo follows) and the whole of
   a pair's page in ``urdf2links report --pairs``;
-* :func:`pair_markdown`: the same as Markdown (``summary.md``);
+* :func:`pair_markdown`: the same as Markdown (``summary.md``; that of ``compare A --against B`` too, before the
+  usual report's), :func:`pair_headline`: the pair's own headline on ``compare A --against B``'s page;
+* every list of differences says its order (:data:`~urdf2links.compare.pairs.effects.ORDER_WORDS`), and each
+  difference what undoing it alone does to A and G, or that this is at rounding (:func:`effect_words`);
 * :func:`write_pair_page`: a pair's ``report.html``, ``summary.json`` and ``summary.md``;
 * :func:`write_pairs_index`: ``index.html`` and ``index.md`` over the pairs, with each pair's verdict
   against its tolerances.
@@ -20,8 +23,10 @@ from pathlib import Path
 import numpy as np
 
 from ..formatting import fmt, fmt_md, fmt_t, json_ready
+from .effects import NOT_IN_A_G, ORDER_WORDS
 
-__all__ = ["description_sections", "pair_markdown", "write_pair_page", "write_pairs_index", "CSS"]
+__all__ = ["description_sections", "pair_markdown", "pair_headline", "write_pair_page", "write_pairs_index", "CSS",
+           "effect_words", "part_words"]
 
 CSS = """
 body { font-family: -apple-system, 'Segoe UI', Helvetica, Arial, sans-serif; margin: 0 auto; max-width: 1180px;
@@ -68,6 +73,50 @@ def _share(x) -> str:
     if x is None or (isinstance(x, float) and not np.isfinite(x)):
         return "&ndash;"
     return f"{100 * float(x):.0f}%" if abs(float(x)) >= 0.005 else "0%"
+
+
+def effect_words(d: dict) -> str:
+    """What a difference (its JSON) does to A and G, in words: ``none`` (damping, limits, frames: no term of A or
+    G), ``at rounding``, ``A 6.7e-02, G 7.2e-02`` (what undoing it alone changes, relative to the term's largest
+    entry), or ``not undoable alone``."""
+    e = d.get("effect") or {}
+    if d.get("kind") in NOT_IN_A_G:
+        return "none: not a term of A or G"
+    if d.get("kind") == "root_pose" and e.get("at_rounding") is True and not e.get("undoable", True):
+        return "none: a floating root's pose is a state"
+    if e.get("at_rounding") is True:
+        return "at rounding"
+    if e.get("at_rounding") is None:
+        return "not undoable alone (see after undoing all)" if e else "not evaluated"
+    changes = [(t, _number(e.get(f"changes_{t}")), _number(e.get(f"as_named_changes_{t}"))) for t in ("A", "G")]
+    return ", ".join(f"{t} {fmt_md(a)}" + (f" (as named {fmt_md(n)})" if n is not None and a is not None and n > a
+                                           else "") for t, a, n in changes)
+
+
+def _number(x) -> float | None:
+    """A figure of a summary (``"inf"`` as JSON writes it) as a float; None stays None."""
+    return None if x is None else float(x)
+
+
+def part_words(d: dict) -> str:
+    """The part a difference names, as each file calls it: ``link forearm_link / forearm_link``."""
+    names = " / ".join(str(n) for n in (d.get("urdf"), d.get("mjcf")) if n) or "-"
+    return f"{d.get('part', 'part')} {names}"
+
+
+def pair_headline(s: dict, failures=None) -> dict:
+    """The pair's own headline on ``compare A --against B``'s page (``{"title", "html"}``): the two files and the
+    verdict on them, before the first file's comparison against MuJoCo."""
+    d = s["descriptions"]
+    box = _verdict(s, failures)
+    m = s.get("description_motion")
+    if m and m.get("project"):
+        t = m["project"]["divergence_time"]
+        box = box[:-len("</div>")] + (f"<br><b>In motion</b> (urdf2links, t = 0..{m['t_end']:g} s): the descriptions "
+                                      f"{fmt(m['project']['max_divergence'])} apart at most (rad or m)"
+                                      + (f", past {m['threshold']:g} at t = {fmt_t(t)}" if t is not None else "")
+                                      + ".</div>")
+    return {"title": f"{d['urdf']['file']} against {d['mjcf']['file']}: two descriptions of one robot", "html": box}
 
 
 def _verdict(s: dict, failures) -> str:
@@ -128,18 +177,20 @@ def _differences_html(s: dict) -> list[str]:
     rows = []
     for i, d in enumerate(diffs[:200], 1):
         e = d.get("effect") or {}
-        rows.append([str(i), _E(d["kind"]), f"<code>{_E(str(d['urdf'] or '-'))}</code>",
+        rows.append([str(i), _E(d["kind"]) + f" <span class='small'>({_E(d.get('part', ''))})</span>",
+                     f"<code>{_E(str(d['urdf'] or '-'))}</code>",
                      f"<code>{_E(str(d['mjcf'] or '-'))}</code>", _value(d["urdf_value"]), _value(d["mjcf_value"]),
-                     f"{fmt(d['difference'], 3)} {_E(d['unit'])}", _share(e.get("explains_A")), _share(e.get("explains_G")),
+                     f"{fmt(d['difference'], 3)} {_E(d['unit'])}", _E(effect_words(d)),
+                     _share(e.get("explains_A")), _share(e.get("explains_G")),
                      _E(d["what"]) + (f"<br><span class='small'>through {_E(', '.join(d['through']))}</span>"
                                       if d.get("through") else "")
                      + (f"<br><span class='small'>why: {_E(d['explanation'])}</span>" if d.get("explanation") else "")])
     more = f"<p class='small'>{len(diffs) - 200} more in summary.json.</p>" if len(diffs) > 200 else ""
-    return ["<p>Largest first: by what undoing each one does to A and G, then by how far past rounding it is. "
-            "Values in each kind's unit; inertias shown by their diagonal (the whole tensor in summary.json). "
+    return [f"<p>Order: {_E(ORDER_WORDS)}. Each names its part as its file calls it (a link by its link, a joint by "
+            "its joint). Values in each kind's unit; inertias shown by their diagonal (the whole tensor in summary.json). "
             f"{below} more quantities were within rounding.</p>",
             _table(rows, ["#", "kind", "first", "second", "first's value", "second's value", "difference",
-                          "explains A", "explains G", "what"], num_cols=(6, 7, 8)), more]
+                          "effect on A, G", "explains A", "explains G", "what"], num_cols=(6, 8, 9)), more]
 
 
 def _effects_html(s: dict) -> list[str]:
@@ -195,12 +246,14 @@ def _motion_html(motion: dict, animation_html: str | None) -> list[str]:
     return parts
 
 
-def description_sections(s: dict, *, animation_html: str | None = None, failures=None) -> list[str]:
+def description_sections(s: dict, *, animation_html: str | None = None, failures=None,
+                         verdict: bool = True) -> list[str]:
     """The HTML sections of a pair (module doc) from its summary ``s`` (``joint_mapping``,
     ``description_differences``, ``description_effects``, and ``description_motion`` when run);
-    ``failures``: the tolerance check's lines (None: no check)."""
+    ``failures``: the tolerance check's lines (None: no check); ``verdict``: open with the pair's verdict (False
+    when the page's headline already is it, :func:`pair_headline`)."""
     d = s["descriptions"]
-    parts = ["<h2>Two descriptions</h2>", _verdict(s, failures),
+    parts = ["<h2>Two descriptions</h2>", _verdict(s, failures) if verdict else "",
              _table([["first", f"<code>{_E(d['urdf']['file'])}</code>", d["urdf"]["format"], _E(d["urdf"]["name"]),
                       str(d["urdf"]["bodies"]), str(d["urdf"]["joints"])],
                      ["second", f"<code>{_E(d['mjcf']['file'])}</code>", d["mjcf"]["format"], _E(d["mjcf"]["name"]),
@@ -227,12 +280,17 @@ def pair_markdown(s: dict, *, title: str, failures=None) -> str:
                      + (f", {_share(by['explains'])} explained by {by['kind']} of {by['urdf'] or by['mjcf']}" if by else ""))
     if failures is not None:
         lines += ["", "Tolerances: " + ("pass" if not failures else "FAIL: " + "; ".join(failures))]
-    lines += ["", "| # | kind | first | second | difference | what |", "|---|---|---|---|---|---|"]
+    lines += ["", f"Differences above rounding: {len(s['description_differences'])}. Order: {ORDER_WORDS}.", "",
+              "| # | kind | part | first | second | difference | effect on A, G | what |",
+              "|---|---|---|---|---|---|---|---|"]
     for i, d in enumerate(s["description_differences"][:100], 1):
-        lines.append(f"| {i} | {d['kind']} | {d['urdf'] or '-'} | {d['mjcf'] or '-'} | {fmt_md(d['difference'], 3)} "
-                     f"{d['unit']} | {d['what']}" + (f" (why: {d['explanation']})" if d.get("explanation") else "") + " |")
+        lines.append(f"| {i} | {d['kind']} | {d.get('part', '')} | {d['urdf'] or '-'} | {d['mjcf'] or '-'} | "
+                     f"{fmt_md(d['difference'], 3)} {d['unit']} | {effect_words(d)} | {d['what']}"
+                     + (f" (why: {d['explanation']})" if d.get("explanation") else "") + " |")
+    if len(s["description_differences"]) > 100:
+        lines.append(f"| ... | {len(s['description_differences']) - 100} more in summary.json | | | | | | |")
     if not s["description_differences"]:
-        lines.append("| - | none above rounding | | | | |")
+        lines.append("| - | none above rounding | | | | | | |")
     m = s.get("description_motion")
     if m:
         lines += ["", f"Motion, t = 0..{m['t_end']:g} s: divergence urdf2links {fmt_md((m['project'] or {}).get('max_divergence'))}"

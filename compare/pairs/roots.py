@@ -30,7 +30,7 @@ from urdf2links.dynamics.transforms import link_transform
 from urdf2links.parsers.mjcf_state import matrix_to_quat
 from urdf2links.parsers.parts import RobotParts, home_poses
 
-__all__ = ["RootPair", "match_bodies", "root_pair", "alignment", "is_free_root", "align_second", "pose_words"]
+__all__ = ["RootPair", "match_bodies", "root_pair", "fixed_root", "paired_bodies", "alignment", "is_free_root", "align_second", "pose_words"]
 
 
 @dataclass(frozen=True)
@@ -76,8 +76,48 @@ def is_free_root(parts: RobotParts, body: str | None) -> bool:
     return b.parent is None and len(b.joints) == 1 and b.joints[0].kind == "free"
 
 
+def _ancestors(parts: RobotParts, body: str) -> list[str]:
+    """``body`` and every body above it, nearest first."""
+    parent = {b.name: b.parent for b in parts.bodies}
+    out = [body]
+    while parent[out[-1]] is not None:
+        out.append(parent[out[-1]])
+    return out
+
+
+def fixed_root(parts: RobotParts) -> str | None:
+    """The deepest body above (or at) every moving body when neither it nor a body above it has a joint: the
+    body the robot is fixed by (a hand's palm, a fixed humanoid's pelvis, an arm's base); None when a joint
+    moves it (a floating base, a chain whose first body moves) or nothing moves."""
+    common = None
+    for b in parts.bodies:
+        if b.joints:
+            a = _ancestors(parts, b.name)
+            common = a if common is None else [x for x in common if x in a]
+    if not common:
+        return None
+    if any(parts.body(x).joints for x in common):
+        return None
+    return common[0]
+
+
 def root_pair(U: RobotParts, M: RobotParts, bodies: dict) -> RootPair:
-    """The topmost matched pair of ``bodies`` (module doc)."""
+    """The root pair (module doc): the topmost matched pair of ``bodies`` when it sits at or above both
+    sides' fixed roots (or either side has none), else the fixed roots (unless ``bodies`` pairs either of
+    them with another body: then the names' pair stands)."""
+    top = _topmost(U, M, bodies)
+    fu, fm = fixed_root(U), fixed_root(M)
+    if fu is None or fm is None:
+        return top
+    if top.urdf is not None and top.urdf in _ancestors(U, fu) and top.mjcf in _ancestors(M, fm):
+        return top
+    if bodies.get(fu, fm) != fm or any(v == fm and k != fu for k, v in bodies.items()):
+        return top
+    return RootPair(fu, fm, (False, False))
+
+
+def _topmost(U: RobotParts, M: RobotParts, bodies: dict) -> RootPair:
+    """The first matched body of ``bodies`` in the first description's tree order with no matched ancestor."""
     parent = {b.name: b.parent for b in U.bodies}
     for b in U.bodies:
         if b.name not in bodies:
@@ -89,6 +129,16 @@ def root_pair(U: RobotParts, M: RobotParts, bodies: dict) -> RootPair:
             rm = bodies[b.name]
             return RootPair(b.name, rm, (is_free_root(U, b.name), is_free_root(M, rm)))
     return RootPair(None, None)
+
+
+def paired_bodies(U: RobotParts, M: RobotParts, pairs, root: RootPair | None = None) -> dict[str, str]:
+    """:func:`match_bodies` with the root pair added (``root``; by :func:`root_pair` when None): the bodies
+    both descriptions have, the roots among them even when their names differ."""
+    bodies = match_bodies(U, M, pairs)
+    root = root_pair(U, M, bodies) if root is None else root
+    if root.urdf is not None and root.urdf not in bodies and root.mjcf not in bodies.values():
+        bodies[root.urdf] = root.mjcf
+    return bodies
 
 
 def alignment(U: RobotParts, M: RobotParts, root: RootPair | None, WU=None, WM=None) -> np.ndarray:

@@ -68,7 +68,8 @@ def write_baselines(summaries, path, *, factor: float | None = None, about: str 
     {"runs": [entry, ...]}}}``, one entry (:func:`baseline_entry`) per accepted run length and MuJoCo
     setting. Runs already in an existing file are kept unless this run replaces them (same
     ``t_end``, integrator and timestep): a capped run and a whole-scene run can both be accepted.
-    ``about`` replaces the file's description (a corpus' baselines say how they were made)."""
+    ``about`` replaces the file's description (a corpus' baselines say how they were made). Keys of an existing
+    file that are not these (``urdf2links check``'s ``fingerprints``) are kept."""
     path = Path(path)
     old = load_baselines(path) if path.is_file() else {"scenes": {}}
     scenes = {k: {"runs": _runs(v)} for k, v in old.get("scenes", {}).items()}
@@ -88,6 +89,7 @@ def write_baselines(summaries, path, *, factor: float | None = None, about: str 
         "floors": {k: (f"{v[1]:g} x energy.scale" if isinstance(v, tuple) else v) for k, v in CHECKED_FIGURES.items()},
         "scenes": dict(sorted(scenes.items())),
     }
+    data.update({k: v for k, v in old.items() if k not in data})
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(json_ready(data), indent=2) + "\n")
     return path

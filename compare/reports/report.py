@@ -32,6 +32,7 @@ from .contact_section import contact_markdown, contact_section
 from .coverage import coverage_cell, coverage_html, coverage_markdown, weak_evidence
 from .motion import motion_section
 from .plots import plot_coordinates, plot_energy, plot_error, plot_overview, plot_terms
+from .stops import stops_html, stops_md
 
 __all__ = ["write_report", "render_html", "render_markdown", "write_index"]
 
@@ -96,21 +97,34 @@ def _headline(s) -> list:
     return head
 
 
-def _top(s, check, index_link, index_label="all scenes") -> list[str]:
-    """Title, verdict, notes on the run length and the baseline check, headline figures, setup."""
+def _gate_line(p: dict) -> str:
+    """The plausibility gate in one line: what it checked, and whether both runs passed (docs/reports.md)."""
+    return (("passed" if p["plausible"] else "FAILED (the verdict says why)") + " on both engines' runs: "
+            + "; ".join(p["checks"]))
+
+
+def _top(s, check, index_link, index_label="all scenes", headline=None) -> list[str]:
+    """Title, verdict, notes on the run length and the baseline check, headline figures, setup. ``headline``
+    (``{"title", "html"}``): the page's own title and headline when the comparison is not its subject (a pair of
+    descriptions): the comparison against MuJoCo follows under its own heading."""
     e = html.escape
     tr, mj, pr = s["trajectory"], s["mujoco"], s["project"]
-    title = f"{s['robot']} / {s['scene']}: urdf2links against MuJoCo"
-    verdict_cls = ("box chaos" if s["chaotic"] or weak_evidence(s) else
+    title = headline["title"] if headline else f"{s['robot']} / {s['scene']}: urdf2links against MuJoCo"
+    implausible = not (s.get("plausibility") or {}).get("plausible", True)     # issue 43: the gate first
+    verdict_cls = ("box bad" if implausible else "box chaos" if s["chaotic"] or weak_evidence(s) else
                    ("box bad" if tr["divergence_time"] is not None else "box"))
     parts = [f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>{e(title)}</title>"
              f"<style>{_CSS}</style></head><body>",
              f"<p class='small'><a href='{e(index_link)}'>&larr; {e(index_label)}</a></p>" if index_link else "",
-             f"<h1>{e(s['robot'])} / {e(s['scene'])}</h1>",
+             *([f"<h1>{e(title)}</h1>", headline["html"],
+                f"<h2>The first description against MuJoCo: {e(s['robot'])} / {e(s['scene'])}</h2>"] if headline else
+               [f"<h1>{e(s['robot'])} / {e(s['scene'])}</h1>"]),
              f"<p class='sub'>{e(s['description'])}</p>",
              f"<div class='{verdict_cls}'><b>Trajectories:</b> {e(tr['verdict'])}</div>"]
     if s.get("coverage"):
         parts.append(f"<p class='sub'><b>Coverage:</b> {e(s['coverage']['text'])} (section 4).</p>")
+    if s.get("plausibility"):       # issue 43: what the gate checked, before any verdict
+        parts.append(f"<p class='sub'><b>Plausibility:</b> {e(_gate_line(s['plausibility']))}.</p>")
     if s.get("t_end_note"):
         parts.append(f"<div class='box chaos'>{e(s['t_end_note'])}</div>")
     if check is not None:
@@ -279,7 +293,7 @@ def _closing_sections(s, command) -> list[str]:
 
 def render_html(c, summary: dict, *, command: str | None = None, check: "CheckResult | None" = None,
                 index_link: str | None = None, animation_fps: float = DEFAULT_FPS, index_label: str = "all scenes",
-                light: bool = False, extra_sections=(), first_sections=()) -> str:
+                light: bool = False, extra_sections=(), first_sections=(), headline=None) -> str:
     """The scene's self-contained report page (plots as base64 PNG, the motion section's viewer
     inlined); ``index_link``: relative address of the index page, if any, shown as ``index_label``;
     ``animation_fps``: frames per second of simulated time of the motion section (0: no motion
@@ -287,9 +301,10 @@ def render_html(c, summary: dict, *, command: str | None = None, check: "CheckRe
     (:func:`~urdf2links.compare.reports.plots.plot_overview`: the difference and both energy balances)
     instead of the four plots, for pages made by the dozen (a corpus); ``extra_sections``: HTML
     fragments put after the energy section; ``first_sections``: HTML fragments put first, after the headline
-    figures (a comparison of two descriptions, :mod:`urdf2links.compare.pairs.report`)."""
+    figures (a comparison of two descriptions, :mod:`urdf2links.compare.pairs.report`), whose ``headline``
+    (``{"title", "html"}``) is then the page's own."""
     motion = [] if light else motion_section(c, fps=animation_fps)
-    parts = (_top(summary, check, index_link, index_label) + list(first_sections) + motion + _terms_section(summary, light)
+    parts = (_top(summary, check, index_link, index_label, headline) + list(first_sections) + motion + _terms_section(summary, light)
              + _trajectory_section(c, summary, light) + _energy_section(c, summary, light)
              + coverage_html(summary, 4, _rows) + list(extra_sections)
              + contact_section(c, summary)      # issue 37
@@ -305,7 +320,10 @@ def render_markdown(s: dict) -> str:
     lines = [f"# {s['robot']} / {s['scene']}: urdf2links against MuJoCo", "", s["description"], ""]
     if s.get("t_end_note"):
         lines += [f"> {s['t_end_note']}", ""]
-    lines += [f"**Trajectories:** {tr['verdict']}", "", *coverage_markdown(s),
+    lines += [f"**Trajectories:** {tr['verdict']}", ""]
+    if s.get("plausibility"):       # issue 43: what the gate checked, before any verdict
+        lines += [f"**Plausibility:** {_gate_line(s['plausibility'])}.", ""]
+    lines += [*coverage_markdown(s),
               f"t = 0..{s['t_end']:g} s; urdf2links {pr['method']}"
               + (f" rtol {pr['rtol']:g}" if pr["method"] not in ("RK4", "midpoint") else f" dt {pr['dt']:g}")
               + f"; MuJoCo {mj['integrator']} dt {mj['timestep']:g} s; {s['route_description']}.", "",
@@ -337,13 +355,15 @@ def render_markdown(s: dict) -> str:
 
 def write_report(c, out_dir=None, *, root=None, json_path=None, command: str | None = None,
                  check: "CheckResult | None" = None, index_link: str | None = None,
-                 animation_fps: float = DEFAULT_FPS, first_sections=(), summary_extra: dict | None = None) -> dict:
+                 animation_fps: float = DEFAULT_FPS, first_sections=(), summary_extra: dict | None = None,
+                 headline=None, first_markdown: str | None = None) -> dict:
     """Write ``report.html``, ``summary.json`` and ``summary.md`` for comparison ``c`` into
     ``out_dir`` (default ``<root>/<robot>/<scene>/``, ``root`` default ``out/reports``, whose page then links ``../../index.html``;
     else ``index_link``) and, if given, the summary also to ``json_path``; ``animation_fps`` as
     :func:`render_html`; ``first_sections`` go first on the page and ``summary_extra`` (keys added to the
-    summary) into ``summary.json``: a comparison of two descriptions. Returns ``{"dir", "html", "json", "md",
-    "summary"}``."""
+    summary) into ``summary.json``: a comparison of two descriptions, whose ``headline`` (``{"title", "html"}``)
+    is the page's and whose ``first_markdown`` opens ``summary.md`` (the usual Markdown follows, its headings one
+    level down). Returns ``{"dir", "html", "json", "md", "summary"}``."""
     summary = json_ready({**c.summary(), **(summary_extra or {})})
     if out_dir is None:
         out = Path(DEFAULT_OUT if root is None else root) / summary["robot"] / summary["scene"]
@@ -357,10 +377,13 @@ def write_report(c, out_dir=None, *, root=None, json_path=None, command: str | N
         jp = Path(json_path)
         jp.parent.mkdir(parents=True, exist_ok=True)
         jp.write_text(text)
-    (out / "summary.md").write_text(render_markdown(summary))
+    md = render_markdown(summary)
+    if first_markdown:
+        md = first_markdown.rstrip("\n") + "\n\n" + "\n".join("#" + x if x.startswith("#") else x for x in md.split("\n"))
+    (out / "summary.md").write_text(md)
     (out / "report.html").write_text(render_html(c, summary, command=command, check=check, index_link=index_link,
-                                                 animation_fps=animation_fps, first_sections=first_sections),
-                                     encoding="utf-8")
+                                                 animation_fps=animation_fps, first_sections=first_sections,
+                                                 headline=headline), encoding="utf-8")
     if (out / "tradeoff.json").is_file():  # a work-precision study of this scene (urdf2links tradeoff): its section
         try:
             insert_section(out / "report.html", json.loads((out / "tradeoff.json").read_text()))
@@ -370,11 +393,13 @@ def write_report(c, out_dir=None, *, root=None, json_path=None, command: str | N
             "summary": summary}
 
 
-def write_index(entries, out_root, *, note: str = "", command: str | None = None, corpus_link: str | None = None) -> dict:
+def write_index(entries, out_root, *, note: str = "", command: str | None = None, corpus_link: str | None = None,
+                stopped=()) -> dict:
     """``index.html`` and ``index.md`` in ``out_root``: one row per (summary, link, check) entry,
     ``entries`` a list of dicts ``{"summary": ..., "link": relative path of report.html, "check":
     CheckResult or None}``; ``corpus_link``: relative address of a corpus report
-    (``urdf2links report --corpus``), linked under the title."""
+    (``urdf2links report --corpus``), linked under the title; ``stopped``: the hard cases that stopped by
+    design (:mod:`urdf2links.compare.reports.stops`), in a section of their own."""
     root = Path(out_root)
     root.mkdir(parents=True, exist_ok=True)
     e = html.escape
@@ -430,7 +455,7 @@ def write_index(entries, out_root, *, note: str = "", command: str | None = None
              (f"<p><b><a href='{e(corpus_link)}'>Corpus report</a></b>: every robot of a corpus of real robot "
               "descriptions against MuJoCo, each in its default scene (<code>urdf2links report --corpus</code>).</p>"
               if corpus_link else ""),
-             _rows(rows, header, num_cols=(3, 4, 5, 7, 8, 9, 11, 12)),
+             _rows(rows, header, num_cols=(3, 4, 5, 7, 8, 9, 11, 12)), stops_html(list(stopped)),
              "<p class='small'>terms: max |ours &minus; MuJoCo| / max |MuJoCo| of A (mj_fullM) and e + G (qfrc_bias) at "
              "seeded random states; route 1 = the project's tree as MJCF, route 2 = MuJoCo's own URDF import (fixed base "
              "only; \"repaired\" when MuJoCo refused the file). Trajectory errors in rad (m for translations). Energy drift: "
@@ -445,6 +470,7 @@ def write_index(entries, out_root, *, note: str = "", command: str | None = None
     md_link = corpus_link.removesuffix("index.html") + "corpus.md" if corpus_link else None
     corpus_md = [f"Corpus report: [{md_link}]({md_link}) and {corpus_link} (every robot of a corpus against MuJoCo, "
                  "each in its default scene).", ""] if corpus_link else []
-    md_text = "\n".join(["# urdf2links against MuJoCo", "", (note + "\n") if note else "", *corpus_md, *md, ""])
+    md_text = "\n".join(["# urdf2links against MuJoCo", "", (note + "\n") if note else "", *corpus_md, *md,
+                         *stops_md(list(stopped)), ""])
     (root / "index.md").write_text(md_text)
-    return {"html": root / "index.html", "md": root / "index.md", "table": "\n".join(md)}
+    return {"html": root / "index.html", "md": root / "index.md", "table": "\n".join([*md, *stops_md(list(stopped))])}

@@ -503,10 +503,24 @@ class Model:
         return DynamicsError(
             f"{where}mass matrix A of model {self.name!r} is not positive definite at q={_fmt(q)}: smallest "
             f"eigenvalue {w[0]:.3e} (largest {w[-1]:.3e}); its eigenvector moves coordinates {parts}, "
-            f"of links {links}. A moving link (or subtree) without mass or without inertia about its "
-            f"joint axis does this; load with inertia='repair' or give the link an inertia.",
+            f"of links {links}. {_unphysical(self.tree)}A moving link (or subtree) without mass or without inertia "
+            "about its joint axis does this; load with inertia='repair' (the command line's --inertia repair) or "
+            "give the link a physical inertia.",
             q=q, coordinates=names, row=row,
         )
+
+
+def _unphysical(tree) -> str:
+    """The links whose pseudo-inertia H has a negative eigenvalue (a negative mass or principal moment), with
+    their mass, as a sentence (issue 43: the message names the link and the value); empty when none has."""
+    bad = []
+    for p, name in enumerate(tree.link_names):
+        H = np.asarray(tree.H[p], float)
+        scale = max(float(np.max(np.abs(H))), np.finfo(float).tiny)
+        if float(np.linalg.eigvalsh(H)[0]) < -1e-12 * scale:
+            bad.append(f"{name!r} (mass {H[3, 3]:.6g} kg" + (")" if H[3, 3] < 0 else ", a negative principal moment)"))
+    return f"Unphysical inertia on link{'s' * (len(bad) > 1)} {', '.join(bad[:6])}: its H is not positive definite. " \
+        if bad else ""
 
 
 def _fmt(q) -> str:

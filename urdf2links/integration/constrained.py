@@ -1,4 +1,4 @@
-"""A scene with constraints integrated: the KKT right-hand side, DOP853 step by step, projection after each step.
+"""A scene with constraints integrated: the KKT right-hand side, one step at a time, projection after each step.
 
 This is the documented interpreted path of constrained scenes (docs/equations.md (E72)-(E75)): the compiled
 integration loops (:mod:`urdf2links.integration.loops`) carry no constraint solve, so a scene with
@@ -7,9 +7,11 @@ integration loops (:mod:`urdf2links.integration.loops`) carry no constraint solv
 - the right-hand side is the scene's compiled one, ``plan.rhs`` (every term the scene names: ``q''`` of
   the free tree and the power ``P``), turned into ``f = A q''_free = Q - e - G + ...`` with the compiled
   mass matrix, plus the fixed tendons' forces (E76), then solved with the multipliers (E72);
-- scipy's DOP853 takes one step at a time (``rtol``, ``atol`` of the scene); after every accepted step
+- the scene's method takes one step at a time (:mod:`urdf2links.integration.constrained_steps`: DOP853 or
+  RK45 with the scene's ``rtol``, ``atol``; ``auto`` as DOP853; RK4 with its ``dt``; any other refused by
+  name); after every accepted step
   the state is projected onto ``Phi = 0`` and ``Phi' = 0`` (E74) and the step's derivative is evaluated
-  again at the projected state (DOP853's first stage is the last one of the step before). Drift is
+  again at the projected state (the next step's first stage is the last one of the step before). Drift is
   thus bounded by one step's integration error and removed before it can grow: the residual stays at
   rounding level (the projection stops at ``max |Phi| <= 1e-13``). Samples are read from the step's dense
   output and projected the same way.
@@ -32,6 +34,7 @@ import numpy as np
 from ..console import Progress
 from ..dynamics.constrained import independent_rows, kkt_solve, project_position, project_velocity
 from ..errors import IntegrationError
+from .constrained_steps import check_constrained_method, constrained_stepper
 
 __all__ = ["ConstrainedRHS", "simulate_constrained", "refuse_constrained"]
 
@@ -148,22 +151,21 @@ def simulate_constrained(plan, run, q, qd, *, progress=None, max_wall=None, max_
 
     started = time.perf_counter()
     rhs = ConstrainedRHS(plan)
+    method = check_constrained_method(run, rhs.where)      # refused before any work: the method, scene, accepted
     model, n = plan.model, plan.model.n
     y, initial = _initial(rhs, np.asarray(q, float), np.asarray(qd, float))
     t_eval = np.linspace(0.0, run.t_end, max(run.samples, 2))
     Y = np.empty((t_eval.size, 2 * n + 1))
     Y[0] = y
-    from scipy.integrate import DOP853      # here: scipy.integrate takes 0.6 s to import, and only this path needs it
-
-    solver = DOP853(rhs, 0.0, y, run.t_end, rtol=run.rtol, atol=run.atol)
-    bar = Progress(run.t_end, label=f"{plan.scene.name} DOP853+projection", enabled=progress)
+    solver, label = constrained_stepper(rhs, y, run, rhs.where)
+    bar = Progress(run.t_end, label=f"{plan.scene.name} {method}+projection", enabled=progress)
     k, steps, drift = 1, 0, 0.0
     t0 = time.perf_counter()
     try:
         while solver.status == "running":
             msg = solver.step()
             if solver.status == "failed":
-                raise IntegrationError(f"{rhs.where}: DOP853 with projection (rtol {run.rtol:g}) could not finish "
+                raise IntegrationError(f"{rhs.where}: {label} with projection could not finish "
                                        f"the run to t_end = {run.t_end:g} s: {msg} at t = {solver.t:.6g} s")
             steps += 1
             dense = solver.dense_output()
@@ -173,7 +175,7 @@ def simulate_constrained(plan, run, q, qd, *, progress=None, max_wall=None, max_
             yp, before = rhs.project(solver.t, solver.y)
             drift = max(drift, before)
             solver.y = yp
-            solver.f = rhs(solver.t, yp)        # DOP853's first stage of the next step (FSAL)
+            solver.f = rhs(solver.t, yp)        # the first stage of the next step (FSAL)
             if np.isnan(Y[k - 1, 0]):
                 Y[k - 1] = yp
             bar(solver.t)
@@ -181,7 +183,7 @@ def simulate_constrained(plan, run, q, qd, *, progress=None, max_wall=None, max_
     finally:
         bar.close()
     wall = time.perf_counter() - t0
-    return _trajectory(Trajectory, plan, rhs, run, t_eval, Y, steps, drift, initial, wall, started)
+    return _trajectory(Trajectory, plan, rhs, run, t_eval, Y, steps, drift, initial, wall, started, method=method)
 
 
 def _limits(rhs, steps, max_steps, started, max_wall, t):
@@ -191,7 +193,7 @@ def _limits(rhs, steps, max_steps, started, max_wall, t):
         raise IntegrationError(f"{rhs.where}: max_wall = {max_wall:g} s spent at t = {t:.6g} s")
 
 
-def _trajectory(Trajectory, plan, rhs, run, t, Y, steps, drift, initial, wall, started):
+def _trajectory(Trajectory, plan, rhs, run, t, Y, steps, drift, initial, wall, started, *, method):
     model, n = plan.model, plan.model.n
     qs, qds, W = Y[:, :n], Y[:, n:2 * n], Y[:, 2 * n]
     E, V, h = plan.energies(t, qs, qds)
@@ -207,11 +209,12 @@ def _trajectory(Trajectory, plan, rhs, run, t, Y, steps, drift, initial, wall, s
         res[i], rate[i] = np.max(np.abs(T.phi), initial=0.0), np.max(np.abs(T.rate), initial=0.0)
     info = {"rows": list(rhs.cset.rows), "solved_rows": rhs.kept_rows, "residual": res, "rate_residual": rate,
             "max_residual": float(res.max()), "max_step_drift": float(drift), "lambda": lam, "forces": gen,
-            "initial": initial, "method": "DOP853 + projection after every step (E74), interpreted path",
+            "initial": initial, "method": f"{method} + projection after every step (E74), interpreted path"
+            + (" (auto: DOP853, the constrained path has no stiffness test)" if run.method == "auto" else ""),
             "min_schur_pivot": rhs.min_pivot[0], "min_schur_pivot_t": rhs.min_pivot[1]}
-    stats = {"method": "DOP853", "scene_method": run.method, "integrator": "DOP853+projection", "rtol": run.rtol, "atol": run.atol,
-             "dt": run.dt, "nfev": rhs.nfev, "nsteps": steps, "njev": 0, "stretches": [], "methods_used":
-             "DOP853 with projection", "wall_time": wall, "terms": plan.terms, "success": True, "message": "",
+    stats = {"method": method, "scene_method": run.method, "integrator": f"{method}+projection", "rtol": run.rtol,
+             "atol": run.atol, "dt": run.dt, "nfev": rhs.nfev, "nsteps": steps, "njev": 0,
+             "stretches": [], "methods_used": f"{method} with projection", "wall_time": wall, "terms": plan.terms, "success": True, "message": "",
              "recharting": False, "n_recharts": 0, "recharts": [], "segments": 1, "limit_excursions": [],
              "spring_notes": list(plan.spring_set.notes), "constraints": info,
              "run_s": time.perf_counter() - started}

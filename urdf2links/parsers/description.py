@@ -71,6 +71,9 @@ class Geometry:
     path: Path | None = None
     scale: np.ndarray | None = None
     problem: str = ""
+    missing: str = ""
+    """A mesh whose file was not found: the description file, link, element, filename and the paths looked for
+    (:func:`urdf2links.parsers.mesh_paths.missing_mesh`); what needs the file raises it."""
 
 
 @dataclass(frozen=True)

@@ -375,6 +375,9 @@ class _Importer:
         coupling = self._coupling(tree)
         repaired = sorted({r.link for r in self.records if r.action == "repaired"})
         info = {"coordinates": self.coord_info, "notes": self.notes, "joints": self._joint_table(),
+                # issue 42: every mesh whose file was not found (description file, link, element, paths looked for)
+                "missing_files": [g.missing for link in self.desc.links.values()
+                                  for g in (*link.collisions, *link.visuals) if g.missing],
                 # URDF-link inertias after repair (link frame H (4, 4)), to write a repaired URDF for other tools
                 "repaired_H": {k: self.H_link[k].tolist() for k in repaired if k in self.H_link},
                 "frame_of": {

@@ -7,14 +7,20 @@ package path are the package folders found for it. A file is handed to the mesh 
 its suffix is a mesh format (:data:`MESH_SUFFIXES`), so ``/etc/passwd`` named as a mesh is refused
 without being opened.
 
+A mesh that does not resolve is named with the description file, the link, the element (visual or collision)
+and the paths looked for (:func:`missing_mesh`): a note when the file is read leniently, an error with
+``strict`` (:mod:`urdf2links.parsers.urdf`), and the error of whatever needs the mesh (an inertia from geometry,
+a drawing, the collision kind of ``compare --against``).
+
 Public API: :func:`resolve_mesh_path`, :func:`require_mesh`, :func:`find_package_dir`,
-:func:`check_mesh_file`, :data:`MESH_SUFFIXES`.
+:func:`check_mesh_file`, :func:`missing_mesh`, :data:`MESH_SUFFIXES`.
 """
 
 from __future__ import annotations
 
 import os
 import stat
+from dataclasses import dataclass
 from pathlib import Path
 from urllib.parse import unquote
 
@@ -22,7 +28,7 @@ from ..errors import MeshError
 from .description import Geometry
 
 __all__ = ["resolve_mesh_path", "require_mesh", "find_package_dir", "check_mesh_file", "MESH_SUFFIXES",
-           "leaves_package", "unresolved_mesh_problem"]
+           "leaves_package", "unresolved_mesh_problem", "mesh_candidates", "missing_mesh", "MissingMesh"]
 
 #: Suffixes of the mesh formats trimesh reads (and the corpus uses: stl, dae, obj); others are refused.
 MESH_SUFFIXES = (".stl", ".dae", ".obj", ".ply", ".off", ".glb", ".gltf", ".3mf", ".stp", ".step", ".xaml",
@@ -100,12 +106,21 @@ def resolve_mesh_path(filename: str, *, directory=None, package_dirs=()) -> Path
     - ``file:///abs/path`` is that path; ``file://rel`` is relative to ``directory``.
     - Otherwise an absolute path, or a path relative to ``directory`` (then ``package_dirs``).
     """
+    for c in mesh_candidates(filename, directory=directory, package_dirs=package_dirs):
+        if _regular(c):
+            return c.resolve()
+    return None
+
+
+def mesh_candidates(filename: str, *, directory=None, package_dirs=()) -> list[Path]:
+    """The paths :func:`resolve_mesh_path` tries for ``filename``, in its order (none for a package path that
+    leaves its package)."""
     candidates: list[Path] = []
     for scheme in ("package://", "model://"):
         if filename.startswith(scheme):
             pkg, _, rest = unquote(filename[len(scheme):]).partition("/")
             if not pkg or leaves_package(rest) or leaves_package(pkg):
-                return None       # outside every package folder: refused by require_mesh, never read
+                return []         # outside every package folder: refused by require_mesh, never read
             bases = _package_bases(directory, package_dirs)
             for base in bases:
                 candidates.append(base / pkg / rest)
@@ -120,10 +135,37 @@ def resolve_mesh_path(filename: str, *, directory=None, package_dirs=()) -> Path
         else:
             bases = ([Path(directory)] if directory is not None else []) + [Path(p) for p in package_dirs]
             candidates += [b / path for b in bases]
-    for c in candidates:
-        if _regular(c):
-            return c.resolve()
-    return None
+    return list(dict.fromkeys(candidates))
+
+
+@dataclass(frozen=True)
+class MissingMesh:
+    """A mesh that did not resolve: its ``filename`` as written in the description file ``source``, ``why``,
+    ``looked`` (the paths looked for, in words) and ``fix``."""
+
+    filename: str
+    source: str
+    why: str
+    looked: str
+    fix: str
+
+    @property
+    def problem(self) -> str:
+        """The defect with the file it is named in (a parser's note or strict error adds the link and element)."""
+        return f"mesh {self.filename!r} named in {self.source}: {self.why}{self.looked}"
+
+    def text(self, where: str) -> str:
+        """The error of what needs the file; ``where`` names the description file, the link and the element."""
+        return f"{where}: mesh {self.filename!r}: {self.why}{self.looked}; {self.fix}"
+
+
+def missing_mesh(filename: str, *, source: str, directory=None, package_dirs=()) -> MissingMesh:
+    """Why ``filename`` (named in the description file ``source``) did not resolve (:func:`unresolved_mesh_problem`)
+    and the paths looked for: the first three, and how many more."""
+    tried = mesh_candidates(filename, directory=directory, package_dirs=package_dirs)
+    looked = ", ".join(repr(str(p)) for p in tried[:3]) + (f" and {len(tried) - 3} other place(s)" if len(tried) > 3 else "")
+    why, _, fix = unresolved_mesh_problem(filename).partition("; ")
+    return MissingMesh(filename, source, why, f" (looked for {looked})" if tried else "", fix or "correct the filename")
 
 
 def unresolved_mesh_problem(filename: str) -> str:
@@ -149,6 +191,8 @@ def require_mesh(geometry: Geometry, *, link: str, source: str) -> Path:
         raise MeshError(f"{source}: link '{link}': the geometry is a {geometry.kind}, not a mesh")
     if geometry.path is not None:
         return check_mesh_file(geometry.path, name=geometry.filename or str(geometry.path))
+    if geometry.missing:
+        raise MeshError(geometry.missing)
     raise MeshError(f"{source}: link '{link}': mesh '{geometry.filename}': "
                     f"{unresolved_mesh_problem(geometry.filename or '')}")
 

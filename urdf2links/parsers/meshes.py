@@ -29,8 +29,8 @@ def _read(geometry: Geometry, *, force_mesh: bool):
     import trimesh
 
     name = _name(geometry)
-    if geometry.path is None:
-        raise MeshError(f"mesh {name!r}: {unresolved_mesh_problem(geometry.filename or '')}")
+    if geometry.path is None:     # the description file, link, element and paths looked for, when parsed from a file
+        raise MeshError(geometry.missing or f"mesh {name!r}: {unresolved_mesh_problem(geometry.filename or '')}")
     path = check_mesh_file(geometry.path, name=name)   # a regular file with a mesh suffix, or MeshError: never
     try:                                               # a device, a FIFO or a directory (urdf2links.parsers.mesh_paths)
         loaded = trimesh.load(str(path), force="mesh") if force_mesh else trimesh.load(str(path))

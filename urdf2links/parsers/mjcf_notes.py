@@ -21,6 +21,22 @@ MUJOCO_OFF = ("mjDSBL_CONTACT", "mjDSBL_CONSTRAINT", "mjDSBL_EQUALITY", "mjDSBL_
               "mjDSBL_ACTUATION")
 
 
+def _keyframes(m) -> str:
+    """How the runs use the file's keyframes (issue 43): the default scene starts around the one named ``home``
+    (urdf2links.scenes.excitation, E65); the others are not used."""
+    import mujoco
+
+    names = [mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_KEY, k) for k in range(m.nkey)]
+    scene = "a scene file's [initial] starts where it says"
+    if "home" in names:
+        others = "; the other keyframes are not used" if m.nkey > 1 else ""
+        return ("keyframe 'home' centres the default scene's start: its q0 is drawn within a quarter of each joint's "
+                f"range around home's qpos and its q' excites the joints (E65); --q0 random draws within the limits "
+                f"and --q0 rest starts at MuJoCo's qpos0, not at home{others}; {scene}")
+    return ("not used: none is named 'home' (the keyframe the default scene starts around); the default scene starts "
+            f"within the joint limits or around MuJoCo's qpos0; {scene}")
+
+
 def _names(m, kind, count, limit=8) -> str:
     import mujoco
 
@@ -51,7 +67,8 @@ def inventory(m, joint_kinds: dict) -> list[str]:
         "connect, weld and joint are read (E68-E70; tendon equalities of fixed tendons too: E70 on their lengths) and act when a scene says [constraints] from_file = true "
         "(urdf2links inspect --scene shows them); otherwise the joints stay independent and MuJoCo's run disables them")
     add(m.nu, f"{m.nu} actuator(s) ({_names(m, 'mjOBJ_ACTUATOR', m.nu)})",
-        "scene effects when a scene names them ([[actuator]] name = '...', ctrl = ...: MuJoCo's law on both engines); "
+        "scene effects when a scene names them ([[actuator]] name = '...', ctrl = ...: MuJoCo's law on both engines; "
+        "one on a fixed tendon with [constraints] from_file = true; one on a site or a spatial tendon is refused); "
         "the others act on neither engine (MuJoCo's run switches them off)")
     add(m.nsensor, f"{m.nsensor} sensor(s)", "not used (they do not change the dynamics)")
     add(m.nsite, f"{m.nsite} site(s)", "not used (frames only)")
@@ -61,8 +78,7 @@ def inventory(m, joint_kinds: dict) -> list[str]:
         "remain MuJoCo's own: compare such a model with care)")
     add(m.nskin, f"{m.nskin} skin(s)", "visual only, not used")
     add(m.nplugin, f"{m.nplugin} plugin instance(s)", "not modelled: a plugin's forces are MuJoCo's alone")
-    add(m.nkey, f"{m.nkey} keyframe(s) ({_names(m, 'mjOBJ_KEY', m.nkey)})",
-        "not used: the initial state is MuJoCo's default qpos0 (name a state in a scene's [initial])")
+    add(m.nkey, f"{m.nkey} keyframe(s) ({_names(m, 'mjOBJ_KEY', m.nkey)})", _keyframes(m))
     add(m.nmocap, f"{m.nmocap} mocap body(ies)", "welded to the world where the file puts them")
     limited = [j for j in range(m.njnt) if m.jnt_limited[j]]
     add(len(limited), f"{len(limited)} joint(s) with limits ({_names(m, 'mjOBJ_JOINT', 0) or ''}"

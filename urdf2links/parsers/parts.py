@@ -61,7 +61,7 @@ class JointPart:
     ``ref``; a free joint's pose), limits (None: unlimited), ``damping``, ``stiffness`` at
     ``springref``, ``armature`` (E49), ``friction``; ``source_type`` the file's own word for it; ``effort`` and
     ``velocity`` the largest joint force and speed the file states (URDF ``<limit>``; MJCF: module doc of
-    :func:`_actuator_limits`), None when it states none."""
+    :func:`_actuator_limits`), None when it states none; ``effort_source`` where an MJCF's comes from, in words."""
 
     name: str
     kind: str
@@ -79,6 +79,7 @@ class JointPart:
     written_axis: np.ndarray | None = None
     effort: float | None = None
     velocity: float | None = None
+    effort_source: str = ""
 
     @property
     def built_axis(self) -> np.ndarray:
@@ -205,7 +206,8 @@ def _mjcf_parts(path) -> RobotParts:
 
     notes: list[str] = []
     m, where = compile_mjcf(str(path), notes)
-    effort, speed = _actuator_limits(m)
+    sources: dict = {}
+    effort, speed = _actuator_limits(m, sources)
 
     def name(obj, i, fallback):
         return mujoco.mj_id2name(m, getattr(mujoco.mjtObj, obj), i) or fallback
@@ -235,7 +237,7 @@ def _mjcf_parts(path) -> RobotParts:
                 damping=float(m.dof_damping[da]), stiffness=float(m.jnt_stiffness[j]),
                 springref=float(m.qpos_spring[qa]) if kind in ("hinge", "slide") else 0.0,
                 armature=float(m.dof_armature[da]), friction=float(m.dof_frictionloss[da]), source_type=kind,
-                effort=effort.get(j), velocity=speed.get(j)))
+                effort=effort.get(j), velocity=speed.get(j), effort_source=sources.get(j, "")))
         bodies.append(BodyPart(bname, None if parent == 0 else name("mjOBJ_BODY", parent, f"body{parent}"), pose, H,
                                tuple(joints)))
     g = np.array(m.opt.gravity, float)
@@ -248,37 +250,63 @@ def _mjcf_parts(path) -> RobotParts:
                       compiler=_compiler_settings(path), sites=sites, velocity_actuators=bool(speed))
 
 
-def _actuator_limits(m) -> tuple[dict, dict]:
+def _actuator_limits(m, sources: dict | None = None) -> tuple[dict, dict]:
     """``({joint id: largest force}, {joint id: largest speed})`` an MJCF model states. The force: the smallest
-    of the joint's ``actuatorfrcrange``, and for each actuator on the joint alone (transmission ``joint``, gear
-    ``g``) ``|g| forcerange`` and, for a motor (force = ctrl: gain 1, no bias), ``|g| ctrlrange``; the largest
+    of the joint's ``actuatorfrcrange``, and for each actuator on the joint (transmission ``joint``, gear ``g``;
+    or ``tendon`` on a fixed tendon whose coefficient at the joint is ``c``: the joint's share ``|g c|``)
+    ``|g c| forcerange`` and, for a motor (force = ctrl: gain 1, no bias), ``|g c| ctrlrange``; the largest
     absolute end of each range. The speed: a velocity actuator's (bias ``-kv qdot``) ``ctrlrange`` over ``|g|``
-    (its control is the transmission's speed ``g qdot``)."""
+    (its control is the transmission's speed ``g qdot``; joint transmissions only). ``sources`` (a dict) gets
+    ``{joint id: where the force limit comes from, in words}``."""
     import mujoco
 
     force, speed = {}, {}
+    sources = {} if sources is None else sources
     for j in range(m.njnt):
         if m.jnt_actfrclimited[j]:
             force[j] = float(np.max(np.abs(m.jnt_actfrcrange[j])))
+            sources[j] = "actuatorfrcrange"
     for k in range(m.nu):
-        if int(m.actuator_trntype[k]) != int(mujoco.mjtTrn.mjTRN_JOINT):
-            continue
-        j, g = int(m.actuator_trnid[k, 0]), abs(float(m.actuator_gear[k, 0]))
+        g = abs(float(m.actuator_gear[k, 0]))
         if g == 0.0:
             continue
-        bias, gain = np.asarray(m.actuator_biasprm[k], float), np.asarray(m.actuator_gainprm[k], float)
         ends = []
         if m.actuator_forcelimited[k]:
-            ends.append(g * float(np.max(np.abs(m.actuator_forcerange[k]))))
+            ends.append(("forcerange", float(np.max(np.abs(m.actuator_forcerange[k])))))
+        bias, gain = np.asarray(m.actuator_biasprm[k], float), np.asarray(m.actuator_gainprm[k], float)
         motor = int(m.actuator_biastype[k]) == 0 and gain[0] == 1.0 and int(m.actuator_dyntype[k]) == 0
         if motor and m.actuator_ctrllimited[k]:
-            ends.append(g * float(np.max(np.abs(m.actuator_ctrlrange[k]))))
-        if ends:
-            force[j] = min([force.get(j, np.inf), *ends])
+            ends.append(("ctrlrange", float(np.max(np.abs(m.actuator_ctrlrange[k])))))
+        name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_ACTUATOR, k) or f"actuator {k}"
+        for j, share, via in _transmission_shares(m, k):
+            for what, end in ends:
+                if g * share * end < force.get(j, np.inf):
+                    force[j] = g * share * end
+                    sources[j] = f"{name}'s {what} x gear {g:g}" + via
         velocity = int(m.actuator_biastype[k]) == 1 and bias[2] != 0.0 and bias[1] == 0.0 and gain[0] == -bias[2]
-        if velocity and m.actuator_ctrllimited[k]:
-            speed[j] = float(np.max(np.abs(m.actuator_ctrlrange[k]))) / g
+        joint = int(m.actuator_trntype[k]) == int(mujoco.mjtTrn.mjTRN_JOINT)
+        if velocity and joint and m.actuator_ctrllimited[k]:
+            speed[int(m.actuator_trnid[k, 0])] = float(np.max(np.abs(m.actuator_ctrlrange[k]))) / g
     return force, speed
+
+
+def _transmission_shares(m, k) -> list[tuple[int, float, str]]:
+    """``[(joint id, |c|, words)]`` of actuator ``k``'s transmission: its joint (``c`` = 1), or each joint of its
+    fixed tendon (``c`` the tendon's coefficient there: the tendon's force ``f`` is ``c f`` at the joint); none for
+    other transmissions (a site's, a spatial tendon's: their share depends on the configuration)."""
+    import mujoco
+
+    kind, target = int(m.actuator_trntype[k]), int(m.actuator_trnid[k, 0])
+    if kind == int(mujoco.mjtTrn.mjTRN_JOINT):
+        return [(target, 1.0, "")]
+    if kind != int(mujoco.mjtTrn.mjTRN_TENDON):
+        return []
+    adr, num = int(m.tendon_adr[target]), int(m.tendon_num[target])
+    if any(int(m.wrap_type[i]) != int(mujoco.mjtWrap.mjWRAP_JOINT) for i in range(adr, adr + num)):
+        return []
+    tendon = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_TENDON, target) or f"tendon {target}"
+    return [(int(m.wrap_objid[i]), abs(float(m.wrap_prm[i])), f" x coef {float(m.wrap_prm[i]):g} of tendon {tendon}")
+            for i in range(adr, adr + num) if float(m.wrap_prm[i]) != 0.0]
 
 
 def _compiler_settings(path) -> dict:

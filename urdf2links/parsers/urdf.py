@@ -35,7 +35,7 @@ import numpy as np
 from lxml import etree
 
 from ..dynamics.rotations import matrix_to_rpy
-from ..errors import URDFError, URDFStructureError, URDFValueError
+from ..errors import MeshError, URDFError, URDFStructureError, URDFValueError
 from ..ranges import out_of_range
 from .description import (
     JOINT_TYPES,
@@ -48,7 +48,7 @@ from .description import (
     RobotDescription,
 )
 from .inventory import inventory_notes, joint_value_notes
-from .mesh_paths import require_mesh, resolve_mesh_path
+from .mesh_paths import missing_mesh, require_mesh, resolve_mesh_path
 from .source import read_source
 from .xacro_input import is_xacro_path
 
@@ -102,9 +102,20 @@ class _Reader:
             self.fail(el, what, problem, fix + _TOLERATED, cls)
         self.note(el, what, f"{problem}; {done}")
 
+    def misspelt(self, el, attr: str, what: str) -> None:
+        """When ``el`` lacks the required ``attr`` but has an unknown attribute spelt like it (``valeu`` for
+        ``value``), the error names that attribute with a did-you-mean (issue 43)."""
+        if el is None:
+            return
+        near = difflib.get_close_matches(attr, [a for a in el.attrib if a != attr], n=1, cutoff=0.6)
+        if near:
+            self.fail(el, f"{what} {near[0]}=\"{el.get(near[0])}\"", f"{near[0]}: did you mean {attr}? (the "
+                      f"'{attr}' attribute is missing)", f"rename {near[0]} to {attr}")
+
     def text(self, el, attr: str, what: str) -> str:
         value = el.get(attr)
         if value is None or not value.strip():
+            self.misspelt(el, attr, what)
             self.fail(el, what, f"the '{attr}' attribute is missing or empty",
                       f"add {attr}=\"...\"")
         return value.strip()
@@ -116,6 +127,7 @@ class _Reader:
         raw = el.get(attr) if el is not None else None
         if raw is None:
             if default is None:
+                self.misspelt(el, attr, what)
                 self.fail(el, f"{what} {attr}", "the attribute is missing",
                           f"add {attr}=\"{' '.join(['0'] * n)}\" ({n} numbers)")
             return np.array(default, dtype=float)
@@ -242,7 +254,7 @@ def _geometry_strict(r: _Reader, el, what: str, directory, package_dirs) -> Geom
     origin = r.origin(el, what)
     shape = _shape(r, el, what)
     kind = etree.QName(shape).localname
-    what = f"{what} <geometry><{kind}>"
+    element, what = what, f"{what} <geometry><{kind}>"
     if kind not in GEOMETRY_KINDS:
         r.fail(shape, what, f"unknown shape <{kind}>", f"use one of {', '.join(GEOMETRY_KINDS)}")
 
@@ -264,7 +276,13 @@ def _geometry_strict(r: _Reader, el, what: str, directory, package_dirs) -> Geom
     filename = r.text(shape, "filename", what)
     scale = r.floats(shape, "scale", 3, what, (1.0, 1.0, 1.0), allow_one=True, quantity="scale")
     path = resolve_mesh_path(filename, directory=directory, package_dirs=package_dirs)
-    return Geometry(kind, origin, filename=filename, path=path, scale=scale)
+    missing = ""
+    if path is None:     # issue 42: named (file, link, element, paths looked for); strict: refused
+        m = missing_mesh(filename, source=r.label, directory=directory, package_dirs=package_dirs)
+        r.tolerate(shape, what, m.problem, "kept without its file: the dynamics does not use it, and what does (an "
+                   "inertia from geometry, a drawing, compare --against) refuses it by name", m.fix, MeshError)
+        missing = m.text(f"{r.label}: {element}")
+    return Geometry(kind, origin, filename=filename, path=path, scale=scale, missing=missing)
 
 
 def _geometry(r: _Reader, el, what: str, directory, package_dirs) -> Geometry:

@@ -226,8 +226,10 @@ def file_actuator(row: dict) -> str | None:
     or None when it can: a joint transmission on a hinge or slide, no activation dynamics, a fixed
     gain, an affine (or no) bias, no delay, no damping or armature of its own."""
     why = []
-    if row["trntype"] not in ("joint", "jointinparent"):
-        why.append(f"its transmission is a {row['trntype']} (only joint transmissions are modelled)")
+    if row["trntype"] == "tendon":      # a fixed tendon's acts through it (resolve_actuators): this one is spatial
+        why.append("its transmission is a spatial tendon (only joints and fixed tendons are modelled)")
+    elif row["trntype"] not in ("joint", "jointinparent"):
+        why.append(f"its transmission is a {row['trntype']} (only joints and fixed tendons are modelled)")
     elif row["joint_type"] not in ("hinge", "slide"):
         why.append(f"it drives a {row['joint_type']} joint, whose MuJoCo transmission (length = the rotation's "
                    "axis-angle . gear) is not a linear map of the ZYX angles: out of scope; drive the joint's "
@@ -245,10 +247,13 @@ def file_actuator(row: dict) -> str | None:
     return "; ".join(why) or None
 
 
-def resolve_actuators(specs, model, *, where="<scene>") -> ActuatorSet:
+def resolve_actuators(specs, model, *, where="<scene>", file_tendons: bool | None = None) -> ActuatorSet:
     """The scene's actuators on ``model`` (:class:`ActuatorSet`): scene actuators on their coordinates,
     file actuators from ``model.info['actuators']`` (SceneError naming the actuator when the file has
-    none of that name, or when it cannot be modelled: :func:`file_actuator` says why)."""
+    none of that name, or when it cannot be modelled: :func:`file_actuator` says why). A file actuator on a
+    fixed tendon acts through its tendon (E76, :mod:`urdf2links.scenes.file_constraints`), which needs
+    ``[constraints] from_file``: with ``file_tendons`` False (a scene without it) such an actuator is refused
+    by name, never dropped (issue 43)."""
     names = model.coordinate_names
     table = {row["name"]: row for row in model.info.get("actuators", []) if row.get("name")}
     out, notes = [], []
@@ -266,7 +271,13 @@ def resolve_actuators(specs, model, *, where="<scene>") -> ActuatorSet:
             raise SceneError(f"{where}: [[actuator]] name = {s.name!r} is not an actuator of {model.name!r}"
                              + (f"; its actuators are {have}" if have else " (the robot file declares no named "
                                 "actuator: give coordinate = '...' and the law instead)"))
-        if row["trntype"] == "tendon" and any(s.name in t["actuators"] and t["fixed"] for t in model.info.get("tendons", [])):
+        fixed = [t["name"] for t in model.info.get("tendons", []) if s.name in t["actuators"] and t["fixed"]]
+        if row["trntype"] == "tendon" and fixed:
+            if file_tendons is False:
+                raise SceneError(f"{where}: [[actuator]] {s.name!r} drives the file's fixed tendon {fixed[0]!r}: a "
+                                 "tendon acts only in a scene with [constraints] from_file = true (the file's "
+                                 "equalities and tendons then act too); add it, or drive the joints with scene "
+                                 "actuators (coordinate = ...)")
             continue        # issue 36: an actuator on a fixed tendon acts through its tendon (scenes/file_constraints.py)
         why = file_actuator(row)
         if why:

@@ -78,7 +78,8 @@ class Plan:
         self.rest = np.array([s.rest for s in springs])
         self.damper_index = np.array([names.index(s.coordinate) for s in dampers], dtype=int)
         self.damping = np.array([s.damping for s in dampers])
-        self.actuator_set = resolve_actuators(scene.actuators, model, where=str(scene.path or scene.name))
+        self.actuator_set = resolve_actuators(scene.actuators, model, where=str(scene.path or scene.name),
+                                              file_tendons=bool(getattr(scene, "file_constraints", False)))
         """The scene's actuators on this model (:mod:`urdf2links.scenes.actuators`) and notes."""
         self.contact_set = resolve_contacts(scene.contacts, model, scene.initial_state(model)[0],
                                             where=str(scene.path or scene.name))

@@ -88,6 +88,7 @@ from ..ranges import MAX_SAMPLES, MAX_STEPS, METHODS, MIN_ATOL, Q0_CHOICES, MIN_
 from .contact import parse_contacts
 from .actuators import ActuatorSpec, hold_actuators, parse_actuators
 from .constraints import constraint_options, parse_constraints
+from .expect import ExpectedStop, parse_expect
 from .excitation import DAMPER_TORQUE_TEXT, coordinate_ranges, damper_torques, excited_state
 from .functions import Constant, SceneValueError, TimeFunction, VectorFunction, parse_function, vector_function
 
@@ -102,7 +103,7 @@ DEFAULT_SCENE_NAME = "default"
 _TOP = ("description", "chaotic", "robot", "gravity", "base", "force", "moment", "torque", "spring",
         "dampers", "springs", "gravcomp", "initial", "run", "record", "actuator", "computed_torque",
         "constraint", "constraints",   # issue 36: [[constraint]], [constraints] from_file
-        "contact")       # issue 37
+        "contact", "expect")       # issue 37; issue 42: [expect] a hard case's stop (urdf2links.scenes.expect)
 _ROBOT = ("urdf", "mjcf", "shipped", "example_robot_data", "floating_base", "inertia", "mimic", "package_dirs",
           "strict", "xacro_args")
 #: Joint types whose damping (URDF or MJCF) becomes a damper on their one coordinate.
@@ -203,12 +204,11 @@ class Scene:
     gravcomp_bodies: tuple[tuple[str, float], ...] = ()
     constraints: tuple = ()
     """``[[constraint]]`` blocks (:mod:`urdf2links.scenes.constraints`; issue 36)."""
-    file_constraints: bool = False
-    """``[constraints] from_file``: an MJCF file's own equalities and fixed tendons act."""
+    file_constraints: bool = False    # [constraints] from_file: an MJCF file's own equalities and fixed tendons act
     mimic_constraints: bool = False
     """``[constraints] mimic``: a URDF's ``<mimic>`` joints as exact joint constraints (E70)."""
-    contacts: tuple = ()
-    """``[[contact]]`` blocks (issue 37): :class:`urdf2links.scenes.contact.ContactSpec`."""
+    contacts: tuple = ()          # [[contact]] blocks (issue 37): urdf2links.scenes.contact.ContactSpec
+    expected_stop: ExpectedStop | None = None     # [expect]: a hard case that stops by design (issue 42)
 
     def model(self):
         """Load the scene's robot with its options (a :class:`~urdf2links.dynamics.model.Model`)."""
@@ -608,7 +608,7 @@ def scene_from_dict(data: dict, *, where: str = "<scene>", directory: Path | Non
                  file_springs=file_springs, gravcomp=gravcomp, actuators=actuators, computed_torque=computed,
                  gravcomp_factor=gravcomp_factor, gravcomp_bodies=gravcomp_bodies,
                  constraints=parse_constraints(r, data), **constraint_options(r, data),
-                 contacts=parse_contacts(r, data))     # issue 37
+                 contacts=parse_contacts(r, data), expected_stop=parse_expect(r, data))     # issues 37, 42
 
 
 def _gravcomp(r: _Reader, data: dict) -> tuple[bool, float | None, tuple]:

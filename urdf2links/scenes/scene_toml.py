@@ -20,10 +20,11 @@ from .contact import contact_toml
 from ..errors import SceneError, URDFError
 from ..parsers.xacro_input import parse_xacro_arg
 from .constraints import constraint_toml
+from .expect import expect_toml
 from .scene import RunSettings, Scene, default_scene, load_scene
 
-__all__ = ["scene_toml", "write_scene", "scene_or_robot", "scene_from_args", "write_scene_option", "xacro_args_of",
-           "hold_of", "ground_of"]
+__all__ = ["scene_toml", "scene_with_plan", "write_scene", "scene_or_robot", "scene_from_args", "write_scene_option",
+           "xacro_args_of", "hold_of", "ground_of"]
 
 
 def _value(v) -> str:
@@ -112,7 +113,18 @@ def scene_toml(scene: Scene, *, folder=None) -> str:
     out += _run_lines(scene.run) + [""]
     if scene.link_poses:
         out += ["[record]", f"link_poses = {_value(list(scene.link_poses))}", ""]
+    out += expect_toml(scene.expected_stop, _value)     # issue 42: a hard case that stops by design
     return "\n".join(out)
+
+
+def scene_with_plan(scene: Scene, plan_text: str) -> str:
+    """What ``urdf2links inspect ... --scene`` prints: a scene file's plan as it is; a default scene as its TOML
+    followed by the plan as TOML comments, so that ``inspect ROBOT --scene > f.toml`` writes a scene file that
+    parses (issue 43)."""
+    if scene.path is not None:
+        return plan_text
+    comments = "\n".join(f"# {line}".rstrip() for line in plan_text.splitlines())
+    return f"{scene_toml(scene).rstrip()}\n\n# the plan of this scene (urdf2links inspect):\n{comments}"
 
 
 def _actuator_lines(actuators) -> list[str]:
