@@ -294,22 +294,23 @@ def with_ground(scene, model=None, *, q0: str = "excite", seed: int = 0, floor: 
     plane = file_floor(model) if floor else None
     height = plane["height"] if plane else 0.0
     if not np.any(model.gravity_vector):
-        raise SceneError(f"--ground: robot {model.name!r} ({scene.robot}) has no gravity (the file's is off or 0): "
-                         "nothing would hold it on the ground")
+        raise SceneError(f"ground contact (--ground, or the file's floor): robot {model.name!r} ({scene.robot}) has no "
+                         "gravity (the file's is off or 0): nothing would hold it on the ground; --no-floor drops a "
+                         "file's floor")
     start = standing_start(model, height=height, depth=SETTLE, excite=q0 == "excite", seed=seed)
     if not start.feet:
         raise SceneError(f"--ground: robot {model.name!r} ({scene.robot}) has no link to stand on")
     spheres, notes = start.feet, list(start.notes)
     if len(start.feet) < 3:     # no support polygon: the robot cannot stand unaided; whatever it falls on touches
         spheres = tuple(_candidates(model)[0])
-        notes.append(f"--ground: {len(start.feet)} feet cannot carry the robot unaided (a stance needs 3 not in a "
+        notes.append(f"on the ground: {len(start.feet)} feet cannot carry the robot unaided (a stance needs 3 not in a "
                      f"line): all its {len(spheres)} contact candidates touch the ground, so that it falls onto them")
     spec = ground_contact(model, spheres, height=height, sharing=len(start.feet),
                           **({"friction": plane["friction"]} if plane else {}))
     if any(a.source == "hold" for a in scene.actuators):
-        notes.append("--ground: --hold's servos replaced by the stance's servos (the ground carries the base)")
+        notes.append("on the ground: --hold's servos replaced by the stance's servos (the ground carries the base)")
     if scene.torques:
-        notes.append("--ground: the default scene's damper torques dropped (the joints start at rest on their feet)")
+        notes.append("on the ground: the default scene's damper torques dropped (the joints start at rest on their feet)")
     where = (f"the file's floor {plane['name']!r} (height {height:g} m, friction {plane['friction']:g}; --no-floor "
              "drops it)" if plane else "--ground")
     servos = tuple(a for a in scene.actuators if a.source not in ("hold", "stand")) + start.actuators
