@@ -178,7 +178,8 @@ def test_compare_keeps_the_floor_and_prints_each_engines_base_height():
 
 def test_two_feet_fall_onto_every_candidate_and_no_gravity_is_refused(tmp_path):
     """gymnasium's humanoid stands on two ball feet, which cannot carry it unaided: every collision sphere and
-    capsule end then touches its floor, and the notes say why; a floor without gravity is refused by name."""
+    capsule end then touches its floor, and the notes say why. Without gravity a file's floor is not used (noted),
+    and --ground is refused by name."""
     import gymnasium
 
     from urdf2links.errors import SceneError
@@ -193,8 +194,10 @@ def test_two_feet_fall_onto_every_candidate_and_no_gravity_is_refused(tmp_path):
     assert 'gravity="0 0 0"' in weightless
     (tmp_path / "ant0.xml").write_text(weightless)
     scene = default_scene(tmp_path / "ant0.xml", t_end=T_END)
+    kept = ground_for(scene, scene.model())
+    assert not kept.contacts and "without gravity nothing holds the robot" in " ".join(kept.notes)
     with pytest.raises(SceneError, match="ant0.xml.*no gravity"):
-        ground_for(scene, scene.model())
+        ground_for(scene, scene.model(), ground=True)
 
 
 @pytest.mark.usefixtures("corpus_installed")

@@ -329,12 +329,15 @@ def ground_for(scene, model, *, ground: bool = False, floor: bool = True, q0: st
     if scene.path is not None and not ground:
         return scene
     plane = file_floor(model)
-    if ground or (plane and floor and floating_root(model)):
+    weighty = bool(np.any(model.gravity_vector))
+    if ground or (plane and floor and floating_root(model) and weighty):
         return with_ground(scene, model, q0=q0, seed=seed, floor=floor)
     if plane is None:
         return scene
     why = ("--no-floor: the file's floor {!r} dropped: the robot has no ground" if not floor else
-           "the file's floor {!r} is not used: the robot has no floating base (a free joint) for it to carry")
+           "the file's floor {!r} is not used: the robot has no floating base (a free joint) for it to carry"
+           if not floating_root(model) else "the file's floor {!r} is not used: without gravity nothing holds the "
+           "robot on it")
     return dataclasses.replace(scene, notes=tuple(scene.notes) + (why.format(plane["name"]),))
 
 
