@@ -26,7 +26,7 @@ from urdf2links.parsers.mjcf import is_mjcf_path
 from urdf2links.parsers.mjcf_state import quat_to_matrix
 from urdf2links.parsers.parts import RobotParts, home_poses
 
-from .differences import ROUNDING, Difference
+from .kinds import ROUNDING, Difference
 
 __all__ = ["Solid", "collision_solids", "collision_differences"]
 

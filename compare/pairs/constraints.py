@@ -14,9 +14,9 @@ from __future__ import annotations
 import numpy as np
 
 from urdf2links.parsers.mjcf import is_mjcf_path
-from urdf2links.parsers.mjcf_constraints import file_equalities
+from urdf2links.parsers.mjcf import file_equalities
 
-from .differences import Difference
+from .kinds import Difference
 
 __all__ = ["constraint_differences", "ANCHOR_ROUNDING"]
 

@@ -16,10 +16,10 @@ coupling changes the motion: ``coupling`` is a dynamic kind.
 from __future__ import annotations
 
 from urdf2links.parsers.mjcf import is_mjcf_path
-from urdf2links.parsers.mjcf_constraints import file_equalities
+from urdf2links.parsers.mjcf import file_equalities
 from urdf2links.parsers.urdf import parse_urdf
 
-from .differences import ROUNDING, Difference
+from .kinds import ROUNDING, Difference
 from .mapping import JointMapping
 
 __all__ = ["couplings", "coupling_differences"]

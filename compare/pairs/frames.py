@@ -17,7 +17,7 @@ import numpy as np
 
 from urdf2links.parsers.parts import RobotParts
 
-from .differences import ROUNDING, Difference
+from .kinds import ROUNDING, Difference
 
 __all__ = ["frame_differences"]
 

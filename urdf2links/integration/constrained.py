@@ -34,6 +34,7 @@ import numpy as np
 from ..console import Progress
 from ..dynamics.constrained import independent_rows, kkt_solve, project_position, project_velocity
 from ..errors import IntegrationError
+from .trajectory import Trajectory
 from .constrained_steps import check_constrained_method, constrained_stepper
 
 __all__ = ["ConstrainedRHS", "simulate_constrained", "refuse_constrained"]
@@ -146,9 +147,7 @@ def _initial(rhs, q, qd):
 
 
 def simulate_constrained(plan, run, q, qd, *, progress=None, max_wall=None, max_steps=10_000_000):
-    """The run of a plan with constraints (module doc) -> :class:`~urdf2links.integration.simulate.Trajectory`."""
-    from .simulate import Trajectory
-
+    """The run of a plan with constraints (module doc) -> :class:`~urdf2links.integration.trajectory.Trajectory`."""
     started = time.perf_counter()
     rhs = ConstrainedRHS(plan)
     method = check_constrained_method(run, rhs.where)      # refused before any work: the method, scene, accepted

@@ -47,11 +47,11 @@ from ..dynamics.transforms import PARAMETERS
 from ..dynamics.tree import LinkSpec, build_tree
 from ..errors import MJCFError
 from ..ranges import out_of_range
-from .mjcf_constraints import equality_rows, tendon_rows
+from .mjcf_constraints import compiled_equalities, equality_rows, tendon_rows
 from .mjcf_notes import inventory
 from .mjcf_state import MujocoJoint, MujocoMap, quat_to_matrix
 
-__all__ = ["load_mjcf", "load_mjcf_string", "compile_mjcf", "is_mjcf_path", "MJCF_OPTIONS"]
+__all__ = ["load_mjcf", "load_mjcf_string", "compile_mjcf", "file_equalities", "is_mjcf_path", "MJCF_OPTIONS"]
 
 #: Load options an MJCF file takes (the URDF-only ones are refused by name).
 MJCF_OPTIONS = ("inertia", "strict")
@@ -117,6 +117,13 @@ def compile_mjcf(source, notes: list[str] | None = None, *, edit=None):
         raise MJCFError(f"{where}: not readable text ({err}); an MJCF file is UTF-8 XML") from None
     return m, where
 
+
+
+def file_equalities(path) -> list[dict]:
+    """The equalities of an MJCF file compiled by MuJoCo alone, no tree built (a pair's files): one row each
+    (:func:`~urdf2links.parsers.mjcf_constraints.equality_rows`)."""
+    m, _ = compile_mjcf(path)
+    return compiled_equalities(m)
 
 def load_mjcf(source, *, inertia: str = "audit", strict: bool = False) -> Model:
     """Load an MJCF file (or MJCF text) as a :class:`~urdf2links.dynamics.model.Model` (module doc).

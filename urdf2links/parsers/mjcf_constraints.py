@@ -25,7 +25,7 @@ import numpy as np
 
 from .mjcf_state import quat_to_matrix
 
-__all__ = ["equality_rows", "tendon_rows", "inspect_rows", "file_equalities"]
+__all__ = ["equality_rows", "tendon_rows", "inspect_rows", "compiled_equalities"]
 
 
 def _eq_type(b, i) -> str:
@@ -151,9 +151,7 @@ class _Compiled:
         return self.mj.mj_id2name(self.m, getattr(self.mj.mjtObj, obj), i) or fallback
 
 
-def file_equalities(path) -> list[dict]:
-    """:func:`equality_rows` of an MJCF file compiled by MuJoCo alone (no tree built: a pair's files)."""
-    from .mjcf import compile_mjcf
-
-    m, _ = compile_mjcf(path)
+def compiled_equalities(m) -> list[dict]:
+    """:func:`equality_rows` of a model ``m`` (``mujoco.MjModel``) compiled by MuJoCo alone, without a tree
+    (:func:`urdf2links.parsers.mjcf.file_equalities`: a pair's files)."""
     return equality_rows(_Compiled(m))[0]

@@ -31,7 +31,7 @@ from ..dynamics.rotations import rpy_to_matrix
 from ..errors import SceneError
 
 __all__ = ["ConstraintSpec", "parse_constraints", "SceneConstraints", "scene_constraints", "describe_constraints",
-           "plan_constraints", "constraint_toml"]
+           "constraint_toml"]
 
 _KEYS = {"connect": ("name", "kind", "links", "points"), "weld": ("name", "kind", "links", "points", "rpy"),
          "joint": ("name", "kind", "coordinates", "coefficients", "reference")}
@@ -213,25 +213,6 @@ def scene_constraints(scene, model, specs=None) -> SceneConstraints | None:
     q0, _ = scene.initial_state(model)
     cons = [_resolve(s, model, q0, where, k) for k, s in enumerate(specs)]
     return SceneConstraints(ConstraintSet(model, cons), tendons)
-
-
-def plan_constraints(scene, model) -> SceneConstraints | None:
-    """The scene's ``[[constraint]]`` blocks and, with ``[constraints] from_file``, the file's equalities and
-    fixed tendons (:mod:`urdf2links.scenes.file_constraints`), on ``model``; None without any."""
-    specs, tendons, notes = list(scene.constraints), [], []
-    where = str(scene.path or scene.name)
-    if getattr(scene, "mimic_constraints", False):
-        specs = mimic_specs(model, where) + specs
-    if getattr(scene, "file_constraints", False):
-        from .file_constraints import file_constraints
-
-        fs, tendons, notes = file_constraints(model, scene, where)
-        specs = fs + specs
-    sc = scene_constraints(scene, model, specs)
-    if tendons or notes:
-        sc = SceneConstraints(ConstraintSet(model, [] if sc is None else sc.cset.constraints), tuple(tendons),
-                              list(notes))
-    return sc
 
 
 def describe_constraints(sc: SceneConstraints | None, model) -> list[str]:

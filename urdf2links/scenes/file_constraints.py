@@ -6,7 +6,8 @@
 actuators whose transmission is a tendon when the scene names them (``[[actuator]] name = ...``,
 ``ctrl = ...``; MuJoCo's law (E55) on the tendon's length). A joint equality in MuJoCo's ``qpos`` becomes
 one in the model's coordinates ``q = s qpos + o``: ``q_a - r_a = s_a sum_k c_k s_b^-k (q_b - r_b)^k`` with
-``r = o + s qpos0``.
+``r = o + s qpos0``. :func:`plan_constraints` joins them with the scene's own ``[[constraint]]`` blocks and a URDF's
+mimic couplings (:mod:`urdf2links.scenes.constraints`): the plan's constraints.
 """
 
 from __future__ import annotations
@@ -15,10 +16,11 @@ import numpy as np
 
 from ..errors import SceneError
 from .actuators import Actuator
-from .constraints import ConstraintSpec
+from ..dynamics.constraints import ConstraintSet
+from .constraints import ConstraintSpec, SceneConstraints, mimic_specs, scene_constraints
 from .tendons import FixedTendon
 
-__all__ = ["file_constraints", "tendon_actuator_names"]
+__all__ = ["file_constraints", "plan_constraints", "tendon_actuator_names"]
 
 
 def _coordinate(model, joint, where, eq):
@@ -115,3 +117,20 @@ def file_constraints(model, scene, where) -> tuple[list[ConstraintSpec], list[Fi
         if td.stiffness or td.damping or td.actuators:
             tendons.append(td)
     return specs, tendons, notes
+
+
+def plan_constraints(scene, model) -> SceneConstraints | None:
+    """The scene's ``[[constraint]]`` blocks and, with ``[constraints] from_file``, the file's equalities and
+    fixed tendons (:func:`file_constraints`), on ``model``; None without any."""
+    specs, tendons, notes = list(scene.constraints), [], []
+    where = str(scene.path or scene.name)
+    if getattr(scene, "mimic_constraints", False):
+        specs = mimic_specs(model, where) + specs
+    if getattr(scene, "file_constraints", False):
+        fs, tendons, notes = file_constraints(model, scene, where)
+        specs = fs + specs
+    sc = scene_constraints(scene, model, specs)
+    if tendons or notes:
+        sc = SceneConstraints(ConstraintSet(model, [] if sc is None else sc.cset.constraints), tuple(tendons),
+                              list(notes))
+    return sc

@@ -41,7 +41,8 @@ import numpy as np
 from ..dynamics.transforms import BaseState
 from .actuators import actuator_forces, describe_actuator, resolve_actuators
 from .contact import resolve_contacts
-from .constraints import describe_constraints, plan_constraints
+from .constraints import describe_constraints
+from .file_constraints import plan_constraints
 from .functions import Constant
 from .scene_kernels import CompiledScene
 

@@ -1,7 +1,7 @@
 """The visible geometry of an MJCF model: MuJoCo's compiled geoms as the animation's and thumbnail's shapes.
 
 Each body's geoms (``geom_type``, ``geom_size``, ``geom_pos``, ``geom_quat``, ``geom_rgba`` of the
-compiled model) become :class:`~urdf2links.view.visuals.Shape` s in the body's frame (the frame
+compiled model) become :class:`~urdf2links.view.shapes.Shape` s in the body's frame (the frame
 ``model.info["frame_of"]`` places, like a URDF link's): boxes, cylinders and spheres as such; capsules
 and ellipsoids tessellated; meshes from MuJoCo's own vertices (``mesh_vert``, ``mesh_face``). Planes and
 height fields (floors), the world body's geoms and invisible geoms (alpha 0) are left out.
@@ -14,7 +14,7 @@ import numpy as np
 from ..dynamics.rotations import homogeneous
 from ..parsers.mjcf import compile_mjcf
 from ..parsers.mjcf_state import quat_to_matrix
-from .visuals import RobotShapes, Shape
+from .shapes import RobotShapes, Shape
 
 __all__ = ["mjcf_shapes"]
 

@@ -17,13 +17,13 @@ The colour of a ``<visual>`` is the mesh file's own (URDF ``<material>`` colours
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from ..dynamics.rotations import homogeneous, rpy_to_matrix
 from ..errors import MeshError, URDFError
 from ..parsers.description import Geometry, RobotDescription
+from .mjcf_visuals import mjcf_shapes
+from .shapes import RobotShapes, Shape
 
 __all__ = ["Shape", "RobotShapes", "robot_shapes", "model_shapes", "scene_shapes", "decimate", "tessellate",
            "DEFAULT_MAX_FACES", "MIN_PART_FACES"]
@@ -33,63 +33,6 @@ DEFAULT_MAX_FACES = 40_000
 #: Mesh parts of at most this many triangles are kept whole (decimating small parts, thin rings and
 #: caps, loses whole pieces of them); larger ones are decimated to at least this many.
 MIN_PART_FACES = 400
-
-
-@dataclass(frozen=True, eq=False)
-class Shape:
-    """One shape of a link, in the link's frame through ``origin`` (4, 4).
-
-    ``kind``: ``"box"`` (``size`` (3,)), ``"cylinder"`` (``radius``, ``length``, axis z),
-    ``"sphere"`` (``radius``), ``"mesh"`` (``vertices`` (V, 3) float32 in the shape's frame,
-    ``faces`` (F, 3) int32) or ``"frame"`` (the link's axes). ``source``: ``"visual"``,
-    ``"collision"`` or ``"frame"``. ``color`` (3,) in 0..1, or None for the viewer's default.
-    """
-
-    link: str
-    kind: str
-    origin: np.ndarray
-    source: str
-    size: np.ndarray | None = None
-    radius: float | None = None
-    length: float | None = None
-    vertices: np.ndarray | None = None
-    faces: np.ndarray | None = None
-    color: tuple | None = None
-
-    def centre(self) -> np.ndarray:
-        """The centre of the shape's bounding box, in the shape's frame (3,)."""
-        if self.kind == "mesh":
-            return 0.5 * (self.vertices.min(axis=0) + self.vertices.max(axis=0)).astype(float)
-        return np.zeros(3)
-
-    def extent(self) -> float:
-        """Half the diagonal of the shape's bounding box (m): how far it reaches from :meth:`centre`."""
-        if self.kind == "box":
-            return 0.5 * float(np.linalg.norm(self.size))
-        if self.kind == "cylinder":
-            return float(np.hypot(self.radius, 0.5 * self.length))
-        if self.kind == "sphere":
-            return float(self.radius)
-        if self.kind == "mesh":
-            return 0.5 * float(np.linalg.norm(self.vertices.max(axis=0) - self.vertices.min(axis=0)))
-        return 0.0
-
-
-@dataclass(frozen=True, eq=False)
-class RobotShapes:
-    """The shapes of a robot: ``links`` (URDF links, file order), ``shapes``, ``notes`` (what was
-    decimated, replaced or could not be read), ``faces`` (mesh triangles kept) and ``faces_read``
-    (in the files)."""
-
-    robot: str
-    links: tuple[str, ...]
-    shapes: tuple[Shape, ...]
-    notes: tuple[str, ...] = ()
-    faces: int = 0
-    faces_read: int = 0
-
-    def of(self, link: str) -> tuple[Shape, ...]:
-        return tuple(s for s in self.shapes if s.link == link)
 
 
 def _origin(geometry: Geometry) -> np.ndarray:
@@ -257,8 +200,6 @@ def model_shapes(model, *, description: RobotDescription | None = None, package_
     from ..parsers.urdf import parse_urdf
 
     if description is None and model.info.get("format") == "mjcf" and model.info.get("source_file"):
-        from .mjcf_visuals import mjcf_shapes
-
         return mjcf_shapes(model)
     if description is None and model.source and model.source != "<string>":
         try:

@@ -19,6 +19,7 @@ import numpy as np
 
 from ..dense import DenseOutput
 from .erk import TABLEAUX
+from .stretches import run_erk, run_radau
 from .stiffness import (BACKOFF, E_HLAMB, E_HSUM, E_IASTI, E_RATIO, RATIO_HLAMBDA, STIFF_HLAMBDA, STIFF_RATIO,
                         STIFF_TESTS, SWITCH_BACK)
 
@@ -63,8 +64,6 @@ def drive_auto(drv, loops, args, f0, t0, t1, y0, rtol, atol, dt, need_dense, str
     their dense outputs joined, and one dict per stretch (``method``, ``t0``, ``t1``, ``steps``,
     ``nfev``, ``njev``, ``rejected``, ``started``, ``start_figures``, ``ended``, ``end_figures``, and
     ``declined``: the stiff verdicts a DOP853 stretch did not follow, with the rates compared)."""
-    from .driver import run_erk, run_radau
-
     nq, nv = structure
     tab = TABLEAUX["DOP853"]
     t, y, f, h = t0, y0, f0, None
