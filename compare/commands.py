@@ -94,9 +94,13 @@ def _print_headline(s: dict, stream=None) -> None:
     if s.get("contact"):        # issue 37: MuJoCo's native contact beside the law
         nat = s["contact"]["native"]
         b, st = nat["base_height"], nat["settle_time"]
-        print(f"  contact    MuJoCo's native contact (a reference): base height {b['native_final'] - b['ours_final']:+.2e} m "
-              f"at the end (largest difference {b['max_difference']:.2e} m), feet {nat['feet']['final_max_distance']:.2e} m "
-              f"apart, settled at {st['ours'] if st['ours'] is not None else 'never'} / "
+        ground = f", the ground at {b['ground']:.4g} m" if b.get("ground") is not None else ""
+        print(f"  contact    base height at the end (the root link's z{ground}): urdf2links {b['ours_final']:.4g} m"
+              + (f" (lowest {b['ours_min']:.4g} m)" if "ours_min" in b else "")
+              + f", MuJoCo's native contact (a reference) {b['native_final']:.4g} m; difference native - urdf2links "
+              f"{b['native_final'] - b['ours_final']:+.2e} m (largest {b['max_difference']:.2e} m)", file=stream)
+        print(f"             feet {nat['feet']['final_max_distance']:.2e} m apart at the end, settled at "
+              f"{st['ours'] if st['ours'] is not None else 'never'} / "
               f"{st['native'] if st['native'] is not None else 'never'} s (law / native)", file=stream)
     if s.get("coverage"):
         print(f"  coverage   {s['coverage']['text']}", file=stream)
@@ -112,7 +116,9 @@ def _compare_cmd(args) -> str:
     parts = ["urdf2links compare", shown_path(args.scene)]
     parts += [f for f, on in (("--floating", args.floating), (f"--q0 {args.q0}", args.q0 != "excite"),
                               (f"--inertia {args.inertia}", args.inertia), (f"--mimic {args.mimic}", args.mimic),
-                              ("--strict", args.strict)) if on]
+                              ("--strict", args.strict), ("--hold", getattr(args, "hold", False)),
+                              ("--ground", getattr(args, "ground", False)),     # issue 43: and the file's floor
+                              ("--no-floor", getattr(args, "no_floor", False))) if on]
     parts += [f"--package-dir {shown_path(d)}" for d in args.package_dir] + [f"--xacro-arg {a}" for a in args.xacro_arg]
     for flag, value, default in (("--t-end", args.t_end, None), ("--mujoco-integrator", args.mujoco_integrator, "RK4"),
                                  ("--mujoco-dt", args.mujoco_dt, 1e-4), ("--method", args.method, None),

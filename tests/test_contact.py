@@ -221,23 +221,33 @@ def test_mjcf_capsule_ends_and_spheres_are_contact_spheres():
     assert np.max(np.abs(np.array(got) - np.array(want))) < 1e-12
 
 
-def test_ground_takes_the_lowest_spheres_and_touches_at_q0(quad):
-    """--ground on quad12 (floating): its lowest foot spheres, the plane through their lowest point at q0, and
-    --hold's servos on the trunk's six coordinates removed; the scene written as TOML reads back the same."""
-    from urdf2links.scenes.contact import resolve_contacts, with_ground
+def test_ground_stands_the_robot_on_its_feet_whatever_its_q0(quad):
+    """--ground on quad12 (floating), from a q0 with one leg bent up: its four feet all the same (the stance
+    resets the joints), the ground at 0 with the lowest foot SETTLE into it, --hold's servos replaced by the
+    stance's twelve (none on the trunk); the scene written as TOML reads back the same, its sway included."""
+    import tomllib
+
+    from urdf2links.scenes.contact import SETTLE, resolve_contacts
     from urdf2links.scenes.scene import default_scene
     from urdf2links.scenes.scene_toml import scene_toml
+    from urdf2links.scenes.stance import with_ground
 
     q0 = {"FL_thigh": 0.6, "FL_knee": -1.2}
     scene = with_ground(replace_q0(default_scene(ROBOTS / "quad12.urdf", floating=True, q0="zero", hold=2.0), q0), quad)
     assert scene.name.endswith("-ground") and len(scene.actuators) == 12
+    assert {a.source for a in scene.actuators} == {"stand"}
     assert all(not a.coordinate.startswith("trunk.") for a in scene.actuators)
-    cset = resolve_contacts(scene.contacts, quad, scene.initial_state(quad)[0])
-    # the legs hang straight (0.36 m below the hip) except FL's, bent 9 cm up: the other three feet are lowest
-    assert sorted(s.link for s in cset.spheres) == ["FR_calf", "RL_calf", "RR_calf"]
-    assert cset.rows[0][4] == pytest.approx(-0.36 - 0.02, abs=1e-12)
-    back = scene_from_dict(__import__("tomllib").loads(scene_toml(scene)), name="back")
+    q = scene.initial_state(quad)[0]
+    cset = resolve_contacts(scene.contacts, quad, q)
+    assert sorted(s.link for s in cset.spheres) == ["FL_calf", "FR_calf", "RL_calf", "RR_calf"]
+    assert cset.rows[0][4] == 0.0
+    poses = urdf_link_poses(quad, q)
+    bottoms = [(poses[s.link][:3, :3] @ s.centre + poses[s.link][:3, 3])[2] - s.radius for s in cset.spheres]
+    # the balanced stance puts the four feet at one height (least squares to ~1e-9 m)
+    assert min(bottoms) == pytest.approx(-SETTLE, abs=1e-12) and max(bottoms) - min(bottoms) < 1e-6
+    back = scene_from_dict(tomllib.loads(scene_toml(scene)), name="back")
     assert _same_specs(back.contacts, scene.contacts)
+    assert [a.ctrl.describe() for a in back.actuators] == [a.ctrl.describe() for a in scene.actuators]
 
 
 def replace_q0(scene, q0):
@@ -247,26 +257,28 @@ def replace_q0(scene, q0):
 
 
 def _same_specs(a, b) -> bool:
-    return len(a) == len(b) and all(x.describe() == y.describe() and x.lowest == y.lowest for x, y in zip(a, b))
+    return len(a) == len(b) and all(x.describe() == y.describe() and x.lowest == y.lowest
+                                    and [s.link for s in x.spheres] == [s.link for s in y.spheres] for x, y in zip(a, b))
 
 
 def test_ground_on_a_robot_without_collision_spheres():
-    """solo12 has only meshes: --ground puts 2 cm spheres at its lowest leaf links, the four feet."""
+    """solo12 has only meshes: --ground puts 2 cm spheres at its links named foot, the four feet."""
     from corpus import ROOT
 
-    from urdf2links.scenes.contact import resolve_contacts, with_ground
+    from urdf2links.scenes.contact import resolve_contacts
     from urdf2links.scenes.scene import default_scene
+    from urdf2links.scenes.stance import with_ground
 
     scene = with_ground(default_scene(ROOT / "solo_description/robots/solo12.urdf", floating=True, q0="zero"))
     model = scene.model()
     cset = resolve_contacts(scene.contacts, model, scene.initial_state(model)[0])
     assert sorted(s.link for s in cset.spheres) == ["FL_FOOT", "FR_FOOT", "HL_FOOT", "HR_FOOT"]
-    assert "no collision spheres" in " ".join(cset.notes)
+    assert "no collision spheres" in " ".join(scene.notes) and "FL_FOOT" in " ".join(scene.notes)
 
 
 def test_ground_refuses_a_fixed_base():
-    from urdf2links.scenes.contact import with_ground
     from urdf2links.scenes.scene import default_scene
+    from urdf2links.scenes.stance import with_ground
 
     with pytest.raises(SceneError, match="fixed base.*--floating"):
         with_ground(default_scene(ROBOTS / "quad12.urdf"))

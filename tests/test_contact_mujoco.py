@@ -90,21 +90,26 @@ def test_native_contact_holds_the_robot_up_near_the_law(stand):
 
 @pytest.mark.usefixtures("corpus_installed")
 def test_ground_on_go1_agrees_once_mujocos_step_resolves_the_contact():
-    """go1 (example-robot-data) in its floating default scene with --ground collapses onto its feet; an impact
-    at t ~ 0.55 s makes the contact's stiffest mode ~1e5 /s: MuJoCo's RK4 step is halved for it (at 1e-4 s
-    the feet land 7e-2 rad away, not blowing up) and the engines then agree."""
+    """go1 (example-robot-data) at q = 0 on its four feet, its joints free (issue 37's --ground; since issue 43
+    --ground holds a stance, tests/test_stance.py), collapses onto its feet; an impact at t ~ 0.55 s makes the
+    contact's stiffest mode ~1e5 /s: MuJoCo's RK4 step is halved for it (at 1e-4 s the feet land 7e-2 rad
+    away, not blowing up) and the engines then agree."""
+    import dataclasses
     import warnings
 
     from corpus import ROOT
 
     from urdf2links.compare.mujoco_side.contact_inputs import contact_timestep
-    from urdf2links.scenes.contact import with_ground
+    from urdf2links.scenes.contact import _robot_spheres, ground_contact
     from urdf2links.scenes.scene import default_scene
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")         # go1's base inertia finding: audited, not the point here
-        scene = with_ground(default_scene(ROOT / "go1_description/urdf/go1.urdf", floating=True, q0="zero", t_end=0.6))
+        scene = default_scene(ROOT / "go1_description/urdf/go1.urdf", floating=True, q0="zero", t_end=0.6)
         model = scene.model()
+    feet = _robot_spheres(model)
+    assert sorted(s.link for s in feet) == ["FL_foot", "FR_foot", "RL_foot", "RR_foot"]
+    scene = dataclasses.replace(scene, contacts=(dataclasses.replace(ground_contact(model, feet), height="touching"),))
     plan = compile_plan(scene, model)
     traj = simulate(plan, samples=121, progress=False)
     dt, note = contact_timestep(plan, traj, 1e-4)

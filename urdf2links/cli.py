@@ -130,7 +130,7 @@ def _joint_lines(joints) -> list[str]:
 
 def _inspect(args) -> int:
     from .scenes.plan import compile_plan
-    from .scenes.scene_toml import hold_of, load_options_of, scene_or_robot, scene_with_plan
+    from .scenes.scene_toml import ground_of, hold_of, load_options_of, scene_or_robot, scene_with_plan
 
     if args.scene or str(args.file).endswith(".toml"):
         scene = scene_or_robot(args.file, q0=args.q0, seed=args.seed, t_end=args.t_end, load=load_options_of(args),
@@ -138,10 +138,7 @@ def _inspect(args) -> int:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             model = scene.model()
-        if getattr(args, "ground", False):      # issue 37
-            from .scenes.contact import with_ground
-
-            scene = with_ground(scene, model)
+        scene = ground_of(args, scene, model)     # issues 37, 43: --ground, the file's floor
         print(scene_with_plan(scene, compile_plan(scene, model).describe()))     # a default scene: TOML that parses
         return 0
     from .parsers.robot_file import load_robot
@@ -383,8 +380,8 @@ def _add_default_scene_options(p, *, seed: bool = True, write_scene: bool = True
     g.add_argument("--hold", action="store_true", help="hold the robot at q0: a position servo on every coordinate, "
                    "critically damped at --hold-bandwidth, gains from the mass matrix at q0 (both engines)")
     g.add_argument("--hold-bandwidth", type=float, metavar="HZ", help="the servos' bandwidth with --hold (default 2 Hz)")
-    g.add_argument("--ground", action="store_true", help="a floating robot on the ground: contact at its lowest "
-                   "collision spheres (else its lowest leaf links), touching at q0 (docs/contact.md)")
+    g.add_argument("--ground", action="store_true", help="a floating robot standing on the ground (docs/contact.md)")
+    g.add_argument("--no-floor", action="store_true", help="drop an MJCF file's own floor (kept by default)")
     if write_scene:
         g.add_argument("--write-scene", metavar="FILE.toml", help="also write the default scene to FILE.toml, to "
                        "edit and run by name")

@@ -502,7 +502,8 @@ def _run_notes(scene, plan, mj, run, traj, t_end_note, *, resampled: bool) -> li
         notes.append(f"the project re-charted the ZYX angles of {sorted({r['link'] for r in traj.stats['recharts']})} "
                      f"{traj.stats['n_recharts']} times near phi_y = +-pi/2 (urdf2links.integration.charts); its q are converted "
                      "back to the loaded model's coordinates, which MuJoCo integrates as hinges through the singularity")
-    notes += [f"scene: {x}" for x in (*plan.spring_set.notes, *plan.actuator_set.notes)]
+    # issue 43: the scene's own notes too (--ground's feet and loads, loading options given)
+    notes += [f"scene: {x}" for x in (*plan.spring_set.notes, *plan.actuator_set.notes, *plan.scene.notes)]
     clamps = [a.name for a in plan.actuator_set.actuators if a.ctrlrange is not None or a.forcerange is not None]
     if clamps:
         notes.append(f"the clamps of {', '.join(clamps[:6])} (ctrlrange, forcerange) make the right-hand side non-smooth "

@@ -150,7 +150,10 @@ def native_figures(plan, ours_t, ours_q, ours_kinetic, run) -> dict:
         return np.sum(np.linalg.norm(tang, axis=2) * touch, axis=0)
     s_o, s_m = slip(p_o), slip(p_m)
     return {
+        # issue 43: the root link's z in the world (each engine's own), its lowest, and the ground's height under it
         "base_height": {"ours_final": float(T_o[-1, 2]), "native_final": float(T_m[-1, 2]),
+                        "ours_min": float(T_o[:, 2].min()), "native_min": float(T_m[:, 2].min()),
+                        "ground": float(heights[0]) if np.allclose(normals, [0.0, 0.0, 1.0]) else None,
                         "max_difference": float(np.max(np.abs(T_o[:, 2] - T_m[:, 2])))},
         "feet": {"final_max_distance": float(np.max(np.linalg.norm(p_o[-1] - p_m[-1], axis=1))),
                  "slip_ours_max": float(s_o.max()), "slip_native_max": float(s_m.max()),

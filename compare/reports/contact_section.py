@@ -22,8 +22,11 @@ def _settle(x) -> str:
 
 def _rows(nat: dict) -> list[list[str]]:
     b, f, s = nat["base_height"], nat["feet"], nat["settle_time"]
-    return [["base height at the end (m)", fmt(b["ours_final"]), fmt(b["native_final"]),
+    return [["base height at the end (m, the root link's z" + (f"; ground at {b['ground']:g} m" if b.get("ground")
+                                                                   is not None else "") + ")", fmt(b["ours_final"]), fmt(b["native_final"]),
              fmt(b["native_final"] - b["ours_final"])],
+            *([["lowest base height (m)", fmt(b["ours_min"]), fmt(b["native_min"]),
+                fmt(b["native_min"] - b["ours_min"])]] if "ours_min" in b else []),
             ["largest base height difference (m)", "", "", fmt(b["max_difference"])],
             ["feet: largest distance at the end (m)", "", "", fmt(f["final_max_distance"])],
             ["largest slip of a sphere while touching (m)", fmt(f["slip_ours_max"]), fmt(f["slip_native_max"]),

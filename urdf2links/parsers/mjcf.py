@@ -412,6 +412,21 @@ class _Builder:
             out += [(body, (pos + axis).tolist(), r), (body, (pos - axis).tolist(), r)]
         return out
 
+    def floors(self) -> list:
+        """Issue 43: every colliding plane geom of the world body (the file's floor): ``{name, height, normal,
+        friction}`` (``height`` along the unit ``normal``, ``friction`` its sliding friction), for ``--ground``."""
+        m, mj, out = self.m, self.mj, []
+        for g in range(m.ngeom):
+            if int(m.geom_type[g]) != int(mj.mjtGeom.mjGEOM_PLANE) or m.geom_bodyid[g] != 0 \
+                    or not (m.geom_contype[g] or m.geom_conaffinity[g]):
+                continue
+            R = np.empty(9)
+            mj.mju_quat2Mat(R, np.array(m.geom_quat[g], float))
+            normal = R.reshape(3, 3)[:, 2]
+            out.append({"name": self.name("mjOBJ_GEOM", g, f"geom{g}"), "normal": normal.tolist(),
+                        "height": float(normal @ np.array(m.geom_pos[g], float)), "friction": float(m.geom_friction[g, 0])})
+        return out
+
     def model(self) -> Model:
         m, mj = self.m, self.mj
         tree = self.build()
@@ -450,6 +465,7 @@ class _Builder:
                 "frame_of": frame_of, "equalities": equalities, "tendons": tendons, "mujoco": qmap, "q0": q0, "home": home,
                 "closed": {"equalities": int(m.neq), "tendons": int(m.ntendon)}, "gravcomp": gravcomp, "body_mass_com": coms,
                 "collision_spheres": self.collision_spheres(),      # issue 37: for [[contact]]
+                "floors": self.floors(),        # issue 43: the file's floor, kept by the default scene
                 "actuators": self.actuator_rows(kinds, {j: names for j, (_, _, _, _, names) in
                                                         enumerate(self.mj_joints)}),
                 "option": {"gravity": gravity.tolist(), "timestep": float(m.opt.timestep), "integrator": integrator,

@@ -7,7 +7,8 @@ spheres, with one compliant law (docs/equations.md (E77)-(E80)):
   and/or ``links = [...]``: the robot's own collision spheres on those links (URDF ``<collision>`` spheres,
   MJCF sphere geoms and both ends of capsule geoms), and/or ``lowest = true``: the robot's collision spheres
   lowest at the initial state (within :data:`LOWEST_BAND` of the lowest), or, for a robot without any,
-  spheres of :data:`FALLBACK_RADIUS` at the origins of its lowest leaf links (``--ground``);
+  spheres of :data:`FALLBACK_RADIUS` at the origins of its lowest leaf links (``--ground`` gives its feet
+  instead, as ``spheres``: :mod:`urdf2links.scenes.stance`);
 - ``height``: a number (m), or ``"touching"``: the plane through the lowest point of the spheres at the
   initial state (the robot starts touching the ground, whatever its initial state);
 - the law: ``law = "hunt_crossley"`` (``f_n = d^e (k + c d')``) or ``"spring_damper"``
@@ -29,7 +30,8 @@ import numpy as np
 from ..errors import SceneError
 
 __all__ = ["ContactSphere", "ContactSpec", "ContactSet", "parse_contacts", "resolve_contacts", "contact_arrays",
-           "ground_contact", "with_ground", "floating_root", "contact_toml", "LAWS", "KC", "LOWEST_BAND", "FALLBACK_RADIUS"]
+           "ground_contact", "floating_root", "contact_toml", "LAWS", "KC", "LOWEST_BAND", "FALLBACK_RADIUS",
+           "SETTLE"]
 
 LAWS = ("hunt_crossley", "spring_damper")
 #: floats per sphere in the packed block: centre (3, tree link frame), radius, normal (3), height, k, c, e,
@@ -39,6 +41,8 @@ KC = 14
 LOWEST_BAND = 0.01
 #: radius (m) of the spheres put at the lowest leaf links of a robot without collision spheres.
 FALLBACK_RADIUS = 0.02
+#: ``--ground``'s static depth (m): the law's stiffness puts the robot's weight on its feet at this depth.
+SETTLE = 0.005
 _KEYS = ("height", "normal", "law", "stiffness", "damping", "exponent", "friction", "slip_speed", "links",
          "spheres", "lowest")
 
@@ -239,25 +243,25 @@ def contact_arrays(cset: ContactSet) -> tuple[np.ndarray, np.ndarray]:
     return links, data.ravel()
 
 
-def ground_contact(model, q0, *, settle: float = 0.005, damping_ratio: float = 0.5, friction: float = 0.8,
-                   slip_speed: float = 0.1) -> ContactSpec:
-    """``--ground``: a ``[[contact]]`` block on a flat ground (normal +z) touching the robot's lowest spheres at
-    ``q0``, Hunt-Crossley with exponent 1.5, stiffness and damping from the robot's weight shared by those
-    spheres (E84): static depth ``settle`` (m), ``damping_ratio`` of the linearised contact at that depth. The
-    defaults (a soft ground, 5 mm, and a slip speed of 0.1 m/s) keep the contact's stiff modes below
-    ~5e3 /s on the shipped quadruped, where MuJoCo's RK4 at 1e-4 s is accurate."""
-    g = 9.81
-    poses = _link_poses(model, q0)
-    low, _ = _lowest(model, poses, np.array([0.0, 0.0, 1.0]))
+def ground_contact(model, feet, *, height: float = 0.0, settle: float = SETTLE, damping_ratio: float = 0.5,
+                   friction: float = 0.8, slip_speed: float = 0.1, sharing: int | None = None) -> ContactSpec:
+    """``--ground``: a ``[[contact]]`` block on a flat ground (normal +z) at ``height`` under the spheres ``feet``
+    (:func:`urdf2links.scenes.stance.choose_feet`), Hunt-Crossley with exponent 1.5, stiffness and damping from
+    the robot's weight shared by those spheres (E84): static depth ``settle`` (m), ``damping_ratio`` of the
+    linearised contact at that depth. The defaults (a soft ground, 5 mm, and a slip speed of 0.1 m/s) keep the
+    contact's stiff modes below ~5e3 /s on the shipped quadruped, where MuJoCo's RK4 at 1e-4 s is accurate;
+    ``friction`` is a file floor's own; ``sharing`` the number of spheres that carry the weight (all of them
+    when None)."""
+    g = float(np.linalg.norm(model.gravity_vector)) or 9.81
     mass = float(np.sum(np.asarray(model.tree.H)[:, 3, 3]))
-    n = max(len(low), 1)
+    n = max(len(feet) if sharing is None else sharing, 1)
     e = 1.5
     f_s = mass * g / n
     k = f_s / settle ** e
     k_lin = e * f_s / settle
     b = 2.0 * damping_ratio * np.sqrt(k_lin * mass / n)
-    return ContactSpec(height="touching", law="hunt_crossley", stiffness=float(k), damping=float(b / settle ** e),
-                       exponent=e, friction=friction, slip_speed=slip_speed, lowest=True)
+    return ContactSpec(height=float(height), law="hunt_crossley", stiffness=float(k), damping=float(b / settle ** e),
+                       exponent=e, friction=float(friction), slip_speed=slip_speed, spheres=tuple(feet))
 
 
 def floating_root(model) -> tuple[str, ...]:
@@ -265,31 +269,6 @@ def floating_root(model) -> tuple[str, ...]:
     coord = np.asarray(model.tree.coord)
     roots = [p for p in range(model.tree.n_links) if model.tree.parent[p] < 0 and np.all(coord[p] >= 0)]
     return tuple(model.coordinate_names[int(i)] for i in coord[roots[0]]) if roots else ()
-
-
-def with_ground(scene, model=None):
-    """``--ground``: the default scene ``scene`` of a floating robot with :func:`ground_contact` added (at its
-    lowest collision spheres, touching the ground at its initial state), named ``<name>-ground``; ``--hold``'s
-    servos on the floating root's six coordinates are removed (the ground carries the base; noted)."""
-    import dataclasses
-
-    if scene.path is not None:
-        raise SceneError(f"{scene.path}: --ground applies to a robot file run in its default scene; a scene file "
-                         "names its ground in [[contact]] blocks")
-    model = scene.model() if model is None else model
-    root = floating_root(model)
-    if not root:
-        raise SceneError(f"--ground: robot {model.name!r} has a fixed base ({scene.robot}); ground contact is for "
-                         "floating robots: add --floating (a URDF), or use an MJCF file with a free joint")
-    q0, _ = scene.initial_state(model)
-    spec = ground_contact(model, q0)
-    held = [a for a in scene.actuators if not (a.source == "hold" and a.coordinate in root)]
-    notes = ((f"--ground: --hold's servos on the floating root ({', '.join(root)}) removed: the ground carries the "
-              "base",) if len(held) < len(scene.actuators) else ())
-    return dataclasses.replace(
-        scene, name=f"{scene.name}-ground", contacts=tuple(scene.contacts) + (spec,), actuators=tuple(held),
-        description=f"{scene.description}; on the ground (--ground): its lowest collision spheres, " + spec.describe(),
-        notes=tuple(scene.notes) + notes)
 
 
 def contact_toml(specs, value) -> list[str]:

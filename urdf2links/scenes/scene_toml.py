@@ -16,15 +16,15 @@ import json
 from dataclasses import fields
 from pathlib import Path
 
-from .contact import contact_toml, with_ground
+from .contact import contact_toml
 from ..errors import SceneError, URDFError
 from ..parsers.xacro_input import parse_xacro_arg
 from .constraints import constraint_toml
 from .expect import expect_toml
 from .scene import RunSettings, Scene, default_scene, load_scene
 
-__all__ = ["scene_toml", "scene_with_plan", "write_scene", "scene_or_robot", "scene_from_args", "write_scene_option", "xacro_args_of",
-           "hold_of"]
+__all__ = ["scene_toml", "scene_with_plan", "write_scene", "scene_or_robot", "scene_from_args", "write_scene_option",
+           "xacro_args_of", "hold_of", "ground_of"]
 
 
 def _value(v) -> str:
@@ -71,12 +71,12 @@ def _run_lines(run: RunSettings) -> list[str]:
 def scene_toml(scene: Scene, *, folder=None) -> str:
     """``scene`` as TOML text (robot path relative to ``folder`` when given). SceneError for a scene
     with time functions (base motion, loads, torques that are not constant), which this writer does not spell."""
-    from .functions import Constant
+    from .functions import Constant, Sines
 
     functions = [w for w, on in (("[base]", scene.base is not None), ("[[force]]/[[moment]]", bool(scene.loads)),
                                  ("[[torque]]", any(not isinstance(f, Constant) for _, f in scene.torques)),
                                  ("[[computed_torque]]", bool(scene.computed_torque)),
-                                 ("[[actuator]] ctrl", any(not isinstance(a.ctrl, Constant) for a in scene.actuators)))
+                                 ("[[actuator]] ctrl", any(not isinstance(a.ctrl, (Constant, Sines)) for a in scene.actuators)))
                  if on]
     if functions:
         raise SceneError(f"scene {scene.name!r}: {', '.join(functions)} hold functions of time, which cannot be "
@@ -131,7 +131,8 @@ def _actuator_lines(actuators) -> list[str]:
     """``[[actuator]]`` blocks of actuators whose ctrl is a constant (``--hold``'s servos, or a scene's)."""
     out = []
     for a in actuators:
-        out.append("[[actuator]]" + ("  # --hold: critically damped on A_ii at q0 (E56)" if a.source == "hold" else ""))
+        out.append("[[actuator]]" + {"hold": "  # --hold: critically damped on A_ii at q0 (E56)",
+                                      "stand": "  # --ground: the stance's servo (docs/contact.md)"}.get(a.source, ""))
         out.append(f"name = {_value(a.name)}")
         if a.coordinate is not None:
             out += [f"coordinate = {_value(a.coordinate)}", f"kind = {_value(a.kind)}"]
@@ -144,8 +145,16 @@ def _actuator_lines(actuators) -> list[str]:
             out.append(f"gear = {_value(float(a.gear))}")
             out += [f"ctrlrange = {_value(list(map(float, a.ctrlrange)))}"] if a.ctrlrange is not None else []
             out += [f"forcerange = {_value(list(map(float, a.forcerange)))}"] if a.forcerange is not None else []
-        out += [f"ctrl = {_value(float(a.ctrl.value))}", ""]
+        out += [f"ctrl = {_ctrl_value(a.ctrl)}", ""]
     return out
+
+
+def _ctrl_value(f) -> str:
+    """A constant ctrl, or a sum of sines (the stance's sway, issue 43) as its TOML table."""
+    if hasattr(f, "value"):
+        return _value(float(f.value))
+    return (f"{{ offset = {_value(float(f.offset))}, rate = {_value(float(f.rate))}, sines = "
+            f"{_value([[float(x) for x in term] for term in f.terms])} }}")
 
 
 def write_scene(scene: Scene, path) -> Path:
@@ -241,7 +250,30 @@ def scene_from_args(args):
     ``--q0``, ``--seed``, ``--t-end``, ``--hold``, ``--ground`` and the loading options."""
     scene = scene_or_robot(args.scene, q0=getattr(args, "q0", "excite"), seed=getattr(args, "seed", 0),
                            t_end=getattr(args, "t_end", None), load=load_options_of(args), hold=hold_of(args))
-    return with_ground(scene) if getattr(args, "ground", False) else scene     # issue 37: --ground
+    return ground_of(args, scene)
+
+
+def ground_of(args, scene, model=None):
+    """``--ground`` (issue 37) and a file's floor (issue 43, ``--no-floor`` drops it) on a robot's default scene
+    (:func:`urdf2links.scenes.stance.ground_for`); the feet chosen are said on stderr."""
+    import warnings
+
+    from ..console import err
+    from ..parsers.robot_file import is_mjcf_path
+    from .stance import ground_for
+
+    ground = bool(getattr(args, "ground", False))
+    if scene.path is not None and not ground or not (ground or is_mjcf_path(scene.robot)):
+        return scene
+    if model is None:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")     # the default scene's audit is inspect's
+            model = scene.model()
+    out = ground_for(scene, model, ground=ground, floor=not getattr(args, "no_floor", False),
+                     q0=getattr(args, "q0", "excite") or "excite", seed=getattr(args, "seed", 0) or 0)
+    for note in out.notes[len(scene.notes):]:
+        err(f"{scene.name}: {note}")
+    return out
 
 
 def write_scene_option(args, scene) -> None:
