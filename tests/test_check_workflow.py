@@ -129,6 +129,7 @@ def test_the_workflows_install_and_check_steps_run_in_a_temporary_repository(tmp
     (repo / "urdf2links.toml").write_text('[[robots]]\nfiles = ["robots/*.urdf"]\n')
     _git(repo, "init", "-q", "-b", "main")
     assert main(["check", str(repo), "--write-workflow", "--from", f"git+file://{PROJECT}@{head}"]) == 0
+    assert main(["check", str(repo), "--write-baselines", "--quiet"]) == 0     # the robots' fingerprints accepted
     _git(repo, "add", "-A")
     _git(repo, "commit", "-qm", "a robot and the workflow")
     flow = yaml.safe_load((repo / WORKFLOW).read_text())
