@@ -267,6 +267,8 @@ def test_the_scope_names_what_a_real_mjcf_file_loses(tmp_path):
     off = {x["effect"]: x for x in v["switched_off"]}
     assert v["scope"].startswith("the model without its ") and v["scope"].removeprefix("the model ") in v["text"]
     assert off["limits"]["count"] == 8 and off["actuators"]["count"] == 8, off
+    # ant.xml's motors have no names: each is named by its index and its joint, never by an empty string
+    assert all(n.startswith("#") and " on " in n for n in off["actuators"]["names"]), off["actuators"]
     if "contact" not in s["effects"]:       # the scene applies no contact: the file's is switched off
         assert off["contact"]["names"][0] == "floor" and "the file's floor 'floor'" in v["scope"]
     for effect in off:

@@ -108,8 +108,10 @@ def switched_off(model, plan, file_model=None) -> list[dict]:
         springs += [j["name"] for j in own if j.get("damping") and j["name"] not in springs]
     out.append(_effect("springs", "the file's joint springs and dampers", springs, "joint"))
     named = {a.name for a in plan.actuator_set.actuators}
-    out.append(_effect("actuators", "the file's actuators", [a["name"] for a in model.info.get("actuators", [])
-                                                             if a.get("name") not in named], "actuator"))
+    acts = [a.get("name") or f"#{k}" + (f" on {a['joint']}" if a.get("joint") else "")   # an unnamed one by its
+            for k, a in enumerate(model.info.get("actuators", []))                          # index and joint
+            if not a.get("name") or a["name"] not in named]
+    out.append(_effect("actuators", "the file's actuators", acts, "actuator"))
     return [x for x in out if x]
 
 
