@@ -22,6 +22,13 @@ code it times. This module watches numba's ``numba:compile`` events (numba's pub
 
 Nothing here imports numba until a compiled function is about to be used (:func:`watch`, called by
 :mod:`urdf2links.numba_cache` when it installs the cache): ``import urdf2links`` stays fast.
+
+**numba's private hooks.** :func:`one_signature` replaces a dispatcher's ``get_call_template`` and
+:func:`kernel` / :func:`c_function` pass the ``_nrt`` option: neither is numba's public API (explicit
+signatures given to ``njit`` would compile every kernel eagerly at import, for every type of array it
+may get, which is what the cold start avoids). numba is therefore pinned to the tested minor release
+(pyproject.toml), and ``tests/test_numba_hooks.py`` fails if either hook stops doing what it does here
+(docs/speed.md, "numba's private hooks").
 """
 
 from __future__ import annotations
@@ -272,10 +279,18 @@ def one_signature(dispatcher):
     ``Literal[int](0)``, ``True`` is ``Literal[bool](True)``) and compiles a callee anew for every
     pattern of constants it is called with (the recursive pass was compiled five times for a
     pendulum). Callers' constants are widened to their plain types (``int64``, ``bool``) here;
-    ``None`` stays ``none`` (the effects' markers, :mod:`urdf2links.scenes.scene_kernels`)."""
+    ``None`` stays ``none`` (the effects' markers, :mod:`urdf2links.scenes.scene_kernels`).
+    ``get_call_template`` is numba's private method through which a compiled caller types (and
+    compiles) a call to a dispatcher; the instance's own replaces it (module doc: pinned, tested)."""
     from numba.core import types
 
-    resolve = dispatcher.get_call_template
+    resolve = getattr(dispatcher, "get_call_template", None)
+    if resolve is None:         # numba's private hook is gone: say so rather than compile a variant per constant
+        import numba
+
+        raise RuntimeError(f"urdf2links.compilation.one_signature: numba {numba.__version__}'s dispatcher has no "
+                           "get_call_template (a private hook); install the numba release pyproject.toml pins "
+                           "(docs/speed.md, \"numba's private hooks\")")
 
     def get_call_template(args, kws):
         return resolve(tuple(types.unliteral(a) for a in args), {k: types.unliteral(v) for k, v in kws.items()})
@@ -292,8 +307,9 @@ def kernel(fn):
     optimizer removes only some of them: they took about a fifth of the time of one forward-dynamics
     evaluation of UR5 (0.13 of 0.77 us, ``perf`` on the compiled loop), more in a batch, where the
     threads share the counts. A function that allocates is refused at compilation ("NRT required but
-    not enabled"), so the option cannot hide a leak. ``tests/test_cold_start.py`` checks that the compiled
-    kernels carry no reference counting."""
+    not enabled", or a typing error for ``np.zeros``), so the option cannot hide a leak.
+    ``tests/test_cold_start.py`` checks that the compiled kernels carry no reference counting;
+    ``tests/test_numba_hooks.py`` that the private option still works (module doc)."""
     from numba import njit
 
     return njit(cache=True, _nrt=False)(fn)

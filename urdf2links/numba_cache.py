@@ -19,6 +19,13 @@ inline the kernels of other files: after an edit of ``dynamics/kernels.py`` the 
 still call the old kernels. The locator's source stamp is therefore the stamp of every compiled
 source file of the package together (path, size, modification time of each file that uses numba):
 an edit of any of them invalidates every cached function, which is then compiled again once.
+
+**numba's private hook.** numba has no public way to add a cache locator: :func:`install` puts one
+first in ``numba.core.caching.CacheImpl._locator_classes``, a subclass of its
+``UserProvidedCacheLocator``. numba is pinned to the tested minor release (pyproject.toml), and
+``tests/test_numba_hooks.py`` checks that the locator is installed and that urdf2links' compiled
+functions cache into this folder (a numba without the list falls back to its documented
+``config.CACHE_DIR``, for every function of the process).
 """
 
 from __future__ import annotations
