@@ -104,6 +104,10 @@ def panda(tmp_path_factory):
                         text)
     assert continuous.count('type="continuous"') == 1
     (repo / URDF).write_text(continuous)
+    # its meshes where its package:// paths resolve from the URDF's folder (check fails a robot whose mesh is
+    # missing, naming it: issue 42)
+    shutil.copytree(ERD / "panda_description" / "meshes",
+                    repo / "robots" / "example-robot-data" / "robots" / "panda_description" / "meshes")
     save_mujoco_import(repo / URDF, repo / MJCF, keep_geometry=False)
     _prepared_mjcf(repo / MJCF)
     (repo / "tests").mkdir()
