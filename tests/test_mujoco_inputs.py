@@ -15,9 +15,11 @@ import pytest
 import mujoco
 
 from urdf2links.compare.mujoco_side.mjcf import mjcf_from_scene  # noqa: E402
+from urdf2links.compare.mujoco_side.mujoco_constraints import with_constraints  # noqa: E402
 from urdf2links.compare.mujoco_side.mujoco_inputs import LayoutError, check_offsets, mjdata_offsets  # noqa: E402
 from urdf2links.compare.mujoco_side.mujoco_run import run_mujoco  # noqa: E402
 from urdf2links.locations import shipped_robots_dir  # noqa: E402
+from urdf2links.scenes.plan import compile_plan  # noqa: E402
 from urdf2links.scenes.scene import load_scene, scene_from_dict  # noqa: E402
 
 ROBOTS = shipped_robots_dir()
@@ -62,6 +64,9 @@ def every_load_scene():
 def _both(scene, *, t_end, integrator="RK4", dt=1e-4, samples=11):
     model = scene.model()
     mj = mjcf_from_scene(scene, model, timestep=dt, integrator=integrator)
+    plan = compile_plan(scene, model)
+    if plan.constraints is not None:        # a closed loop or a tendon: route 1 carries them as compare does
+        mj = with_constraints(mj, plan.constraints)
     fast = run_mujoco(mj, scene, t_end=t_end, samples=samples)
     slow = run_mujoco(mj, scene, t_end=t_end, samples=samples, inputs="python")
     assert mujoco.get_mjcb_control() is None
@@ -107,9 +112,10 @@ def test_compiled_callback_with_euler():
 
 
 def test_timed_region_is_the_engine():
-    """wall_time is inside mj_step only (less than the harness's total), the energy flag is off in
-    the stepping model, and a run without inputs installs no callback."""
-    scene = load_scene(ROBOTS / "ur5_falling.toml")
+    """A passive scene without dampers (the double pendulum): wall_time is inside mj_step only (less than the
+    harness's total), the energy flag is off in the stepping model, and a run without inputs installs no
+    callback."""
+    scene = load_scene(ROBOTS / "double_pendulum_chaos.toml")
     mj = mjcf_from_scene(scene, scene.model(), timestep=1e-3)
     run = run_mujoco(mj, scene, t_end=0.5, samples=51)
     assert run.inputs == "none" and run.callback_calls == 0
