@@ -41,7 +41,7 @@ from urdf2links.scenes.excitation import coordinate_ranges
 
 from urdf2links.integration.simulate import Compilation
 
-from .mjcf import INTEGRATORS
+from .mjcf import INTEGRATORS, add_spec_actuators
 from .mujoco_constraints import route2_constraints
 from .mujoco_inputs import CompiledInputs
 from .mujoco_run import _INTEGRATOR_ENUM, MujocoRun, _blow_ups, implicit_note, instability_note
@@ -134,7 +134,6 @@ def _edit(actuators, gravcomp: dict, notes: list[str]):
     writes them (``general``: dynamics none, gain fixed, bias affine, E55), and the scene's gravcomp on the
     bodies (MuJoCo counts the bodies with gravcomp when it compiles: ``ngravcomp``; a gravcomp set
     afterwards on a model compiled without any would not act)."""
-    import mujoco
 
     def edit(spec):
         for body, f in gravcomp.items():
@@ -143,17 +142,7 @@ def _edit(actuators, gravcomp: dict, notes: list[str]):
                 notes.append(f"gravcomp of body {body!r} not written (the file does not name it)")
                 continue
             b.gravcomp = f
-        for a in actuators:
-            kw = dict(name=a.name, target=a.joint, trntype=mujoco.mjtTrn.mjTRN_JOINT,
-                      dyntype=mujoco.mjtDyn.mjDYN_NONE, gaintype=mujoco.mjtGain.mjGAIN_FIXED,
-                      biastype=mujoco.mjtBias.mjBIAS_AFFINE, gainprm=[a.gain] + [0.0] * 9,
-                      biasprm=list(a.bias) + [0.0] * 7, gear=[a.gear, 0, 0, 0, 0, 0],
-                      ctrllimited=int(a.ctrlrange is not None), forcelimited=int(a.forcerange is not None))
-            if a.ctrlrange is not None:
-                kw["ctrlrange"] = list(a.ctrlrange)
-            if a.forcerange is not None:
-                kw["forcerange"] = list(a.forcerange)
-            spec.add_actuator(**kw)
+        add_spec_actuators(spec, actuators, target=lambda a: a.joint)
     return edit
 
 

@@ -67,7 +67,8 @@ from urdf2links.dynamics.transforms import BaseState
 from urdf2links.integration.simulate import Compilation
 from urdf2links.scenes.file_constraints import tendon_actuator_names
 
-from .mjcf import INTEGRATORS, MjcfModel
+from .mjcf import INTEGRATORS
+from .mjcf_model import MjcfModel
 from .mujoco_inputs import CompiledInputs
 from .tendon_controls import tendon_actuators
 
