@@ -10,7 +10,8 @@ _numba_cache.install()     # before any compiled function is defined (idempotent
 
 from .agreement.terms import TermsComparison, compare_terms_urdf, massless_moving_links, repaired_urdf_text
 from .agreement.trajectory import DIVERGENCE_THRESHOLD, SceneComparison, compare_scene, growth_fit, scene_key
-from .mujoco_side.mjcf import MjcfModel, mjcf_from_model, mjcf_from_scene
+from .mujoco_side.mjcf import mjcf_from_model, mjcf_from_scene
+from .mujoco_side.mjcf_model import MjcfModel
 from .mujoco_side.mujoco_run import MujocoRun, mujoco_accelerations, run_mujoco
 from .mujoco_side.mujoco_urdf import (
     FREE_DOF_LABELS,

@@ -103,7 +103,7 @@ def test_the_loops_are_compiled_once_whatever_the_effects():
 _CALLBACK = """
 import json
 from numba import cfunc, types
-from urdf2links.compare.mujoco_side import mujoco_inputs as MI
+from urdf2links.compare.mujoco_side import control_callback as MI
 sig = types.void(types.voidptr, types.voidptr)
 got = {}
 for name, effects in (("none", (None,) * 5), ("ct", (1, None, None, None, None))):

@@ -1,4 +1,4 @@
-"""The compiled control callback (urdf2links.compare.mujoco_side.mujoco_inputs) against the Python one it replaces.
+"""The compiled control callback (urdf2links.compare.mujoco_side.control_callback) against the Python one it replaces.
 
 The Python callback (``run_mujoco(..., inputs="python")``, numpy at every RK4 stage) is the harness
 the MuJoCo comparison used before; the compiled one must give the same trajectories to 1e-12 on
@@ -16,7 +16,7 @@ import mujoco
 
 from urdf2links.compare.mujoco_side.mjcf import mjcf_from_scene  # noqa: E402
 from urdf2links.compare.mujoco_side.mujoco_constraints import with_constraints  # noqa: E402
-from urdf2links.compare.mujoco_side.mujoco_inputs import LayoutError, check_offsets, mjdata_offsets  # noqa: E402
+from urdf2links.compare.mujoco_side.mjdata_layout import LayoutError, check_offsets, mjdata_offsets  # noqa: E402
 from urdf2links.compare.mujoco_side.mujoco_run import run_mujoco  # noqa: E402
 from urdf2links.locations import shipped_robots_dir  # noqa: E402
 from urdf2links.scenes.plan import compile_plan  # noqa: E402

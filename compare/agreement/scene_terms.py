@@ -27,7 +27,7 @@ from urdf2links.parsers.xacro_input import expand_xacro, is_xacro_path
 from urdf2links.scenes.excitation import coordinate_ranges
 from urdf2links.scenes.scene import Scene, robot_stem
 
-from ..mujoco_side.mjcf import MjcfModel
+from ..mujoco_side.mjcf_model import MjcfModel
 from ..mujoco_side.mujoco_urdf import MujocoRefused
 from .terms import compare_terms_urdf
 
@@ -59,11 +59,11 @@ def _with_gravity(model, gravity):
 
 def _route1_model(model):
     """``model`` as route 1 writes it: without the shared armature of a ball's three angles
-    (:func:`~urdf2links.compare.mujoco_side.mjcf.route1_armature`)."""
+    (:func:`~urdf2links.compare.mujoco_side.mjcf_bodies.route1_armature`)."""
     from urdf2links.dynamics.model import Model
     from urdf2links.dynamics.tree import LinkTree
 
-    from ..mujoco_side.mjcf import route1_armature
+    from ..mujoco_side.mjcf_bodies import route1_armature
 
     arm, balls = route1_armature(model.tree)
     if not balls:

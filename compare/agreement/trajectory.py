@@ -79,7 +79,8 @@ from urdf2links.scenes.coverage import Coverage, coverage
 from urdf2links.scenes.plan import compile_plan
 from urdf2links.scenes.scene import Scene, load_scene, robot_label
 
-from ..mujoco_side.mjcf import MjcfModel, mjcf_from_scene
+from ..mujoco_side.mjcf import mjcf_from_scene
+from ..mujoco_side.mjcf_model import MjcfModel
 from ..mujoco_side.mujoco_mjcf import FILE_LABEL, file_route_inputs, file_runner, file_terms, mujoco_from_mjcf
 from ..mujoco_side.mujoco_constraints import with_constraints
 from ..mujoco_side.tendon_controls import tendon_actuators

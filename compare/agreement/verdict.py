@@ -22,7 +22,7 @@ also ``summary()["trajectory"]["verdict"]``, the line reports show.
 
 from __future__ import annotations
 
-from ..mujoco_side.mujoco_run import instability_note
+from ..mujoco_side.mujoco_stepping import instability_note
 
 __all__ = ["cut_scope", "switched_off", "run_scope", "comparison_verdict", "FULL_SCOPE"]
 

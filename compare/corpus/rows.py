@@ -41,7 +41,7 @@ from urdf2links.scenes.scene import default_scene
 
 from ..formatting import json_ready
 from ..mujoco_side.mjcf import MjcfRefused
-from ..mujoco_side.mujoco_run import instability_note
+from ..mujoco_side.mujoco_stepping import instability_note
 from ..mujoco_side.stable_run import fallback_note
 from ..reports.baselines import check_baseline
 

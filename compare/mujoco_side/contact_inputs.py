@@ -1,7 +1,7 @@
 """The scene's ground contact in MuJoCo's loop: the same law, computed in the compiled control callback (issue 37).
 
 MuJoCo's own contacts are off in route 1 (:mod:`urdf2links.compare.mujoco_side.mjcf`). At every stage of
-MuJoCo's integrator the control callback (:func:`urdf2links.compare.mujoco_side.mujoco_inputs.control`) calls
+MuJoCo's integrator the control callback (:func:`urdf2links.compare.mujoco_side.control_callback.control`) calls
 :func:`add_contact`: MuJoCo's ``qpos``, ``qvel`` are the project's ``q``, ``q'`` (route 1 writes the same
 coordinates, ``qpos_index`` / ``dof_index``), the project's kinematics pass and contact law
 (:mod:`urdf2links.scenes.contact_kernels`, docs/equations.md (E77)-(E80)) give the contact's generalized

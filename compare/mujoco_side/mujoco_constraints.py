@@ -31,7 +31,7 @@ from numpy.polynomial import polynomial as P
 
 from urdf2links.dynamics.constraints import WORLD
 
-from .mjcf import MjcfModel
+from .mjcf_model import MjcfModel
 
 __all__ = ["with_constraints", "shifted_polycoef", "equality_rows", "route2_constraints",
            "SOLIMP", "COMPARE_SOLREF"]

@@ -25,7 +25,6 @@ own run when given). MuJoCo is timed as in route 1: ``mj_step(m, d, nstep=k)`` f
 
 from __future__ import annotations
 
-import contextlib
 import copy
 import dataclasses
 import math
@@ -41,10 +40,12 @@ from urdf2links.scenes.excitation import coordinate_ranges
 
 from urdf2links.integration.simulate import Compilation
 
-from .mjcf import INTEGRATORS
+from .mjcf import add_spec_actuators
 from .mujoco_constraints import route2_constraints
 from .mujoco_inputs import CompiledInputs
-from .mujoco_run import _INTEGRATOR_ENUM, MujocoRun, _blow_ups, implicit_note, instability_note
+from .mujoco_run import MujocoRun
+from .mujoco_stepping import (blow_up_counts, implicit_note, instability_note, integrator_name, recorded_energies,
+                              set_stepping, step_samples)
 from .tendon_controls import tendon_actuators
 
 __all__ = ["MujocoFile", "mujoco_from_mjcf", "file_terms", "run_file", "file_runner", "FILE_LABEL",
@@ -134,7 +135,6 @@ def _edit(actuators, gravcomp: dict, notes: list[str]):
     writes them (``general``: dynamics none, gain fixed, bias affine, E55), and the scene's gravcomp on the
     bodies (MuJoCo counts the bodies with gravcomp when it compiles: ``ngravcomp``; a gravcomp set
     afterwards on a model compiled without any would not act)."""
-    import mujoco
 
     def edit(spec):
         for body, f in gravcomp.items():
@@ -143,17 +143,7 @@ def _edit(actuators, gravcomp: dict, notes: list[str]):
                 notes.append(f"gravcomp of body {body!r} not written (the file does not name it)")
                 continue
             b.gravcomp = f
-        for a in actuators:
-            kw = dict(name=a.name, target=a.joint, trntype=mujoco.mjtTrn.mjTRN_JOINT,
-                      dyntype=mujoco.mjtDyn.mjDYN_NONE, gaintype=mujoco.mjtGain.mjGAIN_FIXED,
-                      biastype=mujoco.mjtBias.mjBIAS_AFFINE, gainprm=[a.gain] + [0.0] * 9,
-                      biasprm=list(a.bias) + [0.0] * 7, gear=[a.gear, 0, 0, 0, 0, 0],
-                      ctrllimited=int(a.ctrlrange is not None), forcelimited=int(a.forcerange is not None))
-            if a.ctrlrange is not None:
-                kw["ctrlrange"] = list(a.ctrlrange)
-            if a.forcerange is not None:
-                kw["forcerange"] = list(a.forcerange)
-            spec.add_actuator(**kw)
+        add_spec_actuators(spec, actuators, target=lambda a: a.joint)
     return edit
 
 
@@ -199,43 +189,76 @@ def mujoco_from_mjcf(plan, *, timestep: float | None = None, integrator: str | N
     """The scene's MJCF robot compiled by MuJoCo with only the scene's effects (module doc)."""
     scene, model = plan.scene, plan.model
     notes: list[str] = []
-    acts = plan.actuator_set.actuators
-    if acts and any(w.startswith("actuators on") for w in file_route_inputs(scene, plan)):
-        notes.append("the scene's actuators are not all carried by the file's joints: this model runs without them "
-                     "(its terms only; the trajectory is route 1's)")
-        acts = ()
-    via_callback = [a for a in acts if _carried(plan, a) is None]
-    if via_callback:
-        notes.append(f"actuators on ball or free joints' angles ({', '.join(a.name for a in via_callback[:6])}"
-                     + (", ..." if len(via_callback) > 6 else "") + "): no MuJoCo joint actuator acts on ZYX angles; "
-                     "the project's law is applied through qfrc_applied from the control callback (f = E^-T tau, E50)")
+    acts = _run_actuators(plan, notes)
     carried_acts = [a for a in acts if _carried(plan, a)]
     tendon_acts = [ta.actuator for ta in tendon_actuators(plan)]     # issue 43: fed their controls too
     own = [a for a in carried_acts if a.source != "file"]
     table = scene.gravcomp_table(model)
     m, where = compile_mjcf(str(scene.robot), notes, edit=_edit(own, table, notes) if own or table else None)
     g = np.zeros(3) if scene.gravity is None else np.asarray(scene.gravity, float)
-    m.opt.gravity[:] = g
-    for name in ("mjDSBL_GRAVITY", "mjDSBL_SPRING", "mjDSBL_DAMPER", "mjDSBL_ACTUATION", "mjDSBL_CLAMPCTRL"):
-        m.opt.disableflags &= ~int(getattr(mujoco.mjtDisableBit, name))    # the scene says (the file's flags notwithstanding)
-    off_flags = [n for n in MUJOCO_OFF if not ((acts or tendon_acts) and n == "mjDSBL_ACTUATION")]
-    for name in off_flags:
-        m.opt.disableflags |= int(getattr(mujoco.mjtDisableBit, name))
+    springs = plan.spring_set.springs
+    off_flags = _scene_flags(m, g, springs, actuated=bool(acts or tendon_acts), gravcomp=bool(table))
     kept = carried_acts + tendon_acts
     ids = dict(zip((a.name for a in kept), _actuation(m, kept, notes))) if kept else {}
-    actuator_ids = [ids.get(a.name, -1) for a in acts]
-    springs = plan.spring_set.springs
-    if not any(s.stiffness > 0 for s in springs) and not table:     # MuJoCo's mj_passive skips gravcomp too
-        m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_SPRING)   # when springs and dampers are both off
+    _scene_springs(m, model, springs)
+    changed = _tendons_off(m, plan, notes)
+    fluid = _fluid_off(m)
+    _scene_gravcomp(m, table, notes, actuated=bool(acts or tendon_acts))
+    set_stepping(m, timestep=timestep, integrator=integrator)
+    notes.append(f"the file compiled by MuJoCo {mujoco.__version__}; gravity {g.tolist()}; disabled: "
+                 + ", ".join(n.removeprefix("mjDSBL_").lower() for n in off_flags)
+                 + "; joint stiffness, springref and damping set to the scene's springs and dampers ("
+                 + (", ".join(f"{s.coordinate}: k {s.stiffness:g} rest {s.rest:g} c {s.damping:g}" for s in springs)
+                    or "none") + ")"
+                 + (f"; {', '.join(changed)} set to 0" if changed else "")
+                 + (f"; fluid {', '.join(fluid)} set to 0" if fluid else ""))
+    return MujocoFile(model=m, source=model, gravity=g, path=where, notes=notes,
+                      actuator_ids=tuple(ids.get(a.name, -1) for a in acts),
+                      tendon_actuator_ids=tuple(ids[a.name] for a in tendon_acts))
+
+
+def _run_actuators(plan, notes: list[str]) -> list:
+    """The scene's actuators MuJoCo's run of the file carries: none when the file's joints do not carry them
+    all, those on ball or free joints' angles through the control callback (both noted)."""
+    acts = list(plan.actuator_set.actuators)
+    if acts and any(w.startswith("actuators on") for w in file_route_inputs(plan.scene, plan)):
+        notes.append("the scene's actuators are not all carried by the file's joints: this model runs without them "
+                     "(its terms only; the trajectory is route 1's)")
+        return []
+    via_callback = [a for a in acts if _carried(plan, a) is None]
+    if via_callback:
+        notes.append(f"actuators on ball or free joints' angles ({', '.join(a.name for a in via_callback[:6])}"
+                     + (", ..." if len(via_callback) > 6 else "") + "): no MuJoCo joint actuator acts on ZYX angles; "
+                     "the project's law is applied through qfrc_applied from the control callback (f = E^-T tau, E50)")
+    return acts
+
+
+def _scene_flags(m, g, springs, *, actuated: bool, gravcomp: bool) -> list[str]:
+    """The scene's gravity ``g`` and MuJoCo's switches as the scene says, the file's flags notwithstanding:
+    gravity, springs, dampers, actuation (when ``actuated``) and clamping on, what the project does not model
+    off (:data:`~urdf2links.parsers.mjcf_notes.MUJOCO_OFF`), springs off without a stiffness (and without
+    ``gravcomp``: MuJoCo's ``mj_passive`` skips gravcomp too when springs and dampers are both off), dampers
+    off without a damping. Returns the flags of MUJOCO_OFF switched off."""
+    m.opt.gravity[:] = g
+    for name in ("mjDSBL_GRAVITY", "mjDSBL_SPRING", "mjDSBL_DAMPER", "mjDSBL_ACTUATION", "mjDSBL_CLAMPCTRL"):
+        m.opt.disableflags &= ~int(getattr(mujoco.mjtDisableBit, name))
+    off_flags = [n for n in MUJOCO_OFF if not (actuated and n == "mjDSBL_ACTUATION")]
+    for name in off_flags:
+        m.opt.disableflags |= int(getattr(mujoco.mjtDisableBit, name))
+    if not any(s.stiffness > 0 for s in springs) and not gravcomp:
+        m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_SPRING)
     if not any(s.damping > 0 for s in springs):
         m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_DAMPER)
+    return off_flags
+
+
+def _scene_springs(m, model, springs) -> None:
+    """The scene's springs and dampers as the joints' ``jnt_stiffness``, ``qpos_spring`` and ``dof_damping``
+    (hinges and slides; 0 everywhere else)."""
     m.jnt_stiffness[:] = 0.0
     m.dof_damping[:] = 0.0
-    qmap = model.info["mujoco"]
-    by_coord = {}
-    for j in qmap.joints:
-        if j.kind in ("hinge", "slide"):
-            by_coord[model.coordinate_names[j.coordinates[0]]] = j
+    by_coord = {model.coordinate_names[j.coordinates[0]]: j for j in model.info["mujoco"].joints
+                if j.kind in ("hinge", "slide")}
     for s in springs:
         j = by_coord[s.coordinate]
         jid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, j.name)
@@ -244,38 +267,39 @@ def mujoco_from_mjcf(plan, *, timestep: float | None = None, integrator: str | N
         m.jnt_stiffness[jid] = s.stiffness
         m.qpos_spring[j.qposadr] = s.rest
         m.dof_damping[j.dofadr] = s.damping
+
+
+def _tendons_off(m, plan, notes: list[str]) -> list[str]:
+    """Tendons' stiffness and damping set to 0, then the file's equalities and fixed tendons on when the scene
+    asks (issue 36: :func:`~urdf2links.compare.mujoco_side.mujoco_constraints.route2_constraints`): what was
+    changed, for the note."""
     changed = [a for a in ("tendon_stiffness", "tendon_damping") if np.any(getattr(m, a))]
     tendons = m.tendon_stiffness.copy(), m.tendon_damping.copy()
     m.tendon_stiffness[:] = 0.0
     m.tendon_damping[:] = 0.0
-    if plan.constraints is not None and plan.scene.file_constraints:    # issue 36: the file's equalities and
+    if plan.constraints is not None and plan.scene.file_constraints:    # the file's equalities and
         changed = route2_constraints(m, plan, tendons, notes)          # fixed tendons act, as written
+    return changed
+
+
+def _fluid_off(m) -> list[str]:
+    """Fluid forces (density, viscosity, wind) set to 0: those that were not, for the note."""
     fluid = [k for k in ("density", "viscosity") if getattr(m.opt, k) != 0.0] + (["wind"] if np.any(m.opt.wind) else [])
     m.opt.density, m.opt.viscosity = 0.0, 0.0
     m.opt.wind[:] = 0.0
+    return fluid
+
+
+def _scene_gravcomp(m, table: dict, notes: list[str], *, actuated: bool) -> None:
+    """``body_gravcomp`` set to the scene's ``[gravcomp]`` (``table``: ``{body: factor}``), noted."""
     before = np.array(m.body_gravcomp)
     for b in range(1, m.nbody):
         m.body_gravcomp[b] = table.get(mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, b) or f"body{b}", 0.0)
     if not np.array_equal(before, m.body_gravcomp):
         notes.append("body gravcomp set to the scene's [gravcomp]" + ("" if table else " (none: the scene does not ask)"))
-    if table and np.any(m.jnt_actgravcomp) and not (acts or tendon_acts):
+    if table and np.any(m.jnt_actgravcomp) and not actuated:
         notes.append("joints with actuatorgravcomp: MuJoCo routes their gravcomp through actuation, which this run "
                      "switches off (the scene names no actuator): MuJoCo applies no gravcomp on them, the project does")
-    if timestep is not None:
-        m.opt.timestep = float(timestep)
-    if integrator is not None:
-        if integrator not in INTEGRATORS:
-            raise ValueError(f"integrator must be one of {INTEGRATORS}, got {integrator!r}")
-        m.opt.integrator = int(_INTEGRATOR_ENUM[integrator])
-    notes.append(f"the file compiled by MuJoCo {mujoco.__version__}; gravity {g.tolist()}; disabled: "
-                 + ", ".join(n.removeprefix("mjDSBL_").lower() for n in off_flags)
-                 + "; joint stiffness, springref and damping set to the scene's springs and dampers ("
-                 + (", ".join(f"{s.coordinate}: k {s.stiffness:g} rest {s.rest:g} c {s.damping:g}" for s in springs)
-                    or "none") + ")"
-                 + (f"; {', '.join(changed)} set to 0" if changed else "")
-                 + (f"; fluid {', '.join(fluid)} set to 0" if fluid else ""))
-    return MujocoFile(model=m, source=model, gravity=g, path=where, notes=notes, actuator_ids=tuple(actuator_ids),
-                      tendon_actuator_ids=tuple(ids[a.name] for a in tendon_acts))
 
 
 def _rel(ours, theirs, floor: float = 0.0) -> float:
@@ -345,46 +369,26 @@ def run_file(mf: MujocoFile, plan, *, t_end: float, samples: int, reference=None
     if offset > 1e-9 * dt:
         notes.append(f"timestep {dt:g} s does not divide the sample interval: samples at the nearest steps "
                      f"(largest offset {offset:.3g} s)")
-    S = len(ks)
-    qpos, qvel, ts = np.empty((S, m.nq)), np.empty((S, m.nv)), np.empty(S)
-    engine, done = 0.0, 0
     fed = mf.actuator_ids or mf.tendon_actuator_ids     # issue 43: controls of actuators on tendons too
     inputs = CompiledInputs.for_file(plan, m, d, mf.actuator_ids) if fed else None
-    with (inputs.installed() if inputs is not None else contextlib.nullcontext()):
-        for j in range(S):
-            k = int(ks[j])
-            if k > done:
-                t0 = clock()
-                mujoco.mj_step(m, d, nstep=k - done)
-                engine += clock() - t0
-                done = k
-            ts[j], qpos[j], qvel[j] = d.time, d.qpos, d.qvel
-    blow = _blow_ups(d)
-    integ = mujoco.mjtIntegrator(int(m.opt.integrator)).name.removeprefix("mjINT_")
-    integ = {"EULER": "Euler", "RK4": "RK4", "IMPLICIT": "implicit", "IMPLICITFAST": "implicitfast"}.get(integ, integ)
+    rec, engine = step_samples(m, d, inputs, ks)
+    ts, qpos, qvel = rec["t"], rec["qpos"], rec["qvel"]
+    blow = blow_up_counts(d)
+    integ = integrator_name(m)
     note = implicit_note(integ, m)
     if note:
         notes.append(note)
     if blow:
         notes.append(instability_note(blow, integ, dt))
         ts = ks * dt
+    S = len(ks)
     q, qd = np.empty((S, model.n)), np.empty((S, model.n))
     prev = np.asarray(q0, float)
     for j in range(S):
         ref = prev if reference is None else np.asarray(reference[j], float)
         q[j], qd[j] = qmap.from_mujoco(qpos[j], qvel[j], reference=ref)
         prev = q[j]
-    me = copy.deepcopy(m)
-    me.opt.enableflags |= int(mujoco.mjtEnableBit.mjENBL_ENERGY)
-    de = mujoco.MjData(me)
-    energy = np.empty((S, 2))
-    for j in range(S):
-        de.qpos[:], de.qvel[:] = qpos[j], qvel[j]
-        mujoco.mj_fwdPosition(me, de)
-        mujoco.mj_energyPos(me, de)
-        mujoco.mj_fwdVelocity(me, de)
-        mujoco.mj_energyVel(me, de)
-        energy[j] = de.energy[1], de.energy[0]
+    energy = recorded_energies(m, rec, lambda me, de: (de.energy[1], de.energy[0]))     # MuJoCo's order: V, E
     return MujocoRun(t=ts, q=q, qd=qd, energy=energy, base_tracking_error=0.0, wall_time=engine, nsteps=int(ks[-1]),
                      timestep=dt, integrator=integ, coordinate_names=model.coordinate_names, notes=notes,
                      harness_time=clock() - start, inputs="none" if inputs is None else "compiled",
@@ -399,10 +403,7 @@ def file_runner(mf: MujocoFile, plan, *, t_end: float, samples: int, reference=N
 
     def run_at(integrator: str, timestep: float) -> MujocoRun:
         m = copy.deepcopy(mf.model)
-        m.opt.timestep = float(timestep)
-        if integrator not in INTEGRATORS:
-            raise ValueError(f"integrator must be one of {INTEGRATORS}, got {integrator!r}")
-        m.opt.integrator = int(_INTEGRATOR_ENUM[integrator])
+        set_stepping(m, timestep=timestep, integrator=integrator)
         return run_file(dataclasses.replace(mf, model=m), plan, t_end=t_end, samples=samples, reference=reference)
 
     return run_at

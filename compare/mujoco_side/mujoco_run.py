@@ -52,9 +52,7 @@ included in the potential).
 
 from __future__ import annotations
 
-import contextlib
 import copy
-import time as _time
 from dataclasses import dataclass, field
 from typing import Callable, Iterable
 
@@ -67,12 +65,14 @@ from urdf2links.dynamics.transforms import BaseState
 from urdf2links.integration.simulate import Compilation
 from urdf2links.scenes.file_constraints import tendon_actuator_names
 
-from .mjcf import INTEGRATORS, MjcfModel
+from .mjcf_model import MjcfModel
 from .mujoco_inputs import CompiledInputs
+from .mujoco_stepping import (blow_up_counts, implicit_note, instability_note, integrator_name, recorded_energies,
+                              set_stepping, step_samples)
 from .tendon_controls import tendon_actuators
 
 __all__ = ["MujocoRun", "run_mujoco", "mujoco_accelerations", "robot_energy", "energy_function", "ENERGY_COLUMNS",
-           "PythonInputs", "INPUTS", "TIMED_REGION", "instability_note", "implicit_note"]
+           "PythonInputs", "INPUTS", "TIMED_REGION"]
 
 ENERGY_COLUMNS = ("kinetic", "potential")
 #: The implementations of the control callback (see the module doc).
@@ -81,14 +81,6 @@ INPUTS = ("compiled", "python")
 TIMED_REGION = ("MuJoCo's engine: the mujoco.mj_step(m, d, nstep=k) calls from sample to sample, energy flag off, "
                 "the control callback (if the scene has inputs) included; not the model copy, the sample copies, "
                 "the energy pass nor the callback's compilation")
-
-_INTEGRATOR_ENUM = {
-    "Euler": mujoco.mjtIntegrator.mjINT_EULER,
-    "RK4": mujoco.mjtIntegrator.mjINT_RK4,
-    "implicit": mujoco.mjtIntegrator.mjINT_IMPLICIT,
-    "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST,
-}
-
 
 @dataclass(frozen=True)
 class MujocoRun:
@@ -389,8 +381,8 @@ def run_mujoco(mj: MjcfModel, scene=None, *, q0=None, qd0=None, t_end: float | N
     if note:
         notes.append(note)
     driver = _inputs(mj, m, d, plan, inputs, explicit, base_fn, torques, loads, ctrl, notes)
-    rec, wall = _stepping(m, d, driver, ks)
-    blow_ups = _blow_ups(d)
+    rec, wall = step_samples(m, d, driver, ks)
+    blow_ups = blow_up_counts(d)
     if blow_ups:
         notes.append(instability_note(blow_ups, integ, dt))
         rec["t"] = ks * dt   # MuJoCo's reset also set d.time back to 0: the samples' times are the steps'
@@ -404,25 +396,6 @@ def run_mujoco(mj: MjcfModel, scene=None, *, q0=None, qd0=None, t_end: float | N
                      harness_time=_clock() - start, inputs=used,
                      callback_calls=0 if driver is None else int(driver.calls),
                      compilation=driver.compilation if isinstance(driver, CompiledInputs) else Compilation())
-
-
-def implicit_note(integ: str, m) -> str | None:
-    """What MuJoCo's integrator ``integ`` treats implicitly in model ``m``, when that makes its trajectory
-    another discretization than the explicit ODE both engines share (None for RK4, or when nothing is):
-    Euler takes joint damping (``dof_damping``) implicitly; implicitfast and implicit take the derivative
-    of every velocity-dependent force (damping, and the actuators' ``b2 gear^2`` and velocity gains;
-    implicit also the Coriolis terms). Their step then converges to the ODE at first order in dt."""
-    damped = bool(np.any(m.dof_damping > 0)) and not (m.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_DAMPER))
-    actuated = m.nu > 0 and not (m.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_ACTUATION))
-    vel = actuated and bool(np.any(m.actuator_biasprm[:, 2] != 0) or np.any(m.actuator_gainprm[:, 2] != 0))
-    if integ == "Euler" and damped:
-        return ("MuJoCo's Euler integrates joint damping implicitly ((M + dt D) qacc = f, mj_EulerSkip): a first-order "
-                "discretization of the same ODE, converging as dt shrinks; the actuators' velocity terms stay explicit")
-    if integ in ("implicit", "implicitfast") and (damped or vel):
-        what = ", ".join(w for w, on in (("joint damping", damped), ("the actuators' velocity feedback (kv)", vel)) if on)
-        return (f"MuJoCo's {integ} integrates {what} implicitly ((M - dt dF/dqvel) qacc = f): a first-order "
-                "discretization of the same ODE, converging as dt shrinks")
-    return None
 
 
 def _inputs(mj, m, d, plan, inputs, explicit, base_fn, torques, loads, ctrl, notes):
@@ -441,25 +414,6 @@ def _inputs(mj, m, d, plan, inputs, explicit, base_fn, torques, loads, ctrl, not
         notes.append("inputs given as Python callables: MuJoCo is driven from the Python control callback at every "
                      "stage (its wall time includes that harness)")
     return PythonInputs(mj, m, d, base=base_fn, torques=torques, loads=loads, ctrl=ctrl)
-
-
-#: MuJoCo's warnings that its state blew up (it then resets the state: ``mj_checkPos/Vel/Acc``).
-_BLOW_UP = ("mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC")
-
-
-def _blow_ups(d) -> dict:
-    """``{"BADQACC": count, ...}``: how often MuJoCo met NaN, Inf or huge values in the run (each time it
-    resets its state: its automatic reset)."""
-    counts = {w.removeprefix("mjWARN_"): int(d.warning[int(getattr(mujoco.mjtWarning, w))].number) for w in _BLOW_UP}
-    return {w: k for w, k in counts.items() if k}
-
-
-def instability_note(blow_ups: dict, integ: str, dt: float) -> str:
-    """What a run's ``blow_ups`` mean, for the notes."""
-    return (f"MuJoCo's simulation became unstable ({', '.join(f'{w} x{k}' for w, k in blow_ups.items())}: NaN, Inf or "
-            f"huge values) and it reset its state each time: its trajectory is not a solution from the first reset "
-            f"on. {integ} at dt {dt:g} s is likely unstable for this model (stiff: large damping or springs on small "
-            f"inertias); a smaller --mujoco-dt or --mujoco-integrator implicit would tell")
 
 
 def _scene_inputs(mj, scene, q0, qd0, t_end, samples, base, torques, loads, ctrl):
@@ -495,60 +449,18 @@ def _configured(mj, timestep, integrator, *, energy: bool):
     """A copy of ``mj``'s model with the timestep and integrator asked for and the energy flag on
     or off; the integrator's name."""
     m = copy.deepcopy(mj.model)
-    if timestep is not None:
-        m.opt.timestep = float(timestep)
-    if integrator is not None:
-        if integrator not in INTEGRATORS:
-            raise ValueError(f"integrator must be one of {INTEGRATORS}, got {integrator!r}")
-        m.opt.integrator = int(_INTEGRATOR_ENUM[integrator])
-    integ = mujoco.mjtIntegrator(int(m.opt.integrator)).name.removeprefix("mjINT_")
-    integ = {"EULER": "Euler", "RK4": "RK4", "IMPLICIT": "implicit", "IMPLICITFAST": "implicitfast"}.get(integ, integ)
+    set_stepping(m, timestep=timestep, integrator=integrator)
+    integ = integrator_name(m)
     flag = int(mujoco.mjtEnableBit.mjENBL_ENERGY)
     m.opt.enableflags = (m.opt.enableflags | flag) if energy else (m.opt.enableflags & ~flag)
     return m, integ
-
-
-def _stepping(m, d, driver, ks):
-    """``mj_step(m, d, nstep)`` from sample to sample (the steps ``ks``), the callback installed;
-    the recorded ``t``, ``qpos``, ``qvel`` and the time spent inside ``mj_step`` (MuJoCo's engine)."""
-    S = len(ks)
-    rec = {"t": np.empty(S), "qpos": np.empty((S, m.nq)), "qvel": np.empty((S, m.nv))}
-    engine = 0.0
-    k_done = 0
-    clock = _time.perf_counter    # inside mj_step nothing compiles: the plain clock, cheapest
-    with (driver.installed() if driver is not None else contextlib.nullcontext()):
-        for j in range(S):
-            k = int(ks[j])
-            if k > k_done:
-                t0 = clock()
-                mujoco.mj_step(m, d, nstep=k - k_done)
-                engine += clock() - t0
-                k_done = k
-            rec["t"][j] = d.time
-            rec["qpos"][j] = d.qpos
-            rec["qvel"][j] = d.qvel
-    if isinstance(driver, CompiledInputs):
-        driver.check()
-    return rec, engine
 
 
 def _recorded(mj, m, rec, base_fn) -> dict:
     """The project's ``q``, ``qd`` at the recorded states, MuJoCo's energies there (the untimed
     energy pass, see the module doc), the base's pose and its largest tracking error."""
     q, qd = rec["qpos"][:, mj.qpos_index], rec["qvel"][:, mj.dof_index]
-    me = copy.deepcopy(m)
-    me.opt.enableflags |= int(mujoco.mjtEnableBit.mjENBL_ENERGY)
-    de = mujoco.MjData(me)
-    energy = np.empty((len(rec["t"]), 2))
-    for j in range(len(rec["t"])):
-        de.time = rec["t"][j]
-        de.qpos[:] = rec["qpos"][j]
-        de.qvel[:] = rec["qvel"][j]
-        mujoco.mj_fwdPosition(me, de)
-        mujoco.mj_energyPos(me, de)
-        mujoco.mj_fwdVelocity(me, de)
-        mujoco.mj_energyVel(me, de)
-        energy[j] = robot_energy(mj, me, de)
+    energy = recorded_energies(m, rec, lambda me, de: robot_energy(mj, me, de))
     out = {"q": q, "qd": qd, "energy": energy, "base": None, "track": 0.0}
     if mj.moving_base:
         bp = np.array(rec["qpos"][:, mj.base_qpos])

@@ -44,6 +44,8 @@ import mujoco
 import numpy as np
 from lxml import etree
 
+from .mjcf import add_spec_actuators
+
 __all__ = [
     "MujocoRefused",
     "MujocoURDF",
@@ -239,18 +241,8 @@ def _compile(text: str, source: str, floating_base: bool, notes: list[str], actu
 def _add_actuators(spec, actuators) -> None:
     """A scene's actuators added to MuJoCo's import as ``general`` actuators on the URDF joints of their
     coordinates (the coordinates of revolute and prismatic joints are those joints' positions), as route 1
-    writes them (E55)."""
-    for a in actuators:
-        kw = dict(name=a.name, target=a.coordinate, trntype=mujoco.mjtTrn.mjTRN_JOINT,
-                  dyntype=mujoco.mjtDyn.mjDYN_NONE, gaintype=mujoco.mjtGain.mjGAIN_FIXED,
-                  biastype=mujoco.mjtBias.mjBIAS_AFFINE, gainprm=[a.gain] + [0.0] * 9,
-                  biasprm=list(a.bias) + [0.0] * 7, gear=[a.gear, 0, 0, 0, 0, 0],
-                  ctrllimited=int(a.ctrlrange is not None), forcelimited=int(a.forcerange is not None))
-        if a.ctrlrange is not None:
-            kw["ctrlrange"] = list(a.ctrlrange)
-        if a.forcerange is not None:
-            kw["forcerange"] = list(a.forcerange)
-        spec.add_actuator(**kw)
+    writes them (E55, :func:`~urdf2links.compare.mujoco_side.mjcf.add_spec_actuators`)."""
+    add_spec_actuators(spec, actuators, target=lambda a: a.coordinate)
 
 
 def _compile_quiet(text: str, source: str, floating_base: bool, notes: list[str], actuators=()):

@@ -3,7 +3,7 @@ evidence that its trajectory has converged.
 
 MuJoCo's RK4 is explicit: on a stiff model (large joint damping on light links, stiff springs,
 high-gain servos) its step must be below ~2.8 / |lambda|, and past that it meets NaN or huge values and
-resets its state (``BADQACC``: :func:`~urdf2links.compare.mujoco_side.mujoco_run.instability_note`).
+resets its state (``BADQACC``: :func:`~urdf2links.compare.mujoco_side.mujoco_stepping.instability_note`).
 Its ``implicitfast`` and ``implicit`` integrators treat the velocity-dependent forces (damping, and a
 servo's velocity gain) implicitly and stay stable there; a stiff spring is still explicit in them.
 :func:`stable_run` runs the asked setting and, after a blow-up, tries in turn :data:`FALLBACKS` at the
@@ -21,7 +21,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .mujoco_run import MujocoRun, instability_note, run_mujoco
+from .mujoco_run import MujocoRun, run_mujoco
+from .mujoco_stepping import instability_note
 
 __all__ = ["stable_run", "FALLBACKS", "STEP_FACTORS", "CONVERGED", "fallback_note"]
 

@@ -41,7 +41,7 @@ from urdf2links.view.visuals import scene_shapes
 
 from ..agreement.trajectory import DIVERGENCE_THRESHOLD, divergence_time
 from ..mujoco_side.mujoco_mjcf import file_runner, mujoco_from_mjcf
-from ..mujoco_side.mujoco_run import _INTEGRATOR_ENUM
+from ..mujoco_side.mujoco_stepping import INTEGRATOR_ENUM
 from ..mujoco_side.mujoco_urdf import MujocoRefused, mujoco_from_urdf
 from ..mujoco_side.stable_run import stable_run
 from .mapping import coordinate_map
@@ -104,7 +104,7 @@ def _mujoco_urdf_run(plan, *, t_end, samples, timestep, integrator) -> tuple[np.
     mj = mujoco_from_urdf(scene.robot, gravity=g, damping=bool(scene.urdf_damping), floating_base=floating)
     m = mj.model
     m.opt.timestep = float(timestep)
-    m.opt.integrator = int(_INTEGRATOR_ENUM[integrator])
+    m.opt.integrator = int(INTEGRATOR_ENUM[integrator])
     names = list(model.coordinate_names)
     root = [i for i, n in enumerate(names) if n not in mj.qpos_of_joint]
     if (len(root) != 6 if floating else root):
