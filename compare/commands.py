@@ -1,5 +1,5 @@
 """The ``compare``, ``report`` and ``tradeoff`` commands of ``urdf2links``: their handlers (the arguments are
-declared in :mod:`urdf2links.cli`, which imports this module only when one of them runs, so that
+declared in :mod:`urdf2links.commands.comparisons`, which imports this module only when one of them runs, so that
 ``import urdf2links`` never imports MuJoCo).
 
 ``urdf2links compare SCENE.toml``: one scene against MuJoCo, a report in

@@ -130,7 +130,7 @@ def test_never_a_traceback(tmp_path, monkeypatch, capsys):
     def broken(args):
         raise KeyError("boom")
 
-    monkeypatch.setattr(cli, "_list", broken)
+    monkeypatch.setitem(cli.COMMANDS, "list", cli.COMMANDS["list"]._replace(run=broken))
     monkeypatch.delenv("URDF2LINKS_DEBUG", raising=False)
     assert main(["list"]) == 2
     err = capsys.readouterr().err

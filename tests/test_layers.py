@@ -35,7 +35,7 @@ LAYERS = [
     ("compare: corpus", ("urdf2links.compare.corpus",)),
     ("compare: check", ("urdf2links.compare.check",)),
     ("compare: commands", ("urdf2links.compare", "urdf2links.compare.commands")),
-    ("command line", ("urdf2links.cli", "urdf2links.__main__", "urdf2links.pytest_plugin")),
+    ("command line", ("urdf2links.cli", "urdf2links.commands", "urdf2links.__main__", "urdf2links.pytest_plugin")),
 ]
 EXACT = {"urdf2links", "urdf2links.compare"}    # prefixes that match only themselves
 
@@ -140,8 +140,8 @@ def test_only_the_command_line_imports_compare():
     when it is active) reaches the MuJoCo side."""
     offenders = []
     for module, path in SOURCES.items():
-        if module.startswith("urdf2links.compare") or module in ("urdf2links.cli", "urdf2links.__main__",
-                                                                 "urdf2links.pytest_plugin"):
+        if module.startswith(("urdf2links.compare", "urdf2links.commands")) or module in (
+                "urdf2links.cli", "urdf2links.__main__", "urdf2links.pytest_plugin"):
             continue
         for line, target in imports_of(path.read_text(), module, is_package=path.name == "__init__.py"):
             if target.startswith("urdf2links.compare"):
