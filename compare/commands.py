@@ -27,7 +27,7 @@ from urdf2links.compilation import clock  # durations without numba's compilatio
 from urdf2links.console import err, shown_path
 from urdf2links.integration.integrators import METHODS
 from urdf2links.locations import DEFAULT_OUT, default_baselines, report_scenes, shipped_robots_dir
-from urdf2links.scenes.scene import load_scene
+from urdf2links.scenes.scene_read import load_scene
 from urdf2links.scenes.scene_toml import load_options_of, override_loading, scene_from_args, write_scene_option
 
 from .agreement.trajectory import compare_scene

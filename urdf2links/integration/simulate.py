@@ -30,7 +30,8 @@ from ..errors import IntegrationError
 from ..ranges import MAX_STEPS
 from ..scenes.limits import limit_excursions
 from ..scenes.plan import Plan, as_plan, compile_plan
-from ..scenes.scene import RunSettings, Scene, check_run
+from ..scenes.scene import RunSettings, Scene
+from ..scenes.scene_checks import check_run
 from .charts import integrate_charted, link_poses
 from .constrained import simulate_constrained
 from .trajectory import TIMED_REGION, Trajectory
@@ -61,7 +62,7 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
     size fell below the spacing of floating-point numbers, more than ``max_steps`` accepted steps
     (default :data:`~urdf2links.ranges.MAX_STEPS`), more than ``max_wall`` seconds of wall time
     (default: no budget; ``--max-wall`` on the command line), a non-finite state. Overrides are checked
-    like a scene's ``[run]`` (:func:`~urdf2links.scenes.scene.check_run`: SceneError naming the value and its range).
+    like a scene's ``[run]`` (:func:`~urdf2links.scenes.scene_checks.check_run`: SceneError naming the value and its range).
     """
     scene, model, plan = _scene_and_model(scene_or_model, model)
     run = scene.run
@@ -145,7 +146,7 @@ def _scene_and_model(scene_or_model, model: Model | None) -> tuple[Scene, Model,
     """The scene to run (a bare Model runs in a scene of gravity alone), its model, and its compiled
     run when the caller passed one (a :class:`~urdf2links.scenes.plan.Plan`: nothing is loaded or
     compiled again)."""
-    from ..scenes.scene import load_scene
+    from ..scenes.scene_read import load_scene
 
     if isinstance(scene_or_model, Plan):
         plan = as_plan(scene_or_model, model=model)
