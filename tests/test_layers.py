@@ -126,6 +126,8 @@ def test_imports_go_downward(module):
     ("urdf2links.compare.mujoco_side.mjcf", "from ..reports.report import write_report"),
     ("urdf2links.compare.tradeoff.study", "from ..corpus import rows"),
     ("urdf2links.compare.corpus.rows", "from ..check.config import read_config"),       # corpus -> check
+    ("urdf2links.scenes.scene_toml", "from ..commands.options import INPUT"),           # scenes -> command line
+    ("urdf2links.compare.commands", "def f():\n    from urdf2links.commands import run\n"),   # compare -> command line
 ])
 def test_a_planted_wrong_way_import_is_caught(module, planted):
     """The check fails on an import that goes up: each planted line added to a real module."""
