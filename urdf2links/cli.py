@@ -41,8 +41,8 @@ def __getattr__(name: str):
 
 class Command(NamedTuple):
     """A sub-command: ``add_arguments(parser)`` declares its options (None: it has none), ``run(args)`` runs it and
-    returns the exit status; ``help`` is its line in ``urdf2links --help``, ``description`` the text of
-    ``urdf2links NAME --help`` (default: ``help``)."""
+    returns the exit status; ``help`` is its line in ``urdf2links --help``, ``description`` the paragraph atop
+    ``urdf2links NAME --help`` (None: none)."""
 
     add_arguments: Callable | None
     run: Callable
