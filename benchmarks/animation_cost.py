@@ -37,7 +37,7 @@ from urdf2links.compare.commands import REPORT_CAP_S, report_t_end, shipped_scen
 from urdf2links.compare.reports.motion import comparison_animation
 from urdf2links.compare.reports.report import write_report
 from urdf2links.locations import example_robot_data_dir
-from urdf2links.scenes.scene import load_scene
+from urdf2links.scenes.scene_read import load_scene
 from urdf2links.view.animation import DEFAULT_FPS, read_animation_data
 
 BUDGET_MB, BUDGET_S = 5.0, 5.0

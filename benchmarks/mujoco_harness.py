@@ -34,7 +34,7 @@ from urdf2links.compare.mujoco_side.mjcf import mjcf_from_scene
 from urdf2links.compare.mujoco_side.mujoco_run import PythonInputs, robot_energy, run_mujoco
 from urdf2links.locations import shipped_robots_dir
 from urdf2links.scenes.plan import compile_plan
-from urdf2links.scenes.scene import load_scene
+from urdf2links.scenes.scene_read import load_scene
 
 #: (scene, integrator, dt): the Done-when scene first, then a driven arm, then two scenes without inputs.
 CASES = (("ship_crane", "RK4", 1e-4), ("spring_arm_torques", "RK4", 1e-4), ("ur5_falling", "RK4", 1e-4),

@@ -27,7 +27,7 @@ from urdf2links.integration.batch import simulate_batch
 from urdf2links.integration.integrators import integrate
 from urdf2links.locations import shipped_robots_dir
 from urdf2links.scenes.plan import compile_plan
-from urdf2links.scenes.scene import load_scene
+from urdf2links.scenes.scene_read import load_scene
 
 SCENES = ("double_pendulum_chaos", "ur5_falling", "spring_arm_torques", "ship_crane")
 SWEEP_SCENES = ("double_pendulum_chaos", "ur5_falling")

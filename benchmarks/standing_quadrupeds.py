@@ -19,7 +19,7 @@ from pathlib import Path
 
 from urdf2links.compare.agreement.trajectory import compare_scene
 from urdf2links.locations import example_robot_data_dir
-from urdf2links.scenes.scene import default_scene
+from urdf2links.scenes.default_scenes import default_scene
 from urdf2links.scenes.stance import ground_for, stance_figures
 
 OUT = Path(__file__).resolve().parents[1] / "reports" / "benchmarks" / "standing_quadrupeds.md"

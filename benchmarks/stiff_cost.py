@@ -22,7 +22,7 @@ import numpy as np
 from benchmarking import compare, fmt_ratio, fmt_spread, markdown_table, rounds, run_benchmark, spread
 from urdf2links.integration.simulate import simulate, warm_up
 from urdf2links.scenes.plan import as_plan
-from urdf2links.scenes.scene import default_scene
+from urdf2links.scenes.default_scenes import default_scene
 
 ROBOTS = {"ur5": "ur_description/urdf/ur5_robot.urdf",
           "allegro_left": "allegro_hand_description/urdf/allegro_left_hand.urdf",

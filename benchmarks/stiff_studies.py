@@ -39,7 +39,8 @@ def source(where: str, rel: str) -> Path:
 
 
 def scene_of(path: Path):
-    from urdf2links.scenes.scene import default_scene, load_scene
+    from urdf2links.scenes.default_scenes import default_scene
+    from urdf2links.scenes.scene_read import load_scene
 
     return load_scene(path) if path.suffix == ".toml" else default_scene(path)
 

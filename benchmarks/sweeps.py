@@ -49,7 +49,7 @@ from urdf2links.compare.mujoco_side.mjcf import mjcf_from_scene
 from urdf2links.integration.batch import simulate_batch
 from urdf2links.integration.simulate import simulate
 from urdf2links.locations import shipped_robots_dir
-from urdf2links.scenes.scene import load_scene
+from urdf2links.scenes.scene_read import load_scene
 
 SCENES = ("double_pendulum_chaos", "ur5_falling")
 T_END = 2.0

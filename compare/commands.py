@@ -1,5 +1,5 @@
 """The ``compare``, ``report`` and ``tradeoff`` commands of ``urdf2links``: their handlers (the arguments are
-declared in :mod:`urdf2links.cli`, which imports this module only when one of them runs, so that
+declared in :mod:`urdf2links.commands.comparisons`, which imports this module only when one of them runs, so that
 ``import urdf2links`` never imports MuJoCo).
 
 ``urdf2links compare SCENE.toml``: one scene against MuJoCo, a report in
@@ -27,7 +27,7 @@ from urdf2links.compilation import clock  # durations without numba's compilatio
 from urdf2links.console import err, shown_path
 from urdf2links.integration.integrators import METHODS
 from urdf2links.locations import DEFAULT_OUT, default_baselines, report_scenes, shipped_robots_dir
-from urdf2links.scenes.scene import load_scene
+from urdf2links.scenes.scene_read import load_scene
 from urdf2links.scenes.scene_toml import load_options_of, override_loading, scene_from_args, write_scene_option
 
 from .agreement.trajectory import compare_scene

@@ -22,7 +22,8 @@ from urdf2links.locations import shipped_robots_dir
 from urdf2links.scenes.actuators import hold_actuators
 from urdf2links.scenes.plan import as_plan, compile_plan
 from urdf2links.scenes.python_plan import PythonPlan
-from urdf2links.scenes.scene import default_scene, scene_from_dict
+from urdf2links.scenes.default_scenes import default_scene
+from urdf2links.scenes.scene_read import scene_from_dict
 from urdf2links.scenes.scene_toml import scene_toml
 
 UR5 = str(shipped_robots_dir() / "ur5_like.urdf")
@@ -279,7 +280,7 @@ def test_a_held_scene_is_written_and_read_back(tmp_path):
     assert "[[actuator]]" in text and 'kind = "position"' in text
     path = tmp_path / "held.toml"
     path.write_text(text.replace(f'"{UR5}"', f'"{UR5}"'))
-    from urdf2links.scenes.scene import load_scene
+    from urdf2links.scenes.scene_read import load_scene
 
     back = load_scene(path)
     plan_a, plan_b = as_plan(scene), as_plan(back)

@@ -24,7 +24,7 @@ from urdf2links.view.animation import (
     DEFAULT_FPS, Motion, Panel, frame_indices, read_animation_data, render_animation, trajectory_page, viewer_script,
 )
 from urdf2links.parsers.urdf import parse_urdf
-from urdf2links.scenes.scene import load_scene
+from urdf2links.scenes.scene_read import load_scene
 from urdf2links.integration.simulate import simulate
 from urdf2links.view.thumbnail import render_thumbnail
 from urdf2links.view.visuals import decimate, robot_shapes, tessellate

@@ -12,7 +12,9 @@ from urdf2links.integration.integrators import integrate
 from urdf2links.integration.simulate import describe_stretches, simulate
 from urdf2links.locations import shipped_robots_dir
 from urdf2links.scenes.plan import as_plan
-from urdf2links.scenes.scene import RunSettings, default_scene, load_scene
+from urdf2links.scenes.default_scenes import default_scene
+from urdf2links.scenes.scene import RunSettings
+from urdf2links.scenes.scene_read import load_scene
 
 
 def _lam(t):

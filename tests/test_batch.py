@@ -8,7 +8,7 @@ import pytest
 
 from urdf2links.integration.batch import simulate_batch
 from urdf2links.locations import shipped_robots_dir
-from urdf2links.scenes.scene import load_scene
+from urdf2links.scenes.scene_read import load_scene
 from urdf2links.integration.simulate import simulate
 
 
@@ -50,7 +50,7 @@ def test_batch_matches_single_runs_with_every_effect(effect):
     work W of the non-potential forces too (1e-6 J). The effect really acts: the work differs from the
     gravity-only scene's zero by more than 1e-2 J in at least one run (the spring is potential: its
     damper works)."""
-    from urdf2links.scenes.scene import scene_from_dict
+    from urdf2links.scenes.scene_read import scene_from_dict
 
     scene = scene_from_dict({"robot": {"shipped": "double_pendulum"}, "gravity": {}, **DRIVEN[effect]},
                             name=f"double_pendulum_{effect}")

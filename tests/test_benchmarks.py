@@ -256,7 +256,7 @@ def test_animation_cost_runs_scenes_as_the_report_does(tmp_path):
     """The shipped scenes at the length `urdf2links report` runs them (whole scenes), not capped."""
     import animation_cost
 
-    from urdf2links.scenes.scene import load_scene
+    from urdf2links.scenes.scene_read import load_scene
 
     for name, path, T, why in animation_cost.cases(False, tmp_path):
         if why == "as urdf2links report":

@@ -23,7 +23,7 @@ import pytest
 
 from browser import Browser
 from urdf2links.integration.simulate import simulate
-from urdf2links.scenes.scene import load_scene
+from urdf2links.scenes.scene_read import load_scene
 from urdf2links.view.animation import trajectory_page
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -16,7 +16,7 @@ from urdf2links.integration.charts import Chart, angle_block_condition, floating
 from urdf2links.errors import DynamicsError, SceneError
 from urdf2links.dynamics.model import Model
 from urdf2links.dynamics.rotations import xyz_angles_to_matrix
-from urdf2links.scenes.scene import load_scene
+from urdf2links.scenes.scene_read import load_scene
 from urdf2links.dynamics.oracles.recursive import RecursivePlan
 from urdf2links.integration.simulate import simulate
 from urdf2links.dynamics.tree import LinkSpec, build_tree

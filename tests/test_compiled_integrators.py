@@ -18,7 +18,7 @@ import pytest
 from urdf2links.integration.integrators import AngleGuard, integrate
 from urdf2links.locations import shipped_robots_dir
 from urdf2links.scenes.plan import compile_plan
-from urdf2links.scenes.scene import load_scene
+from urdf2links.scenes.scene_read import load_scene
 
 SCENES = ["double_pendulum_chaos", "ship_crane", "spring_arm_torques", "ur5_falling"]
 
@@ -69,7 +69,7 @@ def test_dense_output_of_dop853_is_seventh_order():
     with p in [7.3, 8.7] each time (measured 7.75, 7.97, 8.00; errors 2e-6 down to 1.5e-13, above the
     rounding floor ~1e-15). A cubic Hermite interpolant through the steps would give p = 4 (its error,
     h^4, would also swamp the step's own)."""
-    from urdf2links.scenes.scene import scene_from_dict
+    from urdf2links.scenes.scene_read import scene_from_dict
 
     scene = scene_from_dict({"robot": {"shipped": "pendulum"}, "gravity": {}, "initial": {"q": {"hinge": 1.0}}})
     model = scene.model()

@@ -17,7 +17,7 @@ from urdf2links.errors import DynamicsError, SceneError
 from urdf2links.integration import simulate
 from urdf2links.locations import shipped_robots_dir
 from urdf2links.scenes import as_plan, load_scene
-from urdf2links.scenes.scene import scene_from_dict
+from urdf2links.scenes.scene_read import scene_from_dict
 
 LOOPS = shipped_robots_dir() / "loops"
 

@@ -24,7 +24,7 @@ import urdf2links
 from urdf2links.compare.agreement.trajectory import DIVERGENCE_THRESHOLD, compare_scene
 from urdf2links.compare.mujoco_side.mujoco_mjcf import mujoco_from_mjcf
 from urdf2links.scenes import as_plan
-from urdf2links.scenes.scene import scene_from_dict
+from urdf2links.scenes.scene_read import scene_from_dict
 
 DM = importlib.resources.files("dm_control")
 GYM = importlib.resources.files("gymnasium").joinpath("envs", "mujoco", "assets")

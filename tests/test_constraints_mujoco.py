@@ -74,7 +74,7 @@ def test_weld_rows_against_mujoco():
     rows by 0.5 R_2^T) equal efc_J; the six rows lock the arm, so J^T lambda = G, and qfrc_constraint is that
     to MuJoCo's regularizer (1e-4)."""
     model = urdf2links.load_urdf(shipped_robots_dir() / "ur5_like.urdf")
-    from urdf2links.scenes.scene import scene_from_dict
+    from urdf2links.scenes.scene_read import scene_from_dict
 
     scene = scene_from_dict({"robot": {"urdf": str(shipped_robots_dir() / "ur5_like.urdf")}, "gravity": {"magnitude": 9.81},
                              "constraint": [{"name": "w", "kind": "weld", "links": ["wrist_3_link"],
@@ -154,7 +154,7 @@ def test_gymnasium_humanoid_tendons():
     assert names == ["left_hipknee", "right_hipknee"]
     assert all(t["fixed"] and not t["stiffness"] and not t["damping"] and not t["limited"] and not t["actuators"]
                for t in model.info["tendons"])
-    from urdf2links.scenes.scene import scene_from_dict
+    from urdf2links.scenes.scene_read import scene_from_dict
 
     scene = scene_from_dict({"robot": {"mjcf": str(path)}, "constraints": {"from_file": True}}, where="h.toml")
     plan = as_plan(scene, model=model)

@@ -12,7 +12,7 @@ from urdf2links.dynamics.loads import Wrench
 from urdf2links.errors import SceneError
 from urdf2links.locations import shipped_robots_dir
 from urdf2links.scenes.plan import compile_plan
-from urdf2links.scenes.scene import scene_from_dict
+from urdf2links.scenes.scene_read import scene_from_dict
 
 ROBOTS = shipped_robots_dir()
 G = 9.81
@@ -228,7 +228,7 @@ def test_ground_stands_the_robot_on_its_feet_whatever_its_q0(quad):
     import tomllib
 
     from urdf2links.scenes.contact import SETTLE, resolve_contacts
-    from urdf2links.scenes.scene import default_scene
+    from urdf2links.scenes.default_scenes import default_scene
     from urdf2links.scenes.scene_toml import scene_toml
     from urdf2links.scenes.stance import with_ground
 
@@ -266,7 +266,7 @@ def test_ground_on_a_robot_without_collision_spheres():
     from corpus import ROOT
 
     from urdf2links.scenes.contact import resolve_contacts
-    from urdf2links.scenes.scene import default_scene
+    from urdf2links.scenes.default_scenes import default_scene
     from urdf2links.scenes.stance import with_ground
 
     scene = with_ground(default_scene(ROOT / "solo_description/robots/solo12.urdf", floating=True, q0="zero"))
@@ -277,7 +277,7 @@ def test_ground_on_a_robot_without_collision_spheres():
 
 
 def test_ground_refuses_a_fixed_base():
-    from urdf2links.scenes.scene import default_scene
+    from urdf2links.scenes.default_scenes import default_scene
     from urdf2links.scenes.stance import with_ground
 
     with pytest.raises(SceneError, match="fixed base.*--floating"):

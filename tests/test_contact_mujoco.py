@@ -12,7 +12,7 @@ from urdf2links.compare.mujoco_side.mujoco_run import run_mujoco
 from urdf2links.integration.simulate import simulate
 from urdf2links.locations import shipped_robots_dir
 from urdf2links.scenes.plan import compile_plan
-from urdf2links.scenes.scene import load_scene
+from urdf2links.scenes.scene_read import load_scene
 
 T_END = 0.4     # the landing (t ~ 0.12 s) and the first rebound of quad12_drop
 
@@ -101,7 +101,7 @@ def test_ground_on_go1_agrees_once_mujocos_step_resolves_the_contact():
 
     from urdf2links.compare.mujoco_side.contact_inputs import contact_timestep
     from urdf2links.scenes.contact import _robot_spheres, ground_contact
-    from urdf2links.scenes.scene import default_scene
+    from urdf2links.scenes.default_scenes import default_scene
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")         # go1's base inertia finding: audited, not the point here

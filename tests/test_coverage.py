@@ -19,7 +19,7 @@ from urdf2links.compare.reports.report import write_index
 from urdf2links.locations import shipped_robots_dir
 from urdf2links.scenes.coverage import MOVED, coverage
 from urdf2links.scenes.excitation import TRAVEL, coordinate_ranges, excited_state
-from urdf2links.scenes.scene import default_scene
+from urdf2links.scenes.default_scenes import default_scene
 
 UR5 = shipped_robots_dir() / "ur5_like.urdf"
 

@@ -13,8 +13,10 @@ from cli_runner import run_cli
 
 from urdf2links import load_urdf
 from urdf2links.errors import SceneError
+from urdf2links.locations import shipped_robots_dir
 from urdf2links.scenes.limits import limit_excursions
-from urdf2links.scenes.scene import default_scene, load_scene
+from urdf2links.scenes.default_scenes import default_scene
+from urdf2links.scenes.scene_read import load_scene
 from urdf2links.scenes.scene_toml import scene_or_robot, scene_toml, write_scene
 from urdf2links.integration.simulate import simulate
 
@@ -107,7 +109,7 @@ def test_scene_toml_round_trip(arm, tmp_path):
     np.testing.assert_array_equal(back.gravity, s.gravity)
     assert back.load_options == {**s.load_options}
     with pytest.raises(SceneError, match="functions of time"):
-        scene_toml(load_scene(__import__("urdf2links.scenes.scene", fromlist=["x"]).shipped_robots_dir() / "ship_crane.toml"))
+        scene_toml(load_scene(shipped_robots_dir() / "ship_crane.toml"))
 
 
 def test_limit_excursions_say_when_which_and_how_far(arm):

@@ -130,7 +130,7 @@ def test_never_a_traceback(tmp_path, monkeypatch, capsys):
     def broken(args):
         raise KeyError("boom")
 
-    monkeypatch.setattr(cli, "_list", broken)
+    monkeypatch.setitem(cli.COMMANDS, "list", cli.COMMANDS["list"]._replace(run=broken))
     monkeypatch.delenv("URDF2LINKS_DEBUG", raising=False)
     assert main(["list"]) == 2
     err = capsys.readouterr().err
@@ -247,7 +247,7 @@ def test_rounding_at_a_limit_is_no_excursion():
 def test_energy_drift_of_a_robot_at_rest_is_measured_against_the_rounding_level():
     """A pendulum hanging at rest does not move: the drifts are rounding, and read as such."""
     from urdf2links.compare.agreement.trajectory import ENERGY_ROUNDING_EPS, compare_scene
-    from urdf2links.scenes.scene import default_scene
+    from urdf2links.scenes.default_scenes import default_scene
 
     c = compare_scene(default_scene(shipped_robots_dir() / "pendulum.urdf", t_end=0.05, q0="rest"))
     en = c.summary()["energy"]

@@ -44,7 +44,7 @@ from hypothesis import strategies as st
 from fuzz_inputs import known_bad_urdf, mutated_scene, mutated_urdf, robot_text, write_mesh_folder
 from urdf2links import load_urdf
 from urdf2links.errors import DynamicsError, IntegrationError, SceneError, URDFError
-from urdf2links.scenes.scene import load_scene
+from urdf2links.scenes.scene_read import load_scene
 from urdf2links.integration.simulate import simulate
 
 OWN_ERRORS = (URDFError, SceneError, DynamicsError, IntegrationError)

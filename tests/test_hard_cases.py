@@ -22,7 +22,7 @@ from hard_robots import GENERATED, HARD
 from urdf2links import DynamicsError, InertiaError, load_urdf, load_urdf_string
 from urdf2links.integration.integrators import IntegrationError
 from urdf2links.scenes.plan import compile_plan
-from urdf2links.scenes.scene import load_scene
+from urdf2links.scenes.scene_read import load_scene
 from urdf2links.integration.simulate import simulate
 
 EPS = np.finfo(float).eps

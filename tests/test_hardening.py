@@ -23,7 +23,7 @@ from urdf2links.integration.integrators import integrate
 from urdf2links.scenes.plan import compile_plan
 from urdf2links.parsers.mesh_paths import require_mesh, resolve_mesh_path
 from urdf2links.ranges import MAX_SAMPLES, MAX_STEPS, RANGES, RTOL_FLOOR
-from urdf2links.scenes.scene import load_scene, scene_from_dict
+from urdf2links.scenes.scene_read import load_scene, scene_from_dict
 from urdf2links.integration.simulate import simulate, warm_up
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -35,7 +35,7 @@ LAYERS = [
     ("compare: corpus", ("urdf2links.compare.corpus",)),
     ("compare: check", ("urdf2links.compare.check",)),
     ("compare: commands", ("urdf2links.compare", "urdf2links.compare.commands")),
-    ("command line", ("urdf2links.cli", "urdf2links.__main__", "urdf2links.pytest_plugin")),
+    ("command line", ("urdf2links.cli", "urdf2links.commands", "urdf2links.__main__", "urdf2links.pytest_plugin")),
 ]
 EXACT = {"urdf2links", "urdf2links.compare"}    # prefixes that match only themselves
 
@@ -126,6 +126,8 @@ def test_imports_go_downward(module):
     ("urdf2links.compare.mujoco_side.mjcf", "from ..reports.report import write_report"),
     ("urdf2links.compare.tradeoff.study", "from ..corpus import rows"),
     ("urdf2links.compare.corpus.rows", "from ..check.config import read_config"),       # corpus -> check
+    ("urdf2links.scenes.scene_toml", "from ..commands.options import INPUT"),           # scenes -> command line
+    ("urdf2links.compare.commands", "def f():\n    from urdf2links.commands import run\n"),   # compare -> command line
 ])
 def test_a_planted_wrong_way_import_is_caught(module, planted):
     """The check fails on an import that goes up: each planted line added to a real module."""
@@ -140,8 +142,8 @@ def test_only_the_command_line_imports_compare():
     when it is active) reaches the MuJoCo side."""
     offenders = []
     for module, path in SOURCES.items():
-        if module.startswith("urdf2links.compare") or module in ("urdf2links.cli", "urdf2links.__main__",
-                                                                 "urdf2links.pytest_plugin"):
+        if module.startswith(("urdf2links.compare", "urdf2links.commands")) or module in (
+                "urdf2links.cli", "urdf2links.__main__", "urdf2links.pytest_plugin"):
             continue
         for line, target in imports_of(path.read_text(), module, is_package=path.name == "__init__.py"):
             if target.startswith("urdf2links.compare"):

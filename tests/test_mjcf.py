@@ -192,7 +192,7 @@ def test_trajectories_agree_with_mujoco_running_the_file(name, files):
     0.3 s: below 1e-6 (the issue's bound; measured 1e-13 to 1e-9 with DOP853 rtol 1e-10 against MuJoCo's
     RK4 at 1e-4 s), energies balanced by both."""
     from urdf2links.compare.agreement.trajectory import compare_scene
-    from urdf2links.scenes.scene import default_scene
+    from urdf2links.scenes.default_scenes import default_scene
 
     path = files[name] if name in files else next(p for p in GYM if p.stem == name)
     s = compare_scene(default_scene(path, t_end=0.3), states=4).summary()
@@ -204,7 +204,7 @@ def test_trajectories_agree_with_mujoco_running_the_file(name, files):
 
 def test_default_scene_takes_the_files_effects(files):
     from urdf2links.scenes.plan import compile_plan
-    from urdf2links.scenes.scene import default_scene
+    from urdf2links.scenes.default_scenes import default_scene
 
     scene = default_scene(files["free"], q0="rest")
     model = scene.model()
@@ -222,7 +222,7 @@ def test_the_files_own_flags_are_followed(files):
     """<flag gravity="disable" damper="disable"/>: the model's gravity is 0, and the default scene has no
     gravity and no dampers (the stiffness still acts); MuJoCo's run switches on what a scene names."""
     from urdf2links.scenes.plan import compile_plan
-    from urdf2links.scenes.scene import default_scene
+    from urdf2links.scenes.default_scenes import default_scene
 
     model = load_mjcf(files["flags"])
     assert model.gravity_vector.tolist() == [0.0, 0.0, 0.0] and "gravity" in model.info["option"]["disabled"]
@@ -233,7 +233,7 @@ def test_the_files_own_flags_are_followed(files):
 def test_gravcomp_equals_mujocos(files):
     """The gravcomp loads' generalized forces equal MuJoCo's qfrc_gravcomp (mapped by J^T), 1e-12."""
     from urdf2links.scenes.plan import compile_plan
-    from urdf2links.scenes.scene import default_scene
+    from urdf2links.scenes.default_scenes import default_scene
 
     scene = default_scene(files["free"])
     model = scene.model()
@@ -300,7 +300,8 @@ def test_scene_files_name_mjcf_robots_and_round_trip(files, tmp_path):
     """A scene file names an .xml robot (``mjcf = ...``) and asks for the file's effects; the default
     scene of an .xml written as TOML reads back to the same effects."""
     from urdf2links.scenes.plan import compile_plan
-    from urdf2links.scenes.scene import default_scene, load_scene
+    from urdf2links.scenes.default_scenes import default_scene
+    from urdf2links.scenes.scene_read import load_scene
     from urdf2links.scenes.scene_toml import write_scene
 
     scene_file = tmp_path / "free.toml"

@@ -319,7 +319,7 @@ def test_scene_run_matches_plan():
     import urdf2links.scenes.plan as plan_mod
     from urdf2links.scenes.python_plan import PythonPlan
     from urdf2links.compare.mujoco_side.mjcf import mjcf_from_scene
-    from urdf2links.scenes.scene import scene_from_dict
+    from urdf2links.scenes.scene_read import scene_from_dict
 
     scene = scene_from_dict({
         "robot": {"urdf": str(ROBOTS / "double_pendulum.urdf")},

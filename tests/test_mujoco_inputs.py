@@ -20,7 +20,7 @@ from urdf2links.compare.mujoco_side.mjdata_layout import LayoutError, check_offs
 from urdf2links.compare.mujoco_side.mujoco_run import run_mujoco  # noqa: E402
 from urdf2links.locations import shipped_robots_dir  # noqa: E402
 from urdf2links.scenes.plan import compile_plan  # noqa: E402
-from urdf2links.scenes.scene import load_scene, scene_from_dict  # noqa: E402
+from urdf2links.scenes.scene_read import load_scene, scene_from_dict  # noqa: E402
 
 ROBOTS = shipped_robots_dir()
 

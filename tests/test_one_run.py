@@ -20,7 +20,7 @@ from urdf2links.locations import example_robot_data_dir, shipped_robots_dir
 from urdf2links.parsers import importer
 from urdf2links.scenes import plan as plan_module
 from urdf2links.scenes.plan import as_plan
-from urdf2links.scenes.scene import load_scene
+from urdf2links.scenes.scene_read import load_scene
 
 
 @pytest.fixture

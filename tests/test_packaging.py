@@ -91,7 +91,7 @@ def test_installed_package_works_from_another_folder(installed, tmp_path):
             "assert 'mujoco' not in sys.modules\n"
             "import urdf2links.compare\n"
             "from urdf2links.locations import shipped_robots_dir\n"
-            "from urdf2links.scenes.scene import load_scene\n"
+            "from urdf2links.scenes.scene_read import load_scene\n"
             f"assert shipped_robots_dir().is_relative_to({str(target)!r}), shipped_robots_dir()\n"
             "s = load_scene(shipped_robots_dir() / 'ur5_falling.toml')\n"
             "print(s.model().n)\n")

@@ -27,7 +27,7 @@ from urdf2links.compare.agreement.trajectory import compare_scene
 from urdf2links.compare.check.cases import Case, RunContext, run_case
 from urdf2links.compare.check.config import SceneEntry
 from urdf2links.locations import shipped_robots_dir
-from urdf2links.scenes.scene import default_scene
+from urdf2links.scenes.default_scenes import default_scene
 
 FLOOR_MJCF = """<mujoco model="boxfloor">
   <worldbody>

@@ -16,7 +16,7 @@ from urdf2links.integration.loops.radau import MU_COMPLEX, MU_REAL, _factor, _so
 from urdf2links.integration.loops.stiffness import spectral_radius
 from urdf2links.locations import shipped_robots_dir
 from urdf2links.scenes.plan import compile_plan
-from urdf2links.scenes.scene import load_scene
+from urdf2links.scenes.scene_read import load_scene
 
 
 def _scene(name):

@@ -11,7 +11,7 @@ from cli_runner import run_cli
 
 from urdf2links.errors import SceneError
 from urdf2links.locations import report_scene_files, report_scenes, shipped_robots_dir
-from urdf2links.scenes.scene import load_scene, scene_from_dict
+from urdf2links.scenes.scene_read import load_scene, scene_from_dict
 from urdf2links.scenes.scene_toml import write_scene
 
 LOOPS = shipped_robots_dir() / "loops"

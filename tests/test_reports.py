@@ -168,7 +168,7 @@ def test_growth_fit_and_divergence_time():
 
 def test_committed_baselines_cover_every_shipped_scene():
     from urdf2links.compare.commands import report_t_end
-    from urdf2links.scenes.scene import load_scene
+    from urdf2links.scenes.scene_read import load_scene
 
     from urdf2links.locations import report_scene_files
 
@@ -271,7 +271,7 @@ def test_cli_does_not_import_mujoco_until_needed():
 
 def test_report_caps_driven_scenes():
     from urdf2links.compare.commands import report_t_end
-    from urdf2links.scenes.scene import load_scene
+    from urdf2links.scenes.scene_read import load_scene
 
     crane = load_scene(ROBOTS / "ship_crane.toml")
     T, note = report_t_end(crane, t_end=None, cap=5.0)

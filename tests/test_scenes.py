@@ -19,7 +19,7 @@ from urdf2links.scenes.python_plan import PythonPlan
 from urdf2links.locations import report_scene_files, shipped_robots_dir
 from urdf2links.errors import SceneError
 from urdf2links.scenes.plan import compile_plan
-from urdf2links.scenes.scene import load_scene
+from urdf2links.scenes.scene_read import load_scene
 from urdf2links.integration.simulate import simulate
 
 ROBOTS = Path(__file__).resolve().parent.parent / "robots"

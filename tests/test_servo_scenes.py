@@ -33,7 +33,8 @@ from urdf2links.compare.mujoco_side.mujoco_run import run_mujoco
 from urdf2links.integration.simulate import simulate
 from urdf2links.locations import shipped_robots_dir
 from urdf2links.scenes.plan import as_plan
-from urdf2links.scenes.scene import default_scene, scene_from_dict
+from urdf2links.scenes.default_scenes import default_scene
+from urdf2links.scenes.scene_read import scene_from_dict
 
 ROBOTS = shipped_robots_dir()
 FIGURE_BOUNDS = {"servo scenes": "1e-6 rad or m: max |q_urdf2links - q_MuJoCo| (MuJoCo RK4 at 1e-4 s)"}

@@ -12,7 +12,7 @@ import pytest
 from urdf2links import load_urdf, urdf_link_poses
 from urdf2links.integration.charts import floating_links
 from urdf2links.dynamics.rotations import rpy_to_matrix, xyz_angles_to_matrix
-from urdf2links.scenes.scene import scene_from_dict
+from urdf2links.scenes.scene_read import scene_from_dict
 from urdf2links.integration.simulate import simulate
 
 ORIGIN_RPY = (0.3, -0.2, 0.1)

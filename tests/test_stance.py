@@ -19,7 +19,7 @@ import pytest
 from urdf2links.integration.simulate import simulate
 from urdf2links.scenes.contact import SETTLE
 from urdf2links.scenes.plan import compile_plan
-from urdf2links.scenes.scene import default_scene
+from urdf2links.scenes.default_scenes import default_scene
 from urdf2links.scenes.stance import ground_for, stance_figures, with_ground
 
 #: joints may pass a limit by this much (rad): see the module doc.

@@ -17,7 +17,8 @@ from urdf2links.compare.mujoco_side.stable_run import CONVERGED, stable_run
 from urdf2links.compare.tradeoff.study import _mujoco_failure
 from urdf2links.locations import shipped_robots_dir
 from urdf2links.scenes.plan import as_plan
-from urdf2links.scenes.scene import default_scene, load_scene
+from urdf2links.scenes.default_scenes import default_scene
+from urdf2links.scenes.scene_read import load_scene
 
 
 @needs_corpus

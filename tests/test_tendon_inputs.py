@@ -147,7 +147,7 @@ _HAND = {"arm_shoulder": 1.0, "arm_elbow": -1.5, "thumb": 2.0, "finger": 2.0}
 
 
 def _manipulator(amplitude: float):
-    from urdf2links.scenes.scene import scene_from_dict
+    from urdf2links.scenes.scene_read import scene_from_dict
 
     data = {"robot": {"mjcf": str(MANIPULATOR)}, "gravity": {"magnitude": 9.81}, "constraints": {"from_file": True},
             "actuator": [{"name": "grasp", "ctrl": {"sines": [[amplitude, 3.0, 0.0]]}}],

@@ -26,7 +26,7 @@ ROBOTS = Path(__file__).resolve().parent.parent / "robots"
 def test_inspect_scene_output_is_a_scene_file(tmp_path):
     """The printed default scene parses as TOML and loads as a scene; the plan is there, as comments.
     Planted: the same text with the plan's lines uncommented (the output before issue 43) does not parse."""
-    from urdf2links.scenes.scene import load_scene
+    from urdf2links.scenes.scene_read import load_scene
 
     out = run_cli("inspect", str(ROBOTS / "double_pendulum.urdf"), "--scene")
     assert out.returncode == 0, out.stderr
@@ -94,7 +94,7 @@ KEYED = """<mujoco model="keyed"><compiler angle="radian"/><worldbody><body name
 def test_inspect_says_how_the_default_scene_uses_the_home_keyframe(tmp_path):
     """With a keyframe named home: the default scene starts around it (and it does: q0 within a quarter of
     the range of home's 0.6); with another name: not used, and why."""
-    from urdf2links.scenes.scene import default_scene
+    from urdf2links.scenes.default_scenes import default_scene
 
     home = tmp_path / "home.xml"
     home.write_text(KEYED.replace("KEY", "home"))

@@ -28,7 +28,8 @@ _PUBLIC = {
     "load_robot": "parsers.robot_file",
 }
 
-from .errors import (  # noqa: E402  (light: the error classes alone)
+from . import errors as _errors  # noqa: E402  (light: the error classes alone)
+from .errors import (  # noqa: E402
     DescriptionError,
     DynamicsError,
     InertiaError,
@@ -61,31 +62,8 @@ def __dir__():
     return sorted(set(globals()) | set(_PUBLIC))
 
 
-__all__ = [
-    "load_urdf",
-    "load_mjcf",
-    "load_mjcf_string",
-    "load_robot",
-    "DescriptionError",
-    "MJCFError",
-    "load_urdf_string",
-    "urdf_link_poses",
-    "AuditRecord",
-    "Model",
-    "LinkSpec",
-    "LinkTree",
-    "build_tree",
-    "pseudo_inertia_from",
-    "Wrench",
-    "BaseState",
-    "base_transforms",
-    "URDFError",
-    "URDFSyntaxError",
-    "URDFStructureError",
-    "URDFValueError",
-    "InertiaError",
-    "MeshError",
-    "DynamicsError",
-]
+#: The public API: the names loaded at first use, and the error classes imported above (a robot's loading and its
+#: dynamics; a scene's and a run's errors are in :mod:`urdf2links.errors`), each listed once.
+__all__ = [*_PUBLIC, *(name for name in _errors.__all__ if name in globals())]
 
 __version__ = "0.1.0"

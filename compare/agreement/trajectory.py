@@ -77,7 +77,8 @@ from urdf2links.scenes.limits import LimitExcursion
 from urdf2links.scenes.actuators import describe_actuator
 from urdf2links.scenes.coverage import Coverage, coverage
 from urdf2links.scenes.plan import compile_plan
-from urdf2links.scenes.scene import Scene, load_scene, robot_label
+from urdf2links.scenes.scene import Scene, robot_label
+from urdf2links.scenes.scene_read import load_scene
 
 from ..mujoco_side.mjcf import mjcf_from_scene
 from ..mujoco_side.mjcf_model import MjcfModel

@@ -9,7 +9,7 @@
   ``accepted`` table does not accept by name, each accepted one that moved past its own tolerance, each accepted
   one that is gone (:func:`~urdf2links.compare.check.accepted.judge`), and the mapped terms A, G past theirs;
 * a **scene** (:func:`check_scene`): a scene file, or a robot's default scene
-  (:func:`urdf2links.scenes.scene.default_scene`, ``q0 = "excite"`` unless the entry says), run by both engines
+  (:func:`urdf2links.scenes.default_scenes.default_scene`, ``q0 = "excite"`` unless the entry says), run by both engines
   (:func:`~urdf2links.compare.agreement.trajectory.compare_scene`) and checked against its accepted figures
   (:func:`~urdf2links.compare.reports.baselines.check_baseline`, key: the case's file); a scene without one
   fails, unless the run writes the baselines; a run with weak evidence (E67: most coordinates barely moved) fails.
@@ -220,7 +220,8 @@ def check_pair(res: CaseResult, pair: PairEntry) -> None:
 
 
 def _scene(entry: SceneEntry):
-    from urdf2links.scenes.scene import default_scene, load_scene
+    from urdf2links.scenes.default_scenes import default_scene
+    from urdf2links.scenes.scene_read import load_scene
 
     if entry.path is not None:
         return load_scene(entry.path)
@@ -334,7 +335,7 @@ def cases_of(config, *, only=None) -> list[Case]:
 
 
 def _scene_robot_files(path: Path, config) -> set:
-    from urdf2links.scenes.scene import load_scene
+    from urdf2links.scenes.scene_read import load_scene
 
     from .depends import robot_files
 

@@ -67,7 +67,7 @@ DEFAULT_BASELINES = "urdf2links-baselines.json"
 ROBOT_SUFFIXES = (".urdf", ".xacro", ".xml")
 #: Run length (s) of a robot's default scene unless the entry says.
 SCENE_T_END = 0.5
-#: The initial states a robot's default scene may start from (urdf2links.scenes.scene.Q0_CHOICES).
+#: The initial states a robot's default scene may start from (urdf2links.ranges.Q0_CHOICES).
 SCENE_Q0 = ("excite", "random", "rest", "zero")
 _LOAD_KEYS = ("floating_base", "package_dirs", "xacro_args", "inertia", "mimic", "strict")
 _TOP_KEYS = ("baselines", "factor", "tolerances", "robots", "pairs", "scenes")

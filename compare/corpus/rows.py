@@ -6,7 +6,7 @@
 and, when asked, its light report page. It never raises for a robot: every outcome is a row whose
 ``status`` says what happened (:data:`STATUSES`):
 
-* ``compared``: imported, run in its default scene (:func:`urdf2links.scenes.scene.default_scene`: gravity,
+* ``compared``: imported, run in its default scene (:func:`urdf2links.scenes.default_scenes.default_scene`: gravity,
   fixed base, every coordinate moving from a seeded random ``q0`` within the joint limits and ``q'``
   (E65), the URDF's damping; ``t_end`` 0.5 s) by both engines and compared (:func:`urdf2links.compare.agreement.trajectory.compare_scene`: terms at
   seeded states on route 1 and route 2, trajectories, energies). MuJoCo refusing the file on route 2
@@ -37,7 +37,7 @@ from pathlib import Path
 
 from urdf2links.compilation import clock  # durations without numba's compilation
 from urdf2links.errors import DescriptionError, SceneError
-from urdf2links.scenes.scene import default_scene
+from urdf2links.scenes.default_scenes import default_scene
 
 from ..formatting import json_ready
 from ..mujoco_side.mjcf import MjcfRefused

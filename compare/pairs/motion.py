@@ -1,7 +1,7 @@
 """The two descriptions in motion: each file run from the same state in its default scene, by the project and
 by MuJoCo running the file as written, and how far the two descriptions move apart.
 
-Both descriptions run their own default scene (:func:`urdf2links.scenes.scene.default_scene`: gravity,
+Both descriptions run their own default scene (:func:`urdf2links.scenes.default_scenes.default_scene`: gravity,
 fixed base unless ``floating_base``, each file's own damping, and for an MJCF file its stiffness and
 gravcomp), from the first description's initial state (at rest, ``q0`` zero or seeded random) mapped
 into the second's coordinates (E52; its unmatched joints at home). Four runs over the same times:
@@ -35,7 +35,7 @@ from urdf2links.parsers.mjcf_state import _nearest, matrix_to_quat, quat_to_matr
 from urdf2links.parsers.robot_file import is_mjcf_path
 from urdf2links.scenes.functions import Constant
 from urdf2links.scenes.plan import as_plan
-from urdf2links.scenes.scene import default_scene
+from urdf2links.scenes.default_scenes import default_scene
 from urdf2links.view.animation import DEFAULT_FPS, Motion, Panel, render_animation
 from urdf2links.view.visuals import scene_shapes
 

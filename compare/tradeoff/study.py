@@ -75,7 +75,8 @@ from urdf2links.integration.integrators import METHODS, integrate
 from urdf2links.integration.simulate import simulate, warm_up
 from urdf2links.integration.constrained import refuse_constrained
 from urdf2links.scenes.plan import compile_plan
-from urdf2links.scenes.scene import load_scene, robot_label
+from urdf2links.scenes.scene import robot_label
+from urdf2links.scenes.scene_read import load_scene
 
 from ..agreement.trajectory import scene_key
 from ..formatting import json_ready, machine_info

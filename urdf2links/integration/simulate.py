@@ -30,7 +30,8 @@ from ..errors import IntegrationError
 from ..ranges import MAX_STEPS
 from ..scenes.limits import limit_excursions
 from ..scenes.plan import Plan, as_plan, compile_plan
-from ..scenes.scene import RunSettings, Scene, check_run
+from ..scenes.scene import RunSettings, Scene
+from ..scenes.scene_checks import check_run
 from .charts import integrate_charted, link_poses
 from .constrained import simulate_constrained
 from .trajectory import TIMED_REGION, Trajectory
@@ -61,15 +62,11 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
     size fell below the spacing of floating-point numbers, more than ``max_steps`` accepted steps
     (default :data:`~urdf2links.ranges.MAX_STEPS`), more than ``max_wall`` seconds of wall time
     (default: no budget; ``--max-wall`` on the command line), a non-finite state. Overrides are checked
-    like a scene's ``[run]`` (:func:`~urdf2links.scenes.scene.check_run`: SceneError naming the value and its range).
+    like a scene's ``[run]`` (:func:`~urdf2links.scenes.scene_checks.check_run`: SceneError naming the value and its range).
     """
     scene, model, plan = _scene_and_model(scene_or_model, model)
-    run = scene.run
-    run = check_run(RunSettings(t_end=run.t_end if t_end is None else t_end, method=method or run.method,
-                                rtol=run.rtol if rtol is None else rtol, atol=run.atol if atol is None else atol,
-                                dt=run.dt if dt is None else dt, samples=run.samples if samples is None else samples,
-                                recharting=run.recharting if recharting is None else bool(recharting)),
-                    f"{scene.path or scene.name}: simulate()", prefix="")
+    run = _run_settings(scene, t_end=t_end, method=method, rtol=rtol, atol=atol, dt=dt, samples=samples,
+                        recharting=recharting)
     plan = plan or compile_plan(scene, model)
     q, qd = scene.initial_state(model)
     if q0 is not None:
@@ -77,12 +74,29 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
     if qd0 is not None:
         qd = model.vector(qd0, "qd0").copy()
     if plan.constraints is not None:    # issue 36: constraints and fixed tendons take the interpreted path (E72)-(E76)
-
         return simulate_constrained(plan, run, q, qd, progress=progress, max_wall=max_wall, max_steps=max_steps)
-    n = model.n
-    y0 = np.r_[q, qd, 0.0]
-    t_eval = np.linspace(0.0, run.t_end, max(run.samples, 2))
     started, compiled0 = compilation.clock(), compilation.seconds()
+    res = _integrate(plan, run, np.r_[q, qd, 0.0], progress=progress, max_wall=max_wall, max_steps=max_steps)
+    return _trajectory(plan, run, res, started=started, compiled0=compiled0, max_wall=max_wall)
+
+
+def _run_settings(scene: Scene, *, t_end, method, rtol, atol, dt, samples, recharting) -> RunSettings:
+    """The scene's ``[run]`` with the settings :func:`simulate` was given in its place, checked like a scene's
+    (:func:`~urdf2links.scenes.scene_checks.check_run`)."""
+    run = scene.run
+    return check_run(RunSettings(t_end=run.t_end if t_end is None else t_end, method=method or run.method,
+                                 rtol=run.rtol if rtol is None else rtol, atol=run.atol if atol is None else atol,
+                                 dt=run.dt if dt is None else dt, samples=run.samples if samples is None else samples,
+                                 recharting=run.recharting if recharting is None else bool(recharting)),
+                     f"{scene.path or scene.name}: simulate()", prefix="")
+
+
+def _integrate(plan: Plan, run: RunSettings, y0: np.ndarray, *, progress, max_wall, max_steps):
+    """The plan's right-hand side integrated from ``y0 = (q, q', 0)`` over the run, re-charted where a floating
+    link's angles ask (:func:`~urdf2links.integration.charts.integrate_charted`); an IntegrationError says why a run
+    could not finish."""
+    scene, model = plan.scene, plan.model
+    t_eval = np.linspace(0.0, run.t_end, max(run.samples, 2))
     bar = Progress(run.t_end, label=f"{scene.name} {run.method}", enabled=progress)
     # torques, springs, actuators and a computed torque (its reference: every coordinate) act on coordinates:
     # their links keep their chart
@@ -102,6 +116,13 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
                                + (f", dt {run.dt:g}" if run.dt and run.method in ("RK4", "midpoint") else "")
                                + f") could not finish the run to t_end = {run.t_end:g} s: {res.message}"
                                + (f" (max_wall {max_wall:g} s for the whole run)" if max_wall is not None else ""))
+    return res
+
+
+def _trajectory(plan: Plan, run: RunSettings, res, *, started: float, compiled0: float, max_wall) -> Trajectory:
+    """The :class:`Trajectory` of an integration ``res``: coordinates, energies and the power balance (E37, E39),
+    the recorded link poses, the run's figures and notes (``stats``)."""
+    scene, model, n = plan.scene, plan.model, plan.model.n
     t = res.t
     qs, qds, W = res.y[:, :n], res.y[:, n:2 * n], res.y[:, 2 * n]
     E, V, h = _energies(res, n)
@@ -145,7 +166,7 @@ def _scene_and_model(scene_or_model, model: Model | None) -> tuple[Scene, Model,
     """The scene to run (a bare Model runs in a scene of gravity alone), its model, and its compiled
     run when the caller passed one (a :class:`~urdf2links.scenes.plan.Plan`: nothing is loaded or
     compiled again)."""
-    from ..scenes.scene import load_scene
+    from ..scenes.scene_read import load_scene
 
     if isinstance(scene_or_model, Plan):
         plan = as_plan(scene_or_model, model=model)

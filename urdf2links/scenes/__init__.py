@@ -9,6 +9,8 @@ from .. import numba_cache as _numba_cache
 _numba_cache.install()     # before any compiled function is defined (idempotent)
 
 from .plan import Plan, as_plan, compile_plan
-from .scene import Scene, default_scene, load_scene
+from .default_scenes import default_scene
+from .scene import Scene
+from .scene_read import load_scene
 
 __all__ = ["Scene", "load_scene", "default_scene", "Plan", "compile_plan", "as_plan"]

@@ -234,7 +234,8 @@ def as_plan(source, *, model=None) -> Plan:
         if model is not None and model is not source.model:
             raise ValueError("as_plan: a Plan brings its own model; model= must be None or that model")
         return source
-    from .scene import Scene, load_scene
+    from .scene import Scene
+    from .scene_read import load_scene
 
     scene = source if isinstance(source, Scene) else load_scene(source)
     return compile_plan(scene, scene.model() if model is None else model)

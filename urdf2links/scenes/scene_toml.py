@@ -1,11 +1,11 @@
 """Scenes as TOML text, and a scene from a file that is either a scene or a robot.
 
-:func:`scene_toml` writes a :class:`~urdf2links.scenes.scene.Scene` in the schema :func:`~urdf2links.scenes.scene.load_scene`
+:func:`scene_toml` writes a :class:`~urdf2links.scenes.scene.Scene` in the schema :func:`~urdf2links.scenes.scene_read.load_scene`
 reads -- robot, gravity, springs, ``[dampers]``, initial state, run, recorded poses -- so that
 ``urdf2links simulate ROBOT.urdf --write-scene FILE.toml`` hands the user the default scene to edit
 (it reads back to the same scene). Time functions (a moving base, loads, torques) have no TOML
 writer: such a scene is refused by name. :func:`scene_or_robot` is what the CLI runs: a ``.toml``
-file is loaded as a scene, anything else is a robot run in its :func:`~urdf2links.scenes.scene.default_scene`.
+file is loaded as a scene, anything else is a robot run in its :func:`~urdf2links.scenes.default_scenes.default_scene`.
 
 Public API: :func:`scene_toml`, :func:`write_scene`, :func:`scene_or_robot`.
 """
@@ -21,7 +21,9 @@ from ..errors import SceneError, URDFError
 from ..parsers.xacro_input import parse_xacro_arg
 from .constraints import constraint_toml
 from .expect import expect_toml
-from .scene import RunSettings, Scene, default_scene, load_scene
+from .default_scenes import default_scene
+from .scene import RunSettings, Scene
+from .scene_read import load_scene
 
 __all__ = ["scene_toml", "scene_with_plan", "write_scene", "scene_or_robot", "scene_from_args", "write_scene_option",
            "xacro_args_of", "hold_of", "ground_of"]
