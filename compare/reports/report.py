@@ -34,28 +34,35 @@ from .motion import motion_section
 from .plots import plot_coordinates, plot_energy, plot_error, plot_overview, plot_terms
 from .stops import stops_html, stops_md
 
-__all__ = ["write_report", "render_html", "render_markdown", "write_index"]
+__all__ = ["write_report", "render_html", "render_markdown", "write_index", "page_css"]
 
 
 # --------------------------------------------------------------------------- HTML
 
 
-_CSS = """
-body { font-family: -apple-system, 'Segoe UI', Helvetica, Arial, sans-serif; margin: 0 auto; max-width: 1120px;
-       padding: 16px 24px 40px; color: #1d2330; line-height: 1.45; }
-h1 { font-size: 1.6em; margin-bottom: 0.1em; } h2 { margin-top: 1.6em; border-bottom: 1px solid #d0d5de; padding-bottom: 3px; }
-.sub { color: #5a6272; margin-top: 0; }
-table { border-collapse: collapse; margin: 8px 0 14px; font-size: 0.92em; }
-th, td { border: 1px solid #d0d5de; padding: 4px 9px; text-align: left; vertical-align: top; }
-th { background: #eef1f6; } td.num { text-align: right; font-family: 'DejaVu Sans Mono', Menlo, monospace; white-space: nowrap; }
-img { max-width: 100%; border: 1px solid #e3e6ec; margin: 6px 0; }
-.box { border-left: 4px solid #3d7bd9; background: #f3f7fd; padding: 8px 14px; margin: 10px 0; }
+def page_css(*, max_width: int = 1120, table_font: str = "0.92em", cell_padding: str = "4px 9px",
+             extra: str = "") -> str:
+    """The stylesheet of the report pages (a scene's report, the pairs' pages): the width, the tables' font and
+    cells' padding, and a page's ``extra`` rules."""
+    return f"""
+body {{ font-family: -apple-system, 'Segoe UI', Helvetica, Arial, sans-serif; margin: 0 auto; max-width: {max_width}px;
+       padding: 16px 24px 40px; color: #1d2330; line-height: 1.45; }}
+h1 {{ font-size: 1.6em; margin-bottom: 0.1em; }} h2 {{ margin-top: 1.6em; border-bottom: 1px solid #d0d5de; padding-bottom: 3px; }}
+.sub {{ color: #5a6272; margin-top: 0; }}
+table {{ border-collapse: collapse; margin: 8px 0 14px; font-size: {table_font}; }}
+th, td {{ border: 1px solid #d0d5de; padding: {cell_padding}; text-align: left; vertical-align: top; }}
+th {{ background: #eef1f6; }} td.num {{ text-align: right; font-family: 'DejaVu Sans Mono', Menlo, monospace; white-space: nowrap; }}
+.box {{ border-left: 4px solid #3d7bd9; background: #f3f7fd; padding: 8px 14px; margin: 10px 0; }}
+.bad {{ border-left-color: #c9302c; background: #fbeeee; }}
+.ok {{ color: #1e7b34; font-weight: 600; }} .fail {{ color: #c9302c; font-weight: 600; }}
+code {{ background: #f0f2f5; padding: 0 3px; border-radius: 3px; font-size: 0.92em; }}
+ul.notes li {{ margin: 2px 0; font-size: 0.9em; }} .small {{ font-size: 0.88em; color: #5a6272; }}
+{extra}"""
+
+
+_CSS = page_css(extra="""img { max-width: 100%; border: 1px solid #e3e6ec; margin: 6px 0; }
 .chaos { border-left-color: #d98c3d; background: #fdf7ef; }
-.bad { border-left-color: #c9302c; background: #fbeeee; }
-.ok { color: #1e7b34; font-weight: 600; } .fail { color: #c9302c; font-weight: 600; }
-code { background: #f0f2f5; padding: 0 3px; border-radius: 3px; font-size: 0.92em; }
-ul.notes li { margin: 2px 0; font-size: 0.9em; } .small { font-size: 0.88em; color: #5a6272; }
-"""
+""")
 
 
 def _rows(rows, header=None, num_cols=()) -> str:
