@@ -400,6 +400,45 @@ def write_report(c, out_dir=None, *, root=None, json_path=None, command: str | N
             "summary": summary}
 
 
+def _index_row(s: dict, link: str, chk: "CheckResult | None") -> list[str]:
+    """One scene's row of ``index.html`` (:func:`write_index`): its cells, HTML."""
+    e = html.escape
+    tr, en, te, wt = s["trajectory"], s["energy"], s["terms"], s["wall_time"]
+    r2 = te["max_rel_error_route2"]
+    check = "&ndash;" if chk is None else ("<span class='ok'>ok</span>" if chk.ok else
+                                            "<span class='fail'>FAIL</span><br><span class='small'>"
+                                            + e(", ".join(chk.failures)) + "</span>")
+    acts = ", ".join({"G": "gravity", "spring": "springs", "damper": "dampers", "tau": "torques",
+                      "Q": "loads"}.get(x, x) for x in s["effects"] if x not in ("A", "e")) or "nothing"
+    r2cell = "skipped<br><span class='small'>floating base</span>" if r2 is None else (
+        fmt(r2, 1) + ("<br><span class='small'>repaired</span>" if "REPAIRED" in te["route2"].get("label", "") else ""))
+    divcell = fmt_t(tr["divergence_time"]) + ("<br><span class='small'>chaotic" + (
+        f", growth {tr['growth_rate']:.2g}/s" if tr.get("growth_rate") else "") + "</span>" if s["chaotic"] else "")
+    tcell = f"{s['t_end']:g} s" + (f"<br><span class='small'>scene {s['t_end_scene']:g} s</span>"
+                                  if s["t_end"] != s["t_end_scene"] else "")
+    return [f"<a href='{e(link)}'>{e(s['scene'])}</a><br><span class='small'>{e(s['robot'])}</span>", e(acts),
+            tcell, fmt(te["max_rel_error_route1"], 1), r2cell, fmt(tr["max_abs_error"], 1), divcell,
+            fmt(en["project_drift_rel"], 1), fmt(en["mujoco_drift_rel"], 1),
+            fmt(s["base"]["tracking_error"], 1) if s["base"]["moving"] else "&ndash;", coverage_cell(s),
+            f"{wt['project_s']:.2f}", f"{wt['mujoco_s']:.2f}", check]
+
+
+def _index_md_row(s: dict, link: str) -> str:
+    """One scene's line of ``index.md`` (:func:`write_index`)."""
+    tr, en, te, wt = s["trajectory"], s["energy"], s["terms"], s["wall_time"]
+    div = fmt_t(tr["divergence_time"])
+    if s["chaotic"]:
+        div += " (chaotic" + (f"; growth {tr['growth_rate']:.2g}/s" if tr.get("growth_rate") else "") + ")"
+    r2 = te["max_rel_error_route2"]
+    r2s = fmt(r2) + (" (repaired)" if "REPAIRED" in te["route2"].get("label", "") else "") if r2 is not None else "skipped"
+    t_end = f"{s['t_end']:g} s" + (f" (scene {s['t_end_scene']:g})" if s["t_end"] != s["t_end_scene"] else "")
+    return (f"| {s['robot']} | [{s['scene']}]({link}) | {t_end} | {fmt_md(te['max_rel_error_route1'])} / "
+            f"{r2s.replace('&ndash;', '-')} | {fmt_md(tr['max_abs_error'])} | {div} | "
+            f"{fmt_md(en['project_drift_rel'])} / {fmt_md(en['mujoco_drift_rel'])} | "
+            f"{fmt_md(s['base']['tracking_error']) if s['base']['moving'] else '-'} | "
+            f"{coverage_cell(s, markdown=True)} | {wt['project_s']:.2f} / {wt['mujoco_s']:.2f} |")
+
+
 def write_index(entries, out_root, *, note: str = "", command: str | None = None, corpus_link: str | None = None,
                 stopped=()) -> dict:
     """``index.html`` and ``index.md`` in ``out_root``: one row per (summary, link, check) entry,
@@ -419,35 +458,8 @@ def write_index(entries, out_root, *, note: str = "", command: str | None = None
           "energy drift rel. (urdf2links / MuJoCo) | base tracking | coverage | wall s (urdf2links / MuJoCo) |",
           "|---|---|---|---|---|---|---|---|---|---|"]
     for ent in entries:
-        s, link, chk = ent["summary"], ent["link"], ent.get("check")
-        tr, en, te, wt = s["trajectory"], s["energy"], s["terms"], s["wall_time"]
-        div = fmt_t(tr["divergence_time"])
-        if s["chaotic"]:
-            div += " (chaotic" + (f"; growth {tr['growth_rate']:.2g}/s" if tr.get("growth_rate") else "") + ")"
-        r2 = te["max_rel_error_route2"]
-        r2s = fmt(r2) + (" (repaired)" if "REPAIRED" in te["route2"].get("label", "") else "") if r2 is not None else "skipped"
-        t_end = f"{s['t_end']:g} s" + (f" (scene {s['t_end_scene']:g})" if s["t_end"] != s["t_end_scene"] else "")
-        check = "&ndash;" if chk is None else ("<span class='ok'>ok</span>" if chk.ok else
-                                                "<span class='fail'>FAIL</span><br><span class='small'>"
-                                                + e(", ".join(chk.failures)) + "</span>")
-        acts = ", ".join({"G": "gravity", "spring": "springs", "damper": "dampers", "tau": "torques",
-                          "Q": "loads"}.get(x, x) for x in s["effects"] if x not in ("A", "e")) or "nothing"
-        r2cell = "skipped<br><span class='small'>floating base</span>" if r2 is None else (
-            fmt(r2, 1) + ("<br><span class='small'>repaired</span>" if "REPAIRED" in te["route2"].get("label", "") else ""))
-        divcell = fmt_t(tr["divergence_time"]) + ("<br><span class='small'>chaotic" + (
-            f", growth {tr['growth_rate']:.2g}/s" if tr.get("growth_rate") else "") + "</span>" if s["chaotic"] else "")
-        tcell = f"{s['t_end']:g} s" + (f"<br><span class='small'>scene {s['t_end_scene']:g} s</span>"
-                                      if s["t_end"] != s["t_end_scene"] else "")
-        rows.append([f"<a href='{e(link)}'>{e(s['scene'])}</a><br><span class='small'>{e(s['robot'])}</span>", e(acts),
-                     tcell, fmt(te["max_rel_error_route1"], 1), r2cell, fmt(tr["max_abs_error"], 1), divcell,
-                     fmt(en["project_drift_rel"], 1), fmt(en["mujoco_drift_rel"], 1),
-                     fmt(s["base"]["tracking_error"], 1) if s["base"]["moving"] else "&ndash;", coverage_cell(s),
-                     f"{wt['project_s']:.2f}", f"{wt['mujoco_s']:.2f}", check])
-        md.append(f"| {s['robot']} | [{s['scene']}]({link}) | {t_end} | {fmt_md(te['max_rel_error_route1'])} / "
-                  f"{r2s.replace('&ndash;', '-')} | {fmt_md(tr['max_abs_error'])} | {div} | "
-                  f"{fmt_md(en['project_drift_rel'])} / {fmt_md(en['mujoco_drift_rel'])} | "
-                  f"{fmt_md(s['base']['tracking_error']) if s['base']['moving'] else '-'} | "
-                  f"{coverage_cell(s, markdown=True)} | {wt['project_s']:.2f} / {wt['mujoco_s']:.2f} |")
+        rows.append(_index_row(ent["summary"], ent["link"], ent.get("check")))
+        md.append(_index_md_row(ent["summary"], ent["link"]))
     first = entries[0]["summary"] if entries else None
     settings = ""
     if first:
