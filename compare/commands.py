@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 import sys
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from urdf2links.compilation import clock  # durations without numba's compilation
@@ -181,6 +182,8 @@ def compare_command(args) -> int:
 
 
 def report_command(args) -> int:
+    """``urdf2links report`` (module doc): ``--pairs`` and ``--corpus`` to their own commands, else every scene
+    compared, checked against the baselines, written, and the index over them."""
     if getattr(args, "pairs", None):
         from .pairs.command import report_pairs_command
 
@@ -201,66 +204,122 @@ def report_command(args) -> int:
     if args.write_baselines is True:
         args.write_baselines = out / "baselines.json"
     load = load_options_of(args)
-    baselines, baselines_path = None, None
-    if args.write_baselines:
-        err(f"baselines: this run's figures are accepted into {shown_path(args.write_baselines)} (not checked)")
-    else:
-        baselines_path, looked = (Path(args.check), [Path(args.check)]) if args.check else default_baselines(out)
-        if baselines_path is None:
-            err(f"baselines: none found (looked for {', '.join(shown_path(p) for p in looked)}): the figures are "
-                "reported, not checked")
-        else:
-            try:
-                baselines = load_baselines(baselines_path)
-            except (OSError, ValueError) as exc:
-                err(f"urdf2links report: error: cannot read baselines {baselines_path}: {exc}")
-                return 2
-            err(f"baselines: {shown_path(baselines_path)} (exit 1 when a figure grows past its baseline)")
-    entries, summaries, failed, errors, stopped = [], [], [], [], []
+    baselines = _report_baselines(args, out)
+    if baselines.unreadable:
+        return 2
+    runs = _ReportRuns()
     start = clock()
     for i, f in enumerate(files, 1):
-        t0 = clock()
-        scene = override_loading(load_scene(f), load)
-        T, note = report_t_end(scene, t_end=args.t_end, cap=args.cap)
-        err(f"[{i}/{len(files)}] {Path(scene.robot).stem}/{scene.name}: t = 0..{T:g} s"
-             + (f" (capped; scene {scene.run.t_end:g} s)" if note and args.t_end is None else ""))
+        _report_scene(args, f, label=f"[{i}/{len(files)}]", load=load, out=out, baselines=baselines, runs=runs)
+    corpus = out / "corpus" / "index.html"
+    idx = write_index(runs.entries, out, note=_report_note(args, baselines),
+                      command="urdf2links report" + (f" --out {args.out}" if args.out else ""),
+                      corpus_link="corpus/index.html" if corpus.is_file() else None, stopped=runs.stopped)
+    if args.write_baselines:
+        bp = write_baselines(runs.summaries, args.write_baselines, factor=args.factor)
+        err(f"wrote {shown_path(bp)}")
+    print(idx["table"])
+    print(f"\n{shown_path(idx['html'])}: {len(runs.entries)} scene(s) in {clock() - start:.0f} s"
+          + (f"; {len(runs.stopped)} hard case(s) stopped by design, as their [expect] says" if runs.stopped else ""))
+    for e in runs.errors:
+        err(f"urdf2links report: scene failed: {e}")
+    for f in runs.failed:
+        err(f"urdf2links report: baseline check FAILED for {f}")
+    return 1 if (runs.errors or runs.failed) else 0
+
+
+@dataclass(frozen=True)
+class _ReportBaselines:
+    """The baselines ``report`` checks against (``data`` None: not checked), their ``path``, and whether the file
+    given could not be read (``unreadable``: the command exits 2)."""
+
+    data: dict | None = None
+    path: Path | None = None
+    unreadable: bool = False
+
+
+def _report_baselines(args, out: Path) -> _ReportBaselines:
+    """``--write-baselines``: none checked; else ``--check FILE`` or the default ``<out>/baselines.json``."""
+    if args.write_baselines:
+        err(f"baselines: this run's figures are accepted into {shown_path(args.write_baselines)} (not checked)")
+        return _ReportBaselines()
+    path, looked = (Path(args.check), [Path(args.check)]) if args.check else default_baselines(out)
+    if path is None:
+        err(f"baselines: none found (looked for {', '.join(shown_path(p) for p in looked)}): the figures are "
+            "reported, not checked")
+        return _ReportBaselines()
+    try:
+        data = load_baselines(path)
+    except (OSError, ValueError) as exc:
+        err(f"urdf2links report: error: cannot read baselines {path}: {exc}")
+        return _ReportBaselines(path=path, unreadable=True)
+    err(f"baselines: {shown_path(path)} (exit 1 when a figure grows past its baseline)")
+    return _ReportBaselines(data, path)
+
+
+@dataclass
+class _ReportRuns:
+    """What ``report``'s scenes gave, filled in scene by scene: the index's entries, the summaries (for
+    ``--write-baselines``), the baseline failures, the errors, the hard cases that stopped by design."""
+
+    entries: list = field(default_factory=list)
+    summaries: list = field(default_factory=list)
+    failed: list = field(default_factory=list)
+    errors: list = field(default_factory=list)
+    stopped: list = field(default_factory=list)
+
+
+def _report_scene(args, f: Path, *, label: str, load: dict, out: Path, baselines: _ReportBaselines,
+                  runs: _ReportRuns) -> None:
+    """One scene of ``report``: compared (a failure, or a hard case's stop by design, noted and the next scene run),
+    checked against its baseline, its report written; ``runs`` gets what it gave."""
+    t0 = clock()
+    scene = override_loading(load_scene(f), load)
+    T, note = report_t_end(scene, t_end=args.t_end, cap=args.cap)
+    err(f"{label} {Path(scene.robot).stem}/{scene.name}: t = 0..{T:g} s"
+        + (f" (capped; scene {scene.run.t_end:g} s)" if note and args.t_end is None else ""))
+    try:
+        c = compare_scene(scene, t_end=T, mujoco_integrator=args.mujoco_integrator, mujoco_dt=args.mujoco_dt,
+                          states=args.states, t_end_note=note, progress=False if args.quiet else None,
+                          log=(lambda m: None) if args.quiet else (lambda m: err(f"    {m}")),
+                          max_wall=args.max_wall)
+    except Exception as exc:  # keep going: one broken scene must not hide the others
+        stop = expected_stop(scene, Path(scene.robot).stem, exc, t_end=T)
+        if stop is not None:      # a hard case's [expect]: listed as stopping by design, not a failure
+            err(f"    stopped by design ({scene.expected_stop.text()}): {type(exc).__name__}: {exc}")
+            runs.stopped.append(stop)
+            return
+        err(f"    FAILED: {type(exc).__name__}: {exc}")
+        runs.errors.append(f"{f}: {exc}")
+        return
+    missed = missed_stop(scene, t_end=T)
+    if missed is not None:
+        err(f"    FAILED: {missed}")
+        runs.errors.append(missed)
+    summary = json_ready(c.summary())
+    check = None
+    if baselines.data is not None:
         try:
-            c = compare_scene(scene, t_end=T, mujoco_integrator=args.mujoco_integrator, mujoco_dt=args.mujoco_dt,
-                              states=args.states, t_end_note=note, progress=False if args.quiet else None,
-                              log=(lambda m: None) if args.quiet else (lambda m: err(f"    {m}")),
-                              max_wall=args.max_wall)
-        except Exception as exc:  # keep going: one broken scene must not hide the others
-            stop = expected_stop(scene, Path(scene.robot).stem, exc, t_end=T)
-            if stop is not None:      # a hard case's [expect]: listed as stopping by design, not a failure
-                err(f"    stopped by design ({scene.expected_stop.text()}): {type(exc).__name__}: {exc}")
-                stopped.append(stop)
-                continue
-            err(f"    FAILED: {type(exc).__name__}: {exc}")
-            errors.append(f"{f}: {exc}")
-            continue
-        missed = missed_stop(scene, t_end=T)
-        if missed is not None:
-            err(f"    FAILED: {missed}")
-            errors.append(missed)
-        summary = json_ready(c.summary())
-        check = None
-        if baselines is not None:
-            try:
-                check = check_baseline(summary, baselines, factor=args.factor, source=shown_path(baselines_path))
-            except KeyError as exc:
-                err(f"    no baseline: {exc.args[0]}")
-            if check is not None and not check.ok:
-                failed.append(f"{summary['key']}: {', '.join(check.failures)}")
-        cmd = f"urdf2links compare {shown_path(f)}" + (f" --t-end {T:g}" if T != scene.run.t_end else "")
-        write_report(c, out / summary["robot"] / summary["scene"], command=cmd, check=check,
-                     index_link="../../index.html", animation_fps=args.animation_fps)
-        summaries.append(summary)
-        entries.append({"summary": summary, "link": f"{summary['robot']}/{summary['scene']}/report.html", "check": check})
-        tr, en = summary["trajectory"], summary["energy"]
-        err(f"    done in {clock() - t0:.1f} s: terms {summary['terms']['max_rel_error']:.1e}, "
-             f"max |dq| {tr['max_abs_error']:.1e}, drift {en['project_drift_rel']:.1e} / {en['mujoco_drift_rel']:.1e}"
-             + ("" if check is None else f", baseline {'ok' if check.ok else 'FAILED: ' + ', '.join(check.failures)}")
-             + ("" if summary["verdict"].get("plausible", True) else "; IMPLAUSIBLE RUN (the verdict says why)"))
+            check = check_baseline(summary, baselines.data, factor=args.factor, source=shown_path(baselines.path))
+        except KeyError as exc:
+            err(f"    no baseline: {exc.args[0]}")
+        if check is not None and not check.ok:
+            runs.failed.append(f"{summary['key']}: {', '.join(check.failures)}")
+    cmd = f"urdf2links compare {shown_path(f)}" + (f" --t-end {T:g}" if T != scene.run.t_end else "")
+    write_report(c, out / summary["robot"] / summary["scene"], command=cmd, check=check,
+                 index_link="../../index.html", animation_fps=args.animation_fps)
+    runs.summaries.append(summary)
+    runs.entries.append({"summary": summary, "link": f"{summary['robot']}/{summary['scene']}/report.html",
+                         "check": check})
+    tr, en = summary["trajectory"], summary["energy"]
+    err(f"    done in {clock() - t0:.1f} s: terms {summary['terms']['max_rel_error']:.1e}, "
+        f"max |dq| {tr['max_abs_error']:.1e}, drift {en['project_drift_rel']:.1e} / {en['mujoco_drift_rel']:.1e}"
+        + ("" if check is None else f", baseline {'ok' if check.ok else 'FAILED: ' + ', '.join(check.failures)}")
+        + ("" if summary["verdict"].get("plausible", True) else "; IMPLAUSIBLE RUN (the verdict says why)"))
+
+
+def _report_note(args, baselines: _ReportBaselines) -> str:
+    """The index's note: the run's length (``--t-end``, ``--cap``) and the baseline check."""
     note = ""
     if args.t_end is not None:
         note = f"Every scene run for t_end = {args.t_end:g} s (--t-end)."
@@ -268,22 +327,10 @@ def report_command(args) -> int:
         note = (f"Scenes with time-dependent inputs (moving base, joint torques, loads) are capped at t_end = "
                 f"{args.cap:g} s (--cap); the others run their whole t_end. `urdf2links compare SCENE.toml` runs any "
                 "scene in full.")
-    if baselines is not None:
-        note += f" Baseline check against {shown_path(baselines_path)} (errors may grow {baselines.get('factor', 10):g}x)."
-    corpus = out / "corpus" / "index.html"
-    idx = write_index(entries, out, note=note.strip(), command="urdf2links report" + (f" --out {args.out}" if args.out
-                      else ""), corpus_link="corpus/index.html" if corpus.is_file() else None, stopped=stopped)
-    if args.write_baselines:
-        bp = write_baselines(summaries, args.write_baselines, factor=args.factor)
-        err(f"wrote {shown_path(bp)}")
-    print(idx["table"])
-    print(f"\n{shown_path(idx['html'])}: {len(entries)} scene(s) in {clock() - start:.0f} s"
-          + (f"; {len(stopped)} hard case(s) stopped by design, as their [expect] says" if stopped else ""))
-    for e in errors:
-        err(f"urdf2links report: scene failed: {e}")
-    for f in failed:
-        err(f"urdf2links report: baseline check FAILED for {f}")
-    return 1 if (errors or failed) else 0
+    if baselines.data is not None:
+        note += (f" Baseline check against {shown_path(baselines.path)} (errors may grow "
+                 f"{baselines.data.get('factor', 10):g}x).")
+    return note.strip()
 
 
 def tradeoff_command(args) -> int:

@@ -246,7 +246,8 @@ def test_rounding_at_a_limit_is_no_excursion():
 
 def test_energy_drift_of_a_robot_at_rest_is_measured_against_the_rounding_level():
     """A pendulum hanging at rest does not move: the drifts are rounding, and read as such."""
-    from urdf2links.compare.agreement.trajectory import ENERGY_ROUNDING_EPS, compare_scene
+    from urdf2links.compare.agreement.side_by_side import ENERGY_ROUNDING_EPS
+    from urdf2links.compare.agreement.trajectory import compare_scene
     from urdf2links.scenes.default_scenes import default_scene
 
     c = compare_scene(default_scene(shipped_robots_dir() / "pendulum.urdf", t_end=0.05, q0="rest"))

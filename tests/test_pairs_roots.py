@@ -23,8 +23,8 @@ from lxml import etree
 
 from urdf2links.compare.mujoco_side.mujoco_urdf import MujocoRefused
 from urdf2links.compare.pairs.mujoco_import import save_mujoco_import
+from urdf2links.compare.pairs.context import pair_context
 from urdf2links.compare.pairs.differences import compare_descriptions
-from urdf2links.compare.pairs.mapping import map_joints
 from urdf2links.compare.pairs.roots import fixed_root
 from urdf2links.errors import DescriptionError
 from urdf2links.locations import example_robot_data_dir
@@ -124,8 +124,9 @@ def test_a_rotated_twin_lists_root_pose_and_no_axis_origin_or_sign(rel, joints, 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         T = robot_parts(_twin(rel, tmp_path, joints=joints))
-        mapping = map_joints(U, T)
-        diffs, _below = compare_descriptions(U, T, mapping)
+        ctx = pair_context(U, T)
+        mapping = ctx.mapping
+        diffs, _below = compare_descriptions(ctx)
     bad = [d.label() for d in diffs if d.kind in ("axis", "origin")]
     assert not bad, f"{rel}: {len(bad)} axis/origin difference(s): {bad[:6]}"
     assert mapping.to_json()["negated"] == [], rel
@@ -183,8 +184,9 @@ def test_mujocos_import_mounted_rotated_and_renamed_lists_root_pose_and_no_axis_
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         M = robot_parts(twin)
-        mapping = map_joints(U, M)
-        diffs, _below = compare_descriptions(U, M, mapping)
+        ctx = pair_context(U, M)
+        mapping = ctx.mapping
+        diffs, _below = compare_descriptions(ctx)
     bad = [d.label() for d in diffs if d.kind in ("axis", "origin")]
     assert not bad, f"{rel}: {len(bad)} axis/origin difference(s): {bad[:6]}"
     assert mapping.to_json()["negated"] == [] and mapping.mapped_fraction == 1.0, rel

@@ -73,7 +73,6 @@ from urdf2links.integration.simulate import Trajectory, simulate, warm_up
 from urdf2links.parsers.robot_file import is_mjcf_path
 from urdf2links.parsers.xacro_input import is_xacro_path
 from urdf2links.ranges import MAX_STEPS
-from urdf2links.scenes.limits import LimitExcursion
 from urdf2links.scenes.actuators import describe_actuator
 from urdf2links.scenes.coverage import Coverage, coverage
 from urdf2links.scenes.plan import compile_plan
@@ -87,12 +86,13 @@ from ..mujoco_side.mujoco_constraints import with_constraints
 from ..mujoco_side.tendon_controls import tendon_actuators
 from .constraint_agreement import run_notes as constraint_run_notes
 from ..mujoco_side.mujoco_run import TIMED_REGION as MUJOCO_REGION
-from ..mujoco_side.contact_inputs import contact_energy, contact_timestep
+from ..mujoco_side.contact_inputs import contact_timestep
 from .contact_reference import contact_reference
-from ..mujoco_side.mujoco_run import MujocoRun, energy_function
+from ..mujoco_side.mujoco_run import MujocoRun
 from ..mujoco_side.stable_run import stable_run
 from .actuator_terms import file_actuators, merged, route1_actuators, route2_actuators
 from .scene_terms import ROUTE1_LABEL, route1_terms, route2_terms
+from .side_by_side import energy_balances, project_at, run_notes
 from .plausibility import file_floors, plausibility
 from .verdict import comparison_verdict, cut_scope, switched_off
 
@@ -107,8 +107,6 @@ __all__ = [
 
 #: Error (rad or m, largest over the coordinates) whose first crossing is the divergence time.
 DIVERGENCE_THRESHOLD = 1e-3
-#: The energy scale of the relative drifts is at least this many eps times max|E + V| (the rounding level).
-ENERGY_ROUNDING_EPS = 1000.0
 
 
 def scene_key(scene: Scene, model=None) -> str:
@@ -371,6 +369,82 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     (:func:`urdf2links.compare.mujoco_side.stable_run.stable_run`; ``summary()["mujoco"]["fallback"]``)."""
     start = clock()
     say = log or (lambda _m: None)
+    setup = _prepare(scene, t_end=t_end, samples=samples, mujoco_dt=mujoco_dt, model=model)
+    say(f"terms at {states} seeded states (route 1" + (", route 2)" if not setup.scene.load_options.get("floating_base")
+                                                       else ")"))
+    mujoco_models = _mujoco_models(setup, mujoco_dt=mujoco_dt, mujoco_integrator=mujoco_integrator)
+    terms = _terms(setup, mujoco_models, states=states, seed=seed)
+    traj, warm = _run_project(setup, method=method, rtol=rtol, atol=atol, progress=progress, max_wall=max_wall,
+                              start=start, say=say)
+    runs = _run_mujoco(setup, mujoco_models, traj, mujoco_dt=mujoco_dt, mujoco_integrator=mujoco_integrator,
+                       mujoco_fallback=mujoco_fallback, say=say)
+    agreement = _agreement(setup, mujoco_models, runs, threshold=threshold)
+    notes = _notes(setup, mujoco_models, runs, resampled=agreement.resampled, t_end_note=t_end_note)
+    info = {**agreement.info, **_coverage_and_gate(setup, mujoco_models, runs, agreement)}
+    info.update({"t_end_note": t_end_note, "warm_up": warm, "total_s": clock() - start})
+    contact = None
+    if "contact" in setup.plan.terms:       # issue 37: MuJoCo's own contact on the same scene, as a reference
+        say("MuJoCo's native contact (a reference, not an error)")
+        contact, info["contact_series"] = contact_reference(setup.plan, mujoco_models.mj, runs.t, agreement.q,
+                                                            agreement.qd, setup.T, setup.samples)
+    return SceneComparison(
+        scene=setup.scene, model=setup.model, mj=mujoco_models.mj, traj=traj, run=runs.run, t=runs.t,
+        q_ours=agreement.q, q_mujoco=runs.run.q, error=agreement.error, energy=agreement.energy, terms=terms,
+        growth=agreement.growth, threshold=threshold, info=info, notes=notes, contact=contact)
+
+
+# --------------------------------------------------------------------------- the comparison's steps
+
+
+@dataclass(frozen=True)
+class _Setup:
+    """The scene, its robot and compiled plan (loaded and compiled once), ``T`` and ``samples`` of both runs."""
+
+    scene: Scene
+    model: object
+    plan: object
+    T: float
+    samples: int
+
+
+@dataclass(frozen=True)
+class _MujocoModels:
+    """Route 1's MJCF of the project's tree (``mj``) and, for an MJCF robot, MuJoCo running the file (``mf``)."""
+
+    mj: MjcfModel
+    mf: object | None
+
+
+@dataclass(frozen=True)
+class _Runs:
+    """The project's run (``traj``) and MuJoCo's (``run``, at its times ``t``), MuJoCo's ``fallback`` after a
+    blow-up, whether it ran the file itself (``file_run``), the contact's timestep note."""
+
+    traj: Trajectory
+    run: MujocoRun
+    t: np.ndarray
+    fallback: dict | None
+    file_run: bool
+    step_note: str | None
+
+
+@dataclass(frozen=True)
+class _Agreement:
+    """The project's ``q``, ``qd`` at MuJoCo's times, ``|q_ours - q_mujoco|``, the chaotic growth, the energies and
+    the summary's energy figures (``info``), whether the project's run was resampled."""
+
+    q: np.ndarray
+    qd: np.ndarray
+    error: np.ndarray
+    growth: dict | None
+    energy: dict
+    info: dict
+    resampled: bool
+
+
+def _prepare(scene, *, t_end, samples, mujoco_dt, model) -> _Setup:
+    """The scene loaded, its robot (``model`` when the caller loaded it), the run's length checked against MuJoCo's
+    step limit, the samples (scaled down with a shortened ``t_end``), the plan compiled once."""
     if isinstance(scene, (str, Path)):
         scene = load_scene(scene)
     if model is None:
@@ -384,16 +458,25 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
     if samples is None:
         s = scene.run.samples
         samples = s if T >= scene.run.t_end else max(101, int(round((s - 1) * T / scene.run.t_end)) + 1)
-    plan = compile_plan(scene, model)     # the compiled run, passed down to every stage below
+    return _Setup(scene, model, compile_plan(scene, model), T, samples)   # the compiled run, passed down
 
-    say(f"terms at {states} seeded states (route 1" + (", route 2)" if not scene.load_options.get("floating_base")
-                                                       else ")"))
-    mj = mjcf_from_scene(scene, model, timestep=mujoco_dt, integrator=mujoco_integrator)
-    if plan.constraints is not None:    # issue 36: the scene's constraints and tendons as MuJoCo equalities
-        mj = with_constraints(mj, plan.constraints)
+
+def _mujoco_models(setup: _Setup, *, mujoco_dt, mujoco_integrator) -> _MujocoModels:
+    """Route 1 (the project's tree as MJCF, the scene's constraints and tendons as equalities) and, for an MJCF
+    robot, route 2 (MuJoCo runs the file itself)."""
+    mj = mjcf_from_scene(setup.scene, setup.model, timestep=mujoco_dt, integrator=mujoco_integrator)
+    if setup.plan.constraints is not None:    # issue 36: the scene's constraints and tendons as MuJoCo equalities
+        mj = with_constraints(mj, setup.plan.constraints)
     mf = None
-    if is_mjcf_path(scene.robot):       # route 2: MuJoCo runs the file itself
-        mf = mujoco_from_mjcf(plan, timestep=mujoco_dt, integrator=mujoco_integrator)
+    if is_mjcf_path(setup.scene.robot):       # route 2: MuJoCo runs the file itself
+        mf = mujoco_from_mjcf(setup.plan, timestep=mujoco_dt, integrator=mujoco_integrator)
+    return _MujocoModels(mj, mf)
+
+
+def _terms(setup: _Setup, models: _MujocoModels, *, states, seed) -> dict:
+    """The terms at identical seeded states, both routes; the actuators' forces beside them (module doc, 1)."""
+    scene, model, plan, mj, mf = setup.scene, setup.model, setup.plan, models.mj, models.mf
+    if mf is not None:
         route2 = file_terms(mf, model, scene, states=states, seed=seed)
     else:
         route2 = route2_terms(scene, states=states, seed=seed, model=model)
@@ -404,73 +487,94 @@ def compare_scene(scene, *, t_end: float | None = None, mujoco_integrator: str =
                 route2_actuators(plan, scene.robot, states=states, seed=seed) if not is_xacro_path(scene.robot)
                 else {"label": "route 2", "skipped": "a xacro robot: route 2's actuators are checked on URDF files"})
         terms["route2"] = merged(terms["route2"], act2)
+    return terms
 
+
+def _run_project(setup: _Setup, *, method, rtol, atol, progress, max_wall, start, say):
+    """The warm-up (its compilation reported apart) and the project's run, within ``max_wall`` from ``start``."""
+    scene, T = setup.scene, setup.T
     meth = method or scene.run.method
-    warm = warm_up(plan, methods=(meth,))      # its compilation: in the summary, and on the command's one line
+    warm = warm_up(setup.plan, methods=(meth,))      # its compilation: in the summary, and on the command's one line
     say(f"project: {meth}" + (f" rtol {rtol or scene.run.rtol:g}" if meth not in ("RK4", "midpoint") else "")
         + f", t = 0..{T:g} s")
     left = None if max_wall is None else max_wall - (clock() - start)
     if left is not None and left <= 0:
         raise IntegrationError(f"{scene.path or scene.name}: max_wall={max_wall:g} s spent before the project's run "
                                "(loading and terms)")
-    traj = simulate(plan, t_end=T, method=method, rtol=rtol, atol=atol, samples=samples,
+    traj = simulate(setup.plan, t_end=T, method=method, rtol=rtol, atol=atol, samples=setup.samples,
                     progress=progress, max_wall=left)
     if max_wall is not None and clock() - start > max_wall:
         raise IntegrationError(f"{scene.path or scene.name}: max_wall={max_wall:g} s spent before MuJoCo's run")
+    return traj, warm
+
+
+def _run_mujoco(setup: _Setup, models: _MujocoModels, traj, *, mujoco_dt, mujoco_integrator, mujoco_fallback,
+                say) -> _Runs:
+    """MuJoCo's run (the file's route when it takes the scene's inputs, else route 1), with the contact's step and
+    the stable fallback after a blow-up."""
+    plan, T, samples, mf = setup.plan, setup.T, setup.samples, models.mf
     step_note = None
     if "contact" in plan.terms:         # issue 37: MuJoCo's step resolves the contact's stiffest mode
         mujoco_dt, step_note = contact_timestep(plan, traj, mujoco_dt)
         if step_note:
             say(step_note)
     say(f"MuJoCo: {mujoco_integrator} dt {mujoco_dt:g}, {int(round(T / mujoco_dt))} steps")
-    file_run = mf is not None and not file_route_inputs(scene, plan)
-    fallback = None
+    file_run = mf is not None and not file_route_inputs(setup.scene, plan)
     runner = (file_runner(mf, plan, t_end=T, samples=samples, reference=traj.q if len(traj.q) == samples else None)
               if file_run else None)     # the file's route falls back like route 1 when MuJoCo blows up
-    run, fallback = stable_run(mj, plan, t_end=T, samples=samples, integrator=mujoco_integrator,
+    run, fallback = stable_run(models.mj, plan, t_end=T, samples=samples, integrator=mujoco_integrator,
                                timestep=mujoco_dt, fallback=mujoco_fallback, runner=runner)
     if fallback is not None:
         say(fallback["note"])
+    return _Runs(traj, run, np.asarray(run.t, float), fallback, file_run, step_note)
 
-    t = np.asarray(run.t, float)
-    q_o, qd_o, W, EV_o, h_o, resampled = _project_at(traj, plan, t, T)
-    error = np.abs(q_o - run.q)
-    err_max = error.max(axis=1) if model.n else np.zeros(len(t))
+
+def _agreement(setup: _Setup, models: _MujocoModels, runs: _Runs, *, threshold) -> _Agreement:
+    """The trajectories' and energies' agreement (module doc, 2 and 3): the project at MuJoCo's times, the error,
+    a chaotic scene's growth up to the divergence, both energy balances."""
+    t = runs.t
+    q_o, qd_o, W, EV_o, h_o, resampled = project_at(runs.traj, setup.plan, t, setup.T)
+    error = np.abs(q_o - runs.run.q)
+    err_max = error.max(axis=1) if setup.model.n else np.zeros(len(t))
     div = divergence_time(t, err_max, threshold)
-    growth = growth_fit(t, err_max, end_time=div) if scene.chaotic else None
-    energy, info = _energy_balances(scene, plan, mj, run, traj, EV_o, h_o, W)
-    notes = _run_notes(scene, plan, mj, run, traj, t_end_note, resampled=resampled)
-    notes += constraint_run_notes(plan, traj, mj)   # issue 36: closed loops, couplings, tendons
-    notes += [step_note] if step_note else []      # issue 37: MuJoCo's step for the contact
+    growth = growth_fit(t, err_max, end_time=div) if setup.scene.chaotic else None
+    energy, info = energy_balances(setup.scene, setup.plan, models.mj, runs.run, runs.traj, EV_o, h_o, W)
+    return _Agreement(q_o, qd_o, error, growth, energy, info, resampled)
+
+
+def _notes(setup: _Setup, models: _MujocoModels, runs: _Runs, *, resampled: bool, t_end_note) -> list[str]:
+    """The report's notes on the runs: both runs', the constraints', the contact's step, route 2's."""
+    scene, plan, model, mf = setup.scene, setup.plan, setup.model, models.mf
+    notes = run_notes(scene, plan, models.mj, runs.run, runs.traj, t_end_note, resampled=resampled)
+    notes += constraint_run_notes(plan, runs.traj, models.mj)   # issue 36: closed loops, couplings, tendons
+    notes += [runs.step_note] if runs.step_note else []      # issue 37: MuJoCo's step for the contact
     if mf is not None:
         notes += ([f"route 2 (the MJCF file in MuJoCo): {x}" for x in mf.notes]
                   + [f"import: {x}" for x in model.info.get("notes", [])])
-        if not file_run:
+        if not runs.file_run:
             notes.append(f"the scene's {', '.join(file_route_inputs(scene, plan))} are inputs that the run of the "
                          "MJCF file does not take yet: MuJoCo's trajectory is route 1's (the project's tree as MJCF)")
+    return notes
+
+
+def _coverage_and_gate(setup: _Setup, models: _MujocoModels, runs: _Runs, agreement: _Agreement) -> dict:
+    """What the run exercised (E66, E67), the plausibility gate before any verdict (issue 43), the model's scope and
+    the effects switched off: the summary's ``info`` beside the energy figures."""
+    scene, plan, model, mf, energy = setup.scene, setup.plan, setup.model, models.mf, agreement.energy
     q0, qd0 = scene.initial_state(model)
-    cov = coverage(q_o, qd_o, model=model)
     floors = file_floors(mf.model) if mf is not None else []    # issue 43: the gate before any verdict
-    info["plausibility"] = plausibility(plan, t=t, runs={"urdf2links": (q_o, qd_o), "MuJoCo": (run.q, run.qd)},
-                                        balances={"urdf2links": (energy["ours_balance"], "h - h(0) - W"),
-                                                  "MuJoCo": (energy["mujoco_h"] - energy["mujoco_h"][0], "h - h(0)")},
-                                        energy_scale=info["energy_scale"], t_end=T, qd0=qd0, floors=floors)
-    info.update({"switched_off": switched_off(model, plan, mf.model if mf is not None else None),
-                 "floors": [{"name": nm, "normal": n.tolist(), "height": h} for nm, n, h in floors]})
-    info.update({"trajectory_route": FILE_LABEL if file_run else ROUTE1_LABEL, "mujoco_fallback": fallback,
-                 "coverage": cov, "scope": cut_scope(model, scene.load_options, plan),
-                 "t_end": T, "t_end_note": t_end_note, "effects": plan.terms, "warm_up": warm,
-                 "actuators": plan.actuator_set.actuators + tuple(ta.actuator for ta in tendon_actuators(plan)),
-                 "q0": dict(zip(model.coordinate_names, q0.tolist())),
-                 "qd0": dict(zip(model.coordinate_names, qd0.tolist())),
-                 "total_s": clock() - start})
-    contact = None
-    if "contact" in plan.terms:       # issue 37: MuJoCo's own contact on the same scene, as a reference
-        say("MuJoCo's native contact (a reference, not an error)")
-        contact, info["contact_series"] = contact_reference(plan, mj, t, q_o, qd_o, T, samples)
-    return SceneComparison(
-        scene=scene, model=model, mj=mj, traj=traj, run=run, t=t, q_ours=q_o, q_mujoco=run.q, error=error,
-        energy=energy, terms=terms, growth=growth, threshold=threshold, info=info, notes=notes, contact=contact)
+    gate = plausibility(plan, t=runs.t, runs={"urdf2links": (agreement.q, agreement.qd),
+                                              "MuJoCo": (runs.run.q, runs.run.qd)},
+                        balances={"urdf2links": (energy["ours_balance"], "h - h(0) - W"),
+                                  "MuJoCo": (energy["mujoco_h"] - energy["mujoco_h"][0], "h - h(0)")},
+                        energy_scale=agreement.info["energy_scale"], t_end=setup.T, qd0=qd0, floors=floors)
+    return {"plausibility": gate, "switched_off": switched_off(model, plan, mf.model if mf is not None else None),
+            "floors": [{"name": nm, "normal": n.tolist(), "height": h} for nm, n, h in floors],
+            "trajectory_route": FILE_LABEL if runs.file_run else ROUTE1_LABEL, "mujoco_fallback": runs.fallback,
+            "coverage": coverage(agreement.q, agreement.qd, model=model),
+            "scope": cut_scope(model, scene.load_options, plan), "t_end": setup.T, "effects": plan.terms,
+            "actuators": plan.actuator_set.actuators + tuple(ta.actuator for ta in tendon_actuators(plan)),
+            "q0": dict(zip(model.coordinate_names, q0.tolist())), "qd0": dict(zip(model.coordinate_names, qd0.tolist()))}
 
 
 def _check_mujoco_steps(scene, T: float, mujoco_dt) -> None:
@@ -481,101 +585,3 @@ def _check_mujoco_steps(scene, T: float, mujoco_dt) -> None:
         raise IntegrationError(f"{scene.path or scene.name}: MuJoCo timestep {mujoco_dt!r} over t_end = {T:g} s makes "
                                f"{steps:.3g} steps, more than the {MAX_STEPS:g} a run may take: give a timestep in "
                                f"[{T / MAX_STEPS:g}, {T:g}] s")
-
-
-def _run_notes(scene, plan, mj, run, traj, t_end_note, *, resampled: bool) -> list[str]:
-    """What the report says about the two runs besides figures: the cap on t_end, the default scene,
-    resampling, re-charting, spring notes, limit excursions, the MJCF's and MuJoCo run's notes."""
-    notes = []
-    if t_end_note:
-        notes.append(t_end_note)
-    if scene.path is None:
-        notes.append(f"no scene file: the robot's default scene ({scene.description}); `urdf2links inspect "
-                     f"{shown_path(scene.robot)} --scene` shows it, --write-scene FILE.toml writes it")
-    if resampled:
-        notes.append("MuJoCo's sample times differ from the project's: the project's dense output was "
-                     "evaluated at MuJoCo's times")
-    if traj.stats.get("stretches") and len(traj.stats["stretches"]) > 1:
-        from urdf2links.integration.simulate import describe_stretches
-
-        notes.append(f"urdf2links' auto method ran {traj.stats['methods_used']}: "
-                     + "; ".join(describe_stretches(traj.stats["stretches"])))
-    if traj.stats.get("n_recharts"):
-        notes.append(f"the project re-charted the ZYX angles of {sorted({r['link'] for r in traj.stats['recharts']})} "
-                     f"{traj.stats['n_recharts']} times near phi_y = +-pi/2 (urdf2links.integration.charts); its q are converted "
-                     "back to the loaded model's coordinates, which MuJoCo integrates as hinges through the singularity")
-    # issue 43: the scene's own notes too (--ground's feet and loads, loading options given)
-    notes += [f"scene: {x}" for x in (*plan.spring_set.notes, *plan.actuator_set.notes, *plan.scene.notes)]
-    clamps = [a.name for a in plan.actuator_set.actuators if a.ctrlrange is not None or a.forcerange is not None]
-    if clamps:
-        notes.append(f"the clamps of {', '.join(clamps[:6])} (ctrlrange, forcerange) make the right-hand side non-smooth "
-                     "where they engage: both integrators lose order across those instants (the project's error estimate "
-                     "too); the difference shrinks with MuJoCo's step and the project's rtol")
-    if plan.reference_funcs:
-        notes.append("computed torque: MuJoCo's side applies the project's own torque (the scene's inverse dynamics at "
-                     "the reference, E57) through qfrc_applied at every stage, evaluated by the compiled control callback; "
-                     "MuJoCo's mj_inverse is compared with the project's inverse dynamics in the tests (1e-10)")
-    notes += [f"limits: {LimitExcursion(**x).text()} (urdf2links' trajectory)" for x in traj.stats["limit_excursions"]]
-    return notes + [f"MJCF: {x}" for x in mj.notes] + [f"MuJoCo run: {x}" for x in run.notes]
-
-
-def _project_at(traj, plan, t, T):
-    """The project's ``q``, ``qd``, work ``W``, ``E + V`` and ``h`` at MuJoCo's sample times ``t``: its
-    own samples when the times agree, else its dense output (then the last value is True)."""
-    n = plan.n
-    if traj.t.shape == t.shape and np.max(np.abs(traj.t - t)) <= 1e-12 * max(1.0, T):
-        EV = traj.energy["kinetic"] + traj.energy["potential"]
-        return traj.q, traj.qd, traj.energy["work"], EV, traj.energy["function"], False
-    if traj.sol is None:
-        raise RuntimeError("the project's run has no dense output to sample at MuJoCo's times")
-    Y = traj.sol(np.clip(t, traj.t[0], traj.t[-1]))
-    q, qd, W = Y[:, :n], Y[:, n:2 * n], Y[:, 2 * n]
-    E, V, h = plan.energies(t, q, qd)
-    return q, qd, W, E + V, h, True
-
-
-def _energy_balances(scene, plan, mj, run, traj, EV_o, h_o, W) -> tuple[dict, dict]:
-    """Both engines' balances ``h - h(0) - W`` (MuJoCo's without ``W`` when no work acts), the
-    energy arrays for the report, and what the summary says about them."""
-    tendon_work = any(td.damping or td.actuators for td in (plan.constraints.tendons if plan.constraints else ()))
-    work_terms = tendon_work or any(term in plan.terms for term in ("Q", "tau", "damper", "base", "gravcomp", "actuator",
-                                                                    "computed_torque", "contact"))
-    # issue 37: the contact's elastic energy (E81) at MuJoCo's states, which MuJoCo's own energy does not count
-    V_c = contact_energy(plan, run.t, run.q) if "contact" in plan.terms else 0.0
-    EV_m = run.total_energy + V_c
-    if scene.base is not None:
-        h_m = energy_function(mj, run, plan) + V_c
-        quantity, sym = "h = E2 - E0 + V (energy function; moving base)", "h"
-    else:
-        h_m = EV_m
-        quantity, sym = "E + V", "(E + V)"
-    bal_o = h_o - h_o[0] - W
-    if work_terms:
-        bal_m = h_m - h_m[0] - W
-        what = [w for w, on in (("contact", "contact" in plan.terms), ("forces/moments", "Q" in plan.terms), ("joint torques", "tau" in plan.terms),
-                                ("dampers", "damper" in plan.terms), ("the moving base", "base" in plan.terms),
-                                ("gravcomp", "gravcomp" in plan.terms), ("actuators", "actuator" in plan.terms),
-                                ("the computed torque", "computed_torque" in plan.terms),
-                                ("tendons' dampers and actuators", tendon_work)) if on]     # issue 43
-        note = (f"work terms present ({', '.join(what)}): both drifts use the project's work W "
-                f"(integrated along the project's trajectory): max |{sym} - {sym}(0) - W|")
-        if scene.base is not None:
-            note += "; MuJoCo's h from its own kinetic energies at qd, -qd and 0 at its states and the prescribed base"
-    else:
-        bal_m = h_m - h_m[0]
-        note = "no work terms: MuJoCo's drift is max |(E + V) - (E + V)(0)| of its own energies"
-    motion = max(float(np.abs(traj.energy["kinetic"]).max()),
-                 float(np.abs(traj.energy["potential"] - traj.energy["potential"][0]).max()),
-                 float(np.abs(traj.energy["work"]).max()))
-    # E + V is a sum of terms of size |V|: its rounding error is a few eps |V|, whatever the motion. A robot
-    # that barely moves has a motion energy below that, and a drift measured against it would read as an
-    # error when it is rounding; the scale is never below 1000 eps max|E + V|.
-    floor = ENERGY_ROUNDING_EPS * float(np.finfo(float).eps) * max(float(np.abs(EV_o).max()), float(np.abs(EV_m).max()))
-    scale = max(motion, floor, 1e-300)
-    scale_note = (f"relative to the motion's energy {motion:.3g} J (max of E, |V - V(0)|, |W|)" if motion >= floor else
-                  f"relative to the rounding level of E + V, {floor:.3g} J ({ENERGY_ROUNDING_EPS:g} eps max|E + V|): "
-                  f"the motion's energy, {motion:.3g} J, is below it (the robot barely moves)")
-    energy = {"ours_EV": EV_o, "mujoco_EV": EV_m, "ours_h": h_o, "mujoco_h": h_m, "ours_balance": bal_o,
-              "mujoco_balance": bal_m, "work": W}
-    return energy, {"energy_scale": scale, "energy_quantity": quantity, "energy_note": note, "work_terms": work_terms,
-                    "energy_scale_note": scale_note}

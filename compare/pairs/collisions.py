@@ -24,8 +24,9 @@ import numpy as np
 from urdf2links.dynamics.rotations import homogeneous, rpy_to_matrix
 from urdf2links.parsers.mjcf import is_mjcf_path
 from urdf2links.parsers.mjcf_state import quat_to_matrix
-from urdf2links.parsers.parts import RobotParts, home_poses
+from urdf2links.parsers.parts import RobotParts
 
+from .context import PairContext
 from .kinds import ROUNDING, Difference
 
 __all__ = ["Solid", "collision_solids", "collision_differences"]
@@ -125,10 +126,10 @@ def collision_solids(parts: RobotParts, *, load: dict | None = None) -> dict:
     return _urdf_solids(parts.source, dict(load or {}))
 
 
-def _folded(parts: RobotParts, solids: dict, keep) -> dict:
+def _folded(parts: RobotParts, solids: dict, keep, W: dict) -> dict:
     """``{target: points (n, 3) in its frame, volume}``: each body's solids on the nearest body in ``keep`` or with
-    joints above it (itself included), or on the world (None) when only welds lead there."""
-    W = home_poses(parts)
+    joints above it (itself included), or on the world (None) when only welds lead there (``W``: the home poses of
+    ``parts``)."""
     bodies = {b.name: b for b in parts.bodies}
     out = {}
     for body, group in solids.items():
@@ -147,18 +148,18 @@ def _box(v) -> str:
     return "[" + " ".join(f"{x:.4g}" for x in lo) + "]..[" + " ".join(f"{x:.4g}" for x in hi) + "]"
 
 
-def collision_differences(U: RobotParts, M: RobotParts, bodies: dict, *, load: dict | None = None
-                          ) -> tuple[list[Difference], int]:
-    """The ``collision`` differences (module doc) and how many bodies agree to rounding. ``bodies``: the first
-    description's body -> the second's, for the bodies both have."""
+def collision_differences(ctx: PairContext, *, load: dict | None = None) -> tuple[list[Difference], int]:
+    """The ``collision`` differences of the pair ``ctx`` (module doc) and how many bodies agree to rounding, per body
+    both descriptions have (``ctx.bodies``)."""
+    U, M, bodies = ctx.urdf, ctx.mjcf, ctx.bodies
     first = (M, U) if M.format == "mjcf" else (U, M)          # a compiled MJCF is quick: a file without any first
     solids = {}
     for p in first:
         solids[id(p)] = collision_solids(p, load=load if p is U else None)
         if not solids[id(p)]:
             return [], 0
-    fu = _folded(U, solids[id(U)], set(bodies))
-    fm = _folded(M, solids[id(M)], set(bodies.values()))
+    fu = _folded(U, solids[id(U)], set(bodies), ctx.home_urdf)
+    fm = _folded(M, solids[id(M)], set(bodies.values()), ctx.home_mjcf)
     pairs = [(None, None)] + list(bodies.items())
     out, agree = [], 0
     for bU, bM in pairs:

@@ -36,12 +36,12 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from urdf2links.dynamics.inertia import pseudo_inertia
-from urdf2links.parsers.parts import JOINT_KINDS, RobotParts, home_poses, parts_model
+from urdf2links.parsers.parts import JOINT_KINDS, RobotParts, parts_model
 
+from .context import PairContext
 from .frames import frame_differences
 from .kinds import KINDS, PARTS, ROUNDING, Difference
-from .mapping import JointMapping
-from .roots import alignment, align_second, match_bodies, paired_bodies, pose_words, root_pair
+from .roots import align_second, pose_words
 
 __all__ = ["Difference", "Side", "side_model", "compare_descriptions", "ROUNDING", "KINDS", "PARTS", "split_H"]
 
@@ -70,11 +70,11 @@ def side_model(side: Side, *, gravity=None):
     return parts_model(parts)
 
 
-def group_H(parts: RobotParts, keep) -> dict[str, np.ndarray]:
+def group_H(parts: RobotParts, keep, W: dict) -> dict[str, np.ndarray]:
     """Body -> the pseudo-inertia (4, 4), in its frame, of itself and every welded body folded onto it: a body
     is folded onto its parent unless it has joints or is in ``keep`` (the bodies both descriptions have), so
-    both sides fold what only one side has, and compare the rest body by body (E11 at home)."""
-    W = home_poses(parts)
+    both sides fold what only one side has, and compare the rest body by body (E11 at home). ``W``: the home
+    poses of ``parts``."""
     target, out = {}, {}
     for b in parts.bodies:
         own = b.joints or b.name in keep or b.parent is None
@@ -132,24 +132,19 @@ def _joint_label(b) -> str:
 
 # -- the comparison --------------------------------------------------------------------------------------
 class _Comparer:
-    def __init__(self, U: RobotParts, M: RobotParts, mapping: JointMapping):
-        self.U, self.M, self.mapping = U, M, mapping
-        pairs = [(m.urdf, m.mjcf) for m in mapping.matches]
-        self.root = mapping.root if mapping.root is not None else root_pair(U, M, match_bodies(U, M, pairs))
-        self.bodies = paired_bodies(U, M, pairs, self.root)     # the root pair among them (structure, E63)
-        self.pmU, self.pmM = parts_model(U), parts_model(M)
-        self.WU = home_poses(U)
-        self.WM = self._aligned(M)          # the second's world carried into the first's (E63)
-        self.bu = {b.name: b for b in U.bodies}
-        self.bm = {b.name: b for b in M.bodies}
+    """The differences of one pair (:func:`compare_descriptions`), read from its context."""
+
+    def __init__(self, ctx: PairContext):
+        self.ctx = ctx
+        self.U, self.M, self.mapping = ctx.urdf, ctx.mjcf, ctx.mapping
+        self.root, self.bodies = ctx.root, ctx.bodies          # the root pair among the bodies (structure, E63)
+        self.pmU, self.pmM = ctx.model_urdf, ctx.model_mjcf
+        self.WU = ctx.home_urdf
+        self.WM = ctx.aligned_mjcf          # the second's world carried into the first's (E63)
+        self.bu = {b.name: b for b in self.U.bodies}
+        self.bm = {b.name: b for b in self.M.bodies}
         self.out: list[Difference] = []
         self.below = {k: 0 for k in KINDS}
-
-    def _aligned(self, parts: RobotParts) -> dict:
-        """The second description's (``parts``, as it is now) home poses carried by the roots' alignment (E63)."""
-        W = home_poses(parts)
-        D = alignment(self.U, parts, self.root, self.WU, W)
-        return {k: D @ v for k, v in W.items()}
 
     def add(self, d: Difference) -> None:
         if d.difference > ROUNDING[d.kind] or (ROUNDING[d.kind] == 0 and d.difference > 0):
@@ -202,7 +197,7 @@ class _Comparer:
 
         def undo(s, n=b.name, bM=bM, refM=refM, u=np.array(ua, float)):
             """The second's axis made the first's, in the frame of the body above as the second is now."""
-            RM = self._rel(self._aligned(s.parts), refM, bM)[:3, :3]
+            RM = self._rel(self.ctx.aligned(s.parts), refM, bM)[:3, :3]
             return replace(s, parts=s.parts.with_joint(n, axis=RM.T @ u))
         self.add(Difference("axis", a.name, b.name, a.axis, b.axis, ang, "rad", what, links, undo=undo))
 
@@ -260,7 +255,7 @@ class _Comparer:
     # parts: mass, COM, inertia -----------------------------------------------------------------------
     def parts(self):
         self.keep_u, self.keep_m = set(self.bodies), set(self.bodies.values())
-        gu, gm = group_H(self.U, self.keep_u), group_H(self.M, self.keep_m)
+        gu, gm = group_H(self.U, self.keep_u, self.WU), group_H(self.M, self.keep_m, self.ctx.home_mjcf)
         for bU, bM in self.bodies.items():
             if bU not in gu or bM not in gm:
                 continue
@@ -306,11 +301,11 @@ class _Comparer:
         return True
 
     def _fix(self, body, key, value):
-        keep = set(self.keep_m)
+        keep, ctx = set(self.keep_m), self.ctx
 
         def undo(s, body=body, key=key, value=np.array(value, float) if np.ndim(value) else float(value)):
             """Set the group's ``key`` to ``value``: the body's own H is the new group's minus what is folded onto it."""
-            group = group_H(s.parts, keep)[body]
+            group = group_H(s.parts, keep, ctx.home_of(s.parts))[body]
             m, c, I = split_H(group)
             new = {"mass": m, "com": c, "inertia": I}
             new[key] = value
@@ -385,10 +380,10 @@ class _Comparer:
         anchor = self.bu[bU].joints[-1].anchor if self.bu[bU].joints else None
 
         def undo(s):
-            W = home_poses(s.parts)
+            W = self.ctx.home_of(s.parts)
             parent = s.parts.body(bM).parent
             WP = np.eye(4) if parent is None else W[parent]
-            WR = np.linalg.inv(alignment(self.U, s.parts, self.root, self.WU, W)) if refM is None else W[refM]
+            WR = np.linalg.inv(self.ctx.alignment_of(s.parts, W)) if refM is None else W[refM]
             parts = s.parts.replaced(bM, pose=np.linalg.inv(WP) @ WR @ PU)
             b = parts.body(bM)
             if anchor is not None and b.joints and b.joints[-1].kind == "hinge":
@@ -402,8 +397,8 @@ class _Comparer:
         rU, rM = self.root.urdf, self.root.mjcf
         if rU is None:
             return
-        WU, WM = self.WU[rU], home_poses(self.M)[rM]
-        D = alignment(self.U, self.M, self.root, self.WU)
+        WU, WM = self.WU[rU], self.ctx.home_mjcf[rM]
+        D = self.ctx.alignment
         dp, rot = float(np.linalg.norm(D[:3, 3])), _angle(D[:3, :3])
         floating = all(self.root.floating)
         d, unit = (rot, "rad") if rot > dp else (dp, "m")
@@ -411,8 +406,7 @@ class _Comparer:
                 f"moved {dp:.4g} m, turned {rot:.4g} rad ({math.degrees(rot):.3g} deg); "
                 + ("a floating root's pose at home is a state (both start from the first's), not a description "
                    "difference" if floating else "the mount: where the robot is fixed in the world"))
-        undo = None if floating else (lambda s: replace(s, parts=align_second(
-            s.parts, alignment(self.U, s.parts, self.root, self.WU))))
+        undo = None if floating else (lambda s: replace(s, parts=align_second(s.parts, self.ctx.alignment_of(s.parts))))
         self.add(Difference("root_pose", rU, rM, WU, WM, d, unit, what, (rU, rM), undo=undo))
 
     # missing -----------------------------------------------------------------------------------------
@@ -440,17 +434,17 @@ class _Comparer:
                                         f"joint {n!r}", (body,)))
 
 
-def compare_descriptions(U: RobotParts, M: RobotParts, mapping: JointMapping) -> tuple[list[Difference], dict]:
-    """Every difference between ``U`` (the first description) and ``M`` above :data:`ROUNDING` (module doc),
-    in no order yet, and ``{kind: how many were below rounding}``."""
-    c = _Comparer(U, M, mapping)
+def compare_descriptions(ctx: PairContext) -> tuple[list[Difference], dict]:
+    """Every difference between the pair's first description (``ctx.urdf``) and its second (``ctx.mjcf``) above
+    :data:`ROUNDING` (module doc), in no order yet, and ``{kind: how many were below rounding}``."""
+    c = _Comparer(ctx)
     c.root_pose()
     c.joints()
     c.parts()
     c.origins()
     c.missing()
 
-    frames, kept = frame_differences(U, M, c.WU, c.WM)
+    frames, kept = frame_differences(ctx.urdf, ctx.mjcf, c.WU, c.WM)
     c.out += frames
     c.below["frame_missing"] += kept
     return c.out, c.below

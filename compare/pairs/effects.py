@@ -27,10 +27,10 @@ from dataclasses import replace
 
 import numpy as np
 
-from urdf2links.parsers.parts import JOINT_KINDS, RobotParts, parts_model
+from urdf2links.parsers.parts import JOINT_KINDS, RobotParts
 
+from .context import PairContext
 from .differences import Difference, Side, side_model
-from .mapping import JointMapping, coordinate_map
 
 __all__ = ["evaluate_effects", "seeded_states", "Terms", "effect_size", "order_differences", "ORDER_WORDS",
            "EFFECT_ROUNDING", "NOT_IN_A_G"]
@@ -60,11 +60,12 @@ class Terms:
     """``A`` (S, n, n) and ``G`` (S, n) of the first description, and the machinery to compare another
     side's against them (module doc)."""
 
-    def __init__(self, U: RobotParts, mapping: JointMapping, *, states: int, seed: int):
-        self.U, self.mapping = U, mapping
-        self.model = parts_model(U).model
+    def __init__(self, ctx: PairContext, *, states: int, seed: int):
+        self.ctx = ctx
+        U = ctx.urdf
+        self.model = ctx.model_urdf.model
         self.names = self.model.coordinate_names
-        ju = {m.urdf for m in mapping.matches}
+        ju = {m.urdf for m in ctx.mapping.matches}
         mapped = {c for j, _ in U.joints if j.name in ju for c in j.coordinates}
         self.Q = seeded_states(U, self.names, mapped, states=states, seed=seed)
         self.A = np.array([self.model.mass_matrix(q) for q in self.Q])
@@ -77,7 +78,7 @@ class Terms:
             warnings.simplefilter("ignore")
             pm = side_model(side, gravity=self.gravity)
         m = pm.model
-        cmap = coordinate_map(self.U, side.parts, self.mapping, signs=signs)
+        cmap = self.ctx.coordinate_map(side.parts, signs=signs)
         iu = np.array([self.names.index(a) for a, *_ in cmap], dtype=int)
         im = np.array([m.coordinate_names.index(b) for _, b, *_ in cmap], dtype=int)
         s = np.array([x[2] for x in cmap], float)
@@ -132,7 +133,8 @@ def _explained(before: float, after: float) -> float:
     return float((before - after) / before)
 
 
-def _attribute(terms: Terms, M: RobotParts, diffs: list[Difference], *, signs: bool) -> tuple[dict, list[dict]]:
+def _attribute(terms: Terms, diffs: list[Difference], *, signs: bool) -> tuple[dict, list[dict]]:
+    M = terms.ctx.mjcf
     base = terms.compare(Side(M), signs=signs)
     rows = []
     for i, d in enumerate(diffs):
@@ -162,8 +164,8 @@ def _change(base: dict, after: dict, k: int) -> float:
 _UNDO_ORDER = {"root_pose": 0, "origin": 1, "axis": 2}
 
 
-def _undo_all(terms: Terms, M: RobotParts, diffs: list[Difference], *, signs: bool) -> dict:
-    side = Side(M)
+def _undo_all(terms: Terms, diffs: list[Difference], *, signs: bool) -> dict:
+    side = Side(terms.ctx.mjcf)
     for d in sorted(diffs, key=lambda d: _UNDO_ORDER.get(d.kind, 3)):
         if d.undo is not None:
             side = d.undo(side)
@@ -185,21 +187,20 @@ def _summary(base, rows, diffs, label) -> dict:
     return out
 
 
-def evaluate_effects(U: RobotParts, M: RobotParts, mapping: JointMapping, diffs: list[Difference], *,
-                     states: int = 8, seed: int = 0) -> dict:
-    """``A`` and ``G`` of both at seeded states, the attribution to ``diffs`` (each difference's ``effect``
-    is set), and what is left with every difference undone (module doc). JSON-ready."""
-    terms = Terms(U, mapping, states=states, seed=seed)
-    base, rows = _attribute(terms, M, diffs, signs=True)
+def evaluate_effects(ctx: PairContext, diffs: list[Difference], *, states: int = 8, seed: int = 0) -> dict:
+    """``A`` and ``G`` of both descriptions of the pair ``ctx`` at seeded states, the attribution to ``diffs`` (each
+    difference's ``effect`` is set), and what is left with every difference undone (module doc). JSON-ready."""
+    terms = Terms(ctx, states=states, seed=seed)
+    base, rows = _attribute(terms, diffs, signs=True)
     effects = {i: {"A_after": None, "G_after": None, "explains_A": 0.0, "explains_G": 0.0, "changes_A": None,
                    "changes_G": None} for i in range(len(diffs))}
     for r in rows:
         effects[r["index"]] = {k: v for k, v in r.items() if k != "index"}
     out = {"states": states, "seed": seed, "gravity": terms.gravity.tolist(),
            "mapped": _summary(base, rows, diffs, "mapped: q_mjcf = sign q_urdf + offset"),
-           "after_undoing_all": _undo_all(terms, M, diffs, signs=True)}
-    if any(m.sign < 0 for m in mapping.matches):
-        base_n, rows_n = _attribute(terms, M, diffs, signs=False)
+           "after_undoing_all": _undo_all(terms, diffs, signs=True)}
+    if any(m.sign < 0 for m in ctx.mapping.matches):
+        base_n, rows_n = _attribute(terms, diffs, signs=False)
         out["as_named"] = _summary(base_n, rows_n, diffs, "as named: q_mjcf = q_urdf + offset (every sign 1)")
         for r in rows_n:
             e = effects[r["index"]]

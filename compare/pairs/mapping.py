@@ -28,7 +28,7 @@ from urdf2links.parsers.parts import JOINT_KINDS, RobotParts, home_poses
 
 from .roots import RootPair, alignment, match_bodies, root_pair
 
-__all__ = ["JointMatch", "JointMapping", "map_joints", "moving_parent", "coordinate_map", "parse_map"]
+__all__ = ["JointMatch", "JointMapping", "map_joints", "moving_parent", "coordinate_map", "parse_map", "world_axes"]
 
 
 @dataclass(frozen=True)
@@ -110,7 +110,7 @@ def moving_parent(parts: RobotParts, joint: str) -> str | None:
     raise KeyError(joint)
 
 
-def _world_axes(parts: RobotParts, D=None, W=None) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+def world_axes(parts: RobotParts, D=None, W=None) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """Joint -> (axis, anchor) in the world at home; ``D`` (4, 4): the world carried into the first
     description's by the roots' alignment (E63), so that neither depends on where a file puts its root."""
     W = home_poses(parts) if W is None else W
@@ -133,9 +133,11 @@ def _sign_offset(ju, jm, wu=None, wm=None) -> tuple[float, float]:
     return s, jm.ref - s * ju.ref
 
 
-def map_joints(urdf: RobotParts, mjcf: RobotParts, *, explicit: dict | None = None) -> JointMapping:
+def map_joints(urdf: RobotParts, mjcf: RobotParts, *, explicit: dict | None = None,
+               homes: tuple[dict, dict] | None = None) -> JointMapping:
     """Match the moving joints of ``urdf`` to those of ``mjcf`` (module doc); ``explicit`` ``{urdf joint:
-    mjcf joint}`` first (a :class:`DescriptionError` names a joint that is not there)."""
+    mjcf joint}`` first (a :class:`DescriptionError` names a joint that is not there); ``homes``: both sides'
+    home poses when already computed (:class:`~urdf2links.compare.pairs.context.PairContext`)."""
     ju = {j.name: j for j, _ in urdf.joints}
     jm = {j.name: j for j, _ in mjcf.joints}
     pairs: dict[str, tuple[str, str]] = {}
@@ -152,18 +154,18 @@ def map_joints(urdf: RobotParts, mjcf: RobotParts, *, explicit: dict | None = No
         if a not in pairs and a in jm and a not in taken:
             pairs[a] = (a, "name")
             taken.add(a)
-    WU, WM = home_poses(urdf), home_poses(mjcf)
+    WU, WM = (home_poses(urdf), home_poses(mjcf)) if homes is None else homes
     root = root_pair(urdf, mjcf, match_bodies(urdf, mjcf, [(a, b) for a, (b, _) in pairs.items()]))
     parent_u = {a: moving_parent(urdf, a) for a in ju}
     parent_m = {b: moving_parent(mjcf, b) for b in jm}
-    axes_u = _world_axes(urdf, W=WU)
+    axes_u = world_axes(urdf, W=WU)
     if root.urdf is None:               # nothing matched yet, no fixed roots on both sides: the best top pair
         root = _top_alignment(urdf, mjcf, (pairs, taken), ju, jm, parent_u, parent_m, axes_u, WU, WM)
-    axes_m = _world_axes(mjcf, alignment(urdf, mjcf, root, WU, WM), W=WM)
+    axes_m = world_axes(mjcf, alignment(urdf, mjcf, root, WU, WM), W=WM)
     _by_structure(pairs, taken, ju, jm, parent_u, parent_m, axes_u, axes_m)
     final = root_pair(urdf, mjcf, match_bodies(urdf, mjcf, [(a, b) for a, (b, _) in pairs.items()]))
     if final != root:
-        axes_m = _world_axes(mjcf, alignment(urdf, mjcf, final, WU, WM), W=WM)
+        axes_m = world_axes(mjcf, alignment(urdf, mjcf, final, WU, WM), W=WM)
     matches = []
     for a in ju:                       # in the first description's tree order
         if a in pairs:
@@ -215,20 +217,23 @@ def _top_alignment(urdf, mjcf, matched, ju, jm, parent_u, parent_m, axes_u, WU, 
     best, best_score = RootPair(None, None), np.inf
     for b in (b for b in jm if parent_m[b] is None and jm[b].kind == ju[tops[0]].kind):
         trial = RootPair(body_u[tops[0]], body_m[b])
-        axes_m = _world_axes(mjcf, alignment(urdf, mjcf, trial, WU, WM), W=WM)
+        axes_m = world_axes(mjcf, alignment(urdf, mjcf, trial, WU, WM), W=WM)
         score = _by_structure(dict(matched[0]), set(matched[1]), ju, jm, parent_u, parent_m, axes_u, axes_m)
         if score < best_score:
             best, best_score = trial, score
     return best
 
 
-def coordinate_map(urdf: RobotParts, mjcf: RobotParts, mapping: JointMapping, *, signs: bool = True):
+def coordinate_map(urdf: RobotParts, mjcf: RobotParts, mapping: JointMapping, *, axes: tuple[dict, dict],
+                   signs: bool = True):
     """``[(urdf coordinate, mjcf coordinate, sign, offset)]`` of the matched joints (E52), signs and
-    offsets from the joints as they are in ``urdf`` and ``mjcf`` now (``signs=False``: every sign 1, the
-    coordinates taken as equal by name). Pairs of different kinds map the slots they share."""
+    offsets from the joints as they are in ``urdf`` and ``mjcf`` now (``axes``: both sides' :func:`world_axes`,
+    the second's aligned, E63; ``signs=False``: every sign 1, the coordinates taken as equal by name). Pairs of
+    different kinds map the slots they share. :meth:`~urdf2links.compare.pairs.context.PairContext.coordinate_map`
+    gives the axes."""
     ju = {j.name: j for j, _ in urdf.joints}
     jm = {j.name: j for j, _ in mjcf.joints}
-    wu, wm = _world_axes(urdf), _world_axes(mjcf, alignment(urdf, mjcf, mapping.root))
+    wu, wm = axes
     out = []
     for m in mapping.matches:
         a, b = ju[m.urdf], jm[m.mjcf]

@@ -44,7 +44,6 @@ from ..mujoco_side.mujoco_mjcf import file_runner, mujoco_from_mjcf
 from ..mujoco_side.mujoco_stepping import INTEGRATOR_ENUM
 from ..mujoco_side.mujoco_urdf import MujocoRefused, mujoco_from_urdf
 from ..mujoco_side.stable_run import stable_run
-from .mapping import coordinate_map
 
 __all__ = ["PairMotion", "run_pair_motion", "pair_animation"]
 
@@ -183,7 +182,7 @@ def run_pair_motion(pair, *, q0: str = "zero", seed: int = 0, t_end: float = 1.0
         model_u = scene_u.model()
         scene_m = default_scene(pair.mjcf_path, t_end=t_end, q0="rest")   # its state: the first one's, mapped
         model_m = scene_m.model()
-    cmap = coordinate_map(pair.urdf, pair.mjcf, pair.mapping)
+    cmap = pair.context.coordinate_map()
     q0u, qd0u = scene_u.initial_state(model_u)
     scene_m = _mapped_initial(scene_m, model_u, model_m, q0u, qd0u, cmap, scene_u.torques)
     plans = (as_plan(scene_u, model=model_u), as_plan(scene_m, model=model_m))

@@ -3,7 +3,8 @@
 :func:`compare_descriptions_of` is the description half of ``urdf2links compare A --against B`` and of
 every pair of ``urdf2links report --pairs``: both files read as parts
 (:func:`urdf2links.parsers.parts.robot_parts`), their joints matched
-(:func:`~urdf2links.compare.pairs.mapping.map_joints`), compared
+(:func:`~urdf2links.compare.pairs.mapping.map_joints`) into the pair's context, computed once
+(:func:`~urdf2links.compare.pairs.context.pair_context`), compared
 (:func:`~urdf2links.compare.pairs.differences.compare_descriptions`), the differences' effects on ``A``
 and ``G`` attributed (:func:`~urdf2links.compare.pairs.effects.evaluate_effects`) and ordered, largest
 first. :meth:`PairComparison.summary` is the JSON the report writes (``joint_mapping``,
@@ -25,12 +26,12 @@ from urdf2links.parsers.parts import RobotParts, robot_parts
 
 from .constraints import constraint_differences
 from .collisions import collision_differences
+from .context import PairContext, pair_context
 from .couplings import coupling_differences
 from .differences import KINDS, ROUNDING, Difference, compare_descriptions
 from .effects import evaluate_effects, order_differences
 from .explanations import explain
-from .mapping import JointMapping, map_joints
-from .roots import paired_bodies
+from .mapping import JointMapping
 
 __all__ = ["PairComparison", "compare_descriptions_of", "TERM_KEYS", "check_tolerances", "exceedances", "DYNAMIC_KINDS"]
 
@@ -45,18 +46,31 @@ TERM_KEYS = ("A", "G")
 
 @dataclass(eq=False)
 class PairComparison:
-    """Both descriptions' parts, the joint mapping, the ordered differences, their effects, notes."""
+    """The pair's :class:`~urdf2links.compare.pairs.context.PairContext` (both descriptions' parts, home poses,
+    joint mapping, matched bodies, the roots' alignment), the ordered differences, their effects, notes."""
 
-    urdf: RobotParts
-    mjcf: RobotParts
+    context: PairContext
     urdf_path: Path
     mjcf_path: Path
-    mapping: JointMapping
     differences: list[Difference]
     below_rounding: dict
     effects: dict
     notes: list[str] = field(default_factory=list)
     seconds: float = 0.0
+
+    @property
+    def urdf(self) -> RobotParts:
+        """The first description's parts."""
+        return self.context.urdf
+
+    @property
+    def mjcf(self) -> RobotParts:
+        """The second description's parts."""
+        return self.context.mjcf
+
+    @property
+    def mapping(self) -> JointMapping:
+        return self.context.mapping
 
     def first_of(self, kind: str) -> Difference | None:
         """The largest difference of ``kind`` (None when there is none above rounding)."""
@@ -158,15 +172,13 @@ def compare_descriptions_of(urdf, mjcf, *, explicit_map: dict | None = None, loa
     load = dict(load or {})
     U = robot_parts(urdf, **load)
     M = robot_parts(mjcf, **{k: v for k, v in load.items() if k != "floating_base"})
-    mapping = map_joints(U, M, explicit=explicit_map)
-    diffs, below = compare_descriptions(U, M, mapping)
-    bodies = paired_bodies(U, M, [(m.urdf, m.mjcf) for m in mapping.matches], mapping.root)
-    collisions, below["collision"] = collision_differences(U, M, bodies, load=load)
+    ctx = pair_context(U, M, explicit_map=explicit_map)       # computed once: everything below reads it
+    diffs, below = compare_descriptions(ctx)
+    collisions, below["collision"] = collision_differences(ctx, load=load)
     diffs += collisions
     diffs += constraint_differences(urdf, mjcf)      # issue 36: loops closed on one side only
-    diffs += coupling_differences(urdf, mjcf, mapping, load=load)
+    diffs += coupling_differences(urdf, mjcf, ctx.mapping, load=load)
     explain(diffs, U, M)
-    effects = evaluate_effects(U, M, mapping, diffs, states=states, seed=seed)
+    effects = evaluate_effects(ctx, diffs, states=states, seed=seed)
     ordered = order_differences(diffs, effects)
-    return PairComparison(U, M, Path(urdf), Path(mjcf), mapping, ordered, below, effects, _notes(U, M),
-                          clock() - start)
+    return PairComparison(ctx, Path(urdf), Path(mjcf), ordered, below, effects, _notes(U, M), clock() - start)

@@ -23,25 +23,14 @@ from pathlib import Path
 import numpy as np
 
 from ..formatting import fmt, fmt_md, fmt_t, json_ready
+from ..reports.report import page_css
 from .effects import NOT_IN_A_G, ORDER_WORDS
 
 __all__ = ["description_sections", "pair_markdown", "pair_headline", "write_pair_page", "write_pairs_index", "CSS",
            "effect_words", "part_words"]
 
-CSS = """
-body { font-family: -apple-system, 'Segoe UI', Helvetica, Arial, sans-serif; margin: 0 auto; max-width: 1180px;
-       padding: 16px 24px 40px; color: #1d2330; line-height: 1.45; }
-h1 { font-size: 1.6em; margin-bottom: 0.1em; } h2 { margin-top: 1.6em; border-bottom: 1px solid #d0d5de; padding-bottom: 3px; }
-.sub { color: #5a6272; margin-top: 0; }
-table { border-collapse: collapse; margin: 8px 0 14px; font-size: 0.9em; }
-th, td { border: 1px solid #d0d5de; padding: 4px 8px; text-align: left; vertical-align: top; }
-th { background: #eef1f6; } td.num { text-align: right; font-family: 'DejaVu Sans Mono', Menlo, monospace; white-space: nowrap; }
-.box { border-left: 4px solid #3d7bd9; background: #f3f7fd; padding: 8px 14px; margin: 10px 0; }
-.bad { border-left-color: #c9302c; background: #fbeeee; } .warn { border-left-color: #d98c3d; background: #fdf7ef; }
-.ok { color: #1e7b34; font-weight: 600; } .fail { color: #c9302c; font-weight: 600; }
-code { background: #f0f2f5; padding: 0 3px; border-radius: 3px; font-size: 0.92em; }
-ul.notes li { margin: 2px 0; font-size: 0.9em; } .small { font-size: 0.88em; color: #5a6272; }
-"""
+CSS = page_css(max_width=1180, table_font="0.9em", cell_padding="4px 8px",
+               extra=".warn { border-left-color: #d98c3d; background: #fdf7ef; }\n")
 
 _E = html.escape
 

@@ -133,6 +133,15 @@ class CheckResult:
     source: str = ""
     ratios: dict = field(default_factory=dict)
 
+    def record(self, name: str, ratio: float, *, failed: bool, fail: str, ok: str) -> None:
+        """One checked figure: its ``ratio`` (:attr:`ratios`), and its line, ``fail`` when ``failed`` (the result
+        fails then), else ``ok``."""
+        self.ratios[name] = ratio
+        if failed:
+            self.ok = False
+            self.failures.append(name)
+        self.lines.append(f"FAIL  {name} {fail}" if failed else f"ok    {name} {ok}")
+
     def text(self) -> str:
         head = f"baseline check {'passed' if self.ok else 'FAILED'} ({self.source})"
         return "\n".join([head] + [f"  warning: {w}" for w in self.warnings] + [f"  {x}" for x in self.lines])
@@ -181,27 +190,20 @@ def check_baseline(summary: dict, baselines: dict, *, factor: float | None = Non
             continue
         fl = floor[1] * scale if isinstance(floor, tuple) else floor
         allowed = f * max(b, fl)
-        res.ratios[name] = math.inf if v is None or not math.isfinite(v) else v / allowed
-        if v is None or not math.isfinite(v) or v > allowed:
-            res.ok = False
-            res.failures.append(name)
-            res.lines.append(f"FAIL  {name} = {raw if v is None else f'{v:.3g}'} grew past its baseline {b:.3g} "
-                             f"(allowed {f:g} x max(baseline, floor {fl:.2g}) = {allowed:.3g})")
-        else:
-            res.lines.append(f"ok    {name} = {v:.3g} (baseline {b:.3g}, allowed {allowed:.3g})")
+        bad = v is None or not math.isfinite(v)
+        res.record(name, math.inf if bad else v / allowed, failed=bad or v > allowed,
+                   fail=f"= {raw if v is None else f'{v:.3g}'} grew past its baseline {b:.3g} "
+                        f"(allowed {f:g} x max(baseline, floor {fl:.2g}) = {allowed:.3g})",
+                   ok="" if bad else f"= {v:.3g} (baseline {b:.3g}, allowed {allowed:.3g})")
     d0 = _number(base.get("trajectory.divergence_time"))
     d = _number(get(summary, "trajectory.divergence_time"))
     if d0 is not None and d is not None:
         rate = _number(base.get("trajectory.growth_rate"))
         margin = math.log(f) / rate if rate and rate > 0 else 0.5 * d0
         earliest = d0 - margin
-        name = "trajectory.divergence_time"
-        res.ratios[name] = (d0 - d) / margin if margin > 0 else (math.inf if d < d0 else 0.0)
-        if d < earliest:
-            res.ok = False
-            res.failures.append(name)
-            res.lines.append(f"FAIL  {name} = {d:.4g} s is earlier than its baseline {d0:.4g} s by more than "
-                             f"{margin:.3g} s (the time the difference needs to grow {f:g}x)")
-        else:
-            res.lines.append(f"ok    {name} = {d:.4g} s (baseline {d0:.4g} s, earliest allowed {earliest:.4g} s)")
+        res.record("trajectory.divergence_time",
+                   (d0 - d) / margin if margin > 0 else (math.inf if d < d0 else 0.0), failed=d < earliest,
+                   fail=f"= {d:.4g} s is earlier than its baseline {d0:.4g} s by more than {margin:.3g} s (the time "
+                        f"the difference needs to grow {f:g}x)",
+                   ok=f"= {d:.4g} s (baseline {d0:.4g} s, earliest allowed {earliest:.4g} s)")
     return res

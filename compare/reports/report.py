@@ -34,28 +34,35 @@ from .motion import motion_section
 from .plots import plot_coordinates, plot_energy, plot_error, plot_overview, plot_terms
 from .stops import stops_html, stops_md
 
-__all__ = ["write_report", "render_html", "render_markdown", "write_index"]
+__all__ = ["write_report", "render_html", "render_markdown", "write_index", "page_css"]
 
 
 # --------------------------------------------------------------------------- HTML
 
 
-_CSS = """
-body { font-family: -apple-system, 'Segoe UI', Helvetica, Arial, sans-serif; margin: 0 auto; max-width: 1120px;
-       padding: 16px 24px 40px; color: #1d2330; line-height: 1.45; }
-h1 { font-size: 1.6em; margin-bottom: 0.1em; } h2 { margin-top: 1.6em; border-bottom: 1px solid #d0d5de; padding-bottom: 3px; }
-.sub { color: #5a6272; margin-top: 0; }
-table { border-collapse: collapse; margin: 8px 0 14px; font-size: 0.92em; }
-th, td { border: 1px solid #d0d5de; padding: 4px 9px; text-align: left; vertical-align: top; }
-th { background: #eef1f6; } td.num { text-align: right; font-family: 'DejaVu Sans Mono', Menlo, monospace; white-space: nowrap; }
-img { max-width: 100%; border: 1px solid #e3e6ec; margin: 6px 0; }
-.box { border-left: 4px solid #3d7bd9; background: #f3f7fd; padding: 8px 14px; margin: 10px 0; }
+def page_css(*, max_width: int = 1120, table_font: str = "0.92em", cell_padding: str = "4px 9px",
+             extra: str = "") -> str:
+    """The stylesheet of the report pages (a scene's report, the pairs' pages): the width, the tables' font and
+    cells' padding, and a page's ``extra`` rules."""
+    return f"""
+body {{ font-family: -apple-system, 'Segoe UI', Helvetica, Arial, sans-serif; margin: 0 auto; max-width: {max_width}px;
+       padding: 16px 24px 40px; color: #1d2330; line-height: 1.45; }}
+h1 {{ font-size: 1.6em; margin-bottom: 0.1em; }} h2 {{ margin-top: 1.6em; border-bottom: 1px solid #d0d5de; padding-bottom: 3px; }}
+.sub {{ color: #5a6272; margin-top: 0; }}
+table {{ border-collapse: collapse; margin: 8px 0 14px; font-size: {table_font}; }}
+th, td {{ border: 1px solid #d0d5de; padding: {cell_padding}; text-align: left; vertical-align: top; }}
+th {{ background: #eef1f6; }} td.num {{ text-align: right; font-family: 'DejaVu Sans Mono', Menlo, monospace; white-space: nowrap; }}
+.box {{ border-left: 4px solid #3d7bd9; background: #f3f7fd; padding: 8px 14px; margin: 10px 0; }}
+.bad {{ border-left-color: #c9302c; background: #fbeeee; }}
+.ok {{ color: #1e7b34; font-weight: 600; }} .fail {{ color: #c9302c; font-weight: 600; }}
+code {{ background: #f0f2f5; padding: 0 3px; border-radius: 3px; font-size: 0.92em; }}
+ul.notes li {{ margin: 2px 0; font-size: 0.9em; }} .small {{ font-size: 0.88em; color: #5a6272; }}
+{extra}"""
+
+
+_CSS = page_css(extra="""img { max-width: 100%; border: 1px solid #e3e6ec; margin: 6px 0; }
 .chaos { border-left-color: #d98c3d; background: #fdf7ef; }
-.bad { border-left-color: #c9302c; background: #fbeeee; }
-.ok { color: #1e7b34; font-weight: 600; } .fail { color: #c9302c; font-weight: 600; }
-code { background: #f0f2f5; padding: 0 3px; border-radius: 3px; font-size: 0.92em; }
-ul.notes li { margin: 2px 0; font-size: 0.9em; } .small { font-size: 0.88em; color: #5a6272; }
-"""
+""")
 
 
 def _rows(rows, header=None, num_cols=()) -> str:
@@ -393,6 +400,45 @@ def write_report(c, out_dir=None, *, root=None, json_path=None, command: str | N
             "summary": summary}
 
 
+def _index_row(s: dict, link: str, chk: "CheckResult | None") -> list[str]:
+    """One scene's row of ``index.html`` (:func:`write_index`): its cells, HTML."""
+    e = html.escape
+    tr, en, te, wt = s["trajectory"], s["energy"], s["terms"], s["wall_time"]
+    r2 = te["max_rel_error_route2"]
+    check = "&ndash;" if chk is None else ("<span class='ok'>ok</span>" if chk.ok else
+                                            "<span class='fail'>FAIL</span><br><span class='small'>"
+                                            + e(", ".join(chk.failures)) + "</span>")
+    acts = ", ".join({"G": "gravity", "spring": "springs", "damper": "dampers", "tau": "torques",
+                      "Q": "loads"}.get(x, x) for x in s["effects"] if x not in ("A", "e")) or "nothing"
+    r2cell = "skipped<br><span class='small'>floating base</span>" if r2 is None else (
+        fmt(r2, 1) + ("<br><span class='small'>repaired</span>" if "REPAIRED" in te["route2"].get("label", "") else ""))
+    divcell = fmt_t(tr["divergence_time"]) + ("<br><span class='small'>chaotic" + (
+        f", growth {tr['growth_rate']:.2g}/s" if tr.get("growth_rate") else "") + "</span>" if s["chaotic"] else "")
+    tcell = f"{s['t_end']:g} s" + (f"<br><span class='small'>scene {s['t_end_scene']:g} s</span>"
+                                  if s["t_end"] != s["t_end_scene"] else "")
+    return [f"<a href='{e(link)}'>{e(s['scene'])}</a><br><span class='small'>{e(s['robot'])}</span>", e(acts),
+            tcell, fmt(te["max_rel_error_route1"], 1), r2cell, fmt(tr["max_abs_error"], 1), divcell,
+            fmt(en["project_drift_rel"], 1), fmt(en["mujoco_drift_rel"], 1),
+            fmt(s["base"]["tracking_error"], 1) if s["base"]["moving"] else "&ndash;", coverage_cell(s),
+            f"{wt['project_s']:.2f}", f"{wt['mujoco_s']:.2f}", check]
+
+
+def _index_md_row(s: dict, link: str) -> str:
+    """One scene's line of ``index.md`` (:func:`write_index`)."""
+    tr, en, te, wt = s["trajectory"], s["energy"], s["terms"], s["wall_time"]
+    div = fmt_t(tr["divergence_time"])
+    if s["chaotic"]:
+        div += " (chaotic" + (f"; growth {tr['growth_rate']:.2g}/s" if tr.get("growth_rate") else "") + ")"
+    r2 = te["max_rel_error_route2"]
+    r2s = fmt(r2) + (" (repaired)" if "REPAIRED" in te["route2"].get("label", "") else "") if r2 is not None else "skipped"
+    t_end = f"{s['t_end']:g} s" + (f" (scene {s['t_end_scene']:g})" if s["t_end"] != s["t_end_scene"] else "")
+    return (f"| {s['robot']} | [{s['scene']}]({link}) | {t_end} | {fmt_md(te['max_rel_error_route1'])} / "
+            f"{r2s.replace('&ndash;', '-')} | {fmt_md(tr['max_abs_error'])} | {div} | "
+            f"{fmt_md(en['project_drift_rel'])} / {fmt_md(en['mujoco_drift_rel'])} | "
+            f"{fmt_md(s['base']['tracking_error']) if s['base']['moving'] else '-'} | "
+            f"{coverage_cell(s, markdown=True)} | {wt['project_s']:.2f} / {wt['mujoco_s']:.2f} |")
+
+
 def write_index(entries, out_root, *, note: str = "", command: str | None = None, corpus_link: str | None = None,
                 stopped=()) -> dict:
     """``index.html`` and ``index.md`` in ``out_root``: one row per (summary, link, check) entry,
@@ -412,35 +458,8 @@ def write_index(entries, out_root, *, note: str = "", command: str | None = None
           "energy drift rel. (urdf2links / MuJoCo) | base tracking | coverage | wall s (urdf2links / MuJoCo) |",
           "|---|---|---|---|---|---|---|---|---|---|"]
     for ent in entries:
-        s, link, chk = ent["summary"], ent["link"], ent.get("check")
-        tr, en, te, wt = s["trajectory"], s["energy"], s["terms"], s["wall_time"]
-        div = fmt_t(tr["divergence_time"])
-        if s["chaotic"]:
-            div += " (chaotic" + (f"; growth {tr['growth_rate']:.2g}/s" if tr.get("growth_rate") else "") + ")"
-        r2 = te["max_rel_error_route2"]
-        r2s = fmt(r2) + (" (repaired)" if "REPAIRED" in te["route2"].get("label", "") else "") if r2 is not None else "skipped"
-        t_end = f"{s['t_end']:g} s" + (f" (scene {s['t_end_scene']:g})" if s["t_end"] != s["t_end_scene"] else "")
-        check = "&ndash;" if chk is None else ("<span class='ok'>ok</span>" if chk.ok else
-                                                "<span class='fail'>FAIL</span><br><span class='small'>"
-                                                + e(", ".join(chk.failures)) + "</span>")
-        acts = ", ".join({"G": "gravity", "spring": "springs", "damper": "dampers", "tau": "torques",
-                          "Q": "loads"}.get(x, x) for x in s["effects"] if x not in ("A", "e")) or "nothing"
-        r2cell = "skipped<br><span class='small'>floating base</span>" if r2 is None else (
-            fmt(r2, 1) + ("<br><span class='small'>repaired</span>" if "REPAIRED" in te["route2"].get("label", "") else ""))
-        divcell = fmt_t(tr["divergence_time"]) + ("<br><span class='small'>chaotic" + (
-            f", growth {tr['growth_rate']:.2g}/s" if tr.get("growth_rate") else "") + "</span>" if s["chaotic"] else "")
-        tcell = f"{s['t_end']:g} s" + (f"<br><span class='small'>scene {s['t_end_scene']:g} s</span>"
-                                      if s["t_end"] != s["t_end_scene"] else "")
-        rows.append([f"<a href='{e(link)}'>{e(s['scene'])}</a><br><span class='small'>{e(s['robot'])}</span>", e(acts),
-                     tcell, fmt(te["max_rel_error_route1"], 1), r2cell, fmt(tr["max_abs_error"], 1), divcell,
-                     fmt(en["project_drift_rel"], 1), fmt(en["mujoco_drift_rel"], 1),
-                     fmt(s["base"]["tracking_error"], 1) if s["base"]["moving"] else "&ndash;", coverage_cell(s),
-                     f"{wt['project_s']:.2f}", f"{wt['mujoco_s']:.2f}", check])
-        md.append(f"| {s['robot']} | [{s['scene']}]({link}) | {t_end} | {fmt_md(te['max_rel_error_route1'])} / "
-                  f"{r2s.replace('&ndash;', '-')} | {fmt_md(tr['max_abs_error'])} | {div} | "
-                  f"{fmt_md(en['project_drift_rel'])} / {fmt_md(en['mujoco_drift_rel'])} | "
-                  f"{fmt_md(s['base']['tracking_error']) if s['base']['moving'] else '-'} | "
-                  f"{coverage_cell(s, markdown=True)} | {wt['project_s']:.2f} / {wt['mujoco_s']:.2f} |")
+        rows.append(_index_row(ent["summary"], ent["link"], ent.get("check")))
+        md.append(_index_md_row(ent["summary"], ent["link"]))
     first = entries[0]["summary"] if entries else None
     settings = ""
     if first:
