@@ -141,7 +141,7 @@ def counts(fn):     # NRT_incref / NRT_decref calls in fn's own compiled code (c
             n += own and ("call void @NRT_incref" in line or "call void @NRT_decref" in line)
     return n
 got = {f.__name__: counts(f) for f in (kernels.kinematics, kernels.dynamics, factor.ltdl, factor.ltdl_solve,
-                                      IK.kinematics_acc, IK.own_armature, MK.fd_plain)}
+                                      IK.own_armature, MK.fd_plain)}     # kinematics: with and without q''
 from urdf2links.scenes import scene_kernels as SK
 ir = SK.rhs_function((None,) * 4).inspect_llvm()      # a scene's right-hand side, callees included
 got["scene_rhs"] = ir.count("call void @NRT_incref") + ir.count("call void @NRT_decref")

@@ -18,9 +18,9 @@ import numpy as np
 from numba import njit
 
 from urdf2links.dynamics.kernels import clear_wrenches, dynamics, kinematics
-from urdf2links.dynamics.tree_arrays import W_Q, nn
+from urdf2links.dynamics.tree_arrays import W_Q, nonneg
 from urdf2links.scenes.contact_kernels import contact_potential, contact_wrenches
-from urdf2links.scenes.scene_kernels import _base_values
+from urdf2links.scenes.scene_inputs import _base_values
 
 __all__ = ["add_contact", "contact_energy", "contact_index", "check_contact_route", "stiffest_mode", "contact_timestep",
            "STEP_LAMBDA"]
@@ -43,7 +43,7 @@ def add_contact(t, TI, TF, W, SI, SF, X, qpos, qvel, index, qfrc):
     clear_wrenches(TI, W)
     contact_wrenches(SI, SF, TI, W)
     dynamics(TI, TF, W, False, True, False)
-    wq = nn(TI[W_Q])
+    wq = nonneg(TI[W_Q])
     for i in range(n):
         qfrc[index[n + i]] += W[wq + i]
 

@@ -14,7 +14,7 @@ Here the same steps are numba code (:func:`control`), installed as a C function 
 * the scene's time functions and loads as the project's own right-hand side compiled them
   (:func:`urdf2links.scenes.scene_arrays.compile_scene`, read once per run by
   :func:`~urdf2links.scenes.scene_arrays.scene_view` into the flat sections :data:`INT_SECTIONS` and
-  :data:`FLOAT_SECTIONS`; evaluated by :func:`~urdf2links.scenes.scene_kernels.fn_data_eval`), so both engines
+  :data:`FLOAT_SECTIONS`; evaluated by :func:`~urdf2links.scenes.scene_inputs.fn_data_eval`), so both engines
   evaluate literally the same functions;
 * MuJoCo's arrays of the run's ``MjData`` (``qfrc_applied``, ``xfrc_applied``, ``xpos``, ``xmat``,
   ``xipos``, ``qfrc_passive``, ``qfrc_actuator``, ``qfrc_bias``, ``qpos``) at the addresses the
@@ -60,7 +60,8 @@ from urdf2links.dynamics.factor import cholesky, cholesky_solve
 from urdf2links.compilation import c_function
 from urdf2links.integration.simulate import Compilation, record_compilation
 from urdf2links.scenes.scene_arrays import scene_view
-from urdf2links.scenes.scene_kernels import _actuators, computed_torque, ct_torque_at, fn_data_eval
+from urdf2links.scenes.scene_inputs import _actuators, fn_data_eval
+from urdf2links.scenes.scene_kernels import computed_torque, ct_torque_at
 
 from .contact_inputs import add_contact, contact_index     # issue 37
 from .tendon_controls import add_tendon_controls     # issue 43: actuators on fixed tendons
@@ -351,7 +352,7 @@ def _float(H, F, k):
 @njit(cache=True, inline="always")
 def _fn(H, I, F, j, t, order):
     """d^order f / dt^order at ``t`` of the scene's time function ``j``
-    (:func:`urdf2links.scenes.scene_kernels.fn_data_eval` on the data the project's right-hand side uses)."""
+    (:func:`urdf2links.scenes.scene_inputs.fn_data_eval` on the data the project's right-hand side uses)."""
     ptr = _int(H, I, I_FN_PTR)
     data = _float(H, F, F_FN_DATA)
     return fn_data_eval(_int(H, I, I_FN_KIND)[j], data, ptr[j], t, order)
@@ -545,7 +546,7 @@ def _ball_servos(H, I, F, t, qfrc):
     (whose joints carry no such actuator): the project's state from MuJoCo's (hinges and slides as they
     are; a ball's quaternion to its ZYX angles by (E7), on the branch of the angles within pi of their
     reference ``ball_ref`` (their initial value), and its rates ``E(phi)^-1 omega``, E43), the project's
-    law there (:func:`urdf2links.scenes.scene_kernels._actuators`, E55), and the torques ``tau`` of the
+    law there (:func:`urdf2links.scenes.scene_inputs._actuators`, E55), and the torques ``tau`` of the
     angles applied as MuJoCo's generalized forces ``f = E^-T tau`` (``tau = E^T f``: the same power,
     E50); a free joint's translations as they are."""
     SI = carray(_voidptr(H[P_SI]), H[N_SI], np.int64)

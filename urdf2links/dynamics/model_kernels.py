@@ -30,8 +30,8 @@ from ..compilation import kernel, one_signature
 
 from .factor import cholesky, cholesky_solve, ltdl, ltdl_solve, unpack
 from .inverse_kernels import id_plain  # noqa: F401  (a hot entry: frozen() finds it here)
-from .kernels import add_wrench, clear_wrenches, dynamics, energies, kinematics, poses
-from .tree_arrays import I_ANCIDX, I_ANCPTR, W_A, W_B, W_Q, W_SIZE, gravity_of, nn
+from .kernels import dynamics, energies, kinematics, poses, set_loads
+from .tree_arrays import I_ANCIDX, I_ANCPTR, W_A, W_B, W_Q, W_SIZE, gravity_of, nonneg, scratches
 
 __all__ = ["coupled_size", "frozen", "FROZEN", "fd_plain", "terms_plain", "forces_plain", "energy_plain", "fd_one",
            "fd_batch", "terms_one", "terms_batch", "energy_one",
@@ -74,10 +74,7 @@ def _terms(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, loads, C, d,
     _state(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, C, d, coupled)
     nl = loads.shape[0]
     if nl > 0:
-        clear_wrenches(TI, W)
-        for k in range(nl):
-            add_wrench(TI, W, int(loads[k, 0]), loads[k, 1], loads[k, 2], loads[k, 3], loads[k, 4], loads[k, 5],
-                       loads[k, 6], loads[k, 7], loads[k, 8], loads[k, 9], loads[k, 10] != 0.0)
+        set_loads(TI, W, loads)
     dynamics(TI, TF, W, want_A, nl > 0, False)
 
 
@@ -121,25 +118,33 @@ def reduce_mass(TI, W, C, A):
             A[k, i] = A[i, k]
 
 
+@njit(cache=True, inline="always")
+def _solve_tree(TI, W, loaded, tau, has_tau, out):
+    """q'' (E24) into ``out`` (n,) after :func:`~urdf2links.dynamics.kernels.dynamics`: ``A q'' = b (+ Q
+    when ``loaded``) (+ tau)`` by the tree-sparse factorization (E47). Returns -1, or the failing pivot."""
+    wb, wq = nonneg(TI[W_B]), nonneg(TI[W_Q])
+    for i in range(out.size):
+        v = W[wb + i]
+        if loaded:
+            v += W[wq + i]
+        if has_tau:
+            v += tau[i]
+        out[i] = v
+    pivot = ltdl(TI, W)
+    if pivot < 0:
+        ltdl_solve(TI, W, out, 0)
+    return pivot
+
+
 @one_signature
 @kernel
 def fd_row(TI, TF, W, X, q, qd, tau, has_tau, base, has_base, gx, gy, gz, loads, C, d, coupled, out):
     """q'' (E24) into ``out`` (n,): ``A q'' = Q + tau - e - G``. Returns -1, or the failing pivot."""
     _terms(TI, TF, W, X, q, qd, True, base, has_base, gx, gy, gz, loads, C, d, coupled, True)
     nl = loads.shape[0]
-    wb, wq = nn(TI[W_B]), nn(TI[W_Q])
     if not coupled:
-        for i in range(out.size):
-            v = W[wb + i]
-            if nl > 0:
-                v += W[wq + i]
-            if has_tau:
-                v += tau[i]
-            out[i] = v
-        pivot = ltdl(TI, W)
-        if pivot < 0:
-            ltdl_solve(TI, W, out, 0)
-        return pivot
+        return _solve_tree(TI, W, nl > 0, tau, has_tau, out)
+    wb, wq = nonneg(TI[W_B]), nonneg(TI[W_Q])
     nt, n = C.shape
     if nl > 0:
         for a in range(nt):
@@ -203,16 +208,7 @@ def fd_plain(TI, TF, q, qd, tau, out):
     gx, gy, gz = gravity_of(TF)
     kinematics(TI, TF, W, q, 0, qd, 0, True, TF, 0, False, gx, gy, gz)
     dynamics(TI, TF, W, True, False, False)
-    wb = nn(TI[W_B])
-    for i in range(n):
-        v = W[wb + i]
-        if has_tau:
-            v += tau[i]
-        out[i] = v
-    pivot = ltdl(TI, W)
-    if pivot < 0:
-        ltdl_solve(TI, W, out, 0)
-    return pivot
+    return _solve_tree(TI, W, False, tau, has_tau, out)
 
 
 @one_signature
@@ -241,7 +237,7 @@ def terms_plain(TI, TF, q, qd, what, A, v):
     if what == MASS:
         unpack(TI, W, A)
     else:
-        wb = nn(TI[W_B])
+        wb = nonneg(TI[W_B])
         for i in range(n):
             v[i] = -W[wb + i]
     return 0
@@ -257,12 +253,9 @@ def forces_plain(TI, TF, q, loads, v):
         return -2
     W = np.empty(TI[W_SIZE])
     kinematics(TI, TF, W, q, 0, q, 0, False, q, 0, False, 0.0, 0.0, 0.0)
-    clear_wrenches(TI, W)
-    for k in range(loads.shape[0]):
-        add_wrench(TI, W, int(loads[k, 0]), loads[k, 1], loads[k, 2], loads[k, 3], loads[k, 4], loads[k, 5],
-                   loads[k, 6], loads[k, 7], loads[k, 8], loads[k, 9], loads[k, 10] != 0.0)
+    set_loads(TI, W, loads)
     dynamics(TI, TF, W, False, True, False)
-    wq = nn(TI[W_Q])
+    wq = nonneg(TI[W_Q])
     for i in range(n):
         v[i] = W[wq + i]
     return 0
@@ -367,10 +360,8 @@ def chunks(B: int) -> int:
 def fd_batch(TI, TF, Q, QD, TAU, has_tau, BASE, has_base, gx, gy, gz, loads, C, d, coupled, OUT, status, nc):
     """:func:`fd_row` for every row ``b`` of ``Q``, ``QD``, ``TAU`` (B, n) and ``BASE`` (B or 1, 18)
     into ``OUT[b]``; ``status[b]`` the failing pivot or -1; rows in ``nc`` chunks (:func:`chunks`)."""
-    B = Q.shape[0]
-    Ws = np.empty((nc, TI[W_SIZE]))
-    Xs = np.empty((nc, coupled_size(C.shape[0], C.shape[1]) if coupled else 0))
-    nb = BASE.shape[0]
+    B, nb = Q.shape[0], BASE.shape[0]
+    Ws, Xs = scratches(TI, nc, coupled_size(C.shape[0], C.shape[1]) if coupled else 0)
     for c in prange(nc):
         for b in range(c * B // nc, (c + 1) * B // nc):
             status[b] = fd_row(TI, TF, Ws[c], Xs[c], Q[b], QD[b], TAU[b if has_tau else 0], has_tau,
@@ -380,10 +371,8 @@ def fd_batch(TI, TF, Q, QD, TAU, has_tau, BASE, has_base, gx, gy, gz, loads, C, 
 @njit(cache=True, parallel=True)
 def terms_batch(TI, TF, Q, QD, moving, BASE, has_base, gx, gy, gz, loads, C, d, coupled, what, A, V, nc):
     """:func:`terms_row` for every row: ``A[b]`` (n, n) for MASS, else ``V[b]`` (n,)."""
-    B = Q.shape[0]
-    Ws = np.empty((nc, TI[W_SIZE]))
-    Xs = np.empty((nc, coupled_size(C.shape[0], C.shape[1]) if coupled else 0))
-    nb = BASE.shape[0]
+    B, nb = Q.shape[0], BASE.shape[0]
+    Ws, Xs = scratches(TI, nc, coupled_size(C.shape[0], C.shape[1]) if coupled else 0)
     for c in prange(nc):
         for b in range(c * B // nc, (c + 1) * B // nc):
             terms_row(TI, TF, Ws[c], Xs[c], Q[b], QD[b if moving else 0], moving, BASE[b if nb > 1 else 0], has_base,
@@ -393,10 +382,8 @@ def terms_batch(TI, TF, Q, QD, moving, BASE, has_base, gx, gy, gz, loads, C, d, 
 @njit(cache=True, parallel=True)
 def energy_batch(TI, TF, Q, QD, moving, BASE, has_base, gx, gy, gz, C, d, coupled, E, V, nc):
     """:func:`energy_row` for every row into ``E[b]``, ``V[b]``."""
-    B = Q.shape[0]
-    Ws = np.empty((nc, TI[W_SIZE]))
-    Xs = np.empty((nc, coupled_size(C.shape[0], C.shape[1]) if coupled else 0))
-    nb = BASE.shape[0]
+    B, nb = Q.shape[0], BASE.shape[0]
+    Ws, Xs = scratches(TI, nc, coupled_size(C.shape[0], C.shape[1]) if coupled else 0)
     for c in prange(nc):
         for b in range(c * B // nc, (c + 1) * B // nc):
             E[b], V[b] = energy_row(TI, TF, Ws[c], Xs[c], Q[b], QD[b if moving else 0], moving,

@@ -44,7 +44,7 @@ from ..compilation import kernel, one_signature
 
 from .transforms import elementary
 
-__all__ = ["flat_tree", "tf_with_gravity", "gravity_of", "HEADER", "CONSTANT", "KS", "KF", "KL", "workspace_size", "nn",
+__all__ = ["flat_tree", "tf_with_gravity", "gravity_of", "HEADER", "CONSTANT", "KS", "KF", "KL", "workspace_size", "nonneg", "scratches",
            "armature_items",
            "ARM_ONE", "ARM_BALL"]
 
@@ -82,11 +82,11 @@ KB = 48
 
 @one_signature
 @kernel
-def nn(k):
-    """``max(k, 0)`` of an offset or index that is never negative: it tells the compiler so. An
-    integer index of unknown sign makes numba wrap negative values around on every access
-    (three instructions, and no vectorization); one ``nn`` where an offset is loaded removes that
-    from every access derived from it."""
+def nonneg(k):
+    """``max(k, 0)``: an offset or index that is never negative, said so to the compiler. An integer
+    index of unknown sign makes numba wrap negative values around on every access (three
+    instructions, and no vectorization); one ``nonneg`` where an offset is loaded removes that from
+    every access derived from it."""
     return max(k, 0)
 
 
@@ -103,6 +103,13 @@ def gravity_of(TF):
     """``(gx, gy, gz)``: the last three entries of a hot entry's ``TF`` (:func:`tf_with_gravity`)."""
     k = TF.size - 3
     return TF[k], TF[k + 1], TF[k + 2]
+
+
+@njit(cache=True)
+def scratches(TI, chunks, nx):
+    """A batch's scratch, one row per chunk of rows: the tree's ``W`` (chunks, W_SIZE) and a caller's ``X``
+    (chunks, nx) (coupled coordinates)."""
+    return np.empty((chunks, TI[W_SIZE])), np.empty((chunks, nx))
 
 
 def _segments(tree):

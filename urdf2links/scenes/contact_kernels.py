@@ -25,7 +25,7 @@ from numba import njit
 
 from ..compilation import kernel
 from ..dynamics.kernels import add_wrench
-from ..dynamics.tree_arrays import KL, O_, W_LINK, WV, nn
+from ..dynamics.tree_arrays import KL, O_, W_LINK, WV, nonneg
 from .scene_arrays import S_CONTACT_DATA, S_CONTACT_LINK, S_NCONTACT
 
 __all__ = ["contact_wrenches", "contact_potential", "contact_state", "sphere_contact", "normal_force",
@@ -39,7 +39,7 @@ NSTATE = 10     # contact_state's columns: point (3), depth, depth rate, f_n, sl
 def sphere_contact(TI, W, p, SF, o):
     """Sphere at ``SF[o:o + KC]`` on tree link ``p`` (E77): ``(d, d', p (3), v_p (3), r_link (3))``, the
     contact point ``r_link`` in the link's frame (for add_wrench)."""
-    d = nn(TI[W_LINK]) + KL * nn(p)
+    d = nonneg(TI[W_LINK]) + KL * nonneg(p)
     R00, R01, R02, R10, R11, R12, R20, R21, R22 = W[d], W[d + 1], W[d + 2], W[d + 3], W[d + 4], W[d + 5], \
         W[d + 6], W[d + 7], W[d + 8]
     c0, c1, c2, r = SF[o], SF[o + 1], SF[o + 2], SF[o + 3]

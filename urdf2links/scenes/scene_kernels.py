@@ -27,8 +27,12 @@ times when the loops called :func:`_rhs` directly, each time with the whole righ
 The indirect call costs 30-90 ns, 3-6 % of an evaluation in a bare loop and nothing measurable in the
 RK4 loop (docs/speed.md).
 
+The scene's inputs at ``t`` (time functions, the base's motion, loads, torques, dampers, actuators,
+springs) are :mod:`urdf2links.scenes.scene_inputs`; this module assembles them into ``y'``.
+
 To add an effect (a constraint, a contact): its arrays and counts in
-:mod:`urdf2links.scenes.scene_arrays`; its kernel here; its name in :data:`EFFECTS` and its test in
+:mod:`urdf2links.scenes.scene_arrays`; its kernel here or, for an input at ``t``, in
+:mod:`urdf2links.scenes.scene_inputs`; its name in :data:`EFFECTS` and its test in
 :func:`effects_of`; one marker argument more in :func:`_rhs` and in :func:`_variant`, and its call behind ``if marker is not None:`` where it acts (:func:`_rhs` for a
 pass of its own, :func:`_applied` for a generalized force).
 """
@@ -41,47 +45,17 @@ from numba import njit
 from ..compilation import kernel, one_signature
 
 from ..dynamics.factor import cholesky, cholesky_solve, ltdl, ltdl_solve
-from ..dynamics.inverse_kernels import kinematics_acc, own_armature
-from ..dynamics.kernels import add_wrench, base_power, clear_wrenches, dynamics, energies, kinematics
+from ..dynamics.inverse_kernels import own_armature
+from ..dynamics.kernels import base_power, clear_wrenches, dynamics, energies, kinematics
 from ..dynamics.model_kernels import reduce_mass, reduce_vector
-from ..dynamics.tree_arrays import W_B, W_Q, W_SIZE, nn
+from ..dynamics.tree_arrays import W_B, W_Q, W_SIZE, nonneg
 from .contact_kernels import contact_potential, contact_wrenches   # issue 37
-from .scene_arrays import (
-    KA,
-    S_ACT_FLAGS,
-    S_ACT_FN,
-    S_ACT_IDX,
-    S_ACT_PRM,
-    S_BASE_FN,
-    S_CT,
-    S_NCONTACT,
-    S_CT_FN,
-    S_NA,
-    S_C,
-    S_D,
-    S_DAMPER_IDX,
-    S_DAMPING,
-    S_FN_DATA,
-    S_FN_KIND,
-    S_FN_PTR,
-    S_GRAV,
-    S_LOAD_FN,
-    S_LOAD_KIND,
-    S_LOAD_LINK,
-    S_LOAD_LOCAL,
-    S_LOAD_POINT,
-    S_LOAD_X,
-    S_REST,
-    S_SPRING_IDX,
-    S_STIFFNESS,
-    S_TORQUE_FN,
-    S_TORQUE_IDX,
-    compile_scene,
-    scratch_size,
-)
+from .scene_arrays import (S_C, S_CT, S_CT_FN, S_GRAV, S_NA, S_NCONTACT, S_REST, S_SPRING_IDX, S_STIFFNESS, compile_scene,
+                           scratch_size)
+from .scene_inputs import _apply_loads, _base_values, _inputs, _springs, _tree_state, fn_eval
 
-__all__ = ["CompiledScene", "scene_rhs", "rhs_function", "rhs_signature", "scene_energies", "fn_eval", "fn_data_eval", "computed_torque", "ct_torque_at",
-           "EFFECTS", "effects_of"]
+__all__ = ["CompiledScene", "scene_rhs", "rhs_function", "rhs_signature", "scene_energies", "computed_torque",
+           "ct_torque_at", "EFFECTS", "effects_of"]
 
 #: The effects compiled only into the scenes that have them (module doc), in the order of ``FX``.
 EFFECTS = ("loads", "actuators", "computed_torque", "coupled")
@@ -94,167 +68,7 @@ def effects_of(SI) -> tuple:
     return tuple(1 if present[name] else None for name in EFFECTS)
 
 
-@one_signature
-@kernel
-def fn_data_eval(kind, data, o, t, order):
-    """``d^order f / dt^order`` at ``t`` of a time function of ``kind`` whose data
-    (:func:`urdf2links.scenes.scene_arrays.function_data`) starts at ``data[o]``."""
-    if kind == 0:
-        if order == 0:
-            out = data[o] + data[o + 1] * t
-        elif order == 1:
-            out = data[o + 1]
-        else:
-            out = 0.0
-        for k in range(int(data[o + 2])):
-            a, w, ph = data[o + 3 + 3 * k], data[o + 4 + 3 * k], data[o + 5 + 3 * k]
-            x = w * t + ph
-            if order == 0:
-                out += a * np.sin(x)
-            elif order == 1:
-                out += a * w * np.cos(x)
-            else:
-                out -= a * w * w * np.sin(x)
-        return out
-    m = int(data[o])
-    k = int(data[o + 1])
-    x = data[o + 2:o + 3 + m]
-    c = o + 3 + m
-    if t < x[0] or t > x[m]:
-        if order > 0:
-            return 0.0
-        t = x[0] if t < x[0] else x[m]
-    lo, hi = 0, m + 1             # np.searchsorted(x, t, side="right"): how many breakpoints are <= t
-    while lo < hi:
-        mid = (lo + hi) // 2
-        if x[mid] <= t:
-            lo = mid + 1
-        else:
-            hi = mid
-    i = min(max(lo - 1, 0), m - 1)    # (written out: numpy's generic searchsorted compiled for a second)
-    s = t - x[i]
-    out = 0.0
-    for j in range(k + 1):       # c[j, i] (s)^(k - j)
-        pw = k - j
-        if pw < order:
-            continue
-        coef = data[c + j * m + i]
-        for r in range(order):
-            coef *= pw - r
-        out += coef * s ** (pw - order)
-    return out
-
-
-@one_signature
-@kernel
-def fn_eval(SI, SF, j, t, order):
-    """``d^order f_j / dt^order`` at ``t`` of the scene's time function ``j`` (:func:`fn_data_eval`)."""
-    return fn_data_eval(SI[SI[S_FN_KIND] + j], SF, SI[S_FN_DATA] + SI[SI[S_FN_PTR] + j], t, order)
-
-
 # -- the right-hand side ------------------------------------------------------------------------------
-@one_signature
-@kernel
-def _tree_state(SI, SF, q, iq, qd, iqd, sign, X):
-    """Coupled coordinates: ``X[0:nt] = C q + d``, ``X[nt:2 nt] = sign C q'`` (E42); ``sign`` -1 or 0
-    gives the rates the energy function h needs."""
-    n, nt = SI[0], SI[1]
-    C, d = SI[S_C], SI[S_D]
-    for a in range(nt):
-        s1 = SF[d + a]
-        s2 = 0.0
-        for j in range(n):
-            s1 += SF[C + a * n + j] * q[iq + j]
-            s2 += SF[C + a * n + j] * qd[iqd + j]
-        X[a] = s1
-        X[nt + a] = sign * s2
-
-
-@one_signature
-@kernel
-def _base_values(SI, SF, t, X, xb):
-    """``X[xb:xb + 18]``: pose, rate and acceleration of {A} at ``t`` from the base functions."""
-    for j in range(6):
-        fj = SI[SI[S_BASE_FN] + j]
-        X[xb + j] = fn_eval(SI, SF, fj, t, 0)
-        X[xb + 6 + j] = fn_eval(SI, SF, fj, t, 1)
-        X[xb + 12 + j] = fn_eval(SI, SF, fj, t, 2)
-
-
-@one_signature
-@kernel
-def _apply_loads(SI, SF, I, W, t):
-    """Add every load of the scene at time ``t`` to the links' external wrenches (in the tree's link
-    frames: ``load_X`` maps the URDF link's axes and point into them)."""
-    for li in range(SI[5]):
-        fn = SI[S_LOAD_FN] + 3 * li
-        v0, v1, v2 = fn_eval(SI, SF, SI[fn], t, 0), fn_eval(SI, SF, SI[fn + 1], t, 0), fn_eval(SI, SF, SI[fn + 2], t, 0)
-        X = SI[S_LOAD_X] + 12 * li
-        pt = SI[S_LOAD_POINT] + 3 * li
-        local = SI[SI[S_LOAD_LOCAL] + li] == 1
-        if local:
-            v0, v1, v2 = (SF[X] * v0 + SF[X + 1] * v1 + SF[X + 2] * v2, SF[X + 4] * v0 + SF[X + 5] * v1 + SF[X + 6] * v2,
-                          SF[X + 8] * v0 + SF[X + 9] * v1 + SF[X + 10] * v2)
-        r0 = SF[X] * SF[pt] + SF[X + 1] * SF[pt + 1] + SF[X + 2] * SF[pt + 2] + SF[X + 3]
-        r1 = SF[X + 4] * SF[pt] + SF[X + 5] * SF[pt + 1] + SF[X + 6] * SF[pt + 2] + SF[X + 7]
-        r2 = SF[X + 8] * SF[pt] + SF[X + 9] * SF[pt + 1] + SF[X + 10] * SF[pt + 2] + SF[X + 11]
-        link = SI[SI[S_LOAD_LINK] + li]
-        if SI[SI[S_LOAD_KIND] + li] == 0:
-            add_wrench(I, W, link, v0, v1, v2, 0.0, 0.0, 0.0, r0, r1, r2, local)
-        else:
-            add_wrench(I, W, link, 0.0, 0.0, 0.0, v0, v1, v2, r0, r1, r2, local)
-
-
-@one_signature
-@kernel
-def _actuators(SI, SF, t, y, iy, f, jf):
-    """Every actuator's generalized force (E55) at ``t``, ``q = y[iy:iy + n]``, ``q' = y[iy + n:]`` added to
-    ``f[jf:]``: MuJoCo's order (``mj_fwdActuation``): ctrl clamped to ctrlrange, ``gain c + (b0 + b1 gear q
-    + b2 gear q')``, clamped to forcerange, times the gear (the joint transmission's moment)."""
-    n = SI[0]
-    ai, af, fl, pr = SI[S_ACT_IDX], SI[S_ACT_FN], SI[S_ACT_FLAGS], SI[S_ACT_PRM]
-    for j in range(SI[S_NA]):
-        i = SI[ai + j]
-        p = pr + KA * j
-        c = fn_eval(SI, SF, SI[af + j], t, 0)
-        flags = SI[fl + j]
-        if flags & 1:
-            c = min(max(c, SF[p + 5]), SF[p + 6])
-        gear = SF[p + 4]
-        a = SF[p] * c + (SF[p + 1] + SF[p + 2] * (y[iy + i] * gear) + SF[p + 3] * (y[iy + n + i] * gear))
-        if flags & 2:
-            a = min(max(a, SF[p + 7]), SF[p + 8])
-        f[jf + i] += gear * a
-
-
-@one_signature
-@kernel
-def _inputs(SI, SF, t, y, iy, f, jf, actuators):
-    """Joint torques, dampers ``-c q'`` and (``actuators`` not None: the effect's marker) actuators at
-    ``(t, q = y[iy:], q' = y[iy + n:])`` added to ``f[jf:]``."""
-    n = SI[0]
-    ti, tf = SI[S_TORQUE_IDX], SI[S_TORQUE_FN]
-    for j in range(SI[6]):
-        f[jf + SI[ti + j]] += fn_eval(SI, SF, SI[tf + j], t, 0)
-    di, dc = SI[S_DAMPER_IDX], SI[S_DAMPING]
-    for j in range(SI[8]):
-        i = SI[di + j]
-        f[jf + i] -= SF[dc + j] * y[iy + n + i]
-    if actuators is not None:
-        if SI[S_NA] > 0:
-            _actuators(SI, SF, t, y, iy, f, jf)
-
-
-@one_signature
-@kernel
-def _springs(SI, SF, y, iy, f, jf):
-    """Springs ``-k (q - rest)`` at ``q = y[iy:]`` added to ``f[jf:]``."""
-    si, k, rest = SI[S_SPRING_IDX], SI[S_STIFFNESS], SI[S_REST]
-    for j in range(SI[7]):
-        i = SI[si + j]
-        f[jf + i] -= SF[k + j] * (y[iy + i] - SF[rest + j])
-
-
 @one_signature
 @kernel
 def _applied(SI, SF, t, y, Q, iQ, f, jf, X, loads, actuators, ct):
@@ -322,15 +136,15 @@ def computed_torque(t, I, F, W, SI, SF, X):
             for j in range(n):
                 s += SF[C + a * n + j] * X[xa + j]
             X[xq + a] = s
-        kinematics_acc(I, F, W, X, 0, X, nt, X, xq, X, xb, has_base, gx, gy, gz)
+        kinematics(I, F, W, X, 0, X, nt, True, X, xb, has_base, gx, gy, gz, X, xq)
     else:
-        kinematics_acc(I, F, W, X, xr, X, xr + n, X, xa, X, xb, has_base, gx, gy, gz)
+        kinematics(I, F, W, X, xr, X, xr + n, True, X, xb, has_base, gx, gy, gz, X, xa)
     if loads:
         clear_wrenches(I, W)
         _apply_loads(SI, SF, I, W, t)
     dynamics(I, F, W, False, loads, False)
     own_armature(I, F, W, X, xq if coupled else xa)
-    wb, wq = nn(I[W_B]), nn(I[W_Q])
+    wb, wq = nonneg(I[W_B]), nonneg(I[W_Q])
     if coupled:
         C = SI[S_C]
         for i in range(n):
@@ -459,7 +273,7 @@ def _rhs(t, y, out, I, F, W, SI, SF, X, loads, actuators, ct, coupled):
     if coupled is not None:
         pivot, P = _coupled_solve(SI, SF, I, W, X, t, y, out, loads, actuators, ct)
     else:
-        wb = nn(I[W_B])
+        wb = nonneg(I[W_B])
         if applied:
             xf = 2 * nt + 18
             P = _applied(SI, SF, t, y, W, I[W_Q], X, xf, X, loads, actuators, ct)
