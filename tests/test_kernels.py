@@ -18,7 +18,7 @@ from corpus import NAMED, needs_corpus
 from urdf2links import BaseState, load_urdf
 from urdf2links.dynamics import kernels as K
 from urdf2links.dynamics.factor import cholesky, cholesky_solve
-from urdf2links.dynamics.tree_arrays import W_SIZE, flat_tree
+from urdf2links.dynamics.tree_arrays import W_SIZE, Tree, flat_tree
 from urdf2links.dynamics.oracles.recursive import RecursivePlan
 from urdf2links.dynamics.transforms import base_transforms
 
@@ -71,9 +71,10 @@ def test_base_power_equals_numpy_form(seed):
     W = np.zeros(TI[W_SIZE])
     b18 = np.r_[base.pose, base.rate, base.accel]
     g = np.asarray(model.gravity_vector)
-    K.kinematics(TI, TF, W, q, 0, qd, 0, True, b18, 0, True, *g)   # records the base's twist
-    K.dynamics(TI, TF, W, False, False, True)                        # and the links' momentum
-    dE, dV = K.base_power(TI, W, *g)
+    tree = Tree(TI, TF, W)
+    K.kinematics(tree, q, 0, qd, 0, True, b18, 0, True, *g)   # records the base's twist
+    K.dynamics(tree, False, False, True)                        # and the links' momentum
+    dE, dV = K.base_power(tree, *g)
     bt = base_transforms(base)
     rp = RecursivePlan(model.tree)
     ref = rp.explicit_time_rates(rp.kinematics(q, qd, bt, acceleration=True), bt, model.gravity_vector)

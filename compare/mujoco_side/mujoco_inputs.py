@@ -59,7 +59,8 @@ from numba.extending import intrinsic
 from urdf2links.dynamics.factor import cholesky, cholesky_solve
 from urdf2links.compilation import c_function
 from urdf2links.integration.simulate import Compilation, record_compilation
-from urdf2links.scenes.scene_arrays import scene_view
+from urdf2links.dynamics.tree_arrays import Tree
+from urdf2links.scenes.scene_arrays import Scene, scene_view
 from urdf2links.scenes.scene_inputs import _actuators, fn_data_eval
 from urdf2links.scenes.scene_kernels import computed_torque, ct_torque_at
 
@@ -523,7 +524,7 @@ def _computed_torque(H, I, t, qfrc):
     """The project's computed torque at ``t`` (:func:`urdf2links.scenes.scene_kernels.computed_torque`, on
     the project's own compiled scene and tree arrays, with scratch of its own) into ``qfrc_applied``."""
     TI, TF, W, SI, SF, X = _scene_arrays(H)
-    computed_torque(t, TI, TF, W, SI, SF, X)
+    computed_torque(t, Tree(TI, TF, W), Scene(SI, SF, X))
     xt = ct_torque_at(SI[0], SI[1])
     dof = _int(H, I, I_DOF)
     for i in range(SI[0]):

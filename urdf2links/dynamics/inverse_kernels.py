@@ -28,24 +28,25 @@ from numba import njit, prange
 from ..compilation import kernel, one_signature
 
 from .kernels import dynamics, kinematics, set_loads
-from .tree_arrays import ARM_BALL, F_ARM, I_ARM, N_ARM, W_B, W_Q, W_SIZE, gravity_of, nonneg, scratches
+from .tree_arrays import ARM_BALL, F_ARM, I_ARM, N_ARM, W_B, W_Q, W_SIZE, Tree, gravity_of, nonneg, scratches
 
 __all__ = ["own_armature", "id_row", "id_one", "id_batch", "id_plain", "inverse_size"]
 
 
 @one_signature
 @kernel
-def own_armature(TI, TF, W, qdd, iqdd):
+def own_armature(tree, qdd, qdd_at):
     """``b_k -= a_k q_k''`` for every coordinate with an armature of its own (E49: ``a_k`` on ``a_kk``);
     a ball link's armature is already in ``b`` through its relative angular acceleration."""
+    TI, TF, W = tree
     if TI[N_ARM] == 0:
         return
     ia, fa, wbv = nonneg(TI[I_ARM]), nonneg(TI[F_ARM]), nonneg(TI[W_B])
-    iqdd = nonneg(iqdd)
+    qdd_at = nonneg(qdd_at)
     for k in range(TI[N_ARM]):
         if TI[ia + 3 * k] != ARM_BALL:
             i = nonneg(TI[ia + 3 * k + 1])
-            W[wbv + i] -= TF[fa + k] * qdd[iqdd + i]
+            W[wbv + i] -= TF[fa + k] * qdd[qdd_at + i]
 
 
 @njit(cache=True, inline="always")
@@ -61,6 +62,7 @@ def id_row(TI, TF, W, X, q, qd, qdd, base, has_base, gx, gy, gz, loads, C, d, co
     (18,) when ``has_base``, gravity ``g``, ``loads`` (k, 11) as for
     :func:`~urdf2links.dynamics.model_kernels.terms_row`, coupled coordinates ``q_tree = C q + d``
     (then ``tau = C^T tau_tree`` at ``C q'``, ``C q''``, E42; ``X`` holds those, 3 n_tree)."""
+    tree = Tree(TI, TF, W)
     nl = loads.shape[0]
     if coupled:
         nt, n = C.shape
@@ -75,16 +77,16 @@ def id_row(TI, TF, W, X, q, qd, qdd, base, has_base, gx, gy, gz, loads, C, d, co
             X[a] = s1
             X[nt + a] = s2
             X[2 * nt + a] = s3
-        kinematics(TI, TF, W, X, 0, X, nt, True, base, 0, has_base, gx, gy, gz, X, 2 * nt)
+        kinematics(tree, X, 0, X, nt, True, base, 0, has_base, gx, gy, gz, X, 2 * nt)
     else:
-        kinematics(TI, TF, W, q, 0, qd, 0, True, base, 0, has_base, gx, gy, gz, qdd, 0)
+        kinematics(tree, q, 0, qd, 0, True, base, 0, has_base, gx, gy, gz, qdd, 0)
     if nl > 0:
-        set_loads(TI, W, loads)
-    dynamics(TI, TF, W, False, nl > 0, False)
+        set_loads(tree, loads)
+    dynamics(tree, False, nl > 0, False)
     if coupled:
-        own_armature(TI, TF, W, X, 2 * C.shape[0])
+        own_armature(tree, X, 2 * C.shape[0])
     else:
-        own_armature(TI, TF, W, qdd, 0)
+        own_armature(tree, qdd, 0)
     wb, wq = nonneg(TI[W_B]), nonneg(TI[W_Q])
     if not coupled:
         for i in range(out.size):
@@ -125,21 +127,28 @@ def id_batch(TI, TF, Q, QD, QDD, BASE, has_base, gx, gy, gz, loads, C, d, couple
 
 
 @one_signature
+@kernel
+def _id_plain(TI, TF, W, q, qd, qdd, out):
+    tree = Tree(TI, TF, W)
+    gx, gy, gz = gravity_of(TF)
+    kinematics(tree, q, 0, qd, 0, True, TF, 0, False, gx, gy, gz, qdd, 0)
+    dynamics(tree, False, False, False)
+    own_armature(tree, qdd, 0)
+    wb = nonneg(TI[W_B])
+    for i in range(out.size):
+        out[i] = -W[wb + i]
+
+
+@one_signature
 @njit(cache=True)
 def id_plain(TI, TF, q, qd, qdd, out):
     """:func:`id_row` for a fixed base, no loads, no coupling (the hot path of
     :meth:`~urdf2links.dynamics.model.Model.inverse_dynamics`), gravity in ``TF``'s last three
     entries (:func:`~urdf2links.dynamics.tree_arrays.tf_with_gravity`): the same operations, so the
-    same bits. -2 when a size is wrong, else 0."""
+    same bits (its body builds the tree's record, :mod:`urdf2links.dynamics.model_kernels`). -2 when a
+    size is wrong, else 0."""
     n = TI[1]
     if q.size != n or qd.size != n or qdd.size != n or out.size != n:
         return -2
-    W = np.empty(TI[W_SIZE])
-    gx, gy, gz = gravity_of(TF)
-    kinematics(TI, TF, W, q, 0, qd, 0, True, TF, 0, False, gx, gy, gz, qdd, 0)
-    dynamics(TI, TF, W, False, False, False)
-    own_armature(TI, TF, W, qdd, 0)
-    wb = nonneg(TI[W_B])
-    for i in range(n):
-        out[i] = -W[wb + i]
+    _id_plain(TI, TF, np.empty(TI[W_SIZE]), q, qd, qdd, out)
     return 0

@@ -30,9 +30,10 @@ once, for its wrench and for the subtree sums. Cost: O(n) for the passes, O(sum 
 ``A``; its factorization (:mod:`urdf2links.dynamics.factor`) has no fill-in outside ancestor pairs.
 
 All functions index the flat arrays of :mod:`urdf2links.dynamics.tree_arrays` (``TI``, ``TF``, and the scratch
-``W``, one per thread) at header offsets; nothing allocates. The numpy form
-(:mod:`urdf2links.dynamics.oracles.recursive`) and the literal form (:mod:`urdf2links.dynamics.oracles.literal`) are the
-oracles the tests check these against.
+``W``, one per thread) at header offsets; nothing allocates. The passes take the three as one record,
+``tree`` (:class:`~urdf2links.dynamics.tree_arrays.Tree`; free between them, not from Python: docs/speed.md).
+The numpy form (:mod:`urdf2links.dynamics.oracles.recursive`) and the literal form
+(:mod:`urdf2links.dynamics.oracles.literal`) are the oracles the tests check these against.
 """
 
 from __future__ import annotations
@@ -84,8 +85,8 @@ from .tree_arrays import (
     nonneg,
 )
 
-__all__ = ["kinematics", "dynamics", "energies", "add_wrench", "clear_wrenches", "set_loads", "base_power", "poses", "armature",
-           "armature_energy"]
+__all__ = ["kinematics", "dynamics", "energies", "add_wrench", "clear_wrenches", "set_loads", "base_power", "poses",
+           "armature", "armature_energy"]
 
 
 # -- root to leaves ---------------------------------------------------------------------------------
@@ -190,7 +191,7 @@ def _base_frame(W, wb, base, base_at, has_base, gx, gy, gz):
 
 @one_signature
 @kernel
-def kinematics(TI, TF, W, q, q_at, qd, qd_at, moving, base, base_at, has_base, gx, gy, gz, qdd=None, qdd_at=0):
+def kinematics(tree, q, q_at, qd, qd_at, moving, base, base_at, has_base, gx, gy, gz, qdd=None, qdd_at=0):
     """Root to leaves (E33): pose ``R, o``, twist ``(omega, v)`` and spatial acceleration of every link
     into its record; unit twists ``s`` of every coordinate. The tree's coordinates are
     ``q[q_at:q_at + n]`` and, when ``moving``, its rates ``qd[qd_at:qd_at + n]`` (else zero);
@@ -199,8 +200,9 @@ def kinematics(TI, TF, W, q, q_at, qd, qd_at, moving, base, base_at, has_base, g
 
     The acceleration is the one at ``q'' = 0`` (the bias term's, E32) when ``qdd`` is None; with the
     coordinates' accelerations ``qdd[qdd_at:qdd_at + n]`` it is the whole one (E33 with ``x'' = q_i''``),
-    which inverse dynamics pairs with the unit twists to give ``A q'' + e + G`` (E54). numba compiles
-    one variant per type of ``qdd``: for None the ``q''`` term is not in the machine code."""
+    which inverse dynamics pairs with the unit twists to give ``A q'' + e + G`` (E54). One compiled variant
+    per type of ``qdd``: for None the ``q''`` term is not in the machine code."""
+    TI, TF, W = tree
     L, n = TI[0], nonneg(TI[1])
     par, sp, ss, sc = nonneg(TI[I_PARENT]), nonneg(TI[I_SEGPTR]), nonneg(TI[I_SEGSLOT]), nonneg(TI[I_SEGCOORD])
     fs, wl, wc, wb = nonneg(TI[F_SEG]), nonneg(TI[W_LINK]), nonneg(TI[W_COORD]), nonneg(TI[W_BASE])
@@ -240,8 +242,9 @@ def kinematics(TI, TF, W, q, q_at, qd, qd_at, moving, base, base_at, has_base, g
 
 @one_signature
 @kernel
-def poses(TI, W, R, o):
+def poses(tree, R, o):
     """Copy every link's rotation into ``R`` (L, 3, 3) and origin into ``o`` (L, 3) after :func:`kinematics`."""
+    TI, W = tree.TI, tree.W
     wl = nonneg(TI[W_LINK])
     for p in range(TI[0]):
         d = wl + KL * p
@@ -346,8 +349,9 @@ def _link_wrench(W, d, wb, momentum):
 # -- leaves to root ---------------------------------------------------------------------------------
 @one_signature
 @kernel
-def _subtree_sums(TI, W, loads):
+def _subtree_sums(tree, loads):
     """(E30): every link's (m, c, J), inertial wrench and (with ``loads``) external wrench summed over its subtree."""
+    TI, W = tree.TI, tree.W
     wl = nonneg(TI[W_LINK])
     par = nonneg(TI[I_PARENT])
     for p in range(TI[0] - 1, 0, -1):
@@ -364,12 +368,13 @@ def _subtree_sums(TI, W, loads):
 
 @one_signature
 @kernel
-def dynamics(TI, TF, W, want_A, loads, momentum):
+def dynamics(tree, want_A, loads, momentum):
     """Leaves to root after :func:`kinematics` (and, with ``loads``, the external wrenches of
     :func:`add_wrench`): ``b = -(e + G)`` (E34), ``Q`` (E36) with ``loads``, and with ``want_A`` the
     mass matrix (E31) packed by ancestor pairs (row ``i``: ``A[i, anc_idx[j]]`` at ``W[W_A + j]``,
     ``j`` in ``anc_ptr[i]:anc_ptr[i + 1]``), armature included (:func:`armature`). With ``momentum``
     the links' total momentum goes to the base record (for :func:`base_power`)."""
+    TI, TF, W = tree
     L, n = TI[0], nonneg(TI[1])
     wl, wc, wb = nonneg(TI[W_LINK]), nonneg(TI[W_COORD]), nonneg(TI[W_BASE])
     if momentum:
@@ -379,7 +384,7 @@ def dynamics(TI, TF, W, want_A, loads, momentum):
         d = wl + KL * p
         _body(TI, TF, W, p, d)
         _link_wrench(W, d, wb, momentum)
-    _subtree_sums(TI, W, loads)
+    _subtree_sums(tree, loads)
     cl, ap, ai = nonneg(TI[I_COORDLINK]), nonneg(TI[I_ANCPTR]), nonneg(TI[I_ANCIDX])
     rp, rs = nonneg(TI[I_RUNPTR]), nonneg(TI[I_RUNS])
     wa, wbv, wq = nonneg(TI[W_A]), nonneg(TI[W_B]), nonneg(TI[W_Q])
@@ -420,17 +425,18 @@ def dynamics(TI, TF, W, want_A, loads, momentum):
                 W[wa + j0 + u] = (W[sl + 3 * n] * p0 + W[sl + 4 * n] * p1 + W[sl + 5 * n] * p2
                                   + W[sl] * h0 + W[sl + n] * h1 + W[sl + 2 * n] * h2)
     if TI[N_ARM] > 0:
-        armature(TI, TF, W, want_A)
+        armature(tree, want_A)
 
 
 @one_signature
 @kernel
-def armature(TI, TF, W, want_A):
+def armature(tree, want_A):
     """The armature's terms (E49) added to the packed ``A`` (with ``want_A``) and to ``b = -(e + G)``,
     after :func:`dynamics`' own terms. A coordinate of its own: ``a`` on its diagonal. The three
     angles ``i`` of a ball link ``p`` (parent record ``s``): ``a w_i.w_l`` on the 3 x 3 block and
     ``-a w_i.(alpha_p - alpha_s - omega_p x (omega_p - omega_s))`` into ``b``: the relative angular
     velocity ``omega_p - omega_s = sum w_i q_i'`` in {0}, and ``J^T a J' q'`` in world twists."""
+    TI, TF, W = tree
     n = nonneg(TI[1])
     ia, fa = nonneg(TI[I_ARM]), nonneg(TI[F_ARM])
     wl, wc, wb, wa, wbv = nonneg(TI[W_LINK]), nonneg(TI[W_COORD]), nonneg(TI[W_BASE]), nonneg(TI[W_A]), nonneg(TI[W_B])
@@ -464,7 +470,9 @@ def armature(TI, TF, W, want_A):
 # -- applied wrenches, energies, base power -----------------------------------------------------------
 @one_signature
 @kernel
-def clear_wrenches(TI, W):
+def clear_wrenches(tree):
+    """Every link's external wrench set to zero (before :func:`add_wrench`)."""
+    TI, W = tree.TI, tree.W
     wl = nonneg(TI[W_LINK])
     for p in range(TI[0]):
         for j in range(6):
@@ -473,9 +481,10 @@ def clear_wrenches(TI, W):
 
 @one_signature
 @kernel
-def add_wrench(TI, W, p, F0, F1, F2, M0, M1, M2, r0, r1, r2, local):
+def add_wrench(tree, p, F0, F1, F2, M0, M1, M2, r0, r1, r2, local):
     """Add a force ``F`` and a moment ``M`` acting at the point ``r`` (link frame) of link ``p`` to
     its external wrench as ``(F, M + r_N x F)`` about {0} (E36); ``local``: F and M in the link's axes."""
+    TI, W = tree.TI, tree.W
     d = nonneg(TI[W_LINK]) + KL * nonneg(p)
     R00, R01, R02 = W[d], W[d + 1], W[d + 2]
     R10, R11, R12 = W[d + 3], W[d + 4], W[d + 5]
@@ -497,20 +506,21 @@ def add_wrench(TI, W, p, F0, F1, F2, M0, M1, M2, r0, r1, r2, local):
 
 @one_signature
 @kernel
-def set_loads(TI, W, loads):
+def set_loads(tree, loads):
     """The links' external wrenches (E36) of ``loads`` (k, 11), one row per wrench
     ``(link, F (3), M (3), point (3), local)`` (:func:`add_wrench`), from zero."""
-    clear_wrenches(TI, W)
+    clear_wrenches(tree)
     for k in range(loads.shape[0]):
-        add_wrench(TI, W, int(loads[k, 0]), loads[k, 1], loads[k, 2], loads[k, 3], loads[k, 4], loads[k, 5],
+        add_wrench(tree, int(loads[k, 0]), loads[k, 1], loads[k, 2], loads[k, 3], loads[k, 4], loads[k, 5],
                    loads[k, 6], loads[k, 7], loads[k, 8], loads[k, 9], loads[k, 10] != 0.0)
 
 
 @one_signature
 @kernel
-def energies(TI, TF, W, gx, gy, gz):
+def energies(tree, gx, gy, gz):
     """``(E, V)`` after :func:`kinematics` (E37): ``E = 0.5 sum (m v.v + 2 v.(omega x c) + omega.J omega)``,
     ``V = -g . sum c``."""
+    TI, TF, W = tree
     wl = nonneg(TI[W_LINK])
     E = 0.0
     V = 0.0
@@ -530,15 +540,16 @@ def energies(TI, TF, W, gx, gy, gz):
         E += 0.5 * (m * (v0 * v0 + v1 * v1 + v2 * v2) + 2.0 * (v0 * x0 + v1 * x1 + v2 * x2) + wJw)
         V -= gx * c0 + gy * c1 + gz * c2
     if TI[N_ARM] > 0:
-        E += armature_energy(TI, TF, W)
+        E += armature_energy(tree)
     return E, V
 
 
 @one_signature
 @kernel
-def armature_energy(TI, TF, W):
+def armature_energy(tree):
     """The armature's kinetic energy (E49) after :func:`kinematics`: ``0.5 a q'^2`` per coordinate of
     its own, ``0.5 a |omega_p - omega_s|^2`` per ball link."""
+    TI, TF, W = tree
     ia, fa = nonneg(TI[I_ARM]), nonneg(TI[F_ARM])
     wl, wb, wqd, par = nonneg(TI[W_LINK]), nonneg(TI[W_BASE]), nonneg(TI[W_QD]), nonneg(TI[I_PARENT])
     E = 0.0
@@ -558,12 +569,13 @@ def armature_energy(TI, TF, W):
 
 @one_signature
 @kernel
-def base_power(TI, W, gx, gy, gz):
+def base_power(tree, gx, gy, gz):
     """``(dE/dt, dV/dt)`` at fixed ``(q, q')`` due to the base motion alone (E41), after
     :func:`dynamics` with ``momentum``: with the base's twist ``(omega_B, v_B)``, its acceleration
     ``(alpha_B, a_B)`` and the links' total momentum ``(P, H)`` about {0},
     ``dE/dt = tr(dW_B sum Hw Xi^T) = a_B.P + alpha_B.H`` (the second trace of E41 vanishes: a skew
     matrix against a symmetric one) and ``dV/dt = -g . (omega_B x sum c + (sum m) v_B)``."""
+    TI, W = tree.TI, tree.W
     wb = nonneg(TI[W_BASE])
     wl = nonneg(TI[W_LINK])
     par = nonneg(TI[I_PARENT])

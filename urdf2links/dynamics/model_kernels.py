@@ -15,7 +15,10 @@ argument of another type raises TypeError (the model then converts it) instead o
 variant. They compute what the row functions compute, operation for operation (the same bits).
 
 Arguments shared by the row functions: ``TI``, ``TF`` the tree (:mod:`urdf2links.dynamics.tree_arrays`);
-``W`` its scratch and ``X`` the coupling scratch (:func:`coupled_size`); ``base`` (18,) pose, rate
+``W`` its scratch and ``X`` the coupling scratch (:func:`coupled_size`). The rows and the hot entries'
+bodies take the tree's arrays and pass them on as one record (:class:`~urdf2links.dynamics.tree_arrays.Tree`):
+a batch's threads call the rows, and a record built in a function that counts references (every one
+that allocates, and the batches) would count them, atomically, on arrays all threads share; ``base`` (18,) pose, rate
 and acceleration of {A} when ``has_base``; ``gx, gy, gz`` gravity; ``loads`` (k, 11) wrenches
 ``(link, F (3), M (3), point (3), local)``; ``C`` (n_tree, n), ``d`` (n_tree,) coupled coordinates
 ``q_tree = C q + d`` when ``coupled`` (docs/equations.md (E42)).
@@ -31,7 +34,7 @@ from ..compilation import kernel, one_signature
 from .factor import cholesky, cholesky_solve, ltdl, ltdl_solve, unpack
 from .inverse_kernels import id_plain  # noqa: F401  (a hot entry: frozen() finds it here)
 from .kernels import dynamics, energies, kinematics, poses, set_loads
-from .tree_arrays import I_ANCIDX, I_ANCPTR, W_A, W_B, W_Q, W_SIZE, gravity_of, nonneg, scratches
+from .tree_arrays import I_ANCIDX, I_ANCPTR, W_A, W_B, W_Q, W_SIZE, Tree, gravity_of, nonneg, scratches
 
 __all__ = ["coupled_size", "frozen", "FROZEN", "fd_plain", "terms_plain", "forces_plain", "energy_plain", "fd_one",
            "fd_batch", "terms_one", "terms_batch", "energy_one",
@@ -50,10 +53,10 @@ def coupled_size(n_tree, n):
 # -- one state ----------------------------------------------------------------------------------------
 @one_signature
 @kernel
-def _state(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, C, d, coupled):
+def _state(tree, X, q, qd, moving, base, has_base, gx, gy, gz, C, d, coupled):
     """:func:`~urdf2links.dynamics.kernels.kinematics` at the model state ``(q, qd)`` (rates zero unless ``moving``)."""
     if not coupled:
-        kinematics(TI, TF, W, q, 0, qd, 0, moving, base, 0, has_base, gx, gy, gz)
+        kinematics(tree, q, 0, qd, 0, moving, base, 0, has_base, gx, gy, gz)
         return
     nt, n = C.shape
     for a in range(nt):
@@ -65,17 +68,17 @@ def _state(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, C, d, couple
                 s2 += C[a, j] * qd[j]
         X[a] = s1
         X[nt + a] = s2
-    kinematics(TI, TF, W, X, 0, X, nt, moving, base, 0, has_base, gx, gy, gz)
+    kinematics(tree, X, 0, X, nt, moving, base, 0, has_base, gx, gy, gz)
 
 
 @one_signature
 @kernel
-def _terms(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, loads, C, d, coupled, want_A):
-    _state(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, C, d, coupled)
+def _terms(tree, X, q, qd, moving, base, has_base, gx, gy, gz, loads, C, d, coupled, want_A):
+    _state(tree, X, q, qd, moving, base, has_base, gx, gy, gz, C, d, coupled)
     nl = loads.shape[0]
     if nl > 0:
-        set_loads(TI, W, loads)
-    dynamics(TI, TF, W, want_A, nl > 0, False)
+        set_loads(tree, loads)
+    dynamics(tree, want_A, nl > 0, False)
 
 
 @one_signature
@@ -92,9 +95,10 @@ def reduce_vector(C, v, iv, out, io, sign):
 
 @one_signature
 @kernel
-def reduce_mass(TI, W, C, A):
+def reduce_mass(tree, C, A):
     """``A = C^T A_tree C`` (n, n) from the packed tree matrix (E42); the lower triangle is summed,
     the upper one mirrors it."""
+    TI, W = tree.TI, tree.W
     nt, n = C.shape
     ap, ai, wa = TI[I_ANCPTR], TI[I_ANCIDX], TI[W_A]
     for i in range(n):
@@ -119,9 +123,10 @@ def reduce_mass(TI, W, C, A):
 
 
 @njit(cache=True, inline="always")
-def _solve_tree(TI, W, loaded, tau, has_tau, out):
+def _solve_tree(tree, loaded, tau, has_tau, out):
     """q'' (E24) into ``out`` (n,) after :func:`~urdf2links.dynamics.kernels.dynamics`: ``A q'' = b (+ Q
     when ``loaded``) (+ tau)`` by the tree-sparse factorization (E47). Returns -1, or the failing pivot."""
+    TI, W = tree.TI, tree.W
     wb, wq = nonneg(TI[W_B]), nonneg(TI[W_Q])
     for i in range(out.size):
         v = W[wb + i]
@@ -140,10 +145,11 @@ def _solve_tree(TI, W, loaded, tau, has_tau, out):
 @kernel
 def fd_row(TI, TF, W, X, q, qd, tau, has_tau, base, has_base, gx, gy, gz, loads, C, d, coupled, out):
     """q'' (E24) into ``out`` (n,): ``A q'' = Q + tau - e - G``. Returns -1, or the failing pivot."""
-    _terms(TI, TF, W, X, q, qd, True, base, has_base, gx, gy, gz, loads, C, d, coupled, True)
+    tree = Tree(TI, TF, W)
+    _terms(tree, X, q, qd, True, base, has_base, gx, gy, gz, loads, C, d, coupled, True)
     nl = loads.shape[0]
     if not coupled:
-        return _solve_tree(TI, W, nl > 0, tau, has_tau, out)
+        return _solve_tree(tree, nl > 0, tau, has_tau, out)
     wb, wq = nonneg(TI[W_B]), nonneg(TI[W_Q])
     nt, n = C.shape
     if nl > 0:
@@ -154,7 +160,7 @@ def fd_row(TI, TF, W, X, q, qd, tau, has_tau, base, has_base, gx, gy, gz, loads,
         for i in range(n):
             out[i] += tau[i]
     A = X[2 * nt:2 * nt + n * n].reshape((n, n))
-    reduce_mass(TI, W, C, A)
+    reduce_mass(tree, C, A)
     o = 2 * nt + n * n
     pivot = cholesky(X, 2 * nt, n, X, o)
     if pivot < 0:
@@ -167,10 +173,11 @@ def fd_row(TI, TF, W, X, q, qd, tau, has_tau, base, has_base, gx, gy, gz, loads,
 def terms_row(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, loads, C, d, coupled, what, A, v):
     """``what``: MASS the mass matrix into ``A`` (n, n); BIAS ``-b = e + G`` into ``v`` (n,) (with
     ``g = 0``: e; at rest with gravity: G); FORCES ``Q`` of ``loads`` into ``v``."""
-    _terms(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, loads, C, d, coupled, what == MASS)
+    tree = Tree(TI, TF, W)
+    _terms(tree, X, q, qd, moving, base, has_base, gx, gy, gz, loads, C, d, coupled, what == MASS)
     if what == MASS:
         if coupled:
-            reduce_mass(TI, W, C, A)
+            reduce_mass(tree, C, A)
         else:
             unpack(TI, W, A)
         return
@@ -187,11 +194,24 @@ def terms_row(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, loads, C,
 @kernel
 def energy_row(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, C, d, coupled):
     """``(E, V)`` (E37) at one state."""
-    _state(TI, TF, W, X, q, qd, moving, base, has_base, 0.0, 0.0, 0.0, C, d, coupled)
-    return energies(TI, TF, W, gx, gy, gz)
+    tree = Tree(TI, TF, W)
+    _state(tree, X, q, qd, moving, base, has_base, 0.0, 0.0, 0.0, C, d, coupled)
+    return energies(tree, gx, gy, gz)
 
 
 # -- single-state entries -----------------------------------------------------------------------------
+# Each hot entry checks the sizes, allocates the scratch and calls its body, a kernel that builds the tree's
+# record: a record built in a function that counts references (one that allocates) would count them.
+@one_signature
+@kernel
+def _fd_plain(TI, TF, W, q, qd, tau, out):
+    tree = Tree(TI, TF, W)
+    gx, gy, gz = gravity_of(TF)
+    kinematics(tree, q, 0, qd, 0, True, TF, 0, False, gx, gy, gz)
+    dynamics(tree, True, False, False)
+    return _solve_tree(tree, False, tau, tau.size > 0, out)
+
+
 @one_signature
 @njit(cache=True)
 def fd_plain(TI, TF, q, qd, tau, out):
@@ -199,16 +219,24 @@ def fd_plain(TI, TF, q, qd, tau, out):
     :data:`_PLAIN_SIGS`), gravity in ``TF`` (:func:`~urdf2links.dynamics.tree_arrays.tf_with_gravity`); -2
     when a size is wrong."""
     n = TI[1]
-    if q.size != n or qd.size != n or out.size != n:
+    if q.size != n or qd.size != n or out.size != n or (tau.size > 0 and tau.size != n):
         return -2
-    has_tau = tau.size > 0
-    if has_tau and tau.size != n:
-        return -2
-    W = np.empty(TI[W_SIZE])
+    return _fd_plain(TI, TF, np.empty(TI[W_SIZE]), q, qd, tau, out)
+
+
+@one_signature
+@kernel
+def _terms_plain(TI, TF, W, q, qd, what, A, v):
+    tree = Tree(TI, TF, W)
     gx, gy, gz = gravity_of(TF)
-    kinematics(TI, TF, W, q, 0, qd, 0, True, TF, 0, False, gx, gy, gz)
-    dynamics(TI, TF, W, True, False, False)
-    return _solve_tree(TI, W, False, tau, has_tau, out)
+    kinematics(tree, q, 0, qd, 0, qd.size > 0, TF, 0, False, gx, gy, gz)       # qd of size 0: at rest
+    dynamics(tree, what == MASS, False, False)
+    if what == MASS:
+        unpack(TI, W, A)
+    else:
+        wb = nonneg(TI[W_B])
+        for i in range(v.size):
+            v[i] = -W[wb + i]
 
 
 @one_signature
@@ -218,29 +246,27 @@ def terms_plain(TI, TF, q, qd, what, A, v):
     into ``v`` (n,): ``e`` with zero gravity in ``TF`` (:func:`~urdf2links.dynamics.tree_arrays.tf_with_gravity`),
     ``G`` with ``qd`` of size 0 (at rest). -2 when a size is wrong, else 0."""
     n = TI[1]
-    if q.size != n:
+    if q.size != n or (qd.size != 0 and qd.size != n):
         return -2
     if what == MASS:
         if A.shape[0] != n or A.shape[1] != n:
             return -2
     elif v.size != n:
         return -2
-    W = np.empty(TI[W_SIZE])
-    gx, gy, gz = gravity_of(TF)
-    if qd.size == 0:
-        kinematics(TI, TF, W, q, 0, q, 0, False, TF, 0, False, gx, gy, gz)
-    else:
-        if qd.size != n:
-            return -2
-        kinematics(TI, TF, W, q, 0, qd, 0, True, TF, 0, False, gx, gy, gz)
-    dynamics(TI, TF, W, what == MASS, False, False)
-    if what == MASS:
-        unpack(TI, W, A)
-    else:
-        wb = nonneg(TI[W_B])
-        for i in range(n):
-            v[i] = -W[wb + i]
+    _terms_plain(TI, TF, np.empty(TI[W_SIZE]), q, qd, what, A, v)
     return 0
+
+
+@one_signature
+@kernel
+def _forces_plain(TI, TF, W, q, loads, v):
+    tree = Tree(TI, TF, W)
+    kinematics(tree, q, 0, q, 0, False, q, 0, False, 0.0, 0.0, 0.0)
+    set_loads(tree, loads)
+    dynamics(tree, False, True, False)
+    wq = nonneg(TI[W_Q])
+    for i in range(v.size):
+        v[i] = W[wq + i]
 
 
 @one_signature
@@ -251,14 +277,17 @@ def forces_plain(TI, TF, q, loads, v):
     n = TI[1]
     if q.size != n or v.size != n or loads.shape[1] != 11:
         return -2
-    W = np.empty(TI[W_SIZE])
-    kinematics(TI, TF, W, q, 0, q, 0, False, q, 0, False, 0.0, 0.0, 0.0)
-    set_loads(TI, W, loads)
-    dynamics(TI, TF, W, False, True, False)
-    wq = nonneg(TI[W_Q])
-    for i in range(n):
-        v[i] = W[wq + i]
+    _forces_plain(TI, TF, np.empty(TI[W_SIZE]), q, loads, v)
     return 0
+
+
+@one_signature
+@kernel
+def _energy_plain(TI, TF, W, q, qd, out):
+    tree = Tree(TI, TF, W)
+    kinematics(tree, q, 0, qd, 0, qd.size > 0, TF, 0, False, 0.0, 0.0, 0.0)       # qd of size 0: at rest
+    gx, gy, gz = gravity_of(TF)
+    out[0], out[1] = energies(tree, gx, gy, gz)
 
 
 @one_signature
@@ -268,17 +297,9 @@ def energy_plain(TI, TF, q, qd, out):
     (:func:`~urdf2links.dynamics.tree_arrays.tf_with_gravity`); ``qd`` of size 0: at rest (V only is meaningful).
     -2 when a size is wrong, else 0."""
     n = TI[1]
-    if q.size != n or out.size != 2:
+    if q.size != n or out.size != 2 or (qd.size != 0 and qd.size != n):
         return -2
-    W = np.empty(TI[W_SIZE])
-    if qd.size == 0:
-        kinematics(TI, TF, W, q, 0, q, 0, False, TF, 0, False, 0.0, 0.0, 0.0)
-    else:
-        if qd.size != n:
-            return -2
-        kinematics(TI, TF, W, q, 0, qd, 0, True, TF, 0, False, 0.0, 0.0, 0.0)
-    gx, gy, gz = gravity_of(TF)
-    out[0], out[1] = energies(TI, TF, W, gx, gy, gz)
+    _energy_plain(TI, TF, np.empty(TI[W_SIZE]), q, qd, out)
     return 0
 
 
@@ -344,8 +365,9 @@ def poses_one(TI, TF, q, base, has_base, C, d, coupled, R, o):
     """The {0}-pose of every link: rotations ``R`` (L, 3, 3) and origins ``o`` (L, 3)."""
     W = np.empty(TI[W_SIZE])
     X = np.empty(coupled_size(C.shape[0], C.shape[1]) if coupled else 0)
-    _state(TI, TF, W, X, q, q, False, base, has_base, 0.0, 0.0, 0.0, C, d, coupled)
-    poses(TI, W, R, o)
+    tree = Tree(TI, TF, W)
+    _state(tree, X, q, q, False, base, has_base, 0.0, 0.0, 0.0, C, d, coupled)
+    poses(tree, R, o)
 
 
 # -- batches: chunks of rows in parallel ------------------------------------------------------------

@@ -86,10 +86,11 @@ def _force(SF, o, depth, rate, v0, v1, v2):
 
 
 @kernel
-def contact_wrenches(SI, SF, TI, W):
+def contact_wrenches(SI, SF, tree):
     """Every sphere's force (E80) added to its link's external wrench (after :func:`kinematics`, before
     :func:`dynamics` with loads); returns ``sum k d^e d'`` = ``dV_c/dt`` (E81), which the right-hand side
     adds to the power so that ``W`` counts only the dissipated work."""
+    TI, W = tree.TI, tree.W
     links, o = SI[S_CONTACT_LINK], SI[S_CONTACT_DATA]
     Pel = 0.0
     for j in range(SI[S_NCONTACT]):
@@ -101,13 +102,14 @@ def contact_wrenches(SI, SF, TI, W):
         F0, F1, F2, fn, el, slip = _force(SF, oj, depth, rate, v0, v1, v2)
         Pel += el * rate
         if fn != 0.0:
-            add_wrench(TI, W, p, F0, F1, F2, 0.0, 0.0, 0.0, l0, l1, l2, False)
+            add_wrench(tree, p, F0, F1, F2, 0.0, 0.0, 0.0, l0, l1, l2, False)
     return Pel
 
 
 @kernel
-def contact_potential(SI, SF, TI, W):
+def contact_potential(SI, SF, tree):
     """``sum k d^(e+1) / (e + 1)`` over the spheres in contact (E81), after :func:`kinematics`."""
+    TI, W = tree.TI, tree.W
     links, o = SI[S_CONTACT_LINK], SI[S_CONTACT_DATA]
     V = 0.0
     for j in range(SI[S_NCONTACT]):
@@ -120,8 +122,9 @@ def contact_potential(SI, SF, TI, W):
 
 
 @kernel
-def contact_state(SI, SF, TI, W, out):
+def contact_state(SI, SF, tree, out):
     """``out[j] = (p (3), d, d', f_n, slip speed, F (3))`` (k, NSTATE) of every sphere, after :func:`kinematics`."""
+    TI, W = tree.TI, tree.W
     links, o = SI[S_CONTACT_LINK], SI[S_CONTACT_DATA]
     for j in range(SI[S_NCONTACT]):
         oj = o + KC * j

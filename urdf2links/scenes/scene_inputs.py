@@ -107,7 +107,7 @@ def fn_eval(SI, SF, j, t, order):
 
 @one_signature
 @kernel
-def _tree_state(SI, SF, q, iq, qd, iqd, sign, X):
+def _tree_state(SI, SF, q, q_at, qd, qd_at, sign, X):
     """Coupled coordinates: ``X[0:nt] = C q + d``, ``X[nt:2 nt] = sign C q'`` (E42); ``sign`` -1 or 0
     gives the rates the energy function h needs."""
     n, nt = SI[0], SI[1]
@@ -116,26 +116,26 @@ def _tree_state(SI, SF, q, iq, qd, iqd, sign, X):
         s1 = SF[d + a]
         s2 = 0.0
         for j in range(n):
-            s1 += SF[C + a * n + j] * q[iq + j]
-            s2 += SF[C + a * n + j] * qd[iqd + j]
+            s1 += SF[C + a * n + j] * q[q_at + j]
+            s2 += SF[C + a * n + j] * qd[qd_at + j]
         X[a] = s1
         X[nt + a] = sign * s2
 
 
 @one_signature
 @kernel
-def _base_values(SI, SF, t, X, xb):
-    """``X[xb:xb + 18]``: pose, rate and acceleration of {A} at ``t`` from the base functions."""
+def _base_values(SI, SF, t, X, base_at):
+    """``X[base_at:base_at + 18]``: pose, rate and acceleration of {A} at ``t`` from the base functions."""
     for j in range(6):
         fj = SI[SI[S_BASE_FN] + j]
-        X[xb + j] = fn_eval(SI, SF, fj, t, 0)
-        X[xb + 6 + j] = fn_eval(SI, SF, fj, t, 1)
-        X[xb + 12 + j] = fn_eval(SI, SF, fj, t, 2)
+        X[base_at + j] = fn_eval(SI, SF, fj, t, 0)
+        X[base_at + 6 + j] = fn_eval(SI, SF, fj, t, 1)
+        X[base_at + 12 + j] = fn_eval(SI, SF, fj, t, 2)
 
 
 @one_signature
 @kernel
-def _apply_loads(SI, SF, I, W, t):
+def _apply_loads(SI, SF, tree, t):
     """Add every load of the scene at time ``t`` to the links' external wrenches (in the tree's link
     frames: ``load_X`` maps the URDF link's axes and point into them)."""
     for li in range(SI[5]):
@@ -152,16 +152,16 @@ def _apply_loads(SI, SF, I, W, t):
         r2 = SF[X + 8] * SF[pt] + SF[X + 9] * SF[pt + 1] + SF[X + 10] * SF[pt + 2] + SF[X + 11]
         link = SI[SI[S_LOAD_LINK] + li]
         if SI[SI[S_LOAD_KIND] + li] == 0:
-            add_wrench(I, W, link, v0, v1, v2, 0.0, 0.0, 0.0, r0, r1, r2, local)
+            add_wrench(tree, link, v0, v1, v2, 0.0, 0.0, 0.0, r0, r1, r2, local)
         else:
-            add_wrench(I, W, link, 0.0, 0.0, 0.0, v0, v1, v2, r0, r1, r2, local)
+            add_wrench(tree, link, 0.0, 0.0, 0.0, v0, v1, v2, r0, r1, r2, local)
 
 
 @one_signature
 @kernel
-def _actuators(SI, SF, t, y, iy, f, jf):
-    """Every actuator's generalized force (E55) at ``t``, ``q = y[iy:iy + n]``, ``q' = y[iy + n:]`` added to
-    ``f[jf:]``: MuJoCo's order (``mj_fwdActuation``): ctrl clamped to ctrlrange, ``gain c + (b0 + b1 gear q
+def _actuators(SI, SF, t, y, y_at, f, f_at):
+    """Every actuator's generalized force (E55) at ``t``, ``q = y[y_at:y_at + n]``, ``q' = y[y_at + n:]`` added to
+    ``f[f_at:]``: MuJoCo's order (``mj_fwdActuation``): ctrl clamped to ctrlrange, ``gain c + (b0 + b1 gear q
     + b2 gear q')``, clamped to forcerange, times the gear (the joint transmission's moment)."""
     n = SI[0]
     ai, af, fl, pr = SI[S_ACT_IDX], SI[S_ACT_FN], SI[S_ACT_FLAGS], SI[S_ACT_PRM]
@@ -173,35 +173,35 @@ def _actuators(SI, SF, t, y, iy, f, jf):
         if flags & 1:
             c = min(max(c, SF[p + 5]), SF[p + 6])
         gear = SF[p + 4]
-        a = SF[p] * c + (SF[p + 1] + SF[p + 2] * (y[iy + i] * gear) + SF[p + 3] * (y[iy + n + i] * gear))
+        a = SF[p] * c + (SF[p + 1] + SF[p + 2] * (y[y_at + i] * gear) + SF[p + 3] * (y[y_at + n + i] * gear))
         if flags & 2:
             a = min(max(a, SF[p + 7]), SF[p + 8])
-        f[jf + i] += gear * a
+        f[f_at + i] += gear * a
 
 
 @one_signature
 @kernel
-def _inputs(SI, SF, t, y, iy, f, jf, actuators):
+def _inputs(SI, SF, t, y, y_at, f, f_at, actuators):
     """Joint torques, dampers ``-c q'`` and (``actuators`` not None: the effect's marker) actuators at
-    ``(t, q = y[iy:], q' = y[iy + n:])`` added to ``f[jf:]``."""
+    ``(t, q = y[y_at:], q' = y[y_at + n:])`` added to ``f[f_at:]``."""
     n = SI[0]
     ti, tf = SI[S_TORQUE_IDX], SI[S_TORQUE_FN]
     for j in range(SI[6]):
-        f[jf + SI[ti + j]] += fn_eval(SI, SF, SI[tf + j], t, 0)
+        f[f_at + SI[ti + j]] += fn_eval(SI, SF, SI[tf + j], t, 0)
     di, dc = SI[S_DAMPER_IDX], SI[S_DAMPING]
     for j in range(SI[8]):
         i = SI[di + j]
-        f[jf + i] -= SF[dc + j] * y[iy + n + i]
+        f[f_at + i] -= SF[dc + j] * y[y_at + n + i]
     if actuators is not None:
         if SI[S_NA] > 0:
-            _actuators(SI, SF, t, y, iy, f, jf)
+            _actuators(SI, SF, t, y, y_at, f, f_at)
 
 
 @one_signature
 @kernel
-def _springs(SI, SF, y, iy, f, jf):
-    """Springs ``-k (q - rest)`` at ``q = y[iy:]`` added to ``f[jf:]``."""
+def _springs(SI, SF, y, y_at, f, f_at):
+    """Springs ``-k (q - rest)`` at ``q = y[y_at:]`` added to ``f[f_at:]``."""
     si, k, rest = SI[S_SPRING_IDX], SI[S_STIFFNESS], SI[S_REST]
     for j in range(SI[7]):
         i = SI[si + j]
-        f[jf + i] -= SF[k + j] * (y[iy + i] - SF[rest + j])
+        f[f_at + i] -= SF[k + j] * (y[y_at + i] - SF[rest + j])
