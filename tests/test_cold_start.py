@@ -143,8 +143,7 @@ def counts(fn):     # NRT_incref / NRT_decref calls in fn's own compiled code (c
             n += own and ("call void @NRT_incref" in line or "call void @NRT_decref" in line)
     return n
 got = {f.__name__: counts(f) for f in (kernels.kinematics, kernels.dynamics, factor.ltdl, factor.ltdl_solve,
-                                      IK.own_armature, MK._fd_plain, IK._id_plain, MK.fd_plain)}
-# kinematics: with and without q''; _fd_plain, _id_plain: the hot entries' bodies, which build the tree's record
+                                      IK.own_armature, MK.fd_plain)}     # kinematics: with and without q''
 from urdf2links.scenes import scene_kernels as SK
 ir = SK.rhs_function((None,) * 4).inspect_llvm()      # a scene's right-hand side, callees included
 got["scene_rhs"] = ir.count("call void @NRT_incref") + ir.count("call void @NRT_decref")
@@ -156,9 +155,8 @@ def test_the_kernels_carry_no_reference_counting(tmp_path):
     """The passes over the tree and the factorization, and a scene's right-hand side with all it calls,
     compiled afresh (an empty cache), call none of numba's reference counting (:func:`compilation.kernel`;
     with plain ``njit`` the kinematics alone had 12 call sites, and they took a fifth of a UR5 forward
-    dynamics; the right-hand side as a counting C function had 24), the hot entries' bodies that build the
-    tree's record included (built where references are counted, it costs them: docs/speed.md). ``fd_plain``
-    allocates its scratch, so it keeps them: the control of the check itself."""
+    dynamics; the right-hand side as a counting C function had 24). ``fd_plain`` allocates its scratch,
+    so it keeps them: the control of the check itself."""
     out = _python(_REFCOUNTS, env={"URDF2LINKS_CACHE_DIR": str(tmp_path)})
     assert out.returncode == 0, out.stderr
     got = json.loads(out.stdout.strip().splitlines()[-1])

@@ -127,28 +127,22 @@ def id_batch(TI, TF, Q, QD, QDD, BASE, has_base, gx, gy, gz, loads, C, d, couple
 
 
 @one_signature
-@kernel
-def _id_plain(TI, TF, W, q, qd, qdd, out):
+@njit(cache=True)
+def id_plain(TI, TF, q, qd, qdd, out):
+    """:func:`id_row` for a fixed base, no loads, no coupling (the hot path of
+    :meth:`~urdf2links.dynamics.model.Model.inverse_dynamics`), gravity in ``TF``'s last three
+    entries (:func:`~urdf2links.dynamics.tree_arrays.tf_with_gravity`): the same operations, so the
+    same bits. -2 when a size is wrong, else 0."""
+    n = TI[1]
+    if q.size != n or qd.size != n or qdd.size != n or out.size != n:
+        return -2
+    W = np.empty(TI[W_SIZE])
     tree = Tree(TI, TF, W)
     gx, gy, gz = gravity_of(TF)
     kinematics(tree, q, 0, qd, 0, True, TF, 0, False, gx, gy, gz, qdd, 0)
     dynamics(tree, False, False, False)
     own_armature(tree, qdd, 0)
     wb = nonneg(TI[W_B])
-    for i in range(out.size):
+    for i in range(n):
         out[i] = -W[wb + i]
-
-
-@one_signature
-@njit(cache=True)
-def id_plain(TI, TF, q, qd, qdd, out):
-    """:func:`id_row` for a fixed base, no loads, no coupling (the hot path of
-    :meth:`~urdf2links.dynamics.model.Model.inverse_dynamics`), gravity in ``TF``'s last three
-    entries (:func:`~urdf2links.dynamics.tree_arrays.tf_with_gravity`): the same operations, so the
-    same bits (its body builds the tree's record, :mod:`urdf2links.dynamics.model_kernels`). -2 when a
-    size is wrong, else 0."""
-    n = TI[1]
-    if q.size != n or qd.size != n or qdd.size != n or out.size != n:
-        return -2
-    _id_plain(TI, TF, np.empty(TI[W_SIZE]), q, qd, qdd, out)
     return 0

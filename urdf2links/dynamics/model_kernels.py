@@ -18,7 +18,8 @@ Arguments shared by the row functions: ``TI``, ``TF`` the tree (:mod:`urdf2links
 ``W`` its scratch and ``X`` the coupling scratch (:func:`coupled_size`). The rows and the hot entries'
 bodies take the tree's arrays and pass them on as one record (:class:`~urdf2links.dynamics.tree_arrays.Tree`):
 a batch's threads call the rows, and a record built in a function that counts references (every one
-that allocates, and the batches) would count them, atomically, on arrays all threads share; ``base`` (18,) pose, rate
+that allocates, and the batches) would count them, atomically, on arrays all threads share (the hot
+entries build theirs: one call each, the same cost as a body kernel's call, docs/speed.md); ``base`` (18,) pose, rate
 and acceleration of {A} when ``has_base``; ``gx, gy, gz`` gravity; ``loads`` (k, 11) wrenches
 ``(link, F (3), M (3), point (3), local)``; ``C`` (n_tree, n), ``d`` (n_tree,) coupled coordinates
 ``q_tree = C q + d`` when ``coupled`` (docs/equations.md (E42)).
@@ -200,18 +201,9 @@ def energy_row(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, C, d, co
 
 
 # -- single-state entries -----------------------------------------------------------------------------
-# Each hot entry checks the sizes, allocates the scratch and calls its body, a kernel that builds the tree's
-# record: a record built in a function that counts references (one that allocates) would count them.
-@one_signature
-@kernel
-def _fd_plain(TI, TF, W, q, qd, tau, out):
-    tree = Tree(TI, TF, W)
-    gx, gy, gz = gravity_of(TF)
-    kinematics(tree, q, 0, qd, 0, True, TF, 0, False, gx, gy, gz)
-    dynamics(tree, True, False, False)
-    return _solve_tree(tree, False, tau, tau.size > 0, out)
-
-
+# Each hot entry builds the tree's record itself: it allocates its scratch, so it counts references, and
+# the record's cost the same as a call into a kernel that would build it (docs/speed.md), without a
+# second compiled function for a cold start.
 @one_signature
 @njit(cache=True)
 def fd_plain(TI, TF, q, qd, tau, out):
@@ -221,22 +213,11 @@ def fd_plain(TI, TF, q, qd, tau, out):
     n = TI[1]
     if q.size != n or qd.size != n or out.size != n or (tau.size > 0 and tau.size != n):
         return -2
-    return _fd_plain(TI, TF, np.empty(TI[W_SIZE]), q, qd, tau, out)
-
-
-@one_signature
-@kernel
-def _terms_plain(TI, TF, W, q, qd, what, A, v):
-    tree = Tree(TI, TF, W)
+    tree = Tree(TI, TF, np.empty(TI[W_SIZE]))
     gx, gy, gz = gravity_of(TF)
-    kinematics(tree, q, 0, qd, 0, qd.size > 0, TF, 0, False, gx, gy, gz)       # qd of size 0: at rest
-    dynamics(tree, what == MASS, False, False)
-    if what == MASS:
-        unpack(TI, W, A)
-    else:
-        wb = nonneg(TI[W_B])
-        for i in range(v.size):
-            v[i] = -W[wb + i]
+    kinematics(tree, q, 0, qd, 0, True, TF, 0, False, gx, gy, gz)
+    dynamics(tree, True, False, False)
+    return _solve_tree(tree, False, tau, tau.size > 0, out)
 
 
 @one_signature
@@ -253,20 +234,18 @@ def terms_plain(TI, TF, q, qd, what, A, v):
             return -2
     elif v.size != n:
         return -2
-    _terms_plain(TI, TF, np.empty(TI[W_SIZE]), q, qd, what, A, v)
-    return 0
-
-
-@one_signature
-@kernel
-def _forces_plain(TI, TF, W, q, loads, v):
+    W = np.empty(TI[W_SIZE])
     tree = Tree(TI, TF, W)
-    kinematics(tree, q, 0, q, 0, False, q, 0, False, 0.0, 0.0, 0.0)
-    set_loads(tree, loads)
-    dynamics(tree, False, True, False)
-    wq = nonneg(TI[W_Q])
-    for i in range(v.size):
-        v[i] = W[wq + i]
+    gx, gy, gz = gravity_of(TF)
+    kinematics(tree, q, 0, qd, 0, qd.size > 0, TF, 0, False, gx, gy, gz)       # qd of size 0: at rest
+    dynamics(tree, what == MASS, False, False)
+    if what == MASS:
+        unpack(TI, W, A)
+    else:
+        wb = nonneg(TI[W_B])
+        for i in range(n):
+            v[i] = -W[wb + i]
+    return 0
 
 
 @one_signature
@@ -277,17 +256,15 @@ def forces_plain(TI, TF, q, loads, v):
     n = TI[1]
     if q.size != n or v.size != n or loads.shape[1] != 11:
         return -2
-    _forces_plain(TI, TF, np.empty(TI[W_SIZE]), q, loads, v)
-    return 0
-
-
-@one_signature
-@kernel
-def _energy_plain(TI, TF, W, q, qd, out):
+    W = np.empty(TI[W_SIZE])
     tree = Tree(TI, TF, W)
-    kinematics(tree, q, 0, qd, 0, qd.size > 0, TF, 0, False, 0.0, 0.0, 0.0)       # qd of size 0: at rest
-    gx, gy, gz = gravity_of(TF)
-    out[0], out[1] = energies(tree, gx, gy, gz)
+    kinematics(tree, q, 0, q, 0, False, q, 0, False, 0.0, 0.0, 0.0)
+    set_loads(tree, loads)
+    dynamics(tree, False, True, False)
+    wq = nonneg(TI[W_Q])
+    for i in range(n):
+        v[i] = W[wq + i]
+    return 0
 
 
 @one_signature
@@ -299,7 +276,10 @@ def energy_plain(TI, TF, q, qd, out):
     n = TI[1]
     if q.size != n or out.size != 2 or (qd.size != 0 and qd.size != n):
         return -2
-    _energy_plain(TI, TF, np.empty(TI[W_SIZE]), q, qd, out)
+    tree = Tree(TI, TF, np.empty(TI[W_SIZE]))
+    kinematics(tree, q, 0, qd, 0, qd.size > 0, TF, 0, False, 0.0, 0.0, 0.0)       # qd of size 0: at rest
+    gx, gy, gz = gravity_of(TF)
+    out[0], out[1] = energies(tree, gx, gy, gz)
     return 0
 
 
