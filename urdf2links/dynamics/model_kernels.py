@@ -15,12 +15,12 @@ argument of another type raises TypeError (the model then converts it) instead o
 variant. They compute what the row functions compute, operation for operation (the same bits).
 
 Arguments shared by the row functions: ``TI``, ``TF`` the tree (:mod:`urdf2links.dynamics.tree_arrays`);
-``W`` its scratch and ``X`` the coupling scratch (:func:`coupled_size`). The rows and the hot entries'
-bodies take the tree's arrays and pass them on as one record (:class:`~urdf2links.dynamics.tree_arrays.Tree`):
-a batch's threads call the rows, and a record built in a function that counts references (every one
-that allocates, and the batches) would count them, atomically, on arrays all threads share (the hot
-entries build theirs: one call each, the same cost as a body kernel's call, docs/speed.md); ``base`` (18,) pose, rate
-and acceleration of {A} when ``has_base``; ``gx, gy, gz`` gravity; ``loads`` (k, 11) wrenches
+``W`` its scratch and ``X`` the coupling scratch (:func:`coupled_size`). The rows and the hot entries
+take the tree's arrays and pass them on to the passes as one record
+(:class:`~urdf2links.dynamics.tree_arrays.Tree`); the rows are kernels, which count no references: a
+record built in a batch's loop would count them, atomically, on arrays every thread shares (a hot entry
+builds its own, one count per call, docs/speed.md); ``base`` (18,) pose, rate and acceleration of {A}
+when ``has_base``; ``gx, gy, gz`` gravity; ``loads`` (k, 11) wrenches
 ``(link, F (3), M (3), point (3), local)``; ``C`` (n_tree, n), ``d`` (n_tree,) coupled coordinates
 ``q_tree = C q + d`` when ``coupled`` (docs/equations.md (E42)).
 """
@@ -202,8 +202,8 @@ def energy_row(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, C, d, co
 
 # -- single-state entries -----------------------------------------------------------------------------
 # Each hot entry builds the tree's record itself: it allocates its scratch, so it counts references, and
-# the record's cost the same as a call into a kernel that would build it (docs/speed.md), without a
-# second compiled function for a cold start.
+# the record costs about what a call into a kernel that built it would (docs/speed.md), without a second
+# compiled function for a cold start.
 @one_signature
 @njit(cache=True)
 def fd_plain(TI, TF, q, qd, tau, out):

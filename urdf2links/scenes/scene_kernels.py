@@ -110,7 +110,8 @@ def computed_torque(t, tree, scene):
     the scene at its reference ``(r, r', r'')(t)`` (every coordinate's ``ct_fn``): ``A r'' + e + G - Q``
     (E54; the scene's base and loads at ``t``) minus every other force the scene applies there (torques,
     dampers, actuators, springs), so that ``q = r`` solves the scene when it starts on it. Overwrites the
-    tree's scratch ``W`` and the start of ``X``."""
+    tree's scratch ``W`` and the start of ``X`` (``tree``: :class:`~urdf2links.dynamics.tree_arrays.Tree`,
+    ``scene``: :class:`~urdf2links.scenes.scene_arrays.Scene`)."""
     TI, W = tree.TI, tree.W
     SI, SF, X = scene
     n, nt = SI[0], SI[1]
