@@ -45,7 +45,7 @@ from numba import njit
 from urdf2links import load_robot
 from urdf2links.integration.loops import radau, lu
 from urdf2links.integration.simulate import simulate
-from urdf2links.scenes import scene_kernels as SK
+from urdf2links.scenes import scene_inputs as SN, scene_kernels as SK
 from urdf2links.dynamics import kernels, model_kernels as MK
 tr = simulate(load_robot("robots/pendulum.urdf"), t_end=0.5, method="auto", progress=False)
 from urdf2links.scenes.plan import compile_plan
@@ -54,8 +54,10 @@ scene, model, _ = _scene_and_model(load_robot("robots/pendulum.urdf"), None)
 rhs = compile_plan(scene, model).rhs
 fresh = njit(SK._rhs.py_func)          # typed anew here: every callee it reaches is compiled or loaded now
 y = np.zeros(rhs.dim)
-fresh(0.0, y, np.empty(rhs.dim), *rhs.args[:6], *rhs.FX)
-used = {f.__name__: len(f.overloads) for f in (SK.computed_torque, SK._actuators, SK._apply_loads, SK._coupled_solve,
+from urdf2links.dynamics.tree_arrays import Tree
+from urdf2links.scenes.scene_arrays import Scene
+fresh(0.0, y, np.empty(rhs.dim), Tree(*rhs.args[:3]), Scene(*rhs.args[3:6]), *rhs.FX)
+used = {f.__name__: len(f.overloads) for f in (SK.computed_torque, SN._actuators, SN._apply_loads, SK._coupled_solve,
         radau.radau_chunk, lu.lu_factor, MK.fd_batch, kernels.kinematics)}
 print(json.dumps({"used": used, "wall": tr.stats["wall_time"], "methods": tr.stats["methods_used"]}))
 """
@@ -141,7 +143,7 @@ def counts(fn):     # NRT_incref / NRT_decref calls in fn's own compiled code (c
             n += own and ("call void @NRT_incref" in line or "call void @NRT_decref" in line)
     return n
 got = {f.__name__: counts(f) for f in (kernels.kinematics, kernels.dynamics, factor.ltdl, factor.ltdl_solve,
-                                      IK.kinematics_acc, IK.own_armature, MK.fd_plain)}
+                                      IK.own_armature, MK.fd_plain)}     # kinematics: with and without q''
 from urdf2links.scenes import scene_kernels as SK
 ir = SK.rhs_function((None,) * 4).inspect_llvm()      # a scene's right-hand side, callees included
 got["scene_rhs"] = ir.count("call void @NRT_incref") + ir.count("call void @NRT_decref")

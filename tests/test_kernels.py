@@ -18,7 +18,7 @@ from corpus import NAMED, needs_corpus
 from urdf2links import BaseState, load_urdf
 from urdf2links.dynamics import kernels as K
 from urdf2links.dynamics.factor import cholesky, cholesky_solve
-from urdf2links.dynamics.tree_arrays import W_SIZE, flat_tree
+from urdf2links.dynamics.tree_arrays import AC, KL, W_COORD, W_LINK, W_SIZE, Tree, flat_tree
 from urdf2links.dynamics.oracles.recursive import RecursivePlan
 from urdf2links.dynamics.transforms import base_transforms
 
@@ -63,6 +63,42 @@ def test_forward_dynamics_solves_the_equation(seed):
     assert rel(qdd, np.linalg.solve(A, rhs)) < 100 * np.finfo(float).eps * np.linalg.cond(A)
 
 
+def _link_accelerations(TI, TF, q, qd, b18, *qdd):
+    """Every link's spatial acceleration (L, 6) and the unit twists (6, n) after one call of the compiled
+    kinematics pass, with ``qdd`` (an array and its offset) or without (the q'' = 0 variant)."""
+    W = np.zeros(TI[W_SIZE])
+    K.kinematics(Tree(TI, TF, W), q, 0, qd, 0, True, b18, 0, True, 0.0, 0.0, -9.81, *qdd)
+    L, n = int(TI[0]), int(TI[1])
+    rec = TI[W_LINK] + KL * np.arange(L)[:, None] + AC + np.arange(6)
+    return W[rec], W[TI[W_COORD]:TI[W_COORD] + 6 * n].reshape(6, n)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_one_kinematics_pass_with_and_without_qdd(seed):
+    """``kernels.kinematics`` is the one root-to-leaves pass (E33) of every call: without ``q''`` (None, the
+    variant the forward path compiles) each link's acceleration is that at ``q'' = 0`` to the bit (E32);
+    given ``q''`` (inverse dynamics, E54) it is that plus ``sum s_i q_i''`` over the coordinates that move
+    the link (world twists are constant along the chain: exact up to rounding, 1e-12 relative). The planted
+    wrong case: a pass that dropped the term would leave the accelerations unchanged."""
+    model = random_tree(seed, links=6)
+    q, qd, base = _state(model, 4000 + seed, True)
+    qdd = np.random.default_rng(5000 + seed).normal(size=model.n)
+    b18 = np.r_[base.pose, base.rate, base.accel]
+    TI, TF = flat_tree(model.tree)
+    a0, S = _link_accelerations(TI, TF, q, qd, b18)
+    assert np.array_equal(_link_accelerations(TI, TF, q, qd, b18, np.zeros(model.n), 0)[0], a0)
+    tree = model.tree
+    above = np.eye(tree.n_links, dtype=bool)         # above[:, p]: p and its ancestors
+    for p in range(tree.n_links):
+        if tree.parent[p] >= 0:
+            above[:, p] |= above[:, tree.parent[p]]
+    moves = above[np.asarray(tree.coord_link, int)]  # (n, L): coordinate i moves link p
+    expected = a0 + (moves * qdd[:, None]).T @ S.T
+    got = _link_accelerations(TI, TF, q, qd, b18, qdd, 0)[0]
+    assert rel(got, expected) < TOL
+    assert rel(a0, expected) > 1e-3, "q'' moved no acceleration: the check cannot see a dropped term"
+
+
 @pytest.mark.parametrize("seed", range(4))
 def test_base_power_equals_numpy_form(seed):
     model = random_tree(seed, links=6)
@@ -71,9 +107,10 @@ def test_base_power_equals_numpy_form(seed):
     W = np.zeros(TI[W_SIZE])
     b18 = np.r_[base.pose, base.rate, base.accel]
     g = np.asarray(model.gravity_vector)
-    K.kinematics(TI, TF, W, q, 0, qd, 0, True, b18, 0, True, *g)   # records the base's twist
-    K.dynamics(TI, TF, W, False, False, True)                        # and the links' momentum
-    dE, dV = K.base_power(TI, W, *g)
+    tree = Tree(TI, TF, W)
+    K.kinematics(tree, q, 0, qd, 0, True, b18, 0, True, *g)   # records the base's twist
+    K.dynamics(tree, False, False, True)                        # and the links' momentum
+    dE, dV = K.base_power(tree, *g)
     bt = base_transforms(base)
     rp = RecursivePlan(model.tree)
     ref = rp.explicit_time_rates(rp.kinematics(q, qd, bt, acceleration=True), bt, model.gravity_vector)

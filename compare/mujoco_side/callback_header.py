@@ -21,7 +21,7 @@ from llvmlite import ir
 from numba import carray, njit, types
 from numba.extending import intrinsic
 
-from urdf2links.scenes.scene_kernels import fn_data_eval
+from urdf2links.scenes.scene_inputs import fn_data_eval
 
 __all__ = ["INT_SECTIONS", "FLOAT_SECTIONS", "HEADER_FIELDS", "HEADER", "HEADER_SYMBOL", "LOAD_SCRATCH", "pointer_at",
            "address_of", "header_symbol_address", "int_section", "float_section", "time_fn", "scene_arrays", "mj_rows"]
@@ -169,7 +169,7 @@ def float_section(H, F, k):
 @njit(cache=True, inline="always")
 def time_fn(H, I, F, j, t, order):
     """d^order f / dt^order at ``t`` of the scene's time function ``j``
-    (:func:`urdf2links.scenes.scene_kernels.fn_data_eval` on the data the project's right-hand side uses)."""
+    (:func:`urdf2links.scenes.scene_inputs.fn_data_eval` on the data the project's right-hand side uses)."""
     ptr = int_section(H, I, I_FN_PTR)
     data = float_section(H, F, F_FN_DATA)
     return fn_data_eval(int_section(H, I, I_FN_KIND)[j], data, ptr[j], t, order)

@@ -18,9 +18,9 @@ import numpy as np
 from numba import njit
 
 from urdf2links.dynamics.kernels import clear_wrenches, dynamics, kinematics
-from urdf2links.dynamics.tree_arrays import W_Q, nn
+from urdf2links.dynamics.tree_arrays import W_Q, Tree, nonneg
 from urdf2links.scenes.contact_kernels import contact_potential, contact_wrenches
-from urdf2links.scenes.scene_kernels import _base_values
+from urdf2links.scenes.scene_inputs import _base_values
 
 __all__ = ["add_contact", "contact_energy", "contact_index", "check_contact_route", "stiffest_mode", "contact_timestep",
            "STEP_LAMBDA"]
@@ -39,11 +39,12 @@ def add_contact(t, TI, TF, W, SI, SF, X, qpos, qvel, index, qfrc):
     xb = 2 * nt
     if has_base:
         _base_values(SI, SF, t, X, xb)
-    kinematics(TI, TF, W, X, 0, X, n, True, X, xb, has_base, 0.0, 0.0, 0.0)
-    clear_wrenches(TI, W)
-    contact_wrenches(SI, SF, TI, W)
-    dynamics(TI, TF, W, False, True, False)
-    wq = nn(TI[W_Q])
+    tree = Tree(TI, TF, W)
+    kinematics(tree, X, 0, X, n, True, X, xb, has_base, 0.0, 0.0, 0.0)
+    clear_wrenches(tree)
+    contact_wrenches(SI, SF, tree)
+    dynamics(tree, False, True, False)
+    wq = nonneg(TI[W_Q])
     for i in range(n):
         qfrc[index[n + i]] += W[wq + i]
 
@@ -52,14 +53,15 @@ def add_contact(t, TI, TF, W, SI, SF, X, qpos, qvel, index, qfrc):
 def _potentials(ts, Q, TI, TF, W, SI, SF, X, out):
     n, nt = SI[0], SI[1]
     has_base = SI[2] != 0
+    tree = Tree(TI, TF, W)
     for s in range(ts.size):
         for i in range(n):
             X[i] = Q[s, i]
             X[n + i] = 0.0
         if has_base:
             _base_values(SI, SF, ts[s], X, 2 * nt)
-        kinematics(TI, TF, W, X, 0, X, n, False, X, 2 * nt, has_base, 0.0, 0.0, 0.0)
-        out[s] = contact_potential(SI, SF, TI, W)
+        kinematics(tree, X, 0, X, n, False, X, 2 * nt, has_base, 0.0, 0.0, 0.0)
+        out[s] = contact_potential(SI, SF, tree)
 
 
 def contact_energy(plan, t, q) -> np.ndarray:

@@ -15,7 +15,7 @@ Here the same steps are numba code (:func:`control`), installed as a C function 
 * the scene's time functions and loads as the project's own right-hand side compiled them
   (:func:`urdf2links.scenes.scene_arrays.compile_scene`, read once per run by
   :class:`~urdf2links.compare.mujoco_side.mujoco_inputs.CompiledInputs` into the flat sections of the
-  header; evaluated by :func:`~urdf2links.scenes.scene_kernels.fn_data_eval`), so both engines
+  header; evaluated by :func:`~urdf2links.scenes.scene_inputs.fn_data_eval`), so both engines
   evaluate literally the same functions;
 * MuJoCo's arrays of the run's ``MjData`` at the addresses the bindings give, ``d->time`` at its
   checked offset (:mod:`~urdf2links.compare.mujoco_side.mjdata_layout`);
@@ -46,7 +46,10 @@ from numba import carray, njit, types
 from urdf2links.compilation import c_function
 from urdf2links.dynamics.factor import cholesky, cholesky_solve
 from urdf2links.integration.simulate import Compilation, record_compilation
-from urdf2links.scenes.scene_kernels import _actuators, computed_torque, ct_torque_at
+from urdf2links.dynamics.tree_arrays import Tree
+from urdf2links.scenes.scene_arrays import Scene
+from urdf2links.scenes.scene_inputs import _actuators
+from urdf2links.scenes.scene_kernels import computed_torque, ct_torque_at
 
 from .callback_header import (
     A_F, A_I, ACTIVE, BASE_BODY, CALLS, CONTACT, CT, CTRL, DATA, ERROR, ERROR_COUNT, F_BALL_REF, F_END, F_FBALL,
@@ -225,7 +228,7 @@ def _computed_torque(H, I, t, qfrc):
     """The project's computed torque at ``t`` (:func:`urdf2links.scenes.scene_kernels.computed_torque`, on
     the project's own compiled scene and tree arrays, with scratch of its own) into ``qfrc_applied``."""
     TI, TF, W, SI, SF, X = scene_arrays(H)
-    computed_torque(t, TI, TF, W, SI, SF, X)
+    computed_torque(t, Tree(TI, TF, W), Scene(SI, SF, X))
     xt = ct_torque_at(SI[0], SI[1])
     dof = int_section(H, I, I_DOF)
     for i in range(SI[0]):
@@ -248,7 +251,7 @@ def _ball_servos(H, I, F, t, qfrc):
     (whose joints carry no such actuator): the project's state from MuJoCo's (hinges and slides as they
     are; a ball's quaternion to its ZYX angles by (E7), on the branch of the angles within pi of their
     reference ``ball_ref`` (their initial value), and its rates ``E(phi)^-1 omega``, E43), the project's
-    law there (:func:`urdf2links.scenes.scene_kernels._actuators`, E55), and the torques ``tau`` of the
+    law there (:func:`urdf2links.scenes.scene_inputs._actuators`, E55), and the torques ``tau`` of the
     angles applied as MuJoCo's generalized forces ``f = E^-T tau`` (``tau = E^T f``: the same power,
     E50); a free joint's translations as they are."""
     SI = carray(pointer_at(H[P_SI]), H[N_SI], np.int64)

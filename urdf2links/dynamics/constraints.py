@@ -36,7 +36,7 @@ from numba import njit
 from .model_kernels import _state, coupled_size
 from .rows import base_rows
 from .kernels import poses
-from .tree_arrays import AC, KL, W_COORD, W_LINK, W_SIZE, WV, nn
+from .tree_arrays import AC, KL, W_COORD, W_LINK, W_SIZE, WV, Tree, nonneg
 
 __all__ = ["Constraint", "ConstraintSet", "ConstraintTerms", "KINDS", "ROWS", "link_motion"]
 
@@ -53,9 +53,10 @@ def link_motion(TI, TF, q, qd, base, has_base, C, d, coupled, R, o, V, Acc, S):
     coordinates' unit twists ``S`` (6, n_tree)."""
     W = np.empty(TI[W_SIZE])
     X = np.empty(coupled_size(C.shape[0], C.shape[1]) if coupled else 0)
-    _state(TI, TF, W, X, q, qd, True, base, has_base, 0.0, 0.0, 0.0, C, d, coupled)
-    poses(TI, W, R, o)
-    wl, wc, nt = nn(TI[W_LINK]), nn(TI[W_COORD]), nn(TI[1])
+    tree = Tree(TI, TF, W)
+    _state(tree, X, q, qd, True, base, has_base, 0.0, 0.0, 0.0, C, d, coupled)
+    poses(tree, R, o)
+    wl, wc, nt = nonneg(TI[W_LINK]), nonneg(TI[W_COORD]), nonneg(TI[1])
     for p in range(TI[0]):
         a = wl + KL * p
         for j in range(6):

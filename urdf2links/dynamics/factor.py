@@ -19,7 +19,7 @@ import numpy as np
 
 from ..compilation import kernel, one_signature
 
-from .tree_arrays import I_ANCIDX, I_ANCPTR, I_ANCROW, I_RUNPTR, I_RUNS, W_A, nn
+from .tree_arrays import I_ANCIDX, I_ANCPTR, I_ANCROW, I_RUNPTR, I_RUNS, W_A, nonneg
 
 __all__ = ["ltdl", "ltdl_solve", "unpack", "cholesky", "cholesky_solve", "pivot_floor"]
 
@@ -40,18 +40,18 @@ def ltdl(TI, W):
     ``L[k, i]`` (unit lower triangular) on its other slots. Returns -1, or the first coordinate (from
     the leaves) whose pivot ``D[k]`` is at or below :func:`pivot_floor`."""
     n = TI[1]
-    ap, ar, wa = nn(TI[I_ANCPTR]), nn(TI[I_ANCROW]), nn(TI[W_A])
+    ap, ar, wa = nonneg(TI[I_ANCPTR]), nonneg(TI[I_ANCROW]), nonneg(TI[W_A])
     scale = 0.0
     for k in range(n):
-        a = abs(W[wa + nn(TI[ap + k + 1] - 1)])
+        a = abs(W[wa + nonneg(TI[ap + k + 1] - 1)])
         if a > scale:
             scale = a
     tiny = pivot_floor(scale, n)
     for kk in range(n):
-        k = nn(n - 1 - kk)
-        r0 = nn(TI[ap + k])
+        k = nonneg(n - 1 - kk)
+        r0 = nonneg(TI[ap + k])
         rk = wa + r0
-        last = nn(TI[ap + k + 1] - r0 - 1)     # the diagonal's slot in row k
+        last = nonneg(TI[ap + k + 1] - r0 - 1)     # the diagonal's slot in row k
         D = W[rk + last]
         if not D > tiny:
             return k
@@ -60,8 +60,8 @@ def ltdl(TI, W):
         # (rows i and i' do not overlap: the same operations as one at a time, in fewer loops).
         t = last - 1
         while t >= 1:
-            r1 = wa + nn(TI[ar + r0 + t])
-            r2 = wa + nn(TI[ar + r0 + t - 1])
+            r1 = wa + nonneg(TI[ar + r0 + t])
+            r2 = wa + nonneg(TI[ar + r0 + t - 1])
             x1 = W[rk + t] / D
             x2 = W[rk + t - 1] / D
             for u in range(t):
@@ -73,7 +73,7 @@ def ltdl(TI, W):
             W[rk + t - 1] = x2
             t -= 2
         if t == 0:
-            r1 = wa + nn(TI[ar + r0])
+            r1 = wa + nonneg(TI[ar + r0])
             x1 = W[rk] / D
             W[r1] -= x1 * W[rk]
             W[rk] = x1
@@ -87,33 +87,33 @@ def ltdl_solve(TI, W, x, ix):
     one run of consecutive ones (``runs`` of :mod:`urdf2links.dynamics.tree_arrays`: every row of a chain)
     is indexed directly, the others through ``anc_idx``."""
     n = TI[1]
-    ap, ai, rp, rs = nn(TI[I_ANCPTR]), nn(TI[I_ANCIDX]), nn(TI[I_RUNPTR]), nn(TI[I_RUNS])
-    wa, ix = nn(TI[W_A]), nn(ix)
+    ap, ai, rp, rs = nonneg(TI[I_ANCPTR]), nonneg(TI[I_ANCIDX]), nonneg(TI[I_RUNPTR]), nonneg(TI[I_RUNS])
+    wa, ix = nonneg(TI[W_A]), nonneg(ix)
     for kk in range(n):                     # L^T z = x: from the leaves
-        k = nn(n - 1 - kk)
-        r0 = nn(TI[ap + k])
-        m = nn(TI[ap + k + 1] - 1 - r0)     # the row without its diagonal
+        k = nonneg(n - 1 - kk)
+        r0 = nonneg(TI[ap + k])
+        m = nonneg(TI[ap + k + 1] - 1 - r0)     # the row without its diagonal
         j = wa + r0
         xk = x[ix + k]
         if TI[rp + k + 1] - TI[rp + k] == 1:
-            c0 = ix + nn(TI[rs + 2 * nn(TI[rp + k])])
+            c0 = ix + nonneg(TI[rs + 2 * nonneg(TI[rp + k])])
             for u in range(m):
                 x[c0 + u] -= W[j + u] * xk
         else:
             for u in range(m):
-                x[ix + nn(TI[ai + r0 + u])] -= W[j + u] * xk
+                x[ix + nonneg(TI[ai + r0 + u])] -= W[j + u] * xk
     for k in range(n):                      # D, then L y = z: from the root
-        r0 = nn(TI[ap + k])
-        m = nn(TI[ap + k + 1] - 1 - r0)
+        r0 = nonneg(TI[ap + k])
+        m = nonneg(TI[ap + k + 1] - 1 - r0)
         j = wa + r0
         v = x[ix + k] / W[j + m]
         if TI[rp + k + 1] - TI[rp + k] == 1:
-            c0 = ix + nn(TI[rs + 2 * nn(TI[rp + k])])
+            c0 = ix + nonneg(TI[rs + 2 * nonneg(TI[rp + k])])
             for u in range(m):
                 v -= W[j + u] * x[c0 + u]
         else:
             for u in range(m):
-                v -= W[j + u] * x[ix + nn(TI[ai + r0 + u])]
+                v -= W[j + u] * x[ix + nonneg(TI[ai + r0 + u])]
         x[ix + k] = v
 
 
@@ -123,15 +123,15 @@ def unpack(TI, W, A):
     """The packed ``A`` (before :func:`ltdl`) as a dense symmetric matrix into ``A`` (n, n); pairs
     that are not ancestor pairs are zero (E25)."""
     n = TI[1]
-    ap, ai, wa = nn(TI[I_ANCPTR]), nn(TI[I_ANCIDX]), nn(TI[W_A])
+    ap, ai, wa = nonneg(TI[I_ANCPTR]), nonneg(TI[I_ANCIDX]), nonneg(TI[W_A])
     for i in range(n):
         for l in range(n):
             A[i, l] = 0.0
     for i in range(n):
-        j0 = nn(TI[ap + i])
+        j0 = nonneg(TI[ap + i])
         for u in range(TI[ap + i + 1] - j0):
             j = j0 + u
-            l = nn(TI[ai + j])
+            l = nonneg(TI[ai + j])
             A[i, l] = W[wa + j]
             A[l, i] = W[wa + j]
 
@@ -141,7 +141,7 @@ def unpack(TI, W, A):
 def cholesky(A, a0, n, Lf, l0):
     """Dense ``A = L L^T`` of the (n, n) row-major ``A[a0:]`` into ``Lf[l0:]`` (lower triangle).
     Returns -1, or the index of the first pivot at or below :func:`pivot_floor` (E46)."""
-    a0, l0 = nn(a0), nn(l0)
+    a0, l0 = nonneg(a0), nonneg(l0)
     scale = 0.0
     for i in range(n):
         if abs(A[a0 + i * n + i]) > scale:
@@ -169,7 +169,7 @@ def cholesky(A, a0, n, Lf, l0):
 @kernel
 def cholesky_solve(Lf, l0, n, x, x0):
     """Solve ``L L^T y = x[x0:x0 + n]`` in place after :func:`cholesky`."""
-    l0, x0 = nn(l0), nn(x0)
+    l0, x0 = nonneg(l0), nonneg(x0)
     for i in range(n):
         v = x[x0 + i]
         for k in range(i):

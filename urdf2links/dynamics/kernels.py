@@ -30,9 +30,10 @@ once, for its wrench and for the subtree sums. Cost: O(n) for the passes, O(sum 
 ``A``; its factorization (:mod:`urdf2links.dynamics.factor`) has no fill-in outside ancestor pairs.
 
 All functions index the flat arrays of :mod:`urdf2links.dynamics.tree_arrays` (``TI``, ``TF``, and the scratch
-``W``, one per thread) at header offsets; nothing allocates. The numpy form
-(:mod:`urdf2links.dynamics.oracles.recursive`) and the literal form (:mod:`urdf2links.dynamics.oracles.literal`) are the
-oracles the tests check these against.
+``W``, one per thread) at header offsets; nothing allocates. The passes take the three as one record,
+``tree`` (:class:`~urdf2links.dynamics.tree_arrays.Tree`; free between them, not from Python: docs/speed.md).
+The numpy form (:mod:`urdf2links.dynamics.oracles.recursive`) and the literal form
+(:mod:`urdf2links.dynamics.oracles.literal`) are the oracles the tests check these against.
 """
 
 from __future__ import annotations
@@ -81,11 +82,11 @@ from .tree_arrays import (
     W_Q,
     W_QD,
     WV,
-    nn,
+    nonneg,
 )
 
-__all__ = ["kinematics", "dynamics", "energies", "add_wrench", "clear_wrenches", "base_power", "poses", "armature",
-           "armature_energy"]
+__all__ = ["kinematics", "dynamics", "energies", "add_wrench", "clear_wrenches", "set_loads", "base_power", "poses",
+           "armature", "armature_energy"]
 
 
 # -- root to leaves ---------------------------------------------------------------------------------
@@ -140,7 +141,7 @@ def _rates(s, xd, xdd, V, Acc):
 @njit(cache=True, inline="always")
 def _constant(TF, f, R, o):
     """``T <- T C`` for the constant transform ``C`` at ``TF[f:]`` (R, p); twist and acceleration unchanged."""
-    f = nn(f)
+    f = nonneg(f)
     C00, C01, C02, C10, C11, C12 = TF[f + 1], TF[f + 2], TF[f + 3], TF[f + 4], TF[f + 5], TF[f + 6]
     C20, C21, C22, p0, p1, p2 = TF[f + 7], TF[f + 8], TF[f + 9], TF[f + 10], TF[f + 11], TF[f + 12]
     R00, R01, R02, R10, R11, R12, R20, R21, R22 = R
@@ -154,7 +155,7 @@ def _constant(TF, f, R, o):
 
 @njit(cache=True, inline="always")
 def _store(W, d, R, o, V, Acc):
-    d = nn(d)
+    d = nonneg(d)
     for j in range(9):
         W[d + j] = R[j]
     for j in range(3):
@@ -166,17 +167,17 @@ def _store(W, d, R, o, V, Acc):
 
 @one_signature
 @kernel
-def _base_frame(W, wb, B, ib, has_base, gx, gy, gz):
-    """The frame every root link starts from, into the base record: {A} from its six factors
-    (``B[ib:ib + 18]``: pose, rate, acceleration) or the identity; its twist and acceleration are
-    recorded, then ``a -= g``."""
+def _base_frame(W, wb, base, base_at, has_base, gx, gy, gz):
+    """The frame every root link starts from, into the base record at ``W[wb:]``: {A} from its six
+    factors (``base[base_at:base_at + 18]``: pose, rate, acceleration) or the identity; its twist and
+    acceleration are recorded, then ``a -= g``."""
     R = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
     o = (0.0, 0.0, 0.0)
     V = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     Acc = V
     if has_base:
         for k in range(6):
-            x, xd, xdd = B[ib + k], B[ib + 6 + k], B[ib + 12 + k]
+            x, xd, xdd = base[base_at + k], base[base_at + 6 + k], base[base_at + 12 + k]
             if x != 0.0 or xd != 0.0 or xdd != 0.0:
                 R, o, s = _slot(k, x, R, o)
                 V, Acc = _rates(s, xd, xdd, V, Acc)
@@ -190,26 +191,32 @@ def _base_frame(W, wb, B, ib, has_base, gx, gy, gz):
 
 @one_signature
 @kernel
-def kinematics(TI, TF, W, q, iq, qd, iqd, moving, B, ib, has_base, gx, gy, gz):
-    """Root to leaves (E33): pose ``R, o``, twist ``(omega, v)`` and spatial acceleration at
-    ``q'' = 0`` of every link into its record; unit twists ``s`` of every coordinate. The tree's
-    coordinates are ``q[iq:iq + n]`` and, when ``moving``, its rates ``qd[iqd:iqd + n]`` (else zero);
-    ``B[ib:ib + 18]`` the pose, rate and acceleration of {A} when ``has_base``; gravity ``g`` enters
-    as the uniform acceleration ``-g`` (zeros: no gravity)."""
-    L, n = TI[0], nn(TI[1])
-    par, sp, ss, sc = nn(TI[I_PARENT]), nn(TI[I_SEGPTR]), nn(TI[I_SEGSLOT]), nn(TI[I_SEGCOORD])
-    fs, wl, wc, wb = nn(TI[F_SEG]), nn(TI[W_LINK]), nn(TI[W_COORD]), nn(TI[W_BASE])
-    wqd = nn(TI[W_QD])
-    iq, iqd, ib = nn(iq), nn(iqd), nn(ib)
-    _base_frame(W, wb, B, ib, has_base, gx, gy, gz)
+def kinematics(tree, q, q_at, qd, qd_at, moving, base, base_at, has_base, gx, gy, gz, qdd=None, qdd_at=0):
+    """Root to leaves (E33): pose ``R, o``, twist ``(omega, v)`` and spatial acceleration of every link
+    into its record; unit twists ``s`` of every coordinate. The tree's coordinates are
+    ``q[q_at:q_at + n]`` and, when ``moving``, its rates ``qd[qd_at:qd_at + n]`` (else zero);
+    ``base[base_at:base_at + 18]`` the pose, rate and acceleration of {A} when ``has_base``; gravity ``g``
+    enters as the uniform acceleration ``-g`` (zeros: no gravity).
+
+    The acceleration is the one at ``q'' = 0`` (the bias term's, E32) when ``qdd`` is None; with the
+    coordinates' accelerations ``qdd[qdd_at:qdd_at + n]`` it is the whole one (E33 with ``x'' = q_i''``),
+    which inverse dynamics pairs with the unit twists to give ``A q'' + e + G`` (E54). One compiled variant
+    per type of ``qdd``: for None the ``q''`` term is not in the machine code."""
+    TI, TF, W = tree
+    L, n = TI[0], nonneg(TI[1])
+    par, sp, ss, sc = nonneg(TI[I_PARENT]), nonneg(TI[I_SEGPTR]), nonneg(TI[I_SEGSLOT]), nonneg(TI[I_SEGCOORD])
+    fs, wl, wc, wb = nonneg(TI[F_SEG]), nonneg(TI[W_LINK]), nonneg(TI[W_COORD]), nonneg(TI[W_BASE])
+    wqd = nonneg(TI[W_QD])
+    q_at, qd_at, qdd_at, base_at = nonneg(q_at), nonneg(qd_at), nonneg(qdd_at), nonneg(base_at)
+    _base_frame(W, wb, base, base_at, has_base, gx, gy, gz)
     for p in range(L):
         s = TI[par + p]
-        a = wb if s < 0 else wl + KL * nn(s)
+        a = wb if s < 0 else wl + KL * nonneg(s)
         R = (W[a], W[a + 1], W[a + 2], W[a + 3], W[a + 4], W[a + 5], W[a + 6], W[a + 7], W[a + 8])
         o = (W[a + O_], W[a + O_ + 1], W[a + O_ + 2])
         V = (W[a + WV], W[a + WV + 1], W[a + WV + 2], W[a + WV + 3], W[a + WV + 4], W[a + WV + 5])
         Acc = (W[a + AC], W[a + AC + 1], W[a + AC + 2], W[a + AC + 3], W[a + AC + 4], W[a + AC + 5])
-        s0 = nn(TI[sp + p])
+        s0 = nonneg(TI[sp + p])
         for u in range(TI[sp + p + 1] - s0):
             seg = s0 + u
             slot = TI[ss + seg]
@@ -217,22 +224,28 @@ def kinematics(TI, TF, W, q, iq, qd, iqd, moving, B, ib, has_base, gx, gy, gz):
             if slot == CONSTANT:
                 R, o = _constant(TF, f, R, o)
             else:
-                i = nn(TI[sc + seg])
-                R, o, sv = _slot(slot, TF[f] + q[iq + i], R, o)
+                i = nonneg(TI[sc + seg])
+                R, o, sv = _slot(slot, TF[f] + q[q_at + i], R, o)
                 for j in range(6):          # s by components: W[wc + j n + i]
                     W[wc + j * n + i] = sv[j]
-                xd = qd[iqd + i] if moving else 0.0
+                xd = qd[qd_at + i] if moving else 0.0
                 W[wqd + i] = xd
-                if xd != 0.0:
-                    V, Acc = _rates(sv, xd, 0.0, V, Acc)
+                if qdd is None:
+                    if xd != 0.0:
+                        V, Acc = _rates(sv, xd, 0.0, V, Acc)
+                else:
+                    xdd = qdd[qdd_at + i]
+                    if xd != 0.0 or xdd != 0.0:
+                        V, Acc = _rates(sv, xd, xdd, V, Acc)
         _store(W, wl + KL * p, R, o, V, Acc)
 
 
 @one_signature
 @kernel
-def poses(TI, W, R, o):
+def poses(tree, R, o):
     """Copy every link's rotation into ``R`` (L, 3, 3) and origin into ``o`` (L, 3) after :func:`kinematics`."""
-    wl = nn(TI[W_LINK])
+    TI, W = tree.TI, tree.W
+    wl = nonneg(TI[W_LINK])
     for p in range(TI[0]):
         d = wl + KL * p
         for r in range(3):
@@ -247,8 +260,8 @@ def _body(TI, TF, W, p, d):
     """m, the first moment c (3,) and J = tr(S) 1 - S (6,) about {0} of link ``p`` alone into the
     record's CM, CC, CJ slots (E28, E29): ``c = R m r_C + m o``,
     ``J = R J_l R^T + 2 (u.o) 1 - (u o^T + o u^T)`` with ``u = R m r_C + m o / 2``. Returns m."""
-    fl = nn(TI[F_LINK]) + KF * nn(p)
-    d = nn(d)
+    fl = nonneg(TI[F_LINK]) + KF * nonneg(p)
+    d = nonneg(d)
     m = TF[fl]
     mx, my, mz = TF[fl + 1], TF[fl + 2], TF[fl + 3]
     Jxx, Jyy, Jzz, Jxy, Jxz, Jyz = TF[fl + 4], TF[fl + 5], TF[fl + 6], TF[fl + 7], TF[fl + 8], TF[fl + 9]
@@ -294,7 +307,7 @@ def _body(TI, TF, W, p, d):
 def _link_wrench(W, d, wb, momentum):
     """The inertial wrench (f, n) (E35) of the link whose (m, c, J) are in its record; with
     ``momentum`` its momentum ``(omega x c + m v, J omega + c x v)`` is added to the base record."""
-    d, wb = nn(d), nn(wb)
+    d, wb = nonneg(d), nonneg(wb)
     m = W[d + CM]
     c0, c1, c2 = W[d + CC], W[d + CC + 1], W[d + CC + 2]
     Jxx, Jyy, Jzz = W[d + CJ], W[d + CJ + 1], W[d + CJ + 2]
@@ -336,15 +349,16 @@ def _link_wrench(W, d, wb, momentum):
 # -- leaves to root ---------------------------------------------------------------------------------
 @one_signature
 @kernel
-def _subtree_sums(TI, W, loads):
+def _subtree_sums(tree, loads):
     """(E30): every link's (m, c, J), inertial wrench and (with ``loads``) external wrench summed over its subtree."""
-    wl = nn(TI[W_LINK])
-    par = nn(TI[I_PARENT])
+    TI, W = tree.TI, tree.W
+    wl = nonneg(TI[W_LINK])
+    par = nonneg(TI[I_PARENT])
     for p in range(TI[0] - 1, 0, -1):
         s = TI[par + p]
         if s >= 0:
             d = wl + KL * p
-            e = wl + KL * nn(s)
+            e = wl + KL * nonneg(s)
             for j in range(CM, FX):     # m, c, J, f, n
                 W[e + j] += W[d + j]
             if loads:
@@ -354,14 +368,15 @@ def _subtree_sums(TI, W, loads):
 
 @one_signature
 @kernel
-def dynamics(TI, TF, W, want_A, loads, momentum):
+def dynamics(tree, want_A, loads, momentum):
     """Leaves to root after :func:`kinematics` (and, with ``loads``, the external wrenches of
     :func:`add_wrench`): ``b = -(e + G)`` (E34), ``Q`` (E36) with ``loads``, and with ``want_A`` the
     mass matrix (E31) packed by ancestor pairs (row ``i``: ``A[i, anc_idx[j]]`` at ``W[W_A + j]``,
     ``j`` in ``anc_ptr[i]:anc_ptr[i + 1]``), armature included (:func:`armature`). With ``momentum``
     the links' total momentum goes to the base record (for :func:`base_power`)."""
-    L, n = TI[0], nn(TI[1])
-    wl, wc, wb = nn(TI[W_LINK]), nn(TI[W_COORD]), nn(TI[W_BASE])
+    TI, TF, W = tree
+    L, n = TI[0], nonneg(TI[1])
+    wl, wc, wb = nonneg(TI[W_LINK]), nonneg(TI[W_COORD]), nonneg(TI[W_BASE])
     if momentum:
         for j in range(6):
             W[wb + BASE_MOM + j] = 0.0
@@ -369,12 +384,12 @@ def dynamics(TI, TF, W, want_A, loads, momentum):
         d = wl + KL * p
         _body(TI, TF, W, p, d)
         _link_wrench(W, d, wb, momentum)
-    _subtree_sums(TI, W, loads)
-    cl, ap, ai = nn(TI[I_COORDLINK]), nn(TI[I_ANCPTR]), nn(TI[I_ANCIDX])
-    rp, rs = nn(TI[I_RUNPTR]), nn(TI[I_RUNS])
-    wa, wbv, wq = nn(TI[W_A]), nn(TI[W_B]), nn(TI[W_Q])
+    _subtree_sums(tree, loads)
+    cl, ap, ai = nonneg(TI[I_COORDLINK]), nonneg(TI[I_ANCPTR]), nonneg(TI[I_ANCIDX])
+    rp, rs = nonneg(TI[I_RUNPTR]), nonneg(TI[I_RUNS])
+    wa, wbv, wq = nonneg(TI[W_A]), nonneg(TI[W_B]), nonneg(TI[W_Q])
     for i in range(n):
-        d = wl + KL * nn(TI[cl + i])
+        d = wl + KL * nonneg(TI[cl + i])
         si = wc + i
         w0, w1, w2 = W[si], W[si + n], W[si + 2 * n]
         v0, v1, v2 = W[si + 3 * n], W[si + 4 * n], W[si + 5 * n]
@@ -396,45 +411,46 @@ def dynamics(TI, TF, W, want_A, loads, momentum):
         h0 = Jxx * w0 + Jxy * w1 + Jxz * w2 + c1 * v2 - c2 * v1
         h1 = Jxy * w0 + Jyy * w1 + Jyz * w2 + c2 * v0 - c0 * v2
         h2 = Jxz * w0 + Jyz * w1 + Jzz * w2 + c0 * v1 - c1 * v0
-        j0 = nn(TI[ap + i])
+        j0 = nonneg(TI[ap + i])
         m = TI[ap + i + 1] - j0
         if TI[rp + i + 1] - TI[rp + i] == 1:       # the row is one run of coordinates c0, c0 + 1, ...
-            c0 = wc + nn(TI[rs + 2 * nn(TI[rp + i])])
+            c0 = wc + nonneg(TI[rs + 2 * nonneg(TI[rp + i])])
             for u in range(m):
                 sl = c0 + u
                 W[wa + j0 + u] = (W[sl + 3 * n] * p0 + W[sl + 4 * n] * p1 + W[sl + 5 * n] * p2
                                   + W[sl] * h0 + W[sl + n] * h1 + W[sl + 2 * n] * h2)
         else:
             for u in range(m):
-                sl = wc + nn(TI[ai + j0 + u])
+                sl = wc + nonneg(TI[ai + j0 + u])
                 W[wa + j0 + u] = (W[sl + 3 * n] * p0 + W[sl + 4 * n] * p1 + W[sl + 5 * n] * p2
                                   + W[sl] * h0 + W[sl + n] * h1 + W[sl + 2 * n] * h2)
     if TI[N_ARM] > 0:
-        armature(TI, TF, W, want_A)
+        armature(tree, want_A)
 
 
 @one_signature
 @kernel
-def armature(TI, TF, W, want_A):
+def armature(tree, want_A):
     """The armature's terms (E49) added to the packed ``A`` (with ``want_A``) and to ``b = -(e + G)``,
     after :func:`dynamics`' own terms. A coordinate of its own: ``a`` on its diagonal. The three
     angles ``i`` of a ball link ``p`` (parent record ``s``): ``a w_i.w_l`` on the 3 x 3 block and
     ``-a w_i.(alpha_p - alpha_s - omega_p x (omega_p - omega_s))`` into ``b``: the relative angular
     velocity ``omega_p - omega_s = sum w_i q_i'`` in {0}, and ``J^T a J' q'`` in world twists."""
-    n = nn(TI[1])
-    ia, fa = nn(TI[I_ARM]), nn(TI[F_ARM])
-    wl, wc, wb, wa, wbv = nn(TI[W_LINK]), nn(TI[W_COORD]), nn(TI[W_BASE]), nn(TI[W_A]), nn(TI[W_B])
-    ap, par = nn(TI[I_ANCPTR]), nn(TI[I_PARENT])
+    TI, TF, W = tree
+    n = nonneg(TI[1])
+    ia, fa = nonneg(TI[I_ARM]), nonneg(TI[F_ARM])
+    wl, wc, wb, wa, wbv = nonneg(TI[W_LINK]), nonneg(TI[W_COORD]), nonneg(TI[W_BASE]), nonneg(TI[W_A]), nonneg(TI[W_B])
+    ap, par = nonneg(TI[I_ANCPTR]), nonneg(TI[I_PARENT])
     for k in range(TI[N_ARM]):
-        kind, i, p = TI[ia + 3 * k], nn(TI[ia + 3 * k + 1]), nn(TI[ia + 3 * k + 2])
+        kind, i, p = TI[ia + 3 * k], nonneg(TI[ia + 3 * k + 1]), nonneg(TI[ia + 3 * k + 2])
         a = TF[fa + k]
         if kind != ARM_BALL:
             if want_A:
-                W[wa + nn(TI[ap + i + 1] - 1)] += a
+                W[wa + nonneg(TI[ap + i + 1] - 1)] += a
             continue
         d = wl + KL * p
         s = TI[par + p]
-        e = wb if s < 0 else wl + KL * nn(s)
+        e = wb if s < 0 else wl + KL * nonneg(s)
         o0, o1, o2 = W[d + WV], W[d + WV + 1], W[d + WV + 2]
         r0, r1, r2 = o0 - W[e + WV], o1 - W[e + WV + 1], o2 - W[e + WV + 2]
         x0 = W[d + AC] - W[e + AC] - (o1 * r2 - o2 * r1)
@@ -445,7 +461,7 @@ def armature(TI, TF, W, want_A):
             w0, w1, w2 = W[si], W[si + n], W[si + 2 * n]
             W[wbv + i + u] -= a * (w0 * x0 + w1 * x1 + w2 * x2)
             if want_A:
-                last = nn(TI[ap + i + u + 1] - 1)      # row i + u ends with i, .., i + u (the same link)
+                last = nonneg(TI[ap + i + u + 1] - 1)      # row i + u ends with i, .., i + u (the same link)
                 for v in range(u + 1):
                     sl = wc + i + v
                     W[wa + last - u + v] += a * (w0 * W[sl] + w1 * W[sl + n] + w2 * W[sl + 2 * n])
@@ -454,8 +470,10 @@ def armature(TI, TF, W, want_A):
 # -- applied wrenches, energies, base power -----------------------------------------------------------
 @one_signature
 @kernel
-def clear_wrenches(TI, W):
-    wl = nn(TI[W_LINK])
+def clear_wrenches(tree):
+    """Every link's external wrench set to zero (before :func:`add_wrench`)."""
+    TI, W = tree.TI, tree.W
+    wl = nonneg(TI[W_LINK])
     for p in range(TI[0]):
         for j in range(6):
             W[wl + KL * p + FX + j] = 0.0
@@ -463,10 +481,11 @@ def clear_wrenches(TI, W):
 
 @one_signature
 @kernel
-def add_wrench(TI, W, p, F0, F1, F2, M0, M1, M2, r0, r1, r2, local):
+def add_wrench(tree, p, F0, F1, F2, M0, M1, M2, r0, r1, r2, local):
     """Add a force ``F`` and a moment ``M`` acting at the point ``r`` (link frame) of link ``p`` to
     its external wrench as ``(F, M + r_N x F)`` about {0} (E36); ``local``: F and M in the link's axes."""
-    d = nn(TI[W_LINK]) + KL * nn(p)
+    TI, W = tree.TI, tree.W
+    d = nonneg(TI[W_LINK]) + KL * nonneg(p)
     R00, R01, R02 = W[d], W[d + 1], W[d + 2]
     R10, R11, R12 = W[d + 3], W[d + 4], W[d + 5]
     R20, R21, R22 = W[d + 6], W[d + 7], W[d + 8]
@@ -487,10 +506,22 @@ def add_wrench(TI, W, p, F0, F1, F2, M0, M1, M2, r0, r1, r2, local):
 
 @one_signature
 @kernel
-def energies(TI, TF, W, gx, gy, gz):
+def set_loads(tree, loads):
+    """The links' external wrenches (E36) of ``loads`` (k, 11), one row per wrench
+    ``(link, F (3), M (3), point (3), local)`` (:func:`add_wrench`), from zero."""
+    clear_wrenches(tree)
+    for k in range(loads.shape[0]):
+        add_wrench(tree, int(loads[k, 0]), loads[k, 1], loads[k, 2], loads[k, 3], loads[k, 4], loads[k, 5],
+                   loads[k, 6], loads[k, 7], loads[k, 8], loads[k, 9], loads[k, 10] != 0.0)
+
+
+@one_signature
+@kernel
+def energies(tree, gx, gy, gz):
     """``(E, V)`` after :func:`kinematics` (E37): ``E = 0.5 sum (m v.v + 2 v.(omega x c) + omega.J omega)``,
     ``V = -g . sum c``."""
-    wl = nn(TI[W_LINK])
+    TI, TF, W = tree
+    wl = nonneg(TI[W_LINK])
     E = 0.0
     V = 0.0
     for p in range(TI[0]):
@@ -509,27 +540,28 @@ def energies(TI, TF, W, gx, gy, gz):
         E += 0.5 * (m * (v0 * v0 + v1 * v1 + v2 * v2) + 2.0 * (v0 * x0 + v1 * x1 + v2 * x2) + wJw)
         V -= gx * c0 + gy * c1 + gz * c2
     if TI[N_ARM] > 0:
-        E += armature_energy(TI, TF, W)
+        E += armature_energy(tree)
     return E, V
 
 
 @one_signature
 @kernel
-def armature_energy(TI, TF, W):
+def armature_energy(tree):
     """The armature's kinetic energy (E49) after :func:`kinematics`: ``0.5 a q'^2`` per coordinate of
     its own, ``0.5 a |omega_p - omega_s|^2`` per ball link."""
-    ia, fa = nn(TI[I_ARM]), nn(TI[F_ARM])
-    wl, wb, wqd, par = nn(TI[W_LINK]), nn(TI[W_BASE]), nn(TI[W_QD]), nn(TI[I_PARENT])
+    TI, TF, W = tree
+    ia, fa = nonneg(TI[I_ARM]), nonneg(TI[F_ARM])
+    wl, wb, wqd, par = nonneg(TI[W_LINK]), nonneg(TI[W_BASE]), nonneg(TI[W_QD]), nonneg(TI[I_PARENT])
     E = 0.0
     for k in range(TI[N_ARM]):
-        kind, i, p = TI[ia + 3 * k], nn(TI[ia + 3 * k + 1]), nn(TI[ia + 3 * k + 2])
+        kind, i, p = TI[ia + 3 * k], nonneg(TI[ia + 3 * k + 1]), nonneg(TI[ia + 3 * k + 2])
         a = TF[fa + k]
         if kind != ARM_BALL:
             E += 0.5 * a * W[wqd + i] * W[wqd + i]
             continue
         d = wl + KL * p
         s = TI[par + p]
-        e = wb if s < 0 else wl + KL * nn(s)
+        e = wb if s < 0 else wl + KL * nonneg(s)
         r0, r1, r2 = W[d + WV] - W[e + WV], W[d + WV + 1] - W[e + WV + 1], W[d + WV + 2] - W[e + WV + 2]
         E += 0.5 * a * (r0 * r0 + r1 * r1 + r2 * r2)
     return E
@@ -537,15 +569,16 @@ def armature_energy(TI, TF, W):
 
 @one_signature
 @kernel
-def base_power(TI, W, gx, gy, gz):
+def base_power(tree, gx, gy, gz):
     """``(dE/dt, dV/dt)`` at fixed ``(q, q')`` due to the base motion alone (E41), after
     :func:`dynamics` with ``momentum``: with the base's twist ``(omega_B, v_B)``, its acceleration
     ``(alpha_B, a_B)`` and the links' total momentum ``(P, H)`` about {0},
     ``dE/dt = tr(dW_B sum Hw Xi^T) = a_B.P + alpha_B.H`` (the second trace of E41 vanishes: a skew
     matrix against a symmetric one) and ``dV/dt = -g . (omega_B x sum c + (sum m) v_B)``."""
-    wb = nn(TI[W_BASE])
-    wl = nn(TI[W_LINK])
-    par = nn(TI[I_PARENT])
+    TI, W = tree.TI, tree.W
+    wb = nonneg(TI[W_BASE])
+    wl = nonneg(TI[W_LINK])
+    par = nonneg(TI[I_PARENT])
     dE = 0.0
     for j in range(6):
         dE += W[wb + BASE_ACC + j] * W[wb + BASE_MOM + (j + 3) % 6]

@@ -15,8 +15,12 @@ argument of another type raises TypeError (the model then converts it) instead o
 variant. They compute what the row functions compute, operation for operation (the same bits).
 
 Arguments shared by the row functions: ``TI``, ``TF`` the tree (:mod:`urdf2links.dynamics.tree_arrays`);
-``W`` its scratch and ``X`` the coupling scratch (:func:`coupled_size`); ``base`` (18,) pose, rate
-and acceleration of {A} when ``has_base``; ``gx, gy, gz`` gravity; ``loads`` (k, 11) wrenches
+``W`` its scratch and ``X`` the coupling scratch (:func:`coupled_size`). The rows and the hot entries
+take the tree's arrays and pass them on to the passes as one record
+(:class:`~urdf2links.dynamics.tree_arrays.Tree`); the rows are kernels, which count no references: a
+record built in a batch's loop would count them, atomically, on arrays every thread shares (a hot entry
+builds its own, one count per call, docs/speed.md); ``base`` (18,) pose, rate and acceleration of {A}
+when ``has_base``; ``gx, gy, gz`` gravity; ``loads`` (k, 11) wrenches
 ``(link, F (3), M (3), point (3), local)``; ``C`` (n_tree, n), ``d`` (n_tree,) coupled coordinates
 ``q_tree = C q + d`` when ``coupled`` (docs/equations.md (E42)).
 """
@@ -30,8 +34,8 @@ from ..compilation import kernel, one_signature
 
 from .factor import cholesky, cholesky_solve, ltdl, ltdl_solve, unpack
 from .inverse_kernels import id_plain  # noqa: F401  (a hot entry: frozen() finds it here)
-from .kernels import add_wrench, clear_wrenches, dynamics, energies, kinematics, poses
-from .tree_arrays import I_ANCIDX, I_ANCPTR, W_A, W_B, W_Q, W_SIZE, gravity_of, nn
+from .kernels import dynamics, energies, kinematics, poses, set_loads
+from .tree_arrays import I_ANCIDX, I_ANCPTR, W_A, W_B, W_Q, W_SIZE, Tree, gravity_of, nonneg, scratches
 
 __all__ = ["coupled_size", "frozen", "FROZEN", "fd_plain", "terms_plain", "forces_plain", "energy_plain", "fd_one",
            "fd_batch", "terms_one", "terms_batch", "energy_one",
@@ -50,10 +54,10 @@ def coupled_size(n_tree, n):
 # -- one state ----------------------------------------------------------------------------------------
 @one_signature
 @kernel
-def _state(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, C, d, coupled):
+def _state(tree, X, q, qd, moving, base, has_base, gx, gy, gz, C, d, coupled):
     """:func:`~urdf2links.dynamics.kernels.kinematics` at the model state ``(q, qd)`` (rates zero unless ``moving``)."""
     if not coupled:
-        kinematics(TI, TF, W, q, 0, qd, 0, moving, base, 0, has_base, gx, gy, gz)
+        kinematics(tree, q, 0, qd, 0, moving, base, 0, has_base, gx, gy, gz)
         return
     nt, n = C.shape
     for a in range(nt):
@@ -65,20 +69,17 @@ def _state(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, C, d, couple
                 s2 += C[a, j] * qd[j]
         X[a] = s1
         X[nt + a] = s2
-    kinematics(TI, TF, W, X, 0, X, nt, moving, base, 0, has_base, gx, gy, gz)
+    kinematics(tree, X, 0, X, nt, moving, base, 0, has_base, gx, gy, gz)
 
 
 @one_signature
 @kernel
-def _terms(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, loads, C, d, coupled, want_A):
-    _state(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, C, d, coupled)
+def _terms(tree, X, q, qd, moving, base, has_base, gx, gy, gz, loads, C, d, coupled, want_A):
+    _state(tree, X, q, qd, moving, base, has_base, gx, gy, gz, C, d, coupled)
     nl = loads.shape[0]
     if nl > 0:
-        clear_wrenches(TI, W)
-        for k in range(nl):
-            add_wrench(TI, W, int(loads[k, 0]), loads[k, 1], loads[k, 2], loads[k, 3], loads[k, 4], loads[k, 5],
-                       loads[k, 6], loads[k, 7], loads[k, 8], loads[k, 9], loads[k, 10] != 0.0)
-    dynamics(TI, TF, W, want_A, nl > 0, False)
+        set_loads(tree, loads)
+    dynamics(tree, want_A, nl > 0, False)
 
 
 @one_signature
@@ -95,9 +96,10 @@ def reduce_vector(C, v, iv, out, io, sign):
 
 @one_signature
 @kernel
-def reduce_mass(TI, W, C, A):
+def reduce_mass(tree, C, A):
     """``A = C^T A_tree C`` (n, n) from the packed tree matrix (E42); the lower triangle is summed,
     the upper one mirrors it."""
+    TI, W = tree.TI, tree.W
     nt, n = C.shape
     ap, ai, wa = TI[I_ANCPTR], TI[I_ANCIDX], TI[W_A]
     for i in range(n):
@@ -121,25 +123,35 @@ def reduce_mass(TI, W, C, A):
             A[k, i] = A[i, k]
 
 
+@njit(cache=True, inline="always")
+def _solve_tree(tree, loaded, tau, has_tau, out):
+    """q'' (E24) into ``out`` (n,) after :func:`~urdf2links.dynamics.kernels.dynamics`: ``A q'' = b (+ Q
+    when ``loaded``) (+ tau)`` by the tree-sparse factorization (E47). Returns -1, or the failing pivot."""
+    TI, W = tree.TI, tree.W
+    wb, wq = nonneg(TI[W_B]), nonneg(TI[W_Q])
+    for i in range(out.size):
+        v = W[wb + i]
+        if loaded:
+            v += W[wq + i]
+        if has_tau:
+            v += tau[i]
+        out[i] = v
+    pivot = ltdl(TI, W)
+    if pivot < 0:
+        ltdl_solve(TI, W, out, 0)
+    return pivot
+
+
 @one_signature
 @kernel
 def fd_row(TI, TF, W, X, q, qd, tau, has_tau, base, has_base, gx, gy, gz, loads, C, d, coupled, out):
     """q'' (E24) into ``out`` (n,): ``A q'' = Q + tau - e - G``. Returns -1, or the failing pivot."""
-    _terms(TI, TF, W, X, q, qd, True, base, has_base, gx, gy, gz, loads, C, d, coupled, True)
+    tree = Tree(TI, TF, W)
+    _terms(tree, X, q, qd, True, base, has_base, gx, gy, gz, loads, C, d, coupled, True)
     nl = loads.shape[0]
-    wb, wq = nn(TI[W_B]), nn(TI[W_Q])
     if not coupled:
-        for i in range(out.size):
-            v = W[wb + i]
-            if nl > 0:
-                v += W[wq + i]
-            if has_tau:
-                v += tau[i]
-            out[i] = v
-        pivot = ltdl(TI, W)
-        if pivot < 0:
-            ltdl_solve(TI, W, out, 0)
-        return pivot
+        return _solve_tree(tree, nl > 0, tau, has_tau, out)
+    wb, wq = nonneg(TI[W_B]), nonneg(TI[W_Q])
     nt, n = C.shape
     if nl > 0:
         for a in range(nt):
@@ -149,7 +161,7 @@ def fd_row(TI, TF, W, X, q, qd, tau, has_tau, base, has_base, gx, gy, gz, loads,
         for i in range(n):
             out[i] += tau[i]
     A = X[2 * nt:2 * nt + n * n].reshape((n, n))
-    reduce_mass(TI, W, C, A)
+    reduce_mass(tree, C, A)
     o = 2 * nt + n * n
     pivot = cholesky(X, 2 * nt, n, X, o)
     if pivot < 0:
@@ -162,10 +174,11 @@ def fd_row(TI, TF, W, X, q, qd, tau, has_tau, base, has_base, gx, gy, gz, loads,
 def terms_row(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, loads, C, d, coupled, what, A, v):
     """``what``: MASS the mass matrix into ``A`` (n, n); BIAS ``-b = e + G`` into ``v`` (n,) (with
     ``g = 0``: e; at rest with gravity: G); FORCES ``Q`` of ``loads`` into ``v``."""
-    _terms(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, loads, C, d, coupled, what == MASS)
+    tree = Tree(TI, TF, W)
+    _terms(tree, X, q, qd, moving, base, has_base, gx, gy, gz, loads, C, d, coupled, what == MASS)
     if what == MASS:
         if coupled:
-            reduce_mass(TI, W, C, A)
+            reduce_mass(tree, C, A)
         else:
             unpack(TI, W, A)
         return
@@ -182,11 +195,15 @@ def terms_row(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, loads, C,
 @kernel
 def energy_row(TI, TF, W, X, q, qd, moving, base, has_base, gx, gy, gz, C, d, coupled):
     """``(E, V)`` (E37) at one state."""
-    _state(TI, TF, W, X, q, qd, moving, base, has_base, 0.0, 0.0, 0.0, C, d, coupled)
-    return energies(TI, TF, W, gx, gy, gz)
+    tree = Tree(TI, TF, W)
+    _state(tree, X, q, qd, moving, base, has_base, 0.0, 0.0, 0.0, C, d, coupled)
+    return energies(tree, gx, gy, gz)
 
 
 # -- single-state entries -----------------------------------------------------------------------------
+# Each hot entry builds the tree's record itself: it allocates its scratch, so it counts references, and
+# the record costs about what a call into a kernel that built it would (docs/speed.md), without a second
+# compiled function for a cold start.
 @one_signature
 @njit(cache=True)
 def fd_plain(TI, TF, q, qd, tau, out):
@@ -194,25 +211,13 @@ def fd_plain(TI, TF, q, qd, tau, out):
     :data:`_PLAIN_SIGS`), gravity in ``TF`` (:func:`~urdf2links.dynamics.tree_arrays.tf_with_gravity`); -2
     when a size is wrong."""
     n = TI[1]
-    if q.size != n or qd.size != n or out.size != n:
+    if q.size != n or qd.size != n or out.size != n or (tau.size > 0 and tau.size != n):
         return -2
-    has_tau = tau.size > 0
-    if has_tau and tau.size != n:
-        return -2
-    W = np.empty(TI[W_SIZE])
+    tree = Tree(TI, TF, np.empty(TI[W_SIZE]))
     gx, gy, gz = gravity_of(TF)
-    kinematics(TI, TF, W, q, 0, qd, 0, True, TF, 0, False, gx, gy, gz)
-    dynamics(TI, TF, W, True, False, False)
-    wb = nn(TI[W_B])
-    for i in range(n):
-        v = W[wb + i]
-        if has_tau:
-            v += tau[i]
-        out[i] = v
-    pivot = ltdl(TI, W)
-    if pivot < 0:
-        ltdl_solve(TI, W, out, 0)
-    return pivot
+    kinematics(tree, q, 0, qd, 0, True, TF, 0, False, gx, gy, gz)
+    dynamics(tree, True, False, False)
+    return _solve_tree(tree, False, tau, tau.size > 0, out)
 
 
 @one_signature
@@ -222,7 +227,7 @@ def terms_plain(TI, TF, q, qd, what, A, v):
     into ``v`` (n,): ``e`` with zero gravity in ``TF`` (:func:`~urdf2links.dynamics.tree_arrays.tf_with_gravity`),
     ``G`` with ``qd`` of size 0 (at rest). -2 when a size is wrong, else 0."""
     n = TI[1]
-    if q.size != n:
+    if q.size != n or (qd.size != 0 and qd.size != n):
         return -2
     if what == MASS:
         if A.shape[0] != n or A.shape[1] != n:
@@ -230,18 +235,14 @@ def terms_plain(TI, TF, q, qd, what, A, v):
     elif v.size != n:
         return -2
     W = np.empty(TI[W_SIZE])
+    tree = Tree(TI, TF, W)
     gx, gy, gz = gravity_of(TF)
-    if qd.size == 0:
-        kinematics(TI, TF, W, q, 0, q, 0, False, TF, 0, False, gx, gy, gz)
-    else:
-        if qd.size != n:
-            return -2
-        kinematics(TI, TF, W, q, 0, qd, 0, True, TF, 0, False, gx, gy, gz)
-    dynamics(TI, TF, W, what == MASS, False, False)
+    kinematics(tree, q, 0, qd, 0, qd.size > 0, TF, 0, False, gx, gy, gz)       # qd of size 0: at rest
+    dynamics(tree, what == MASS, False, False)
     if what == MASS:
         unpack(TI, W, A)
     else:
-        wb = nn(TI[W_B])
+        wb = nonneg(TI[W_B])
         for i in range(n):
             v[i] = -W[wb + i]
     return 0
@@ -256,13 +257,11 @@ def forces_plain(TI, TF, q, loads, v):
     if q.size != n or v.size != n or loads.shape[1] != 11:
         return -2
     W = np.empty(TI[W_SIZE])
-    kinematics(TI, TF, W, q, 0, q, 0, False, q, 0, False, 0.0, 0.0, 0.0)
-    clear_wrenches(TI, W)
-    for k in range(loads.shape[0]):
-        add_wrench(TI, W, int(loads[k, 0]), loads[k, 1], loads[k, 2], loads[k, 3], loads[k, 4], loads[k, 5],
-                   loads[k, 6], loads[k, 7], loads[k, 8], loads[k, 9], loads[k, 10] != 0.0)
-    dynamics(TI, TF, W, False, True, False)
-    wq = nn(TI[W_Q])
+    tree = Tree(TI, TF, W)
+    kinematics(tree, q, 0, q, 0, False, q, 0, False, 0.0, 0.0, 0.0)
+    set_loads(tree, loads)
+    dynamics(tree, False, True, False)
+    wq = nonneg(TI[W_Q])
     for i in range(n):
         v[i] = W[wq + i]
     return 0
@@ -275,17 +274,12 @@ def energy_plain(TI, TF, q, qd, out):
     (:func:`~urdf2links.dynamics.tree_arrays.tf_with_gravity`); ``qd`` of size 0: at rest (V only is meaningful).
     -2 when a size is wrong, else 0."""
     n = TI[1]
-    if q.size != n or out.size != 2:
+    if q.size != n or out.size != 2 or (qd.size != 0 and qd.size != n):
         return -2
-    W = np.empty(TI[W_SIZE])
-    if qd.size == 0:
-        kinematics(TI, TF, W, q, 0, q, 0, False, TF, 0, False, 0.0, 0.0, 0.0)
-    else:
-        if qd.size != n:
-            return -2
-        kinematics(TI, TF, W, q, 0, qd, 0, True, TF, 0, False, 0.0, 0.0, 0.0)
+    tree = Tree(TI, TF, np.empty(TI[W_SIZE]))
+    kinematics(tree, q, 0, qd, 0, qd.size > 0, TF, 0, False, 0.0, 0.0, 0.0)       # qd of size 0: at rest
     gx, gy, gz = gravity_of(TF)
-    out[0], out[1] = energies(TI, TF, W, gx, gy, gz)
+    out[0], out[1] = energies(tree, gx, gy, gz)
     return 0
 
 
@@ -351,8 +345,9 @@ def poses_one(TI, TF, q, base, has_base, C, d, coupled, R, o):
     """The {0}-pose of every link: rotations ``R`` (L, 3, 3) and origins ``o`` (L, 3)."""
     W = np.empty(TI[W_SIZE])
     X = np.empty(coupled_size(C.shape[0], C.shape[1]) if coupled else 0)
-    _state(TI, TF, W, X, q, q, False, base, has_base, 0.0, 0.0, 0.0, C, d, coupled)
-    poses(TI, W, R, o)
+    tree = Tree(TI, TF, W)
+    _state(tree, X, q, q, False, base, has_base, 0.0, 0.0, 0.0, C, d, coupled)
+    poses(tree, R, o)
 
 
 # -- batches: chunks of rows in parallel ------------------------------------------------------------
@@ -367,10 +362,8 @@ def chunks(B: int) -> int:
 def fd_batch(TI, TF, Q, QD, TAU, has_tau, BASE, has_base, gx, gy, gz, loads, C, d, coupled, OUT, status, nc):
     """:func:`fd_row` for every row ``b`` of ``Q``, ``QD``, ``TAU`` (B, n) and ``BASE`` (B or 1, 18)
     into ``OUT[b]``; ``status[b]`` the failing pivot or -1; rows in ``nc`` chunks (:func:`chunks`)."""
-    B = Q.shape[0]
-    Ws = np.empty((nc, TI[W_SIZE]))
-    Xs = np.empty((nc, coupled_size(C.shape[0], C.shape[1]) if coupled else 0))
-    nb = BASE.shape[0]
+    B, nb = Q.shape[0], BASE.shape[0]
+    Ws, Xs = scratches(TI, nc, coupled_size(C.shape[0], C.shape[1]) if coupled else 0)
     for c in prange(nc):
         for b in range(c * B // nc, (c + 1) * B // nc):
             status[b] = fd_row(TI, TF, Ws[c], Xs[c], Q[b], QD[b], TAU[b if has_tau else 0], has_tau,
@@ -380,10 +373,8 @@ def fd_batch(TI, TF, Q, QD, TAU, has_tau, BASE, has_base, gx, gy, gz, loads, C, 
 @njit(cache=True, parallel=True)
 def terms_batch(TI, TF, Q, QD, moving, BASE, has_base, gx, gy, gz, loads, C, d, coupled, what, A, V, nc):
     """:func:`terms_row` for every row: ``A[b]`` (n, n) for MASS, else ``V[b]`` (n,)."""
-    B = Q.shape[0]
-    Ws = np.empty((nc, TI[W_SIZE]))
-    Xs = np.empty((nc, coupled_size(C.shape[0], C.shape[1]) if coupled else 0))
-    nb = BASE.shape[0]
+    B, nb = Q.shape[0], BASE.shape[0]
+    Ws, Xs = scratches(TI, nc, coupled_size(C.shape[0], C.shape[1]) if coupled else 0)
     for c in prange(nc):
         for b in range(c * B // nc, (c + 1) * B // nc):
             terms_row(TI, TF, Ws[c], Xs[c], Q[b], QD[b if moving else 0], moving, BASE[b if nb > 1 else 0], has_base,
@@ -393,10 +384,8 @@ def terms_batch(TI, TF, Q, QD, moving, BASE, has_base, gx, gy, gz, loads, C, d, 
 @njit(cache=True, parallel=True)
 def energy_batch(TI, TF, Q, QD, moving, BASE, has_base, gx, gy, gz, C, d, coupled, E, V, nc):
     """:func:`energy_row` for every row into ``E[b]``, ``V[b]``."""
-    B = Q.shape[0]
-    Ws = np.empty((nc, TI[W_SIZE]))
-    Xs = np.empty((nc, coupled_size(C.shape[0], C.shape[1]) if coupled else 0))
-    nb = BASE.shape[0]
+    B, nb = Q.shape[0], BASE.shape[0]
+    Ws, Xs = scratches(TI, nc, coupled_size(C.shape[0], C.shape[1]) if coupled else 0)
     for c in prange(nc):
         for b in range(c * B // nc, (c + 1) * B // nc):
             E[b], V[b] = energy_row(TI, TF, Ws[c], Xs[c], Q[b], QD[b if moving else 0], moving,

@@ -37,6 +37,8 @@ Layout (the names are module constants, folded into the compiled code):
 
 from __future__ import annotations
 
+from collections import namedtuple
+
 import numpy as np
 from numba import njit
 
@@ -44,14 +46,19 @@ from ..compilation import kernel, one_signature
 
 from .transforms import elementary
 
-__all__ = ["flat_tree", "tf_with_gravity", "gravity_of", "HEADER", "CONSTANT", "KS", "KF", "KL", "workspace_size", "nn",
-           "armature_items",
-           "ARM_ONE", "ARM_BALL"]
+__all__ = ["Tree", "flat_tree", "tf_with_gravity", "gravity_of", "HEADER", "CONSTANT", "KS", "KF", "KL", "workspace_size",
+           "nonneg", "scratches", "armature_items", "ARM_ONE", "ARM_BALL"]
 
 CONSTANT = 6        # seg_slot of a constant transform
 KS = 13             # floats per segment in TF: offset, R (9), p (3)
 KF = 10             # floats per link in TF: m, m r_C (3), J (6)
 KL = 48             # floats per link record in W
+
+Tree = namedtuple("Tree", ["TI", "TF", "W"])
+"""The tree's arrays as one record, the first argument of every pass of
+:mod:`urdf2links.dynamics.kernels`: ``TI`` (int64) the layout and the indices, ``TF`` (float64) the
+constants, ``W`` (float64) the scratch of one thread (module doc). Built inside compiled code, where it
+costs nothing (docs/speed.md); the Python-facing entries take the arrays."""
 
 # TI header
 I_PARENT, I_SEGPTR, I_SEGSLOT, I_SEGCOORD, I_COORDLINK, I_ANCPTR, I_ANCIDX, I_ANCROW, I_RUNPTR, I_RUNS = range(4, 14)
@@ -82,11 +89,11 @@ KB = 48
 
 @one_signature
 @kernel
-def nn(k):
-    """``max(k, 0)`` of an offset or index that is never negative: it tells the compiler so. An
-    integer index of unknown sign makes numba wrap negative values around on every access
-    (three instructions, and no vectorization); one ``nn`` where an offset is loaded removes that
-    from every access derived from it."""
+def nonneg(k):
+    """``max(k, 0)``: an offset or index that is never negative, said so to the compiler. An integer
+    index of unknown sign makes numba wrap negative values around on every access (three
+    instructions, and no vectorization); one ``nonneg`` where an offset is loaded removes that from
+    every access derived from it."""
     return max(k, 0)
 
 
@@ -103,6 +110,13 @@ def gravity_of(TF):
     """``(gx, gy, gz)``: the last three entries of a hot entry's ``TF`` (:func:`tf_with_gravity`)."""
     k = TF.size - 3
     return TF[k], TF[k + 1], TF[k + 2]
+
+
+@njit(cache=True)
+def scratches(TI, chunks, nx):
+    """A batch's scratch, one row per chunk of rows: the tree's ``W`` (chunks, W_SIZE) and a caller's ``X``
+    (chunks, nx) (coupled coordinates)."""
+    return np.empty((chunks, TI[W_SIZE])), np.empty((chunks, nx))
 
 
 def _segments(tree):

@@ -25,7 +25,7 @@ from numba import njit
 
 from ..compilation import kernel
 from ..dynamics.kernels import add_wrench
-from ..dynamics.tree_arrays import KL, O_, W_LINK, WV, nn
+from ..dynamics.tree_arrays import KL, O_, W_LINK, WV, nonneg
 from .scene_arrays import S_CONTACT_DATA, S_CONTACT_LINK, S_NCONTACT
 
 __all__ = ["contact_wrenches", "contact_potential", "contact_state", "sphere_contact", "normal_force",
@@ -39,7 +39,7 @@ NSTATE = 10     # contact_state's columns: point (3), depth, depth rate, f_n, sl
 def sphere_contact(TI, W, p, SF, o):
     """Sphere at ``SF[o:o + KC]`` on tree link ``p`` (E77): ``(d, d', p (3), v_p (3), r_link (3))``, the
     contact point ``r_link`` in the link's frame (for add_wrench)."""
-    d = nn(TI[W_LINK]) + KL * nn(p)
+    d = nonneg(TI[W_LINK]) + KL * nonneg(p)
     R00, R01, R02, R10, R11, R12, R20, R21, R22 = W[d], W[d + 1], W[d + 2], W[d + 3], W[d + 4], W[d + 5], \
         W[d + 6], W[d + 7], W[d + 8]
     c0, c1, c2, r = SF[o], SF[o + 1], SF[o + 2], SF[o + 3]
@@ -86,10 +86,11 @@ def _force(SF, o, depth, rate, v0, v1, v2):
 
 
 @kernel
-def contact_wrenches(SI, SF, TI, W):
+def contact_wrenches(SI, SF, tree):
     """Every sphere's force (E80) added to its link's external wrench (after :func:`kinematics`, before
     :func:`dynamics` with loads); returns ``sum k d^e d'`` = ``dV_c/dt`` (E81), which the right-hand side
     adds to the power so that ``W`` counts only the dissipated work."""
+    TI, W = tree.TI, tree.W
     links, o = SI[S_CONTACT_LINK], SI[S_CONTACT_DATA]
     Pel = 0.0
     for j in range(SI[S_NCONTACT]):
@@ -101,13 +102,14 @@ def contact_wrenches(SI, SF, TI, W):
         F0, F1, F2, fn, el, slip = _force(SF, oj, depth, rate, v0, v1, v2)
         Pel += el * rate
         if fn != 0.0:
-            add_wrench(TI, W, p, F0, F1, F2, 0.0, 0.0, 0.0, l0, l1, l2, False)
+            add_wrench(tree, p, F0, F1, F2, 0.0, 0.0, 0.0, l0, l1, l2, False)
     return Pel
 
 
 @kernel
-def contact_potential(SI, SF, TI, W):
+def contact_potential(SI, SF, tree):
     """``sum k d^(e+1) / (e + 1)`` over the spheres in contact (E81), after :func:`kinematics`."""
+    TI, W = tree.TI, tree.W
     links, o = SI[S_CONTACT_LINK], SI[S_CONTACT_DATA]
     V = 0.0
     for j in range(SI[S_NCONTACT]):
@@ -120,8 +122,9 @@ def contact_potential(SI, SF, TI, W):
 
 
 @kernel
-def contact_state(SI, SF, TI, W, out):
+def contact_state(SI, SF, tree, out):
     """``out[j] = (p (3), d, d', f_n, slip speed, F (3))`` (k, NSTATE) of every sphere, after :func:`kinematics`."""
+    TI, W = tree.TI, tree.W
     links, o = SI[S_CONTACT_LINK], SI[S_CONTACT_DATA]
     for j in range(SI[S_NCONTACT]):
         oj = o + KC * j

@@ -21,7 +21,8 @@ import numpy as np
 from .contact import contact_arrays
 from .functions import Constant, Sines, Table
 
-__all__ = ["SceneArrays", "compile_scene", "scene_view", "function_data", "scratch_size", "ct_offset", "SHEAD", "KA"]
+__all__ = ["Scene", "SceneArrays", "compile_scene", "scene_view", "function_data", "scratch_size", "ct_offset", "SHEAD",
+           "KA"]
 
 # SI header: sizes, then the offsets of the blocks of SI and SF; the actuators' and the computed
 # torque's (issue 26) after the first ones, so that the earlier offsets stay where they were
@@ -37,6 +38,12 @@ S_ACT_PRM = 36                                      # per actuator: gain, b0, b1
 SHEAD = 40
 KA = 9                                              # floats per actuator
 ACT_CTRL_LIMITED, ACT_FORCE_LIMITED = 1, 2          # act_flags bits
+
+Scene = namedtuple("Scene", ["SI", "SF", "X"])
+"""The compiled scene as one record between the right-hand side's kernels: ``SI`` (int64) its header,
+counts and indices, ``SF`` (float64) its numbers, ``X`` (float64) its scratch of one thread
+(:func:`scratch_size`). Built inside the compiled right-hand side (free there, docs/speed.md); the
+C function and the Python-facing entries take the arrays."""
 
 SceneArrays = namedtuple("SceneArrays", [
     "n", "nt", "has_base", "has_g", "coupled",

@@ -27,8 +27,12 @@ times when the loops called :func:`_rhs` directly, each time with the whole righ
 The indirect call costs 30-90 ns, 3-6 % of an evaluation in a bare loop and nothing measurable in the
 RK4 loop (docs/speed.md).
 
+The scene's inputs at ``t`` (time functions, the base's motion, loads, torques, dampers, actuators,
+springs) are :mod:`urdf2links.scenes.scene_inputs`; this module assembles them into ``y'``.
+
 To add an effect (a constraint, a contact): its arrays and counts in
-:mod:`urdf2links.scenes.scene_arrays`; its kernel here; its name in :data:`EFFECTS` and its test in
+:mod:`urdf2links.scenes.scene_arrays`; its kernel here or, for an input at ``t``, in
+:mod:`urdf2links.scenes.scene_inputs`; its name in :data:`EFFECTS` and its test in
 :func:`effects_of`; one marker argument more in :func:`_rhs` and in :func:`_variant`, and its call behind ``if marker is not None:`` where it acts (:func:`_rhs` for a
 pass of its own, :func:`_applied` for a generalized force).
 """
@@ -41,47 +45,17 @@ from numba import njit
 from ..compilation import kernel, one_signature
 
 from ..dynamics.factor import cholesky, cholesky_solve, ltdl, ltdl_solve
-from ..dynamics.inverse_kernels import kinematics_acc, own_armature
-from ..dynamics.kernels import add_wrench, base_power, clear_wrenches, dynamics, energies, kinematics
+from ..dynamics.inverse_kernels import own_armature
+from ..dynamics.kernels import base_power, clear_wrenches, dynamics, energies, kinematics
 from ..dynamics.model_kernels import reduce_mass, reduce_vector
-from ..dynamics.tree_arrays import W_B, W_Q, W_SIZE, nn
+from ..dynamics.tree_arrays import W_B, W_Q, W_SIZE, Tree, nonneg
 from .contact_kernels import contact_potential, contact_wrenches   # issue 37
-from .scene_arrays import (
-    KA,
-    S_ACT_FLAGS,
-    S_ACT_FN,
-    S_ACT_IDX,
-    S_ACT_PRM,
-    S_BASE_FN,
-    S_CT,
-    S_NCONTACT,
-    S_CT_FN,
-    S_NA,
-    S_C,
-    S_D,
-    S_DAMPER_IDX,
-    S_DAMPING,
-    S_FN_DATA,
-    S_FN_KIND,
-    S_FN_PTR,
-    S_GRAV,
-    S_LOAD_FN,
-    S_LOAD_KIND,
-    S_LOAD_LINK,
-    S_LOAD_LOCAL,
-    S_LOAD_POINT,
-    S_LOAD_X,
-    S_REST,
-    S_SPRING_IDX,
-    S_STIFFNESS,
-    S_TORQUE_FN,
-    S_TORQUE_IDX,
-    compile_scene,
-    scratch_size,
-)
+from .scene_arrays import (S_C, S_CT, S_CT_FN, S_GRAV, S_NA, S_NCONTACT, S_REST, S_SPRING_IDX, S_STIFFNESS, Scene,
+                           compile_scene, scratch_size)
+from .scene_inputs import _apply_loads, _base_values, _inputs, _springs, _tree_state, fn_eval
 
-__all__ = ["CompiledScene", "scene_rhs", "rhs_function", "rhs_signature", "scene_energies", "fn_eval", "fn_data_eval", "computed_torque", "ct_torque_at",
-           "EFFECTS", "effects_of"]
+__all__ = ["CompiledScene", "scene_rhs", "rhs_function", "rhs_signature", "scene_energies", "computed_torque",
+           "ct_torque_at", "EFFECTS", "effects_of"]
 
 #: The effects compiled only into the scenes that have them (module doc), in the order of ``FX``.
 EFFECTS = ("loads", "actuators", "computed_torque", "coupled")
@@ -94,190 +68,31 @@ def effects_of(SI) -> tuple:
     return tuple(1 if present[name] else None for name in EFFECTS)
 
 
-@one_signature
-@kernel
-def fn_data_eval(kind, data, o, t, order):
-    """``d^order f / dt^order`` at ``t`` of a time function of ``kind`` whose data
-    (:func:`urdf2links.scenes.scene_arrays.function_data`) starts at ``data[o]``."""
-    if kind == 0:
-        if order == 0:
-            out = data[o] + data[o + 1] * t
-        elif order == 1:
-            out = data[o + 1]
-        else:
-            out = 0.0
-        for k in range(int(data[o + 2])):
-            a, w, ph = data[o + 3 + 3 * k], data[o + 4 + 3 * k], data[o + 5 + 3 * k]
-            x = w * t + ph
-            if order == 0:
-                out += a * np.sin(x)
-            elif order == 1:
-                out += a * w * np.cos(x)
-            else:
-                out -= a * w * w * np.sin(x)
-        return out
-    m = int(data[o])
-    k = int(data[o + 1])
-    x = data[o + 2:o + 3 + m]
-    c = o + 3 + m
-    if t < x[0] or t > x[m]:
-        if order > 0:
-            return 0.0
-        t = x[0] if t < x[0] else x[m]
-    lo, hi = 0, m + 1             # np.searchsorted(x, t, side="right"): how many breakpoints are <= t
-    while lo < hi:
-        mid = (lo + hi) // 2
-        if x[mid] <= t:
-            lo = mid + 1
-        else:
-            hi = mid
-    i = min(max(lo - 1, 0), m - 1)    # (written out: numpy's generic searchsorted compiled for a second)
-    s = t - x[i]
-    out = 0.0
-    for j in range(k + 1):       # c[j, i] (s)^(k - j)
-        pw = k - j
-        if pw < order:
-            continue
-        coef = data[c + j * m + i]
-        for r in range(order):
-            coef *= pw - r
-        out += coef * s ** (pw - order)
-    return out
-
-
-@one_signature
-@kernel
-def fn_eval(SI, SF, j, t, order):
-    """``d^order f_j / dt^order`` at ``t`` of the scene's time function ``j`` (:func:`fn_data_eval`)."""
-    return fn_data_eval(SI[SI[S_FN_KIND] + j], SF, SI[S_FN_DATA] + SI[SI[S_FN_PTR] + j], t, order)
-
-
 # -- the right-hand side ------------------------------------------------------------------------------
 @one_signature
 @kernel
-def _tree_state(SI, SF, q, iq, qd, iqd, sign, X):
-    """Coupled coordinates: ``X[0:nt] = C q + d``, ``X[nt:2 nt] = sign C q'`` (E42); ``sign`` -1 or 0
-    gives the rates the energy function h needs."""
-    n, nt = SI[0], SI[1]
-    C, d = SI[S_C], SI[S_D]
-    for a in range(nt):
-        s1 = SF[d + a]
-        s2 = 0.0
-        for j in range(n):
-            s1 += SF[C + a * n + j] * q[iq + j]
-            s2 += SF[C + a * n + j] * qd[iqd + j]
-        X[a] = s1
-        X[nt + a] = sign * s2
-
-
-@one_signature
-@kernel
-def _base_values(SI, SF, t, X, xb):
-    """``X[xb:xb + 18]``: pose, rate and acceleration of {A} at ``t`` from the base functions."""
-    for j in range(6):
-        fj = SI[SI[S_BASE_FN] + j]
-        X[xb + j] = fn_eval(SI, SF, fj, t, 0)
-        X[xb + 6 + j] = fn_eval(SI, SF, fj, t, 1)
-        X[xb + 12 + j] = fn_eval(SI, SF, fj, t, 2)
-
-
-@one_signature
-@kernel
-def _apply_loads(SI, SF, I, W, t):
-    """Add every load of the scene at time ``t`` to the links' external wrenches (in the tree's link
-    frames: ``load_X`` maps the URDF link's axes and point into them)."""
-    for li in range(SI[5]):
-        fn = SI[S_LOAD_FN] + 3 * li
-        v0, v1, v2 = fn_eval(SI, SF, SI[fn], t, 0), fn_eval(SI, SF, SI[fn + 1], t, 0), fn_eval(SI, SF, SI[fn + 2], t, 0)
-        X = SI[S_LOAD_X] + 12 * li
-        pt = SI[S_LOAD_POINT] + 3 * li
-        local = SI[SI[S_LOAD_LOCAL] + li] == 1
-        if local:
-            v0, v1, v2 = (SF[X] * v0 + SF[X + 1] * v1 + SF[X + 2] * v2, SF[X + 4] * v0 + SF[X + 5] * v1 + SF[X + 6] * v2,
-                          SF[X + 8] * v0 + SF[X + 9] * v1 + SF[X + 10] * v2)
-        r0 = SF[X] * SF[pt] + SF[X + 1] * SF[pt + 1] + SF[X + 2] * SF[pt + 2] + SF[X + 3]
-        r1 = SF[X + 4] * SF[pt] + SF[X + 5] * SF[pt + 1] + SF[X + 6] * SF[pt + 2] + SF[X + 7]
-        r2 = SF[X + 8] * SF[pt] + SF[X + 9] * SF[pt + 1] + SF[X + 10] * SF[pt + 2] + SF[X + 11]
-        link = SI[SI[S_LOAD_LINK] + li]
-        if SI[SI[S_LOAD_KIND] + li] == 0:
-            add_wrench(I, W, link, v0, v1, v2, 0.0, 0.0, 0.0, r0, r1, r2, local)
-        else:
-            add_wrench(I, W, link, 0.0, 0.0, 0.0, v0, v1, v2, r0, r1, r2, local)
-
-
-@one_signature
-@kernel
-def _actuators(SI, SF, t, y, iy, f, jf):
-    """Every actuator's generalized force (E55) at ``t``, ``q = y[iy:iy + n]``, ``q' = y[iy + n:]`` added to
-    ``f[jf:]``: MuJoCo's order (``mj_fwdActuation``): ctrl clamped to ctrlrange, ``gain c + (b0 + b1 gear q
-    + b2 gear q')``, clamped to forcerange, times the gear (the joint transmission's moment)."""
-    n = SI[0]
-    ai, af, fl, pr = SI[S_ACT_IDX], SI[S_ACT_FN], SI[S_ACT_FLAGS], SI[S_ACT_PRM]
-    for j in range(SI[S_NA]):
-        i = SI[ai + j]
-        p = pr + KA * j
-        c = fn_eval(SI, SF, SI[af + j], t, 0)
-        flags = SI[fl + j]
-        if flags & 1:
-            c = min(max(c, SF[p + 5]), SF[p + 6])
-        gear = SF[p + 4]
-        a = SF[p] * c + (SF[p + 1] + SF[p + 2] * (y[iy + i] * gear) + SF[p + 3] * (y[iy + n + i] * gear))
-        if flags & 2:
-            a = min(max(a, SF[p + 7]), SF[p + 8])
-        f[jf + i] += gear * a
-
-
-@one_signature
-@kernel
-def _inputs(SI, SF, t, y, iy, f, jf, actuators):
-    """Joint torques, dampers ``-c q'`` and (``actuators`` not None: the effect's marker) actuators at
-    ``(t, q = y[iy:], q' = y[iy + n:])`` added to ``f[jf:]``."""
-    n = SI[0]
-    ti, tf = SI[S_TORQUE_IDX], SI[S_TORQUE_FN]
-    for j in range(SI[6]):
-        f[jf + SI[ti + j]] += fn_eval(SI, SF, SI[tf + j], t, 0)
-    di, dc = SI[S_DAMPER_IDX], SI[S_DAMPING]
-    for j in range(SI[8]):
-        i = SI[di + j]
-        f[jf + i] -= SF[dc + j] * y[iy + n + i]
-    if actuators is not None:
-        if SI[S_NA] > 0:
-            _actuators(SI, SF, t, y, iy, f, jf)
-
-
-@one_signature
-@kernel
-def _springs(SI, SF, y, iy, f, jf):
-    """Springs ``-k (q - rest)`` at ``q = y[iy:]`` added to ``f[jf:]``."""
-    si, k, rest = SI[S_SPRING_IDX], SI[S_STIFFNESS], SI[S_REST]
-    for j in range(SI[7]):
-        i = SI[si + j]
-        f[jf + i] -= SF[k + j] * (y[iy + i] - SF[rest + j])
-
-
-@one_signature
-@kernel
-def _applied(SI, SF, t, y, Q, iQ, f, jf, X, loads, actuators, ct):
-    """``f[jf:jf + n]``: every generalized force the scene applies besides ``-(e + G)``: Q of the
-    loads (``Q[iQ:]``, when there are loads), joint torques, dampers ``-c q'``, actuators, the computed
+def _applied(scene, t, y, Q, Q_at, f, f_at, loads, actuators, ct):
+    """``f[f_at:f_at + n]``: every generalized force the scene applies besides ``-(e + G)``: Q of the
+    loads (``Q[Q_at:]``, when there are loads), joint torques, dampers ``-c q'``, actuators, the computed
     torque (already in ``X``, :func:`computed_torque`) and springs ``-k (q - rest)``. Returns the power
     ``q' . f`` of the non-potential ones (springs excluded). ``loads``, ``actuators``, ``ct``: the
     effects' markers (module doc)."""
+    SI, SF, X = scene
     n = SI[0]
     for i in range(n):
-        f[jf + i] = 0.0
+        f[f_at + i] = 0.0
     if loads is not None:
         for i in range(n):
-            f[jf + i] = Q[iQ + i]
-    _inputs(SI, SF, t, y, 0, f, jf, actuators)
+            f[f_at + i] = Q[Q_at + i]
+    _inputs(SI, SF, t, y, 0, f, f_at, actuators)
     if ct is not None:
         xt = ct_torque_at(n, SI[1])
         for i in range(n):
-            f[jf + i] += X[xt + i]
+            f[f_at + i] += X[xt + i]
     P = 0.0
     for i in range(n):
-        P += y[n + i] * f[jf + i]
-    _springs(SI, SF, y, 0, f, jf)
+        P += y[n + i] * f[f_at + i]
+    _springs(SI, SF, y, 0, f, f_at)
     return P
 
 
@@ -290,12 +105,15 @@ def ct_torque_at(n, nt):
 
 @one_signature
 @kernel
-def computed_torque(t, I, F, W, SI, SF, X):
+def computed_torque(t, tree, scene):
     """The computed torque at ``t`` (E57) into ``X[ct_torque_at(n, nt):]`` (n,): the inverse dynamics of
     the scene at its reference ``(r, r', r'')(t)`` (every coordinate's ``ct_fn``): ``A r'' + e + G - Q``
     (E54; the scene's base and loads at ``t``) minus every other force the scene applies there (torques,
     dampers, actuators, springs), so that ``q = r`` solves the scene when it starts on it. Overwrites the
-    tree's scratch ``W`` and the start of ``X``."""
+    tree's scratch ``W`` and the start of ``X`` (``tree``: :class:`~urdf2links.dynamics.tree_arrays.Tree`,
+    ``scene``: :class:`~urdf2links.scenes.scene_arrays.Scene`)."""
+    TI, W = tree.TI, tree.W
+    SI, SF, X = scene
     n, nt = SI[0], SI[1]
     has_base, coupled, loads = SI[2] != 0, SI[4] != 0, SI[5] > 0
     g = SI[S_GRAV]
@@ -322,15 +140,15 @@ def computed_torque(t, I, F, W, SI, SF, X):
             for j in range(n):
                 s += SF[C + a * n + j] * X[xa + j]
             X[xq + a] = s
-        kinematics_acc(I, F, W, X, 0, X, nt, X, xq, X, xb, has_base, gx, gy, gz)
+        kinematics(tree, X, 0, X, nt, True, X, xb, has_base, gx, gy, gz, X, xq)
     else:
-        kinematics_acc(I, F, W, X, xr, X, xr + n, X, xa, X, xb, has_base, gx, gy, gz)
+        kinematics(tree, X, xr, X, xr + n, True, X, xb, has_base, gx, gy, gz, X, xa)
     if loads:
-        clear_wrenches(I, W)
-        _apply_loads(SI, SF, I, W, t)
-    dynamics(I, F, W, False, loads, False)
-    own_armature(I, F, W, X, xq if coupled else xa)
-    wb, wq = nn(I[W_B]), nn(I[W_Q])
+        clear_wrenches(tree)
+        _apply_loads(SI, SF, tree, t)
+    dynamics(tree, False, loads, False)
+    own_armature(tree, X, xq if coupled else xa)
+    wb, wq = nonneg(TI[W_B]), nonneg(TI[W_Q])
     if coupled:
         C = SI[S_C]
         for i in range(n):
@@ -357,21 +175,23 @@ def computed_torque(t, I, F, W, SI, SF, X):
 
 @one_signature
 @kernel
-def _coupled_solve(SI, SF, I, W, X, t, y, out, loads, actuators, ct):
+def _coupled_solve(tree, scene, t, y, out, loads, actuators, ct):
     """Coupled coordinates: ``A = C^T A_tree C``, ``rhs = C^T (b + Q) + f`` and ``q''`` by a dense
     Cholesky into ``out[n:2 n]``; returns the pivot (scratch layout: :func:`scratch_size`)."""
+    TI, W = tree.TI, tree.W
+    SI, SF, X = scene
     n, nt = SI[0], SI[1]
     C = SF[SI[S_C]:SI[S_C] + nt * n].reshape((nt, n))
     xa = 2 * nt + 18
     xl = xa + n * n
     xf = xl + n * n
     if loads is not None:
-        reduce_vector(C, W, I[W_Q], X, xf + n, 1.0)
-    P = _applied(SI, SF, t, y, X, xf + n, X, xf, X, loads, actuators, ct)
-    reduce_vector(C, W, I[W_B], out, n, 1.0)
+        reduce_vector(C, W, TI[W_Q], X, xf + n, 1.0)
+    P = _applied(scene, t, y, X, xf + n, X, xf, loads, actuators, ct)
+    reduce_vector(C, W, TI[W_B], out, n, 1.0)
     for i in range(n):
         out[n + i] += X[xf + i]
-    reduce_mass(I, W, C, X[xa:xl].reshape((n, n)))
+    reduce_mass(tree, C, X[xa:xl].reshape((n, n)))
     pivot = cholesky(X, xa, n, X, xl)
     if pivot < 0:
         cholesky_solve(X, xl, n, out, n)
@@ -379,30 +199,32 @@ def _coupled_solve(SI, SF, I, W, X, t, y, out, loads, actuators, ct):
 
 
 @njit(cache=True)
-def scene_rhs(t, y, out, I, F, W, SI, SF, X, rhs):
-    """``out = (q', q'', P)`` (2n + 1,) at ``(t, y = (q, q', W))``; ``W`` the tree's scratch, ``X``
-    the scene's (:func:`~urdf2links.scenes.scene_arrays.scratch_size`), ``rhs`` the compiled
+def scene_rhs(t, y, out, TI, TF, W, SI, SF, X, rhs):
+    """``out = (q', q'', P)`` (2n + 1,) at ``(t, y = (q, q', W))``; ``TI``, ``TF`` the tree's arrays and
+    ``W`` its scratch (:class:`~urdf2links.dynamics.tree_arrays.Tree`), ``SI``, ``SF`` the scene's and ``X``
+    its scratch (:class:`~urdf2links.scenes.scene_arrays.Scene`), ``rhs`` the compiled
     right-hand side of the scene's effects (:func:`rhs_function`: only their code is compiled).
     Returns -1, or the index of the failing pivot (then ``out`` is NaN). ``P`` is the power of the
     non-potential forces ``q' . (Q + tau - c q' + actuators + computed torque)`` minus the explicit
     rate ``dE/dt - dV/dt`` of a moving base (see :mod:`urdf2links.scenes.plan`). Compiled once: ``rhs``
     is a C function, typed by its signature alone (module doc)."""
-    return rhs(t, y, out, I, F, W, SI, SF, X)
+    return rhs(t, y, out, TI, TF, W, SI, SF, X)
 
 
 def _variant(loads, actuators, ct, coupled):
     """The right-hand side of one combination of effects: :func:`_rhs` with its markers fixed (numba
     takes a closure's variables for constants, and caches each combination apart)."""
 
-    def scene_rhs_of_effects(t, y, out, I, F, W, SI, SF, X):
-        return _rhs(t, y, out, I, F, W, SI, SF, X, loads, actuators, ct, coupled)
+    def scene_rhs_of_effects(t, y, out, TI, TF, W, SI, SF, X):
+        return _rhs(t, y, out, Tree(TI, TF, W), Scene(SI, SF, X), loads, actuators, ct, coupled)
 
     return scene_rhs_of_effects
 
 
 def rhs_signature():
-    """The C signature of every :func:`rhs_function`: ``int64(t, y, out, I, F, W, SI, SF, X)``, each
-    array one-dimensional and contiguous (``I``, ``SI`` of int64, the others of float64)."""
+    """The C signature of every :func:`rhs_function`: ``int64(t, y, out, TI, TF, W, SI, SF, X)``, each
+    array one-dimensional and contiguous (``TI``, ``SI`` of int64, the others of float64). Inside, the
+    arrays travel as two records, ``tree`` and ``scene`` (free in a function that counts no references)."""
     from numba import types
 
     f, i = types.float64[::1], types.int64[::1]
@@ -426,12 +248,16 @@ def rhs_function(FX):
 
 
 @njit(inline="always")
-def _rhs(t, y, out, I, F, W, SI, SF, X, loads, actuators, ct, coupled):
+def _rhs(t, y, out, tree, scene, loads, actuators, ct, coupled):
     """:func:`scene_rhs` with the markers of :data:`EFFECTS` as arguments of their own (numba drops
     the code behind ``if marker is not None`` when a marker is None: module doc). Inlined into each
     :func:`_variant` (numba's ``inline="always"``, before typing: the markers are the closure's
     constants there): compiled once per combination, inside its C function, not a second time on its
-    own (every compiled function generates the machine code of all it calls anew)."""
+    own (every compiled function generates the machine code of all it calls anew). ``tree``: the tree's
+    arrays (:class:`~urdf2links.dynamics.tree_arrays.Tree`), ``scene``: the scene's
+    (:class:`~urdf2links.scenes.scene_arrays.Scene`)."""
+    TI, W = tree.TI, tree.W
+    SI, SF, X = scene
     n, nt = SI[0], SI[1]
     has_base = SI[2] != 0
     applied = SI[6] > 0 or SI[7] > 0 or SI[8] > 0 or loads is not None or actuators is not None or ct is not None
@@ -439,44 +265,44 @@ def _rhs(t, y, out, I, F, W, SI, SF, X, loads, actuators, ct, coupled):
     gx, gy, gz = SF[g], SF[g + 1], SF[g + 2]
     xb = 2 * nt
     if ct is not None:          # first: it uses the tree's scratch for its own pass
-        computed_torque(t, I, F, W, SI, SF, X)
+        computed_torque(t, tree, scene)
     if has_base:
         _base_values(SI, SF, t, X, xb)
     if coupled is not None:
         _tree_state(SI, SF, y, 0, y, n, 1.0, X)
-        kinematics(I, F, W, X, 0, X, nt, True, X, xb, has_base, gx, gy, gz)
+        kinematics(tree, X, 0, X, nt, True, X, xb, has_base, gx, gy, gz)
     else:
-        kinematics(I, F, W, y, 0, y, n, True, X, xb, has_base, gx, gy, gz)
+        kinematics(tree, y, 0, y, n, True, X, xb, has_base, gx, gy, gz)
     Pel = 0.0
     if loads is not None:       # loads or contact (effects_of): wrenches on links
-        clear_wrenches(I, W)
-        _apply_loads(SI, SF, I, W, t)
-        Pel = contact_wrenches(SI, SF, I, W)       # issue 37: ground contact (E80), its elastic power (E81)
-    dynamics(I, F, W, True, loads is not None, has_base)
+        clear_wrenches(tree)
+        _apply_loads(SI, SF, tree, t)
+        Pel = contact_wrenches(SI, SF, tree)       # issue 37: ground contact (E80), its elastic power (E81)
+    dynamics(tree, True, loads is not None, has_base)
     for i in range(n):
         out[i] = y[n + i]
     P = 0.0
     if coupled is not None:
-        pivot, P = _coupled_solve(SI, SF, I, W, X, t, y, out, loads, actuators, ct)
+        pivot, P = _coupled_solve(tree, scene, t, y, out, loads, actuators, ct)
     else:
-        wb = nn(I[W_B])
+        wb = nonneg(TI[W_B])
         if applied:
             xf = 2 * nt + 18
-            P = _applied(SI, SF, t, y, W, I[W_Q], X, xf, X, loads, actuators, ct)
+            P = _applied(scene, t, y, W, TI[W_Q], X, xf, loads, actuators, ct)
             for i in range(n):
                 out[n + i] = W[wb + i] + X[xf + i]
         else:
             for i in range(n):
                 out[n + i] = W[wb + i]
-        pivot = ltdl(I, W)
+        pivot = ltdl(TI, W)
         if pivot < 0:
-            ltdl_solve(I, W, out, n)
+            ltdl_solve(TI, W, out, n)
     if pivot >= 0:
         for i in range(out.size):
             out[i] = np.nan
         return pivot
     if has_base:   # the base's twist, acceleration and the links' momentum, recorded by the passes
-        dE, dV = base_power(I, W, gx, gy, gz)
+        dE, dV = base_power(tree, gx, gy, gz)
         P -= dE - dV
     out[2 * n] = P + Pel
     return -1
@@ -484,10 +310,11 @@ def _rhs(t, y, out, I, F, W, SI, SF, X, loads, actuators, ct, coupled):
 
 @one_signature
 @njit(cache=True)
-def scene_energies(ts, Q, QD, out, I, F, W, SI, SF, X):
+def scene_energies(ts, Q, QD, out, TI, TF, W, SI, SF, X):
     """At each sample ``k``: ``out[k] = (E, V, h)``: kinetic energy and potential energy of gravity
     (docs/equations.md (E37)) plus springs ``0.5 k (q - rest)^2``, and the energy function ``h``
     (E39) (``E + V`` for a fixed base; ``E2 - E0 + V`` from E at ``q'``, ``-q'`` and 0 for a moving one)."""
+    tree = Tree(TI, TF, W)
     n, nt = SI[0], SI[1]
     has_base, coupled = SI[2] != 0, SI[4] != 0
     g = SI[S_GRAV]
@@ -506,8 +333,8 @@ def scene_energies(ts, Q, QD, out, I, F, W, SI, SF, X):
                 for i in range(n):
                     X[i] = Q[s, i]
                     X[nt + i] = sign * QD[s, i]
-            kinematics(I, F, W, X, 0, X, nt, True, X, xb, has_base, 0.0, 0.0, 0.0)
-            E, V = energies(I, F, W, gx, gy, gz)
+            kinematics(tree, X, 0, X, nt, True, X, xb, has_base, 0.0, 0.0, 0.0)
+            E, V = energies(tree, gx, gy, gz)
             if pass_ == 0:
                 E0 = E
             elif pass_ == 1:
@@ -517,7 +344,7 @@ def scene_energies(ts, Q, QD, out, I, F, W, SI, SF, X):
         for j in range(SI[7]):
             x = Q[s, SI[si + j]] - SF[rest + j]
             V += 0.5 * SF[k + j] * x * x
-        V += contact_potential(SI, SF, I, W)       # issue 37: the contact's elastic energy (E81)
+        V += contact_potential(SI, SF, tree)       # issue 37: the contact's elastic energy (E81)
         out[s, 0] = E0
         out[s, 1] = V
         out[s, 2] = (0.5 * (E0 + E1) - 2.0 * E2 + V) if has_base else E0 + V
@@ -576,8 +403,8 @@ class CompiledScene:
         n = self.plan.n
         if self.SI[S_CT] == 0:
             return np.zeros(n)
-        I, F, W, SI, SF, X = self.I, self.F, np.zeros_like(self.W), self.SI, self.SF, np.zeros_like(self.X)
-        computed_torque(float(t), I, F, W, SI, SF, X)
+        SI, X = self.SI, np.zeros_like(self.X)
+        computed_torque(float(t), Tree(self.I, self.F, np.zeros_like(self.W)), Scene(SI, self.SF, X))
         xt = ct_torque_at(n, int(SI[1]))
         return X[xt:xt + n].copy()
 
