@@ -11,10 +11,22 @@ from pathlib import Path
 
 __all__ = ["shipped_robots_dir", "example_robot_data_dir", "Shipped", "shipped", "find_input", "InputNotFound",
            "DESCRIPTION_SUFFIXES", "DEFAULT_OUT", "checkout_root", "report_scenes", "default_baselines",
-           "REPORT_FOLDERS", "report_scene_files"]
+           "REPORT_FOLDERS", "report_scene_files", "read_toml"]
 
 #: Suffixes of the files a command reads: scenes, and robot descriptions.
 DESCRIPTION_SUFFIXES = (".toml", ".urdf", ".xacro", ".xml")
+
+
+def read_toml(path, *, error: type[Exception], what: str) -> dict:
+    """The TOML file ``path`` (a scene file, a pairs file) as a dict; ``error`` (the reader's own error class)
+    names ``what`` and the file when it does not exist or is not valid TOML."""
+    path = Path(path)
+    try:
+        return tomllib.loads(path.read_text())
+    except FileNotFoundError:
+        raise error(f"{what} {path} does not exist") from None
+    except tomllib.TOMLDecodeError as err:
+        raise error(f"{path}: not valid TOML: {err}") from None
 
 
 def shipped_robots_dir() -> Path:

@@ -37,9 +37,10 @@ from __future__ import annotations
 
 import math
 import os
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
+
+from urdf2links.locations import read_toml
 
 from .differences import KINDS
 from .pair import TERM_KEYS
@@ -120,12 +121,7 @@ def _root(path: Path, root) -> Path:
 def read_pairs_file(path) -> list[PairSpec]:
     """The pairs of a pairs file (module doc); a ValueError names the file, the pair and the key."""
     path = Path(path)
-    try:
-        data = tomllib.loads(path.read_text())
-    except FileNotFoundError:
-        raise ValueError(f"pairs file {path} does not exist") from None
-    except tomllib.TOMLDecodeError as err:
-        raise ValueError(f"{path}: not valid TOML: {err}") from None
+    data = read_toml(path, error=ValueError, what="pairs file")
     unknown = [k for k in data if k not in ("defaults", "pair", "description")]
     if unknown:
         _fail(str(path), f"unknown top-level key(s) {unknown}: a pairs file has a description, [defaults] and "

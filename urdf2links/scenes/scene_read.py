@@ -74,14 +74,13 @@ not computed, see :mod:`urdf2links.scenes.plan`)::
 
 from __future__ import annotations
 
-import tomllib
 from pathlib import Path
 
 import numpy as np
 
 from ..dynamics.transforms import PARAMETERS
 from ..errors import SceneError
-from ..locations import example_robot_data_dir, shipped_robots_dir
+from ..locations import example_robot_data_dir, read_toml, shipped_robots_dir
 from ..ranges import MAX_SAMPLES, METHODS
 from .actuators import parse_actuators
 from .constraints import constraint_options, parse_constraints
@@ -105,14 +104,8 @@ _RUN = ("t_end", "method", "rtol", "atol", "dt", "samples", "recharting")
 def load_scene(path) -> Scene:
     """Read and validate a scene file (names of links and coordinates are checked by :meth:`Scene.model`)."""
     path = Path(path)
-    where = str(path)
-    try:
-        data = tomllib.loads(path.read_text())
-    except FileNotFoundError:
-        raise SceneError(f"scene file {where} does not exist") from None
-    except tomllib.TOMLDecodeError as err:
-        raise SceneError(f"{where}: not valid TOML: {err}") from None
-    return scene_from_dict(data, where=where, directory=path.parent, name=path.stem, path=path)
+    data = read_toml(path, error=SceneError, what="scene file")
+    return scene_from_dict(data, where=str(path), directory=path.parent, name=path.stem, path=path)
 
 
 def scene_from_dict(data: dict, *, where: str = "<scene>", directory: Path | None = None, name: str = "scene",
