@@ -148,6 +148,23 @@ def pytest_sessionfinish(session, exitstatus):
         (folder / f"{stem}.md").write_text("\n".join(lines) + "\n")
 
 
+@pytest.fixture(scope="module")
+def mimic_arm(tmp_path_factory):
+    """``(URDF, MJCF)``: ur5_like with wrist_3 mimicking wrist_2 (q3 = 2 q2 + 0.1), and MuJoCo's import of it (a
+    joint equality); the pairs tests' coupled arm (tests/test_pairs_drifts.py, tests/test_pairs_reading.py)."""
+    from urdf2links.compare.pairs.mujoco_import import save_mujoco_import
+    from urdf2links.locations import shipped_robots_dir
+
+    folder = tmp_path_factory.mktemp("mimic_arm")
+    text = (shipped_robots_dir() / "ur5_like.urdf").read_text()
+    head, tail = text.split('<joint name="wrist_3_joint"', 1)
+    limit_end = tail.index("/>", tail.index("<limit")) + 2
+    tail = tail[:limit_end] + '\n    <mimic joint="wrist_2_joint" multiplier="2" offset="0.1"/>' + tail[limit_end:]
+    urdf = folder / "ur5_mimic.urdf"
+    urdf.write_text(head + '<joint name="wrist_3_joint"' + tail)
+    return urdf, save_mujoco_import(urdf, folder / "ur5_mimic.xml", keep_geometry=False, keep_frames=True).path
+
+
 @pytest.fixture(scope="session")
 def corpus_installed():
     """The example-robot-data corpus's folder; fails the test (tests/corpus.py ``needs_corpus``) when it

@@ -196,18 +196,6 @@ def test_a_joints_velocity(arm, folder):
     assert c.summary()["description_counts"]["non_dynamic"]["kinds"] == ["velocity"]
 
 
-@pytest.fixture(scope="module")
-def mimic_arm(folder):
-    """ur5_like with wrist_3 mimicking wrist_2 (multiplier 2, offset 0.1), and MuJoCo's import of it."""
-    text = (shipped_robots_dir() / "ur5_like.urdf").read_text()
-    head, tail = text.split('<joint name="wrist_3_joint"', 1)
-    limit_end = tail.index("/>", tail.index("<limit")) + 2
-    tail = tail[:limit_end] + '\n    <mimic joint="wrist_2_joint" multiplier="2" offset="0.1"/>' + tail[limit_end:]
-    urdf = folder / "ur5_mimic.urdf"
-    urdf.write_text(head + '<joint name="wrist_3_joint"' + tail)
-    return urdf, save_mujoco_import(urdf, folder / "ur5_mimic.xml", keep_geometry=False, keep_frames=True).path
-
-
 def test_a_coupling(arm, mimic_arm, folder):
     """MuJoCo's import turns <mimic> into a joint equality (no difference); its multiplier planted 1.5; a joint
     equality the URDF does not have (1 row); a mimic the MJCF does not have. Coupling changes the motion."""

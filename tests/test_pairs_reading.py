@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 
 from urdf2links.cli import main
-from urdf2links.compare.pairs.effects import EFFECT_ROUNDING, ORDER_WORDS, effect_size
+from urdf2links.compare.pairs.effects import EFFECT_ROUNDING, ORDER_WORDS
 from urdf2links.compare.pairs.mujoco_import import save_mujoco_import
 from urdf2links.compare.pairs.pair import compare_descriptions_of
 from urdf2links.locations import shipped_robots_dir
@@ -30,18 +30,6 @@ from urdf2links.locations import shipped_robots_dir
 @pytest.fixture(scope="module")
 def folder(tmp_path_factory):
     return tmp_path_factory.mktemp("reading")
-
-
-@pytest.fixture(scope="module")
-def mimic_arm(folder):
-    """ur5_like with wrist_3 mimicking wrist_2 (q3 = 2 q2 + 0.1), and MuJoCo's import of it (a joint equality)."""
-    text = (shipped_robots_dir() / "ur5_like.urdf").read_text()
-    head, tail = text.split('<joint name="wrist_3_joint"', 1)
-    limit_end = tail.index("/>", tail.index("<limit")) + 2
-    tail = tail[:limit_end] + '\n    <mimic joint="wrist_2_joint" multiplier="2" offset="0.1"/>' + tail[limit_end:]
-    urdf = folder / "ur5_mimic.urdf"
-    urdf.write_text(head + '<joint name="wrist_3_joint"' + tail)
-    return urdf, save_mujoco_import(urdf, folder / "ur5_mimic.xml", keep_geometry=False, keep_frames=True).path
 
 
 def _compare(urdf, mjcf):
