@@ -32,7 +32,7 @@ import numpy as np
 from .. import compilation
 from ..console import Progress
 from ..dynamics.constrained import independent_rows, kkt_solve, project_position, project_velocity
-from ..errors import IntegrationError
+from ..errors import DynamicsError, IntegrationError
 from .constrained_steps import check_constrained_method, constrained_stepper
 from .trajectory import Trajectory
 
@@ -113,7 +113,7 @@ class ConstrainedRHS:
         return out, lam, T
 
     def __call__(self, t, y):
-        return self.solve(t, y)[0]
+        return trial_stage(self, t, y)
 
     def project(self, t, y):
         """``y`` with ``(q, q')`` projected onto ``Phi = 0``, ``Phi' = 0`` (E74); and the residual before."""
@@ -129,6 +129,29 @@ class ConstrainedRHS:
         out = np.array(y, float)
         out[:n], out[n:2 * n] = q2, qd2
         return out, before
+
+
+def trial_stage(rhs, t, y):
+    """``y'`` at a trial stage of a step; where the solve fails there (a non-finite state, ``A`` not positive
+    definite, the rows dependent: an unstable trial step, e.g. a stage deep into a stiff contact) a NaN vector,
+    so the stepper rejects the step with its smallest factor, as the compiled loops do (``loops.common.evaluate``);
+    the failure is kept in ``rhs.failed`` (t, y, error), raised if the step size runs out (:func:`_stepper_failed`)."""
+    try:
+        with np.errstate(all="ignore"):
+            return rhs.solve(t, y)[0]
+    except (DynamicsError, FloatingPointError, np.linalg.LinAlgError) as exc:
+        rhs.failed = (float(t), np.array(y, float), exc)
+        return np.full(len(y), np.nan)
+
+
+def _stepper_failed(rhs, label, run, solver, msg):
+    """The run's error when the stepper gives up: the named error of the last failed solve when there is one
+    (:func:`trial_stage`), else the stepper's message."""
+    failed = getattr(rhs, "failed", None)
+    if failed is not None and isinstance(failed[2], DynamicsError):
+        raise failed[2]
+    raise IntegrationError(f"{rhs.where}: {label} with projection could not finish "
+                           f"the run to t_end = {run.t_end:g} s: {msg} at t = {solver.t:.6g} s")
 
 
 def _initial(rhs, q, qd):
@@ -163,8 +186,7 @@ def simulate_constrained(plan, run, q, qd, *, progress=None, max_wall=None, max_
         while solver.status == "running":
             msg = solver.step()
             if solver.status == "failed":
-                raise IntegrationError(f"{rhs.where}: {label} with projection could not finish "
-                                       f"the run to t_end = {run.t_end:g} s: {msg} at t = {solver.t:.6g} s")
+                _stepper_failed(rhs, label, run, solver, msg)
             steps += 1
             dense = solver.dense_output()
             while k < t_eval.size and t_eval[k] <= solver.t:
@@ -173,7 +195,7 @@ def simulate_constrained(plan, run, q, qd, *, progress=None, max_wall=None, max_
             yp, before = rhs.project(solver.t, solver.y)
             drift = max(drift, before)
             solver.y = yp
-            solver.f = rhs(solver.t, yp)        # the first stage of the next step (FSAL)
+            solver.f = rhs.solve(solver.t, yp)[0]       # the first stage of the next step (FSAL): failures raise
             if np.isnan(Y[k - 1, 0]):
                 Y[k - 1] = yp
             bar(solver.t)
