@@ -144,6 +144,27 @@ def trial_stage(rhs, t, y):
         return np.full(len(y), np.nan)
 
 
+def follow_rows(rhs, t, y):
+    """Between steps, the solved rows chosen again at ``y`` (E73), as many as at the start: a floating base turns a
+    planar loop's plane, so the world-axis row left out at the start (its out-of-plane row) is no longer the
+    redundant one, and the rows kept would become dependent as the base rolls or yaws (issue 45). The pivoted QR
+    of ``Phi_q^T`` keeps the best-conditioned ones; every row's residual is zero on the constraints, so the
+    choice changes nothing else. The count is kept: at a loop's change point the rows still lose their
+    independence and the run stops with the named error. Nothing to do without redundant rows."""
+    sel = rhs.selection
+    if sel is None or not sel.redundant.size:
+        return
+    import scipy.linalg as sla
+
+    n = rhs.model.n
+    J = rhs.cset.terms(y[:n], t=t, base=rhs.plan.base_state(t)).J
+    _, _, piv = sla.qr(J.T, mode="economic", pivoting=True)
+    keep = np.sort(piv[:sel.rank])
+    if not np.array_equal(keep, rhs.keep):
+        rhs.keep = keep
+        rhs.row_changes = getattr(rhs, "row_changes", 0) + 1
+
+
 def _stepper_failed(rhs, label, run, solver, msg):
     """The run's error when the stepper gives up: the named error of the last failed solve when there is one
     (:func:`trial_stage`), else the stepper's message."""
@@ -192,6 +213,7 @@ def simulate_constrained(plan, run, q, qd, *, progress=None, max_wall=None, max_
             while k < t_eval.size and t_eval[k] <= solver.t:
                 Y[k] = rhs.project(t_eval[k], dense(t_eval[k]))[0] if t_eval[k] < solver.t else np.nan
                 k += 1
+            follow_rows(rhs, solver.t, solver.y)
             yp, before = rhs.project(solver.t, solver.y)
             drift = max(drift, before)
             solver.y = yp
@@ -232,7 +254,8 @@ def _trajectory(Trajectory, plan, rhs, run, t, Y, steps, drift, initial, wall, s
             "max_residual": float(res.max()), "max_step_drift": float(drift), "lambda": lam, "forces": gen,
             "initial": initial, "method": f"{method} + projection after every step (E74), interpreted path"
             + (" (auto: DOP853, the constrained path has no stiffness test)" if run.method == "auto" else ""),
-            "min_schur_pivot": rhs.min_pivot[0], "min_schur_pivot_t": rhs.min_pivot[1]}
+            "min_schur_pivot": rhs.min_pivot[0], "min_schur_pivot_t": rhs.min_pivot[1],
+            "row_changes": getattr(rhs, "row_changes", 0)}
     stats = {"method": method, "scene_method": run.method, "integrator": f"{method}+projection", "rtol": run.rtol,
              "atol": run.atol, "dt": run.dt, "nfev": rhs.nfev, "nsteps": steps, "njev": 0,
              "stretches": [], "methods_used": f"{method} with projection", "wall_time": wall, "terms": plan.terms, "success": True, "message": "",

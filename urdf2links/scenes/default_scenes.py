@@ -86,6 +86,11 @@ def default_scene(robot, *, floating: bool = False, q0: str = "excite", seed: in
     run = RunSettings(t_end=t_end, samples=min(MAX_SAMPLES, max(101, int(round(500 * t_end)) + 1)))
     name = default_scene_name(floating=floating, q0=q0, seed=seed, inertia=inertia, mimic=mimic, hold=hold)
     scene = _default_scene(robot, mjcf, model, options, name, state + held_text, q_init, qd_init, run, held, floating)
+    if q0 in ("excite", "random"):      # issue 45: a random start carried onto the closed loops, when they act
+        from .loop_start import start_on_loops
+
+        scene = start_on_loops(scene, model)
+        qd_init = scene.qd0
     if q0 != "excite" or held:      # --hold's servos hold the joints: no damper torque to fight them
         return scene
     torques = damper_torques(scene.springs_for(model).springs, qd_init)
