@@ -140,7 +140,8 @@ def trial_stage(rhs, t, y):
         with np.errstate(all="ignore"):
             return rhs.solve(t, y)[0]
     except (DynamicsError, FloatingPointError, np.linalg.LinAlgError) as exc:
-        rhs.failed = (float(t), np.array(y, float), exc)
+        if isinstance(exc, DynamicsError) or getattr(rhs, "failed", None) is None:    # the named error kept
+            rhs.failed = (float(t), np.array(y, float), exc)
         return np.full(len(y), np.nan)
 
 
@@ -168,6 +169,12 @@ def follow_rows(rhs, t, y):
 def _stepper_failed(rhs, label, run, solver, msg):
     """The run's error when the stepper gives up: the named error of the last failed solve when there is one
     (:func:`trial_stage`), else the stepper's message."""
+    try:
+        rhs.solve(solver.t, solver.y)       # where it stopped: the named error, when the solve fails there
+    except DynamicsError:
+        raise
+    except (FloatingPointError, np.linalg.LinAlgError):
+        pass
     failed = getattr(rhs, "failed", None)
     if failed is not None and isinstance(failed[2], DynamicsError):
         raise failed[2]
