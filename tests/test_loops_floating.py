@@ -78,7 +78,7 @@ def test_biped_lands_and_stands_with_its_loops_closed(drop):
     (to 1e-9 W against a contact power of watts). It lands (the feet's spheres touch), then stands: the pelvis
     still above 0.8 m at the end and level within 0.1 rad.
     Planted wrong cases (checked once): W left out (the contact's and the dampers' work) breaks the balance by
-    3.5 J; the knee loops dropped (from_file = false) the legs fold and the pelvis ends at PELVIS_OPEN m."""
+    3.5 J; the knee loops dropped (from_file = false) the legs fold and the pelvis ends at 0.02 m."""
     plan, tr = drop
     c = tr.stats["constraints"]
     assert len(c["solved_rows"]) == 4 and len(c["rows"]) == 6        # each planar loop's out-of-plane row redundant
@@ -100,7 +100,7 @@ def test_biped_agrees_with_mujoco_under_the_same_contact_law(drop):
     from our trajectory falls at least 5x per 10x (the issue's "in agreement"), and the plausibility gate passes
     on both runs (no sphere sunk, the base above the ground, no joint past its range, no energy growth).
     Planted wrong case (checked once): the contact stiffness doubled in our run only: MuJoCo's error stops
-    falling (3e-3 m at every tau)."""
+    falling (1.2e-2 at every tau, ratios 1.00)."""
     from urdf2links.compare.agreement.constraint_agreement import solref_study
     from urdf2links.compare.agreement.plausibility import plausibility
     from urdf2links.compare.mujoco_side.mjcf import mjcf_from_scene
@@ -160,7 +160,7 @@ def test_excited_default_start_on_the_loops(robot, t_end):
 def test_a_start_off_every_loop_is_refused_by_name():
     """A loop that does not close at the file's reference configuration (a connect of the leg's foot to a world
     point 5 m away, beyond its reach): the projection cannot reach it, and the scene is refused naming the loop
-    and the reason. Planted wrong case (checked once): the point 0.1 m away (reachable) is accepted."""
+    and the reason. Planted wrong case (checked once): the world point where the foot is at hip = 0.3 rad (reachable) is accepted."""
     import dataclasses
 
     from urdf2links.errors import SceneError
