@@ -166,6 +166,25 @@ def follow_rows(rhs, t, y):
         rhs.row_changes = getattr(rhs, "row_changes", 0) + 1
 
 
+def angle_guard(rhs, t, y):
+    """A floating link's ZYX angles at their chart's singularity (``|cos phi_y| <`` ``charts.SINGULAR_COS_MIN``):
+    the constrained path does not re-chart (E45), so it stops there with the named error, as an unconstrained run
+    with re-charting off does, instead of integrating through the lost digits of ``q''``."""
+    from .charts import SINGULAR_COS_MIN, floating_links
+
+    links = getattr(rhs, "_floating", None)
+    if links is None:
+        links = rhs._floating = floating_links(rhs.model)
+    for ln in links:
+        c = abs(np.cos(y[ln.angles[1]]))
+        if c < SINGULAR_COS_MIN:
+            raise DynamicsError(f"{rhs.where}: ZYX angles of link {ln.name!r} reach the singularity of their chart at "
+                                f"t = {t:.6g} s: |cos phi_y| = {c:.2e} < {SINGULAR_COS_MIN:g}; the constrained path does "
+                                "not re-chart them (docs/constraints.md, 'Loops on a floating base'): start the root "
+                                "further from phi_y = +-pi/2, or run without the constraints",
+                                q=y[:rhs.model.n], coordinates=tuple(rhs.model.coordinate_names[i] for i in ln.angles))
+
+
 def _stepper_failed(rhs, label, run, solver, msg):
     """The run's error when the stepper gives up: the named error of the last failed solve when there is one
     (:func:`trial_stage`), else the stepper's message."""
@@ -221,6 +240,7 @@ def simulate_constrained(plan, run, q, qd, *, progress=None, max_wall=None, max_
                 Y[k] = rhs.project(t_eval[k], dense(t_eval[k]))[0] if t_eval[k] < solver.t else np.nan
                 k += 1
             follow_rows(rhs, solver.t, solver.y)
+            angle_guard(rhs, solver.t, solver.y)
             yp, before = rhs.project(solver.t, solver.y)
             drift = max(drift, before)
             solver.y = yp
