@@ -274,6 +274,7 @@ def _trajectory(Trajectory, plan, rhs, run, t, Y, steps, drift, initial, wall, s
     gen = np.empty((t.size, n))
     res, rate = np.empty(t.size), np.empty(t.size)
     for i in range(t.size):
+        follow_rows(rhs, t[i], Y[i])        # a floating base: the rows solved there (E73, E85)
         _, lam[i], T = rhs.solve(t[i], Y[i])
         gen[i] = T.J[rhs.keep].T @ lam[i]
         res[i], rate[i] = np.max(np.abs(T.phi), initial=0.0), np.max(np.abs(T.rate), initial=0.0)
