@@ -193,7 +193,7 @@ FORCE_BOUND = 1e-2
 #: symmetric gripper's: max |lambda| 2e-16, the difference 1.8e-11) has nothing to be relative to.
 FORCE_FLOOR = 1e-8
 #: The report's solref study compares the first seconds of the run (each of its three MuJoCo runs is that long).
-STUDY_WINDOW = 0.5
+STUDY_WINDOW = 0.25
 #: MuJoCo's step in the study is at most tau / STEPS_PER_TAU (RK4 resolves the constraint's own time constant).
 STEPS_PER_TAU = 10.0
 #: A study error at or below this (rad, m) has nothing left to approach: a pair ending there counts as converged

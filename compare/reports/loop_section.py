@@ -15,7 +15,7 @@ A scene with constraint rows (``[[constraint]]``, ``[constraints] from_file`` or
   project's own samples (MuJoCo's ``mj_forward`` at the same state, time and inputs: its ``Phi = Phi' = 0`` there,
   so only its regularizer separates the two) and (b) along MuJoCo's own run (its violation adds ``-k Phi - b Phi'``);
   the bound is on (a), 1e-2 of max ``|lambda|``;
-- **the solref study**: three more MuJoCo runs over the first 0.5 s (``solref`` tau 1e-2, 1e-3, 1e-4 s, RK4 at
+- **the solref study**: three more MuJoCo runs over the first 0.25 s (``solref`` tau 1e-2, 1e-3, 1e-4 s, RK4 at
   ``min(dt, tau / 10)``), MuJoCo's largest distance from the project's run for each, and the rate per decade.
 
 The loops' agreement (residual below 1e-9, forces within the bound, MuJoCo approaching at least 5x per 10x smaller
