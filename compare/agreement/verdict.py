@@ -178,6 +178,8 @@ def switched_off(model, plan, file_model=None) -> list[dict]:
         springs += [j["name"] for j in own if j.get("damping") and j["name"] not in springs]
     out.append(_effect("springs", "the file's joint springs and dampers", springs, "joint"))
     named = {a.name for a in plan.actuator_set.actuators}
+    cons = getattr(plan, "constraints", None)       # issue 45: a fixed tendon's actuators act on both engines
+    named |= {a.name for td in (cons.tendons if cons is not None else ()) for a in td.actuators}
     acts = [a.get("name") or f"#{k}" + (f" on {a['joint']}" if a.get("joint") else "")   # an unnamed one by its
             for k, a in enumerate(model.info.get("actuators", []))                          # index and joint
             if not a.get("name") or a["name"] not in named]

@@ -148,8 +148,12 @@ def _force_rows(s) -> list[list[str]]:
     f = s["forces"]
     a, b = f["at_our_states"], f["along_mujoco_run"]
     out = [[html.escape(r), html.escape(f["units"].get(r, "")), fmt(a["by_row"][r]), fmt(b["by_row"][r])] for r in s["rows"]]
-    out.append(["<b>all rows</b>", "", f"{fmt(a['max_abs'])} ({fmt(a['relative'])} of max |&lambda;| {fmt(a['scale'])})",
-                f"{fmt(b['max_abs'])} ({fmt(b['relative'])})"])
+    if a["max_abs"] <= f["floor"]:      # a coupling that carries no force: nothing to be relative to
+        out.append(["<b>all rows</b>", "", f"{fmt(a['max_abs'])} (&le; {f['floor']:g}; max |&lambda;| {fmt(a['scale'])}: "
+                    "no force to compare)", fmt(b["max_abs"])])
+    else:
+        out.append(["<b>all rows</b>", "", f"{fmt(a['max_abs'])} ({fmt(a['relative'])} of max |&lambda;| "
+                    f"{fmt(a['scale'])})", f"{fmt(b['max_abs'])} ({fmt(b['relative'])})"])
     return out
 
 
