@@ -105,7 +105,7 @@ def _print_headline(s: dict, stream=None) -> None:
               f"{st['native'] if st['native'] is not None else 'never'} s (law / native)", file=stream)
     if s.get("coverage"):
         print(f"  coverage   {s['coverage']['text']}", file=stream)
-    if s.get("constraints"):        # issue 45: the closed loops (compare/reports/loop_section.py)
+    if s.get("constraints") and "error" not in s["constraints"]:        # issue 45: the closed loops (compare/reports/loop_section.py)
         L = s["constraints"]
         st, fa = L["study"], L["forces"]["at_our_states"]
         print(f"  loops      max |Phi| {L['residual']['max']:.2e}, |Phi'| {L['residual']['rate_max']:.2e}; |efc_force - "

@@ -132,3 +132,21 @@ def test_the_scope_names_what_is_left_open(tmp_path):
     loops = cut_scope(model, scene.load_options, compile_plan(scene, model))["loops"]
     assert [x.split(" ")[1] for x in loops["closed"]] == ["(joint)"] and loops["tendons"] == ["split"]
     assert loops["open"] == [] and "fixed tendons on both engines: split" in loops["text"]
+
+
+def test_a_failed_section_is_said_and_keeps_the_report(four_bar, tmp_path, monkeypatch):
+    """Planted: the section's computation raises; the report is still written, its verdict says the loops were NOT
+    compared and why, never that they agree (``report`` must not lose its other scenes to one section)."""
+    from urdf2links.compare.reports import report as report_module
+
+    def broken(c):
+        raise RuntimeError("planted failure")
+
+    monkeypatch.setattr(report_module, "loop_figures", broken)
+    c, _, _ = four_bar
+    fresh = dataclasses.replace(c, info={k: v for k, v in c.info.items() if k != "loop_figures"})
+    paths = write_report(fresh, tmp_path / "broken", animation_fps=0)
+    s = json.loads(paths["json"].read_text())
+    assert s["constraints"] == {"error": "RuntimeError: planted failure"}
+    assert "the loops were NOT compared (RuntimeError: planted failure)" in s["verdict"]["text"]
+    assert "the loops agree" not in s["verdict"]["text"] and "not compared" in paths["html"].read_text()

@@ -174,6 +174,8 @@ def loop_section(s: dict, series: dict | None, verdict: dict) -> list[str]:
     if not s:
         return []
     e = html.escape
+    if "error" in s:
+        return ["<h2>Closed loops</h2>", f"<div class='box bad'><b>Loops:</b> not compared: {e(s['error'])}.</div>"]
     st, f = s["study"], s["forces"]
     loops = (verdict.get("cut") or {}).get("loops") or {}
     parts = ["<h2>Closed loops</h2>",
@@ -214,6 +216,8 @@ def loop_markdown(s: dict, verdict: dict) -> list[str]:
     """The section's lines in summary.md."""
     if not s:
         return []
+    if "error" in s:
+        return ["", "## Closed loops", "", f"**Loops:** not compared: {s['error']}."]
     r, f, st = s["residual"], s["forces"], s["study"]
     a, b = f["at_our_states"], f["along_mujoco_run"]
     loops = (verdict.get("cut") or {}).get("loops") or {}

@@ -380,8 +380,16 @@ def with_loop_sections(c, summary: dict) -> dict:
     if not cons or not cons.get("rows"):
         return summary
     if "loop_figures" not in c.info:
-        c.info["loop_figures"] = loop_figures(c)
+        try:
+            c.info["loop_figures"] = loop_figures(c)
+        except Exception as exc:     # a failed section must not lose the report (nor `report`'s other scenes)
+            c.info["loop_figures"] = ({"error": f"{type(exc).__name__}: {exc}"}, None)
     loops = json_ready(c.info["loop_figures"][0])
+    if "error" in loops:
+        verdict = {**summary["verdict"], "text": summary["verdict"]["text"].rstrip(".")
+                   + f"; the loops were NOT compared ({loops['error']})."}
+        return {**summary, "constraints": loops, "verdict": verdict,
+                "trajectory": {**summary["trajectory"], "verdict": verdict["text"]}}
     verdict = json_ready(with_loops(summary["verdict"], loops))
     trajectory = {**summary["trajectory"], "verdict": verdict["text"]}
     return {**summary, "constraints": loops, "verdict": verdict, "trajectory": trajectory}
