@@ -24,7 +24,7 @@ from __future__ import annotations
 
 from ..mujoco_side.mujoco_stepping import instability_note
 
-__all__ = ["cut_scope", "switched_off", "run_scope", "comparison_verdict", "FULL_SCOPE"]
+__all__ = ["cut_scope", "switched_off", "run_scope", "comparison_verdict", "FULL_SCOPE", "loop_scope", "with_loops"]
 
 #: ``verdict.scope`` of a model that nothing was cut from and nothing switched off in.
 FULL_SCOPE = "the whole model"
@@ -56,6 +56,9 @@ def cut_scope(model, load_options: dict | None = None, plan=None) -> dict:
     if scene is not None and getattr(scene, "mimic_constraints", False):
         mimic = 0
     out = {"equalities": eq, "tendons": tendons, "mimic": mimic, "cut": bool(eq or tendons or mimic)}
+    loops = loop_scope(model, plan, load_options)      # issue 45: which loops were closed, on which side
+    if loops is not None:
+        out["loops"] = loops
     if eq or tendons:
         out["text"] = (f"open tree of a closed mechanism ({eq} constraint{'s' * (eq != 1)}, {tendons} "
                        f"tendon{'s' * (tendons != 1)} dropped)" + (f", {mimic} mimic couplings dropped" if mimic else ""))
@@ -64,6 +67,73 @@ def cut_scope(model, load_options: dict | None = None, plan=None) -> dict:
                        "mimic joints move as independent coordinates)")
     else:
         out["text"] = FULL_SCOPE
+    return out
+
+
+def _left_open(model, plan, load_options) -> list[str]:
+    """The file's loops and couplings that neither engine closes, each with why: an MJCF equality the plan does
+    not solve (not read: ``[constraints] from_file`` off; inactive in the file; not modelled), URDF mimic joints
+    run as independent coordinates."""
+    cons = getattr(plan, "constraints", None)
+    solved = set() if cons is None else {c.name for c in cons.cset.constraints}
+    scene = getattr(plan, "scene", None)
+    from_file = bool(getattr(scene, "file_constraints", False))
+    out = []
+    for r in model.info.get("equalities", []) or []:
+        if r.get("name") in solved:
+            continue
+        why = ("not modelled: " + r["why"] if not r.get("supported", True) else
+               "inactive in the file" if not r.get("active", True) else
+               "the file's equalities not read ([constraints] from_file = false)" if not from_file else "not solved")
+        out.append(f"{r.get('name')} ({r.get('kind')}: {why})")
+    if (load_options or {}).get("mimic", "independent") == "independent" and not getattr(scene, "mimic_constraints", False):
+        out += [f"{j['name']} (mimic: an independent coordinate)" for j in model.info.get("joints", []) if j.get("mimic")]
+    return out
+
+
+def loop_scope(model, plan, load_options: dict | None = None) -> dict | None:
+    """Which loops and couplings the run closes, on which side, and which it leaves open (issue 45):
+    ``closed`` (the plan's constraints, ``name (kind)``), ``tendons`` (its fixed tendons), ``open`` (the file's
+    equalities and mimic couplings neither engine closes, each with why) and ``text``; None for a model with no
+    loop, coupling or tendon at all."""
+    from ..mujoco_side.mujoco_constraints import COMPARE_SOLREF, SOLIMP
+
+    cons = getattr(plan, "constraints", None)
+    closed = [] if cons is None else [f"{c.name} ({c.kind})" for c in cons.cset.constraints]
+    tendons = [] if cons is None else [td.name for td in cons.tendons]
+    left = _left_open(model, plan, load_options)
+    if not closed and not tendons and not left:
+        return None
+    parts = []
+    if closed:
+        parts.append(f"loops closed on both engines: {', '.join(closed)}; urdf2links: exact constraints with "
+                     "multipliers (E72), projected onto Phi = 0, Phi' = 0 after every step (E74); MuJoCo: soft equality "
+                     f"constraints (solref {COMPARE_SOLREF[0]:g} s, damping ratio {COMPARE_SOLREF[1]:g}, solimp "
+                     f"{SOLIMP[0]:g})")
+    if tendons:
+        parts.append(f"fixed tendons on both engines: {', '.join(tendons)} (E76)")
+    parts.append("left open on both engines: " + (", ".join(left) if left else "none"))
+    return {"closed": closed, "tendons": tendons, "open": left, "text": "; ".join(parts)}
+
+
+def with_loops(verdict: dict, loops: dict) -> dict:
+    """``verdict`` (:func:`comparison_verdict`) with the loops' agreement of the report (issue 45,
+    :func:`urdf2links.compare.agreement.constraint_agreement.loop_figures`: ``agree``, ``text``) stated in it:
+    after the agreement when the loops agree; in its place when they do not (the trajectories' sentence kept in
+    brackets, its "agree" said as "within"), so that a disagreeing loop never reads "agree"."""
+    out = dict(verdict)
+    out["loops"] = {k: loops[k] for k in ("agree", "reasons", "text")}
+    head = verdict["agreement"].rstrip(".")
+    text = verdict["text"]
+    if not verdict.get("plausible", True) or not text.startswith(head):
+        out["text"] = text.rstrip(".") + f"; {loops['text']}."
+        return out
+    rest = text[len(head):]
+    if loops["agree"]:
+        out["text"] = f"{head}; {loops['text']}{rest}"
+    else:
+        said = head.replace("the engines agree to", "the trajectories are within").replace(" agree ", " are within ")
+        out["text"] = f"{loops['text']} ({said}){rest}"
     return out
 
 
@@ -108,6 +178,8 @@ def switched_off(model, plan, file_model=None) -> list[dict]:
         springs += [j["name"] for j in own if j.get("damping") and j["name"] not in springs]
     out.append(_effect("springs", "the file's joint springs and dampers", springs, "joint"))
     named = {a.name for a in plan.actuator_set.actuators}
+    cons = getattr(plan, "constraints", None)       # issue 45: a fixed tendon's actuators act on both engines
+    named |= {a.name for td in (cons.tendons if cons is not None else ()) for a in td.actuators}
     acts = [a.get("name") or f"#{k}" + (f" on {a['joint']}" if a.get("joint") else "")   # an unnamed one by its
             for k, a in enumerate(model.info.get("actuators", []))                          # index and joint
             if not a.get("name") or a["name"] not in named]
@@ -151,6 +223,8 @@ def comparison_verdict(agreement: str, *, scope: dict, coverage, mujoco_integrat
     parts = [plausibility.text() if implausible else agreement.rstrip(".")]
     if scope["cut"]:
         parts.append(f"as the {scope['text']}, not the whole mechanism")
+    if scope.get("loops"):      # issue 45: the loops closed, on which side, and those left open
+        parts.append(scope["loops"]["text"])
     if off:
         parts.append(f"without its {', '.join(x['text'] for x in off)} (switched off on both engines)")
     mj = _mujoco_part(mujoco_integrator, mujoco_timestep, blow_ups, fallback)
@@ -158,7 +232,8 @@ def comparison_verdict(agreement: str, *, scope: dict, coverage, mujoco_integrat
         parts.append(mj)
     if coverage.weak:
         parts.append(f"WEAK EVIDENCE: {coverage.text().split(':')[0]}")
-    return {"text": "; ".join(parts) + ".", "agreement": agreement, "scope": run_scope(scope, list(off)), "cut": scope,
+    where = run_scope(scope, list(off)) + (f"; {scope['loops']['text']}" if scope.get("loops") else "")
+    return {"text": "; ".join(parts) + ".", "agreement": agreement, "scope": where, "cut": scope,
             "switched_off": list(off), "plausible": not implausible,
             "weak_evidence": bool(coverage.weak), "coverage": coverage.text(), "moved_fraction": coverage.moved_fraction,
             "mujoco": mj}

@@ -25,16 +25,19 @@ from pathlib import Path
 from urdf2links.locations import DEFAULT_OUT
 from urdf2links.view.animation import DEFAULT_FPS
 
+from ..agreement.constraint_agreement import loop_figures
+from ..agreement.verdict import with_loops
 from ..formatting import fmt, fmt_md, fmt_t, json_ready
 from ..tradeoff.report import insert_section
 from .baselines import CheckResult
 from .contact_section import contact_markdown, contact_section
+from .loop_section import loop_markdown, loop_section
 from .coverage import coverage_cell, coverage_html, coverage_markdown, weak_evidence
 from .motion import motion_section
 from .plots import plot_coordinates, plot_energy, plot_error, plot_overview, plot_terms
 from .stops import stops_html, stops_md
 
-__all__ = ["write_report", "render_html", "render_markdown", "write_index", "page_css"]
+__all__ = ["write_report", "render_html", "render_markdown", "write_index", "page_css", "with_loop_sections"]
 
 
 # --------------------------------------------------------------------------- HTML
@@ -314,6 +317,7 @@ def render_html(c, summary: dict, *, command: str | None = None, check: "CheckRe
     parts = (_top(summary, check, index_link, index_label, headline) + list(first_sections) + motion + _terms_section(summary, light)
              + _trajectory_section(c, summary, light) + _energy_section(c, summary, light)
              + coverage_html(summary, 4, _rows) + list(extra_sections)
+             + loop_section(summary.get("constraints"), _loop_series(c), summary["verdict"])     # issue 45
              + contact_section(c, summary)      # issue 37
              + _closing_sections(summary, command) + ["</body></html>"])
     return "\n".join(parts)
@@ -354,10 +358,41 @@ def render_markdown(s: dict) -> str:
               f"Timed regions: urdf2links: {wt['regions']['project_s']}. MuJoCo: {wt['regions']['mujoco_s']}. "
               + _compile_words(wt), ""]
     lines += contact_markdown(s)        # issue 37: a [[contact]] scene's ground and MuJoCo's native contact
+    lines += loop_markdown(s.get("constraints"), s["verdict"])      # issue 45: the closed loops
     return "\n".join(lines)
 
 
 # --------------------------------------------------------------------------- files
+
+
+def _loop_series(c):
+    got = getattr(c, "info", {}).get("loop_figures")
+    return None if got is None else got[1]
+
+
+def with_loop_sections(c, summary: dict) -> dict:
+    """``summary`` of a comparison ``c`` with its closed loops (issue 45): ``constraints`` (the residual, the forces
+    against MuJoCo's ``efc_force``, the solref study: :func:`~urdf2links.compare.agreement.constraint_agreement.loop_figures`,
+    computed once per comparison and kept in ``c.info``) and the loops' agreement stated in the verdict
+    (:func:`~urdf2links.compare.agreement.verdict.with_loops`). Unchanged for a run without constraint rows."""
+    traj = getattr(c, "traj", None)
+    cons = None if traj is None else traj.stats.get("constraints")
+    if not cons or not cons.get("rows"):
+        return summary
+    if "loop_figures" not in c.info:
+        try:
+            c.info["loop_figures"] = loop_figures(c)
+        except Exception as exc:     # a failed section must not lose the report (nor `report`'s other scenes)
+            c.info["loop_figures"] = ({"error": f"{type(exc).__name__}: {exc}"}, None)
+    loops = json_ready(c.info["loop_figures"][0])
+    if "error" in loops:
+        verdict = {**summary["verdict"], "text": summary["verdict"]["text"].rstrip(".")
+                   + f"; the loops were NOT compared ({loops['error']})."}
+        return {**summary, "constraints": loops, "verdict": verdict,
+                "trajectory": {**summary["trajectory"], "verdict": verdict["text"]}}
+    verdict = json_ready(with_loops(summary["verdict"], loops))
+    trajectory = {**summary["trajectory"], "verdict": verdict["text"]}
+    return {**summary, "constraints": loops, "verdict": verdict, "trajectory": trajectory}
 
 
 def write_report(c, out_dir=None, *, root=None, json_path=None, command: str | None = None,
@@ -371,7 +406,7 @@ def write_report(c, out_dir=None, *, root=None, json_path=None, command: str | N
     summary) into ``summary.json``: a comparison of two descriptions, whose ``headline`` (``{"title", "html"}``)
     is the page's and whose ``first_markdown`` opens ``summary.md`` (the usual Markdown follows, its headings one
     level down). Returns ``{"dir", "html", "json", "md", "summary"}``."""
-    summary = json_ready({**c.summary(), **(summary_extra or {})})
+    summary = with_loop_sections(c, json_ready({**c.summary(), **(summary_extra or {})}))
     if out_dir is None:
         out = Path(DEFAULT_OUT if root is None else root) / summary["robot"] / summary["scene"]
         index_link = index_link or "../../index.html"
