@@ -42,20 +42,25 @@ class Filter:
     def fs(self) -> float:
         return 1.0 / self.dt
 
-    def gains(self, f: np.ndarray) -> np.ndarray:
-        """(3, F) gains ``G_k(f) = |H_k(f)| / (2 pi f)^k`` of the smoother (k = 0), the differentiator (1)
-        and the second derivative (2) at frequencies ``f`` (F,) Hz; an ideal filter has 1 everywhere."""
+    def gains(self, f: np.ndarray, orders=(0, 1, 2)) -> np.ndarray:
+        """(K, F) gains ``G_k(f) = |H_k(f)| / (2 pi f)^k`` (E95, E96) of the smoother (k = 0), the
+        differentiator (1) and the second derivative (2), for k in ``orders`` (K,), at frequencies ``f`` (F,)
+        Hz; an ideal filter has 1 everywhere."""
         f = np.asarray(f, dtype=float)
         w = 2 * np.pi * np.maximum(f, 1e-12)
         if self.method == "spline":
             g = 1.0 / (1.0 + self.lam * self.dt * w**4)
-            return np.vstack([g, g, g])
+            return np.vstack([g for _ in orders])
         out = []
-        for k in range(3):
+        for k in orders:
             h = savgol_coeffs(self.window, self.order, deriv=k, delta=self.dt, use="conv")
             _, H = freqz(h, worN=f, fs=self.fs)
             out.append(np.abs(H) / w**k)
         return np.vstack(out)
+
+    def derivative_bandwidths_hz(self) -> tuple[float, float]:
+        """The -3 dB frequencies of the velocity and acceleration gains ``G_1``, ``G_2``."""
+        return _bandwidth(self, 1), _bandwidth(self, 2)
 
     def describe(self) -> str:
         """The filter in one line, as the identify command prints it."""
@@ -64,12 +69,15 @@ class Filter:
                    f"polynomial order {self.order}")
         else:
             how = f"smoothing spline, lam {self.lam:.4g}"
-        return (f"{how}, zero phase, at {self.fs:.6g} Hz: bandwidth (-3 dB) {self.bandwidth_hz:.4g} Hz")
+        v, a = self.derivative_bandwidths_hz()
+        return (f"{how}, zero phase, at {self.fs:.6g} Hz: bandwidth (-3 dB) {self.bandwidth_hz:.4g} Hz "
+                f"(velocity {v:.4g} Hz, acceleration {a:.4g} Hz)")
 
 
-def _bandwidth(filt: Filter) -> float:
+def _bandwidth(filt: Filter, k: int = 0) -> float:
+    """The first frequency where the gain ``G_k`` (E95, E96) falls to 1/sqrt 2, on a grid of fs/8192."""
     f = np.linspace(0.0, 0.5 * filt.fs, 4097)[1:]
-    g = filt.gains(f)[0]
+    g = filt.gains(f, orders=(k,))[0]
     below = np.flatnonzero(g < _HALF)
     if not below.size:
         return 0.5 * filt.fs

@@ -18,6 +18,7 @@ __all__ = ["QUANTITIES", "RobotLog", "Wrenches", "segment"]
 
 #: The per-joint quantities of a ROS ``sensor_msgs/msg/JointState``, in its field order.
 QUANTITIES = ("position", "velocity", "effort")
+_FIELD = {"position": "positions", "velocity": "velocities", "effort": "efforts"}
 
 
 @dataclass(frozen=True)
@@ -64,7 +65,7 @@ class RobotLog:
     def __post_init__(self):
         S, n = len(self.times), len(self.names)
         for q in QUANTITIES:
-            a = getattr(self, q + "s")
+            a = getattr(self, _FIELD[q])
             if a.shape != (S, n):
                 raise ValueError(f"{self.source}: {q}s must have shape ({S}, {n}); got {a.shape}")
         if self.rows is None:
@@ -76,7 +77,7 @@ class RobotLog:
 
     def values(self, quantity: str) -> np.ndarray:
         """(S, n) array of ``quantity`` (one of :data:`QUANTITIES`)."""
-        return getattr(self, quantity + "s")
+        return getattr(self, _FIELD[quantity])
 
     def logged(self, quantity: str) -> tuple[bool, ...]:
         """Per joint: whether the file has this quantity (a column not entirely NaN)."""

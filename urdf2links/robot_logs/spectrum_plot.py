@@ -20,7 +20,7 @@ def plot_filter(d, path) -> Path:
 
     filt, log = d.filter, d.log
     fs = filt.fs
-    nper = int(min(len(log.times), 2 ** int(np.log2(max(16, len(log.times) // 4)))))
+    nper = int(min(len(log.times), 2 ** int(np.log2(max(16, len(log.times) // 2)))))
     fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(8, 6.5), height_ratios=(3, 2))
     f = None
     for j, name in enumerate(log.names):
@@ -34,7 +34,8 @@ def plot_filter(d, path) -> Path:
         ax.axvline(filt.bandwidth_hz, color="crimson", ls="--", lw=1)
         ax.grid(True, which="both", alpha=0.25)
     top.set_ylabel("position PSD (unit$^2$/Hz)")
-    top.set_title(f"{Path(log.source.split(' topic ')[0]).name}: {filt.describe()}", fontsize=9)
+    how, _, band = filt.describe().partition(": bandwidth")
+    top.set_title(f"{Path(log.source.split(' topic ')[0]).name}: {how}\nbandwidth{band}", fontsize=9)
     top.legend(fontsize=7, ncol=2, loc="lower left")
     ff = np.geomspace(f[1] if f is not None else fs / len(log.times), fs / 2, 600)
     g = filt.gains(ff)
