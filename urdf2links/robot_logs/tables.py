@@ -83,16 +83,19 @@ def read_csv(path) -> RobotLog:
                 raise LogFormatError(f"{source}: row {r} has {len(line)} cells, the header {len(header)}",
                                      source=source, row=r)
             rows.append(line)
-    data = np.empty((len(rows), len(header)))
+    header = [h.strip() for h in header]
+    found = time_column(header)
+    used = [c for c, h in enumerate(header) if parse_column(h) is not None or (found and c == found[0])]
+    data = np.full((len(rows), len(header)), np.nan)       # a column left out is not converted (it is noted)
     for r, line in enumerate(rows):
-        for c, cell in enumerate(line):
-            cell = cell.strip()
+        for c in used:
+            cell = line[c].strip()
             try:
                 data[r, c] = float(cell) if cell else np.nan
             except ValueError:
                 raise LogFormatError(f"{source}: column {header[c]!r}, row {r + 1}: {cell!r} is not a number",
                                      source=source, column=header[c], row=r + 1) from None
-    return log_from_columns(source, [h.strip() for h in header], data)
+    return log_from_columns(source, header, data)
 
 
 def read_npz(path) -> RobotLog:
