@@ -20,7 +20,8 @@ def plot_filter(d, path) -> Path:
 
     filt, log = d.filter, d.log
     fs = filt.fs
-    nper = int(min(len(log.times), 2 ** int(np.log2(max(16, len(log.times) // 2)))))
+    # segments long enough to resolve a twentieth of the bandwidth (as far as the log's length allows)
+    nper = int(min(len(log.times), 2 ** int(np.ceil(np.log2(max(16.0, 20 * fs / filt.bandwidth_hz))))))
     fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(8, 6.5), height_ratios=(3, 2))
     f = None
     for j, name in enumerate(log.names):
@@ -35,7 +36,7 @@ def plot_filter(d, path) -> Path:
         ax.grid(True, which="both", alpha=0.25)
     top.set_ylabel("position PSD (unit$^2$/Hz)")
     how, _, band = filt.describe().partition(": bandwidth")
-    top.set_title(f"{Path(log.source.split(' topic ')[0]).name}: {how}\nbandwidth{band}", fontsize=9)
+    top.set_title(f"{log.source}\n{how}\nbandwidth{band}", fontsize=8.5)
     top.legend(fontsize=7, ncol=2, loc="lower left")
     ff = np.geomspace(f[1] if f is not None else fs / len(log.times), fs / 2, 600)
     g = filt.gains(ff)
