@@ -12,11 +12,12 @@ topic) and the row; the clean log must pass every check (the false-positive side
 from __future__ import annotations
 
 import csv
+import sys
 
 import numpy as np
 import pytest
 
-from tests.corpus import NAMED, path as corpus_path
+from corpus import NAMED, path as corpus_path
 from urdf2links.robot_logs import (DegreesError, JumpError, LogFormatError, NonFiniteError, NonUniformError,
                                    RobotLog, TimeOrderError, TooFewSamplesError, UnknownJointError, check_log,
                                    check_samples, derivatives, noise_level, read_log, write_csv, write_npz)
@@ -113,6 +114,17 @@ def _same(a: RobotLog, b: RobotLog, *, times_exact: bool = True):
         np.testing.assert_array_equal(getattr(a, q), getattr(b, q), err_msg=q)
     if times_exact:
         np.testing.assert_array_equal(a.times, b.times)
+
+
+def test_without_rosbags_the_error_names_the_extra(panda, tmp_path, monkeypatch):
+    """rosbags is optional (the logs extra): without it, a bag is refused by a LogFormatError that says
+    what to install (its import blocked here as an uninstalled package would be)."""
+    log, _, _ = panda
+    _write_bag(tmp_path / "bag", log.take(slice(0, 5)))
+    monkeypatch.setitem(sys.modules, "rosbags.highlevel", None)
+    with pytest.raises(LogFormatError) as e:
+        read_log(tmp_path / "bag")
+    assert "urdf2links[logs]" in str(e.value)
 
 
 # -- round trips -------------------------------------------------------------------------------------
