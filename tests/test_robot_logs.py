@@ -140,6 +140,10 @@ def test_mcap_bag_round_trip(panda, tmp_path):
     np.testing.assert_array_equal(back.t0_ns + np.round(back.times * 1e9).astype(np.int64), stamps)
     np.testing.assert_array_equal(back.wrenches.values, wrench)
     assert back.wrenches.frame == "base" and back.row_word == "message" and back.topic == "/joint_states"
+    d = derivatives(back)                       # the wrenches at the joints' times, through the same filter
+    assert d.wrenches.shape == (log.n_samples, 6)
+    np.testing.assert_allclose(d.wrenches, derivatives(back.with_changes(
+        positions=wrench, velocities=wrench, efforts=wrench, names=tuple("abcdef"))).positions, atol=1e-12)
     # the .mcap file inside the folder names the same bag
     mcap = next((tmp_path / "bag").glob("*.mcap"))
     _same(back, read_log(mcap))

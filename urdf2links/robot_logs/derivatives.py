@@ -47,7 +47,8 @@ class Derivatives:
     ``accelerations``, ``efforts`` (smoothed by the same filter; NaN where not logged). ``filter``: the
     stated filter and its bandwidth; ``noise`` (n,): each joint's position noise (E97), in the
     positions' unit; ``edge``: samples at each end less filtered (``interior`` leaves them out);
-    ``log``: the log filtered (its raw samples, for the spectrum); ``notes``: what was done."""
+    ``log``: the log filtered (its raw samples, for the spectrum); ``wrenches`` (S, 6): the log's contact
+    wrenches interpolated at ``times`` and smoothed by the same filter, or None; ``notes``: what was done."""
 
     times: np.ndarray
     names: tuple[str, ...]
@@ -60,6 +61,7 @@ class Derivatives:
     edge: int
     log: RobotLog
     notes: tuple[str, ...] = ()
+    wrenches: np.ndarray | None = None
 
     @property
     def bandwidth_hz(self) -> float:
@@ -131,6 +133,11 @@ def derivatives(log: RobotLog, *, method: str = "savgol", cutoff_hz: float | Non
     notes.append(f"velocities and accelerations from the positions: {filt.describe()}")
     if on.any():
         notes.append("efforts smoothed by the same filter")
+    wrenches = None
+    if log.wrenches is not None:
+        wrenches = filters.apply(filt, log.times, log.wrenches.at(log.times, source=log.source))[0]
+        notes.append(f"wrenches of {log.wrenches.topic} interpolated (linearly) at the joint samples' times and "
+                     "smoothed by the same filter")
     return Derivatives(times=log.times, names=log.names, positions=out[0], velocities=out[1],
                        accelerations=out[2], efforts=efforts, filter=filt, noise=noise_level(P),
-                       edge=min(edge, S // 2), log=log, notes=tuple(notes))
+                       edge=min(edge, S // 2), log=log, notes=tuple(notes), wrenches=wrenches)

@@ -33,6 +33,20 @@ class Wrenches:
     times: np.ndarray
     values: np.ndarray
 
+    def at(self, times: np.ndarray, *, source: str = "") -> np.ndarray:
+        """(S, 6) the wrenches linearly interpolated at ``times`` (S,); a time outside the topic's own
+        range is an error naming it (nothing is extrapolated)."""
+        t = np.asarray(times, dtype=float)
+        outside = np.flatnonzero((t < self.times[0]) | (t > self.times[-1])) if len(self.times) else np.arange(len(t))
+        if outside.size:
+            k = int(outside[0])
+            raise LogFormatError(
+                f"{source}: the wrench topic {self.topic} runs from {self.times[0] if len(self.times) else 'nothing'} "
+                f"to {self.times[-1] if len(self.times) else ''} s; sample {k + 1} at t = {t[k]:.9g} s lies outside "
+                "it: choose a segment (--from/--to) that both topics cover", source=source, topic=self.topic,
+                time=float(t[k]))
+        return np.column_stack([np.interp(t, self.times, self.values[:, i]) for i in range(6)])
+
 
 @dataclass(frozen=True)
 class RobotLog:
