@@ -157,7 +157,8 @@ def test_sqlite_bag_round_trip(panda, tmp_path):
 
 
 def test_csv_and_npz_round_trip(panda, tmp_path):
-    """CSV (17 significant digits) and NPZ read back bit for bit, times included."""
+    """CSV (17 significant digits) and NPZ read back bit for bit, times included. Planted wrong case
+    (checked once): write_csv with 15 significant digits fails here."""
     log, _, _ = panda
     _same(log, read_log(write_csv(log, tmp_path / "log.csv")))
     _same(log, read_log(write_npz(log, tmp_path / "log.npz")))
@@ -179,6 +180,13 @@ def test_csv_column_variants(panda, tmp_path):
     _same(short, back)
     assert back.column("effort", 2) == "tau_panda_joint3"
     assert any("comment" in n for n in back.notes)
+    cols = {"t_ns": np.round(short.times * 1e9).astype(np.int64)}        # NPZ, one array per column
+    cols.update({f"{j}/position": short.positions[:, i] for i, j in enumerate(short.names)})
+    np.savez(tmp_path / "columns.npz", **cols)
+    back = read_log(tmp_path / "columns.npz")
+    np.testing.assert_array_equal(back.positions, short.positions)
+    np.testing.assert_allclose(back.times, short.times, rtol=0, atol=1e-15)
+    assert not any(back.logged("effort")) and any("nanoseconds" in n for n in back.notes)
 
 
 def test_segment(panda, tmp_path):
@@ -231,7 +239,9 @@ def test_non_finite_value_is_named(panda, tmp_path, cell, error):
 
 def test_a_jump_is_named_and_a_wrap_is_unwrapped(panda, tmp_path):
     """A step of 0.3 rad from row 2001 on is a JumpError at that row; the same joint shifted to cross
-    pi and wrapped into (-pi, pi] is unwrapped and noted, back to the shifted values (to rounding)."""
+    pi and wrapped into (-pi, pi] is unwrapped and noted, back to the shifted values (to rounding).
+    Planted wrong case (checked once): with the step's departure from its neighbours set to zero in
+    check_jumps, no JumpError is raised and this fails."""
     log, names, limits = panda
     P = log.positions.copy()
     P[2000:, 4] += 0.3
