@@ -18,9 +18,11 @@ import numpy as np
 import pytest
 
 from corpus import NAMED, path as corpus_path
+from urdf2links.parsers.robot_file import load_robot
 from urdf2links.robot_logs import (DegreesError, JumpError, LogFormatError, NonFiniteError, NonUniformError,
-                                   RobotLog, TimeOrderError, TooFewSamplesError, UnknownJointError, check_log,
-                                   check_samples, derivatives, noise_level, read_log, write_csv, write_npz)
+                                   RobotLog, TimeOrderError, TooFewSamplesError, UnknownJointError, angular_limits,
+                                   check_log, check_samples, derivatives, noise_level, read_log, write_csv,
+                                   write_npz)
 from urdf2links.robot_logs.bags import JOINT_STATE, WRENCH_STAMPED
 
 ARM = tuple(f"panda_joint{i}" for i in range(1, 8))
@@ -209,6 +211,10 @@ def test_clean_log_passes_every_check(panda):
     assert checked.names == ARM
     assert any("panda_finger_joint1" in n for n in checked.notes)
     np.testing.assert_array_equal(checked.positions, log.positions)
+    # the same with the names and limits of urdf2links' own model of the description, as identify reads them
+    model = load_robot(corpus_path(NAMED["panda"]))
+    assert angular_limits(model) == {n: limits[n] for n in ARM}
+    assert check_log(log, joints=model.coordinate_names, limits=angular_limits(model)).names == ARM
 
 
 # -- bad data: each case planted in the log, each with its named error -----------------------------------

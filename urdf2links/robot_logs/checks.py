@@ -20,7 +20,7 @@ from .errors import (DegreesError, JumpError, LogError, NonFiniteError, TimeOrde
                      UnknownJointError)
 from .log import QUANTITIES, RobotLog
 
-__all__ = ["check_times", "check_log", "check_names", "check_finite", "check_jumps", "check_units",
+__all__ = ["angular_limits", "check_times", "check_log", "check_names", "check_finite", "check_jumps", "check_units",
            "check_samples", "JUMP_SIGMAS", "JUMP_FRACTION", "WRAP_TOLERANCE"]
 
 #: A step is a jump when it departs from its neighbours' median step by more than JUMP_SIGMAS robust
@@ -32,6 +32,19 @@ JUMP_FRACTION = 0.02
 #: A step is an angle wrapped at +-pi when it is within this of +-2 pi and both samples lie within it of +-pi.
 WRAP_TOLERANCE = 0.25
 DEG = 180.0 / np.pi
+
+
+def angular_limits(model) -> dict[str, tuple[float, float]]:
+    """The ``limits`` argument of :func:`check_log` from a loaded model (its ``info["joints"]``): each
+    revolute (or MJCF hinge) joint with one coordinate and finite limits ``lower < upper``, by coordinate
+    name. (A URDF joint's coordinate is its joint position: same zero, same sign, docs/equations.md (E9).)"""
+    out = {}
+    for j in model.info.get("joints", []):
+        lo, hi = j.get("lower"), j.get("upper")
+        if (j.get("type") in ("revolute", "hinge") and len(j.get("coordinates", ())) == 1 and lo is not None
+                and hi is not None and np.isfinite(lo) and np.isfinite(hi) and lo < hi):
+            out[j["coordinates"][0]] = (float(lo), float(hi))
+    return out
 
 
 def check_times(log: RobotLog) -> None:
