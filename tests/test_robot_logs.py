@@ -19,11 +19,12 @@ import pytest
 
 from corpus import NAMED, path as corpus_path
 from urdf2links.parsers.robot_file import load_robot
-from urdf2links.robot_logs import (DegreesError, JumpError, LogFormatError, NonFiniteError, NonUniformError,
+from urdf2links.robot_logs import (BasePoses, DegreesError, JumpError, LogError, LogFormatError, NonFiniteError, NonUniformError,
                                    RobotLog, TimeOrderError, TooFewSamplesError, UnknownJointError, angular_limits,
                                    check_log, check_samples, derivatives, noise_level, read_log, write_csv,
                                    write_npz)
 from urdf2links.robot_logs.bags import JOINT_STATE, WRENCH_STAMPED
+from urdf2links.robot_logs.base import base_coordinates
 
 ARM = tuple(f"panda_joint{i}" for i in range(1, 8))
 SEED = 47
@@ -454,3 +455,94 @@ def test_panda_derivatives_match_mujoco_velocities(panda, tmp_path):
     err = np.abs(d.velocities[i] - log.velocities[i]).max(axis=0)
     assert (err < 0.01 * np.abs(log.velocities).max(axis=0)).all(), err
     d.plot(tmp_path / "panda.png")
+
+
+# -- a floating base's pose ----------------------------------------------------------------------------
+def _base_motion(S=3000, dt=1e-3):
+    """(times, the six floating coordinates (S, 6) and their rates (S, 6)) of sines in x, y, z and the ZYX
+    angles; phi_z turns more than a full turn, so that its quaternions' angle wraps."""
+    t = np.arange(S) * dt
+    amp = np.array([0.3, 0.2, 0.1, 0.4, 0.5, 4.0])
+    w = 2 * np.pi * np.array([0.5, 0.7, 0.9, 0.6, 0.4, 0.3])
+    return t, amp * np.sin(w * t[:, None]), amp * w * np.cos(w * t[:, None])
+
+
+def _quaternions(c):
+    """(S, 4) w, x, y, z of R = Rx(phi_x) Ry(phi_y) Rz(phi_z), through urdf2links' own rotations."""
+    from scipy.spatial.transform import Rotation
+    from urdf2links.dynamics.rotations import xyz_angles_to_matrix
+
+    xyzw = Rotation.from_matrix(np.array([xyz_angles_to_matrix(a) for a in c[:, 3:]])).as_quat()
+    return np.column_stack([xyzw[:, 3], xyzw[:, :3]])
+
+
+def test_base_pose_from_odometry_and_columns(panda, tmp_path):
+    """A floating base's pose written as nav_msgs/Odometry by rosbags' writer, and as the base.* columns
+    of a CSV, reads back as the six floating coordinates (ZYX angles unwrapped through phi_z's full turn)
+    within 1e-9 of the planted ones, and their filtered rates within the filter's bias of the exact
+    rates. Planted wrong case (checked once): with the quaternion's w, x, y, z left in ROS's x, y, z, w
+    order the angles are wrong by far more than that."""
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    log, _, _ = panda
+    t, c, cd = _base_motion()
+    joints = log.take(slice(0, len(t)))
+    quat = _quaternions(c)
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    T = ts.types
+    with Writer(tmp_path / "bag", version=9, storage_plugin=StoragePlugin.MCAP) as w:
+        cj = w.add_connection("/joint_states", JOINT_STATE, typestore=ts)
+        co = w.add_connection("/odom", "nav_msgs/msg/Odometry", typestore=ts)
+        for k, tk in enumerate(t):
+            s = 10**9 + int(round(tk * 1e9))
+            hdr = T["std_msgs/msg/Header"](stamp=T["builtin_interfaces/msg/Time"](sec=s // 10**9, nanosec=s % 10**9),
+                                           frame_id="world")
+            js = T[JOINT_STATE](header=hdr, name=list(ARM), position=joints.positions[k].copy(),
+                                velocity=joints.velocities[k].copy(), effort=joints.efforts[k].copy())
+            w.write(cj, s, ts.serialize_cdr(js, JOINT_STATE))
+            pose = T["geometry_msgs/msg/Pose"](position=T["geometry_msgs/msg/Point"](*c[k, :3]),
+                                               orientation=T["geometry_msgs/msg/Quaternion"](*quat[k, 1:], quat[k, 0]))
+            cov = np.zeros(36)
+            odom = T["nav_msgs/msg/Odometry"](
+                header=hdr, child_frame_id="base_link",
+                pose=T["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=cov),
+                twist=T["geometry_msgs/msg/TwistWithCovariance"](
+                    twist=T["geometry_msgs/msg/Twist"](linear=T["geometry_msgs/msg/Vector3"](0, 0, 0),
+                                                       angular=T["geometry_msgs/msg/Vector3"](0, 0, 0)),
+                    covariance=cov))
+            w.write(co, s, ts.serialize_cdr(odom, "nav_msgs/msg/Odometry"))
+    bag = read_log(tmp_path / "bag", base_topic="/odom")
+    assert bag.base.frame == "world"
+    table = joints.with_changes(times=t, base=BasePoses(source="columns", frame="", times=t, positions=c[:, :3],
+                                                        quaternions=quat, rows=np.arange(1, len(t) + 1)))
+    csv_back = read_log(write_csv(table, tmp_path / "base.csv"))
+    for back in (bag, csv_back):
+        d = derivatives(back)
+        i = d.interior
+        np.testing.assert_allclose(d.base[0][i], c[i], atol=2e-4)       # the smoother's bias on these sines
+        np.testing.assert_allclose(base_coordinates(back.base, back.times), c, atol=1e-9)
+        # rates: the filter's bias is |1 - G_1(f)| * amplitude * w, below 2e-3 of each rate's amplitude
+        scale = np.abs(cd).max(axis=0)
+        assert (np.abs(d.base[1][i] - cd[i]).max(axis=0) < 2e-3 * scale).all()
+
+
+def test_base_pose_errors(panda, tmp_path):
+    """A quaternion off unit norm is an error naming its row; a pitch within a degree of 90 degrees is an
+    error naming its time (the ZYX rates are meaningless there)."""
+    log, names, _ = panda
+    t, c, _ = _base_motion(S=400)
+    quat = _quaternions(c)
+    short = log.take(slice(0, 400)).with_changes(times=t)
+    Base = BasePoses
+    bad = quat.copy()
+    bad[123] *= 1.01
+    with pytest.raises(LogError) as e:
+        check_log(short.with_changes(base=Base("columns", "", t, c[:, :3], bad, np.arange(1, 401))), joints=names)
+    assert e.value.row == 124 and e.value.column == "columns"
+    c2 = c.copy()
+    c2[:, 4] = np.linspace(1.0, 1.565, 400)                             # pitch up to 89.7 degrees
+    tilted = short.with_changes(base=Base("columns", "", t, c2[:, :3], _quaternions(c2), np.arange(1, 401)))
+    with pytest.raises(LogError) as e:
+        derivatives(tilted)
+    assert "pitch" in str(e.value) and e.value.time > t[300]

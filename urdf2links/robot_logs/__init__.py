@@ -9,6 +9,7 @@ The layer reads files and checks data; it builds no regressor and fits nothing (
     check_samples(log, n_base=..., equations_per_sample=...)   # once the base parameters are known
 """
 
+from .base import BASE_SLOTS, BasePoses
 from .checks import angular_limits, check_log, check_samples, check_times
 from .derivatives import DEFAULT_CUTOFF_HZ, Derivatives, derivatives, noise_level
 from .errors import (DegreesError, JumpError, LogError, LogFormatError, NonFiniteError, NonUniformError,
@@ -20,7 +21,7 @@ from .tables import write_csv, write_npz
 
 __all__ = [
     "read_log", "check_log", "angular_limits", "check_samples", "check_times", "derivatives", "Derivatives", "Filter", "noise_level",
-    "DEFAULT_CUTOFF_HZ", "RobotLog", "Wrenches", "QUANTITIES", "segment", "write_csv", "write_npz",
+    "DEFAULT_CUTOFF_HZ", "RobotLog", "Wrenches", "BasePoses", "BASE_SLOTS", "QUANTITIES", "segment", "write_csv", "write_npz",
     "LogError", "LogFormatError", "NonFiniteError", "TimeOrderError", "JumpError", "UnknownJointError",
     "DegreesError", "TooFewSamplesError", "NonUniformError",
 ]

@@ -2,7 +2,9 @@
 
 A bag is the rosbag2 folder with its ``metadata.yaml`` (a ``.mcap`` or ``.db3`` file inside one is taken
 as its folder). The joints come from a ``sensor_msgs/msg/JointState`` topic chosen by ``topic``; contact
-forces, optionally, from a ``geometry_msgs/msg/WrenchStamped`` topic chosen by ``wrench_topic``.
+forces, optionally, from a ``geometry_msgs/msg/WrenchStamped`` topic chosen by ``wrench_topic``; a
+floating base's pose, optionally, from a ``nav_msgs/msg/Odometry`` or ``geometry_msgs/msg/PoseStamped``
+topic chosen by ``base_topic`` (:mod:`urdf2links.robot_logs.base`).
 
 Times are the messages' ``header.stamp`` (the measurement's time), counted in seconds from the first
 message's stamp (kept as :attr:`RobotLog.t0_ns`); a topic whose stamps are all zero is timed by the bag's
@@ -17,13 +19,16 @@ from pathlib import Path
 
 import numpy as np
 
+from .base import BasePoses
 from .errors import LogFormatError
 from .log import QUANTITIES, RobotLog, Wrenches
 
-__all__ = ["JOINT_STATE", "WRENCH_STAMPED", "bag_folder", "read_bag"]
+__all__ = ["JOINT_STATE", "WRENCH_STAMPED", "ODOMETRY", "POSE_STAMPED", "bag_folder", "read_bag"]
 
 JOINT_STATE = "sensor_msgs/msg/JointState"
 WRENCH_STAMPED = "geometry_msgs/msg/WrenchStamped"
+ODOMETRY = "nav_msgs/msg/Odometry"
+POSE_STAMPED = "geometry_msgs/msg/PoseStamped"
 
 
 def bag_folder(path) -> Path | None:
@@ -44,16 +49,17 @@ def _rosbags():
     return AnyReader, get_typestore(Stores.ROS2_HUMBLE)
 
 
-def _connections(reader, source: str, topic: str, msgtype: str):
+def _connections(reader, source: str, topic: str, msgtype):
+    msgtype = (msgtype,) if isinstance(msgtype, str) else tuple(msgtype)
     conns = [c for c in reader.connections if c.topic == topic]
     if not conns:
         listed = sorted(f"{c.topic} ({c.msgtype})" for c in reader.connections)
         raise LogFormatError(f"{source}: no topic {topic!r} in the bag; it has {', '.join(listed) or 'none'}",
                              source=source, topic=topic)
-    bad = [c.msgtype for c in conns if c.msgtype != msgtype]
+    bad = [c.msgtype for c in conns if c.msgtype not in msgtype]
     if bad:
-        raise LogFormatError(f"{source}: topic {topic!r} holds {bad[0]}, not {msgtype}; choose a {msgtype} "
-                             "topic", source=source, topic=topic)
+        raise LogFormatError(f"{source}: topic {topic!r} holds {bad[0]}, not {' or '.join(msgtype)}; choose a "
+                             f"{' or '.join(msgtype)} topic", source=source, topic=topic)
     return conns
 
 
@@ -102,7 +108,23 @@ def _wrenches(reader, source: str, topic: str, t0_ns: int) -> Wrenches:
     return Wrenches(topic=topic, frame=frame, times=times, values=np.array(values, dtype=float).reshape(-1, 6))
 
 
-def read_bag(path, *, topic: str = "/joint_states", wrench_topic: str | None = None) -> RobotLog:
+def _base_poses(reader, source: str, topic: str, t0_ns: int) -> BasePoses:
+    conns = _connections(reader, source, topic, (ODOMETRY, POSE_STAMPED))
+    stamps, values, frame = [], [], ""
+    for conn, _t, raw in reader.messages(connections=conns):
+        msg = reader.deserialize(raw, conn.msgtype)
+        pose = msg.pose.pose if conn.msgtype == ODOMETRY else msg.pose
+        frame = frame or msg.header.frame_id
+        p, q = pose.position, pose.orientation
+        stamps.append(_stamp(msg))
+        values.append((p.x, p.y, p.z, q.w, q.x, q.y, q.z))
+    v = np.array(values, dtype=float).reshape(-1, 7)
+    return BasePoses(source=topic, frame=frame, times=(np.array(stamps, dtype=np.int64) - t0_ns) * 1e-9,
+                     positions=v[:, :3], quaternions=v[:, 3:], rows=np.arange(1, len(v) + 1))
+
+
+def read_bag(path, *, topic: str = "/joint_states", wrench_topic: str | None = None,
+             base_topic: str | None = None) -> RobotLog:
     """A ROS 2 bag's JointState topic (and WrenchStamped topic) as a log (module doc)."""
     folder = bag_folder(path)
     if folder is None:
@@ -120,6 +142,10 @@ def read_bag(path, *, topic: str = "/joint_states", wrench_topic: str | None = N
         t0 = int(stamps[0])
         notes.append(f"times in seconds after the first stamp {t0 // 10**9}.{t0 % 10**9:09d}")
         wrenches = None if wrench_topic is None else _wrenches(reader, str(folder), wrench_topic, t0)
+        base = None if base_topic is None else _base_poses(reader, str(folder), base_topic, t0)
+    if base is not None:
+        notes.append(f"{len(base.times)} base poses of topic {base_topic} (frame {base.frame!r}; quaternions "
+                     "reordered to w, x, y, z)")
     if wrenches is not None:
         notes.append(f"{len(wrenches.times)} {WRENCH_STAMPED} messages of topic {wrench_topic} "
                      f"(frame {wrenches.frame!r})")
@@ -129,4 +155,4 @@ def read_bag(path, *, topic: str = "/joint_states", wrench_topic: str | None = N
     return RobotLog(times=(stamps - t0) * 1e-9, names=names, positions=arrays["position"],
                     velocities=arrays["velocity"], efforts=arrays["effort"], source=source, notes=tuple(notes),
                     columns={(q, j): f"{topic} {q}[{j}]" for q in QUANTITIES for j in names},
-                    row_word="message", t0_ns=t0, topic=topic, wrenches=wrenches)
+                    row_word="message", t0_ns=t0, topic=topic, wrenches=wrenches, base=base)

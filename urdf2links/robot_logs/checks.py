@@ -2,7 +2,8 @@
 (or time stamp), and what is repaired (an angle wrapped at +-pi) is said in the notes. Nothing is guessed.
 
 - :func:`check_times`: finite, strictly increasing time stamps (unsorted and duplicate are errors).
-- :func:`check_log`: the joints' names against the description's (did you mean), NaN and infinite values,
+- :func:`check_log`: the joints' names against the description's (did you mean), NaN and infinite values
+  (and a floating base's unit quaternions),
   wrapped angles (unwrapped, noted) and real jumps (an error), values that look like degrees, and with
   ``n_base`` the number of samples (:func:`check_samples`). It returns the log in the description's joint
   order.
@@ -217,6 +218,8 @@ def check_log(log: RobotLog, *, joints: Sequence[str], limits: Mapping[str, tupl
         raise LogError(f"{log.source}: no joint position is logged; identification needs them",
                        source=log.source, topic=log.topic)
     check_finite(log)
+    if log.base is not None:
+        log.base.check(log.source)
     log = check_jumps(log)
     check_units(log, limits)
     if n_base is not None:

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from . import filters
+from .base import base_coordinates
 from .errors import NonUniformError
 from .filters import Filter
 from .log import RobotLog
@@ -48,7 +49,9 @@ class Derivatives:
     stated filter and its bandwidth; ``noise`` (n,): each joint's position noise (E97), in the
     positions' unit; ``edge``: samples at each end less filtered (``interior`` leaves them out);
     ``log``: the log filtered (its raw samples, for the spectrum); ``wrenches`` (S, 6): the log's contact
-    wrenches interpolated at ``times`` and smoothed by the same filter, or None; ``notes``: what was done."""
+    wrenches interpolated at ``times`` and smoothed by the same filter, or None; ``base`` (3, S, 6): a
+    floating base's coordinates ``x, y, z, phi_x, phi_y, phi_z`` (base.BASE_SLOTS) at ``times``, filtered,
+    their first and second derivatives, or None; ``notes``: what was done."""
 
     times: np.ndarray
     names: tuple[str, ...]
@@ -62,6 +65,7 @@ class Derivatives:
     log: RobotLog
     notes: tuple[str, ...] = ()
     wrenches: np.ndarray | None = None
+    base: np.ndarray | None = None
 
     @property
     def bandwidth_hz(self) -> float:
@@ -138,6 +142,11 @@ def derivatives(log: RobotLog, *, method: str = "savgol", cutoff_hz: float | Non
         wrenches = filters.apply(filt, log.times, log.wrenches.at(log.times, source=log.source))[0]
         notes.append(f"wrenches of {log.wrenches.topic} interpolated (linearly) at the joint samples' times and "
                      "smoothed by the same filter")
+    base = None
+    if log.base is not None:
+        base = filters.apply(filt, log.times, base_coordinates(log.base, log.times, source=log.source))
+        notes.append("the base's pose as x, y, z and ZYX angles (unwrapped) at the joint samples' times, "
+                     "differentiated by the same filter")
     return Derivatives(times=log.times, names=log.names, positions=out[0], velocities=out[1],
                        accelerations=out[2], efforts=efforts, filter=filt, noise=noise_level(P),
-                       edge=min(edge, S // 2), log=log, notes=tuple(notes), wrenches=wrenches)
+                       edge=min(edge, S // 2), log=log, notes=tuple(notes), wrenches=wrenches, base=base)

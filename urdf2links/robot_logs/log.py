@@ -60,7 +60,8 @@ class RobotLog:
     ``columns``: ``(quantity, joint) -> the column's name in the file`` (the CSV header as written,
     ``"<topic> position[<joint>]"`` for a bag). ``row_word``: "row" (tables) or "message" (bags).
     ``t0_ns``: a bag's first stamp (ns since the epoch); its ``times`` count from it. ``topic``: a bag's
-    JointState topic. ``wrenches``: the contact-force topic, when one was read."""
+    JointState topic. ``wrenches``: the contact-force topic, when one was read. ``base``: a floating
+    base's poses (:class:`~urdf2links.robot_logs.base.BasePoses`), when the log has them."""
 
     times: np.ndarray
     names: tuple[str, ...]
@@ -75,6 +76,7 @@ class RobotLog:
     t0_ns: int | None = None
     topic: str | None = None
     wrenches: Wrenches | None = None
+    base: object = None         # BasePoses (urdf2links.robot_logs.base), when the log has the base's pose
 
     def __post_init__(self):
         S, n = len(self.times), len(self.names)
@@ -120,14 +122,15 @@ class RobotLog:
 
     def take(self, keep: np.ndarray, note: str | None = None) -> RobotLog:
         """The samples selected by the boolean mask or index array ``keep`` (S,)."""
-        w = self.wrenches
-        if w is not None and len(self.times[keep]):
-            t = self.times[keep]
+        w, b, t = self.wrenches, self.base, self.times[keep]
+        if w is not None and len(t):
             inside = (w.times >= t[0]) & (w.times <= t[-1])
             w = replace(w, times=w.times[inside], values=w.values[inside])
-        return self.with_changes(note, times=self.times[keep], positions=self.positions[keep],
-                                 velocities=self.velocities[keep], efforts=self.efforts[keep],
-                                 rows=self.rows[keep], wrenches=w)
+        if b is not None and len(t) and b.source == "columns":      # a table's poses are the samples' own
+            b = replace(b, times=b.times[keep], positions=b.positions[keep], quaternions=b.quaternions[keep],
+                        rows=b.rows[keep])
+        return self.with_changes(note, times=t, positions=self.positions[keep], velocities=self.velocities[keep],
+                                 efforts=self.efforts[keep], rows=self.rows[keep], wrenches=w, base=b)
 
 
 def segment(log: RobotLog, *, t_from: float | None = None, t_to: float | None = None) -> RobotLog:

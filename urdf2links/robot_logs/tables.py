@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .base import BASE_COLUMNS, BasePoses
 from .columns import parse_column, time_column
 from .errors import LogFormatError
 from .log import QUANTITIES, RobotLog
@@ -31,8 +32,9 @@ def log_from_columns(source: str, header: list[str], data: np.ndarray) -> RobotL
                              f"name it 't' (seconds) or 't_ns' (nanoseconds)", source=source)
     it, scale = found
     notes, names, columns, ignored = [], [], {}, []
+    base_cols = {h.lower(): c for c, h in enumerate(header) if h.lower() in BASE_COLUMNS}
     for c, h in enumerate(header):
-        if c == it:
+        if c == it or h.lower() in BASE_COLUMNS:
             continue
         parsed = parse_column(h)
         if parsed is None:
@@ -60,9 +62,24 @@ def log_from_columns(source: str, header: list[str], data: np.ndarray) -> RobotL
         absent = [j for j in names if (q, j) not in columns]
         if absent:
             notes.append(f"no {q} column for {', '.join(absent)}: NaN")
+    base = _base_columns(source, base_cols, data, times, notes)
     return RobotLog(times=times, names=tuple(names), positions=arrays["position"],
                     velocities=arrays["velocity"], efforts=arrays["effort"], source=source,
-                    notes=tuple(notes), columns={k: v[0] for k, v in columns.items()})
+                    notes=tuple(notes), columns={k: v[0] for k, v in columns.items()}, base=base)
+
+
+def _base_columns(source: str, cols: dict, data: np.ndarray, times: np.ndarray, notes: list) -> BasePoses | None:
+    """The base's poses from the columns BASE_COLUMNS (all seven, or none)."""
+    if not cols:
+        return None
+    missing = [c for c in BASE_COLUMNS if c not in cols]
+    if missing:
+        raise LogFormatError(f"{source}: base pose columns {sorted(cols)} without {missing}; a base pose needs "
+                             f"all of {list(BASE_COLUMNS)}", source=source, column=missing[0])
+    v = data[:, [cols[c] for c in BASE_COLUMNS]]
+    notes.append("the base's pose read from the columns " + ", ".join(BASE_COLUMNS))
+    return BasePoses(source="columns", frame="", times=times, positions=v[:, :3], quaternions=v[:, 3:],
+                     rows=np.arange(1, len(times) + 1))
 
 
 def read_csv(path) -> RobotLog:
@@ -85,7 +102,8 @@ def read_csv(path) -> RobotLog:
             rows.append(line)
     header = [h.strip() for h in header]
     found = time_column(header)
-    used = [c for c, h in enumerate(header) if parse_column(h) is not None or (found and c == found[0])]
+    used = [c for c, h in enumerate(header) if parse_column(h) is not None or (found and c == found[0])
+            or h.lower() in BASE_COLUMNS]
     data = np.full((len(rows), len(header)), np.nan)       # a column left out is not converted (it is noted)
     for r, line in enumerate(rows):
         for c in used:
@@ -138,11 +156,15 @@ def _jointstate_layout(source: str, arrays: dict) -> RobotLog:
 
 
 def write_csv(log: RobotLog, path) -> Path:
-    """``log`` as CSV in the project's naming (``t``, ``<joint>.position``, ...), every float written
-    exactly (17 significant digits); a quantity absent for a joint is left out."""
+    """``log`` as CSV in the project's naming (``t``, ``<joint>.position``, ..., the base's pose columns
+    when it has them at its samples' times), every float written exactly (17 significant digits); a
+    quantity absent for a joint is left out."""
     cols = [(q, j) for j in range(len(log.names)) for q in QUANTITIES if log.logged(q)[j]]
     header = ["t"] + [f"{log.names[j]}.{q}" for q, j in cols]
     data = np.column_stack([log.times] + [log.values(q)[:, j] for q, j in cols])
+    if log.base is not None and np.array_equal(log.base.times, log.times):
+        header += list(BASE_COLUMNS)
+        data = np.column_stack([data, log.base.positions, log.base.quaternions])
     path = Path(path)
     with open(path, "w", newline="") as f:
         w = csv.writer(f)
