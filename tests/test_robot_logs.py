@@ -22,7 +22,7 @@ from urdf2links.parsers.robot_file import load_robot
 from urdf2links.robot_logs import (BasePoses, DegreesError, JumpError, LogError, LogFormatError, NonFiniteError, NonUniformError,
                                    RobotLog, TimeOrderError, TooFewSamplesError, UnknownJointError, angular_limits,
                                    check_log, check_samples, derivatives, noise_level, read_log, write_csv,
-                                   write_npz)
+                                   write_npz, Wrenches)
 from urdf2links.robot_logs.bags import JOINT_STATE, WRENCH_STAMPED
 from urdf2links.robot_logs.base import base_coordinates
 
@@ -546,3 +546,17 @@ def test_base_pose_errors(panda, tmp_path):
     with pytest.raises(LogError) as e:
         derivatives(tilted)
     assert "pitch" in str(e.value) and e.value.time > t[300]
+
+
+def test_side_topics_must_be_sorted(panda, tmp_path):
+    """A wrench topic whose stamps repeat is a TimeOrderError naming the topic and the message, not a
+    silently wrong interpolation. Planted wrong case: the same wrenches with increasing stamps pass."""
+    log, _, _ = panda
+    short = log.take(slice(0, 50))
+    w = Wrenches(topic="/wrench", frame="", times=short.times.copy(), values=np.zeros((50, 6)))
+    assert derivatives(short.with_changes(wrenches=w), window=11).wrenches.shape == (50, 6)
+    t = short.times.copy()
+    t[20] = t[19]
+    with pytest.raises(TimeOrderError) as e:
+        derivatives(short.with_changes(wrenches=Wrenches("/wrench", "", t, np.zeros((50, 6)))), window=11)
+    assert (e.value.topic, e.value.row, e.value.kind) == ("/wrench", 21, "duplicate")

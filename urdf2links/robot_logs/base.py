@@ -20,6 +20,7 @@ from scipy.spatial.transform import Rotation, Slerp
 
 from ..dynamics.rotations import matrix_to_xyz_angles
 from .errors import LogError, LogFormatError
+from .log import require_increasing
 
 __all__ = ["BASE_SLOTS", "BASE_COLUMNS", "BasePoses", "base_coordinates", "QUATERNION_TOLERANCE", "GIMBAL_COS"]
 
@@ -46,7 +47,10 @@ class BasePoses:
     rows: np.ndarray
 
     def check(self, log_source: str) -> None:
-        """Finite values and unit quaternions; the first bad row named."""
+        """Increasing times, finite values and unit quaternions; the first bad row named."""
+        if self.source != "columns":        # a table's rows are the joints' samples, checked with them
+            require_increasing(self.times, what=f"the base poses of {self.source}", source=log_source,
+                               topic=self.source)
         bad = np.flatnonzero(~np.all(np.isfinite(self.positions), axis=1) | ~np.all(np.isfinite(self.quaternions),
                                                                                         axis=1))
         norm = np.linalg.norm(self.quaternions, axis=1)

@@ -12,7 +12,8 @@ Accepted variants (case-insensitive), tried in this order:
 
 where ``quantity`` is a word of :data:`WORDS`: position ``position``, ``pos``, ``q``; velocity
 ``velocity``, ``vel``, ``qd``, ``dq``, ``qdot``, ``v``; effort ``effort``, ``eff``, ``tau``, ``torque``,
-``force``. A column that matches none of these is left out and named in the log's notes.
+``force``. A column that matches none of these is left out and named in the log's notes. A floating
+base's pose has its own seven columns (:data:`urdf2links.robot_logs.base.BASE_COLUMNS`).
 """
 
 from __future__ import annotations

@@ -12,13 +12,26 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .errors import LogFormatError
+from .errors import LogFormatError, TimeOrderError
 
-__all__ = ["QUANTITIES", "RobotLog", "Wrenches", "segment"]
+__all__ = ["QUANTITIES", "RobotLog", "Wrenches", "segment", "require_increasing"]
 
 #: The per-joint quantities of a ROS ``sensor_msgs/msg/JointState``, in its field order.
 QUANTITIES = ("position", "velocity", "effort")
 _FIELD = {"position": "positions", "velocity": "velocities", "effort": "efforts"}
+
+
+def require_increasing(times: np.ndarray, *, what: str, source: str, topic: str | None = None) -> None:
+    """A side topic's (wrenches', base poses') times strictly increasing, else a TimeOrderError naming
+    the message (interpolation on unsorted times would be silently wrong)."""
+    d = np.diff(times)
+    for kind, mask in (("unsorted", d < 0), ("duplicate", d == 0)):
+        idx = np.flatnonzero(mask)
+        if idx.size:
+            k = int(idx[0]) + 1
+            raise TimeOrderError(f"{source}: {what}: message {k + 1} (t = {times[k]:.9g} s) is {kind} after message "
+                                 f"{k} (t = {times[k - 1]:.9g} s); its stamps must increase", kind=kind,
+                                 source=source, topic=topic, row=k + 1, time=float(times[k]))
 
 
 @dataclass(frozen=True)
@@ -37,6 +50,7 @@ class Wrenches:
         """(S, 6) the wrenches linearly interpolated at ``times`` (S,); a time outside the topic's own
         range is an error naming it (nothing is extrapolated)."""
         t = np.asarray(times, dtype=float)
+        require_increasing(self.times, what=f"the wrench topic {self.topic}", source=source, topic=self.topic)
         outside = np.flatnonzero((t < self.times[0]) | (t > self.times[-1])) if len(self.times) else np.arange(len(t))
         if outside.size:
             k = int(outside[0])
