@@ -15,7 +15,7 @@ import difflib
 from collections.abc import Mapping, Sequence
 
 import numpy as np
-from scipy.signal import medfilt
+from scipy.ndimage import median_filter
 
 from .errors import (DegreesError, JumpError, LogError, NonFiniteError, TimeOrderError, TooFewSamplesError,
                      UnknownJointError)
@@ -135,7 +135,8 @@ def check_jumps(log: RobotLog) -> RobotLog:
             notes.append(f"{log.column('position', j)}: {wraps.size} step(s) of 2 pi unwrapped (an angle wrapped "
                          f"at +-pi), the first after {log.at(wraps[0])}")
         d = np.diff(P[:, j])
-        r = d - medfilt(d, 7)
+        typical = median_filter(d, size=7, mode="nearest")
+        r = d - typical
         sigma = 1.4826 * np.median(np.abs(r - np.median(r)))
         span = np.ptp(P[:, j])
         tau = max(JUMP_SIGMAS * sigma, JUMP_FRACTION * span, 1e-12)
@@ -144,7 +145,7 @@ def check_jumps(log: RobotLog) -> RobotLog:
             k = bad[0] + 1
             raise JumpError(
                 f"{log.source}: column {log.column('position', j)!r} jumps by {d[k - 1]:.6g} from {log.at(k - 1)} "
-                f"to {log.at(k)}, against a typical step of {medfilt(d, 7)[k - 1]:.3g} (threshold {tau:.3g}); not "
+                f"to {log.at(k)}, against a typical step of {typical[k - 1]:.3g} (threshold {tau:.3g}); not "
                 "an angle wrapped at +-pi. Cut the log around it (--from/--to) or repair the encoder's data",
                 step=float(d[k - 1]), column=log.column("position", j), **log.where(k))
     return log.with_changes("; ".join(notes), positions=P) if notes else log
@@ -165,12 +166,13 @@ def _degrees_by_limits(log: RobotLog, j: int, lo: float, hi: float) -> None:
 
 def _degrees_by_rates(log: RobotLog, j: int) -> None:
     """The logged velocity against the position's derivative: a ratio near 180/pi (or pi/180) is degrees."""
-    q, v = log.positions[:, j], log.velocities[:, j]
+    q, v = np.ascontiguousarray(log.positions[:, j]), np.ascontiguousarray(log.velocities[:, j])
     g = np.gradient(q, log.times)
-    if np.dot(g, g) == 0.0 or np.dot(v, v) == 0.0:
+    vg, gg, vv = float(np.sum(v * g)), float(np.sum(g * g)), float(np.sum(v * v))
+    if gg == 0.0 or vv == 0.0:
         return
-    c = np.dot(v, g) / np.dot(g, g)
-    corr = np.dot(v, g) / np.sqrt(np.dot(v, v) * np.dot(g, g))
+    c = vg / gg
+    corr = vg / np.sqrt(vv * gg)
     if corr < 0.9:
         return
     for ratio, q_, unit in ((DEG, "velocity", "degrees per second"), (1 / DEG, "position", "degrees")):

@@ -107,6 +107,11 @@ def savgol(dt: float, *, window: int | None = None, order: int = 3, cutoff_hz: f
         return bw[h]
     if hi < lo:
         raise ValueError(f"savgol: {n_samples} samples are too few for a window larger than the order {order}")
+    # the bandwidth is near (order + 1) fs / (3.2 N): a window of 2 (order + 1) fs / cutoff is past it,
+    # which keeps the search off windows of thousands of samples (each a costly response)
+    guess = int(2 * (order + 1) / (dt * cutoff_hz)) + lo
+    if guess < hi and at(guess) < cutoff_hz:
+        hi = guess
     while hi - lo > 1:
         mid = (lo + hi) // 2
         lo, hi = (mid, hi) if at(mid) > cutoff_hz else (lo, mid)
@@ -125,8 +130,12 @@ def apply(filt: Filter, t: np.ndarray, y: np.ndarray) -> np.ndarray:
     if filt.method == "savgol":
         return np.stack([savgol_filter(y, filt.window, filt.order, deriv=k, delta=filt.dt, axis=0, mode="interp")
                          for k in range(3)])
-    out = np.empty((3,) + y.shape)
-    for j in range(y.shape[1]):
-        s = make_smoothing_spline(t, y[:, j], lam=filt.lam)
-        out[0, :, j], out[1, :, j], out[2, :, j] = s(t), s.derivative(1)(t), s.derivative(2)(t)
-    return out
+    try:        # every column in one fit (scipy >= 1.15 takes y (S, m)); else column by column
+        s = make_smoothing_spline(t, y, lam=filt.lam)
+        return np.stack([s(t), s.derivative(1)(t), s.derivative(2)(t)])
+    except ValueError:
+        out = np.empty((3,) + y.shape)
+        for j in range(y.shape[1]):
+            s = make_smoothing_spline(t, y[:, j], lam=filt.lam)
+            out[0, :, j], out[1, :, j], out[2, :, j] = s(t), s.derivative(1)(t), s.derivative(2)(t)
+        return out

@@ -9,6 +9,7 @@ each optional but one.
 from __future__ import annotations
 
 import csv
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -86,12 +87,31 @@ def read_csv(path) -> RobotLog:
     """A CSV log (module doc). A cell that is not a number is an error naming its column and row."""
     source = str(path)
     with open(path, newline="") as f:
-        reader = csv.reader(f)
         try:
-            header = next(reader)
+            header = [h.strip() for h in next(csv.reader(f))]
         except StopIteration:
             raise LogFormatError(f"{source}: the file is empty; expected a header line {_FORMS}",
                                  source=source) from None
+    found = time_column(header)
+    used = [c for c, h in enumerate(header) if parse_column(h) is not None or (found and c == found[0])
+            or h.lower() in BASE_COLUMNS]
+    try:        # the fast path: every used cell a number; else cell by cell, naming the bad one
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")          # "input contained no data" too
+            block = np.loadtxt(path, delimiter=",", skiprows=1, usecols=used, ndmin=2, dtype=float)
+        data = np.full((block.shape[0], len(header)), np.nan)    # a column left out is not read (it is noted)
+        data[:, used] = block
+    except (ValueError, UserWarning):
+        data = _cells(path, source, header, used)
+    return log_from_columns(source, header, data)
+
+
+def _cells(path, source: str, header: list[str], used: list[int]) -> np.ndarray:
+    """(S, C) the used columns read cell by cell: an empty cell is NaN, any other that is not a number,
+    or a row of another length, an error naming it."""
+    with open(path, newline="") as f:
+        reader = csv.reader(f)
+        next(reader)
         rows = []
         for r, line in enumerate(reader, start=1):
             if not line:
@@ -100,11 +120,7 @@ def read_csv(path) -> RobotLog:
                 raise LogFormatError(f"{source}: row {r} has {len(line)} cells, the header {len(header)}",
                                      source=source, row=r)
             rows.append(line)
-    header = [h.strip() for h in header]
-    found = time_column(header)
-    used = [c for c, h in enumerate(header) if parse_column(h) is not None or (found and c == found[0])
-            or h.lower() in BASE_COLUMNS]
-    data = np.full((len(rows), len(header)), np.nan)       # a column left out is not converted (it is noted)
+    data = np.full((len(rows), len(header)), np.nan)
     for r, line in enumerate(rows):
         for c in used:
             cell = line[c].strip()
@@ -113,7 +129,7 @@ def read_csv(path) -> RobotLog:
             except ValueError:
                 raise LogFormatError(f"{source}: column {header[c]!r}, row {r + 1}: {cell!r} is not a number",
                                      source=source, column=header[c], row=r + 1) from None
-    return log_from_columns(source, header, data)
+    return data
 
 
 def read_npz(path) -> RobotLog:
