@@ -143,6 +143,8 @@ def test_mcap_bag_round_trip(panda, tmp_path):
     np.testing.assert_array_equal(back.t0_ns + np.round(back.times * 1e9).astype(np.int64), stamps)
     np.testing.assert_array_equal(back.wrenches.values, wrench)
     assert back.wrenches.frame == "base" and back.row_word == "message" and back.topic == "/joint_states"
+    said = back.describe()
+    assert f"{log.n_samples} samples" in said and "7 with effort" in said and "/wrench" in said
     d = derivatives(back)                       # the wrenches at the joints' times, through the same filter
     assert d.wrenches.shape == (log.n_samples, 6)
     np.testing.assert_allclose(d.wrenches, derivatives(back.with_changes(
@@ -443,6 +445,12 @@ def test_uneven_sampling_refused_by_savgol(panda):
     assert e.value.row == 501 and e.value.jitter == pytest.approx(0.5, rel=1e-3)
     d = derivatives(uneven, method="spline")
     assert np.isfinite(d.accelerations).all()
+    P = uneven.positions.copy()
+    P[:, 2] = np.nan                                # a joint without positions stays NaN, the rest filtered
+    d = derivatives(uneven.with_changes(positions=P), method="spline")
+    assert np.isnan(d.velocities[:, 2]).all() and np.isfinite(np.delete(d.velocities, 2, axis=1)).all()
+    with pytest.raises(TooFewSamplesError):
+        derivatives(log.take(slice(0, 8)))
 
 
 def test_panda_derivatives_match_mujoco_velocities(panda, tmp_path):

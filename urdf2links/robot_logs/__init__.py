@@ -3,7 +3,8 @@
 The layer reads files and checks data; it builds no regressor and fits nothing (that is
 ``urdf2links.identification``). What ``identify --data`` calls, in order (docs/logs.md):
 
-    log = read_log(path, topic=..., wrench_topic=..., t_from=..., t_to=...)
+    log = read_log(path, topic=..., wrench_topic=..., base_topic=..., t_from=..., t_to=...)
+    print(log.describe())
     log = check_log(log, joints=model.coordinate_names, limits=angular_limits(model))
     d = derivatives(log, method="savgol", cutoff_hz=...)   # d.describe() printed, d.plot(png)
     check_samples(log, n_base=..., equations_per_sample=...)   # once the base parameters are known

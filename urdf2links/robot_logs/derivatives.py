@@ -19,7 +19,7 @@ import numpy as np
 
 from . import filters
 from .base import base_coordinates
-from .errors import NonUniformError
+from .errors import NonUniformError, TooFewSamplesError
 from .filters import Filter
 from .log import RobotLog
 
@@ -109,6 +109,10 @@ def derivatives(log: RobotLog, *, method: str = "savgol", cutoff_hz: float | Non
     if window is not None and (method != "savgol" or cutoff_hz is not None):
         raise ValueError("derivatives: window= is savgol's, and excludes cutoff_hz=")
     S = log.n_samples
+    if S < 2 * order + 3:
+        raise TooFewSamplesError(f"{log.source}: {S} samples cannot be filtered and differentiated twice; a "
+                                 f"polynomial of order {order} needs at least {2 * order + 3}",
+                                 equations=S, needed=2 * order + 3, source=log.source, topic=log.topic)
     dt, jitter, k = _step(log)
     cutoff = DEFAULT_CUTOFF_HZ if cutoff_hz is None and window is None else cutoff_hz
     if cutoff is not None and not 0 < cutoff < 0.5 / dt:
@@ -129,7 +133,10 @@ def derivatives(log: RobotLog, *, method: str = "savgol", cutoff_hz: float | Non
         filt = filters.spline(dt, cutoff_hz=cutoff)
         edge = int(np.ceil(1.0 / (filt.bandwidth_hz * dt)))      # about one period of the cutoff
     P = log.positions
-    out = filters.apply(filt, log.times, P)
+    out = np.full((3,) + P.shape, np.nan)          # a joint without positions stays NaN
+    has = np.array(log.logged("position"), dtype=bool)
+    if has.any():
+        out[:, :, has] = filters.apply(filt, log.times, P[:, has])
     efforts = np.full_like(P, np.nan)
     on = np.array(log.logged("effort"), dtype=bool)
     if on.any():

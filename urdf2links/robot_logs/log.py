@@ -105,6 +105,22 @@ class RobotLog:
     def n_samples(self) -> int:
         return len(self.times)
 
+    def describe(self) -> str:
+        """What was read, in lines, as the identify command prints it: source, samples, duration and rate,
+        the joints and the quantities logged, the side topics, then every note."""
+        S = self.n_samples
+        span = float(self.times[-1] - self.times[0]) if S else 0.0
+        rate = (S - 1) / span if span > 0 else float("nan")
+        logged = {q: sum(self.logged(q)) for q in QUANTITIES}
+        lines = [f"log: {self.source}: {S} samples over {span:.6g} s ({rate:.6g} Hz), {len(self.names)} joints "
+                 f"({', '.join(f'{v} with {q}' for q, v in logged.items())})"]
+        if self.wrenches is not None:
+            lines.append(f"  wrenches: {self.wrenches.topic}, {len(self.wrenches.times)} messages, frame "
+                         f"{self.wrenches.frame!r}")
+        if self.base is not None:
+            lines.append(f"  base pose: {self.base.source}, {len(self.base.times)} poses")
+        return "\n".join(lines + [f"  note: {n}" for n in self.notes])
+
     def values(self, quantity: str) -> np.ndarray:
         """(S, n) array of ``quantity`` (one of :data:`QUANTITIES`)."""
         return getattr(self, _FIELD[quantity])
