@@ -19,10 +19,10 @@ import pytest
 
 from corpus import NAMED, path as corpus_path
 from urdf2links.parsers.robot_file import load_robot
-from urdf2links.robot_logs import (BasePoses, DegreesError, JumpError, LogError, LogFormatError, NonFiniteError, NonUniformError,
-                                   RobotLog, TimeOrderError, TooFewSamplesError, UnknownJointError, angular_limits,
-                                   check_log, check_samples, derivatives, noise_level, read_log, write_csv,
-                                   write_npz, Wrenches)
+from urdf2links.robot_logs import (BasePoses, DegreesError, JumpError, LogError, LogFormatError, NonFiniteError,
+                                   NonUniformError, RobotLog, TimeOrderError, TooFewSamplesError, UnknownJointError,
+                                   Wrenches, angular_limits, check_log, check_samples, derivatives, noise_level,
+                                   read_log, write_csv, write_npz)
 from urdf2links.robot_logs.bags import JOINT_STATE, WRENCH_STAMPED
 from urdf2links.robot_logs.base import base_coordinates
 
@@ -175,8 +175,8 @@ def test_csv_column_variants(panda, tmp_path):
     short = log.take(slice(0, 50))
     forms = ["position[{j}]", "{j}_vel", "tau_{j}"]
     header = ["time"] + [f.format(j=j) for j in short.names for f in forms] + ["comment"]
-    rows = [[repr(float(t))] + [repr(float(x)) for j in range(7) for x in (short.positions[k, j], short.velocities[k, j],
-                                                               short.efforts[k, j])] + ["x"]
+    rows = [[repr(float(t))] + [repr(float(x)) for j in range(7)
+                                for x in (short.positions[k, j], short.velocities[k, j], short.efforts[k, j])] + ["x"]
             for k, t in enumerate(short.times)]
     p = tmp_path / "variants.csv"
     with open(p, "w", newline="") as f:

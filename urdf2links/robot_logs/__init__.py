@@ -21,8 +21,9 @@ from .readers import read_log
 from .tables import write_csv, write_npz
 
 __all__ = [
-    "read_log", "check_log", "angular_limits", "check_samples", "check_times", "derivatives", "Derivatives", "Filter", "noise_level",
-    "DEFAULT_CUTOFF_HZ", "RobotLog", "Wrenches", "BasePoses", "BASE_SLOTS", "QUANTITIES", "segment", "write_csv", "write_npz",
+    "read_log", "check_log", "angular_limits", "check_samples", "check_times", "derivatives", "Derivatives",
+    "Filter", "noise_level", "DEFAULT_CUTOFF_HZ", "RobotLog", "Wrenches", "BasePoses", "BASE_SLOTS", "QUANTITIES",
+    "segment", "write_csv", "write_npz",
     "LogError", "LogFormatError", "NonFiniteError", "TimeOrderError", "JumpError", "UnknownJointError",
     "DegreesError", "TooFewSamplesError", "NonUniformError",
 ]
