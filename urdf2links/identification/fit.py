@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .base import BaseParameters, base_parameters
-from .regressor import regressor_block
+from .regressor import regressor_columns
 from ..dynamics.rows import kernel_array
 
 __all__ = ["Identification", "NormalEquations", "identify", "normal_equations"]
@@ -66,17 +66,18 @@ def normal_equations(base: BaseParameters, q, qd, qdd, tau, *, block: int = 512,
     ind = base.independent
     r = ind.size
     G, b, tt = np.zeros((n, r, r)), np.zeros((n, r)), np.zeros(n)
-    buf = np.empty((min(block, S), n, p))
+    buf = np.empty((n, min(block, S), r))
     for s0 in range(0, S, block):
         s1 = min(S, s0 + block)
         Q, QD, QDD = (kernel_array(a[s0:s1]) for a in arrs[:3])
-        Yb = regressor_block(params, Q, QD, QDD, buf[:s1 - s0], base=base_motion, t=t)
+        YI = buf if s1 - s0 == buf.shape[1] else np.empty((n, s1 - s0, r))
+        regressor_columns(params, Q, QD, QDD, ind, YI, base=base_motion, t=t)     # (n, B, r)
         T = arrs[3][s0:s1]
         for j in range(n):
-            YI = Yb[:, j].take(ind, axis=1)         # (B, r), C-contiguous: BLAS below
-            G[j] += YI.T @ YI
-            b[j] += YI.T @ T[:, j]
-            tt[j] += T[:, j] @ T[:, j]
+            Tj = np.ascontiguousarray(T[:, j])
+            G[j] += YI[j].T @ YI[j]
+            b[j] += YI[j].T @ Tj
+            tt[j] += Tj @ Tj
     return NormalEquations(base=base, G=G, b=b, t=tt, samples=S)
 
 
@@ -139,7 +140,7 @@ class Identification:
         return out
 
 
-def identify(params, q, qd, qdd, tau, *, base: BaseParameters | None = None, weights=None, samples: int | None = 2000,
+def identify(params, q, qd, qdd, tau, *, base: BaseParameters | None = None, weights=None, samples: int | None = 1000,
              rtol: float = 1e-9, block: int = 512, consistent: bool = False, base_motion=None, t=0.0,
              consistency_options: dict | None = None) -> Identification:
     """Fit ``params`` to the samples ``q, q', q'', tau`` (S, n) (module doc): the base parameters from
