@@ -24,13 +24,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .regressor import regressor
+from .regression import regressor
 
 __all__ = ["BaseParameters", "base_parameters", "combination_name", "PREFERENCE"]
 
 #: the pivot's column weight by kind of parameter: an unidentifiable direction is fixed by its heaviest-weighted
-#: parameter (a mass before a first moment before a planar moment before a joint's parameter)
-PREFERENCE = {"m": 8.0, "mx": 4.0, "my": 4.0, "mz": 4.0}
+#: parameter (an armature, which the first joint's link's moment about its axis always hides, before a mass
+#: before a first moment before a planar moment before a joint's damping, friction or offset)
+PREFERENCE = {"armature": 16.0, "m": 8.0, "mx": 4.0, "my": 4.0, "mz": 4.0}
 
 
 @dataclass(frozen=True, eq=False)
@@ -95,7 +96,7 @@ def combination_name(names, head: int, terms, *, digits: int = 4) -> str:
 
 
 def _weights(params) -> np.ndarray:
-    return np.array([PREFERENCE.get(nm.split("_", 1)[0], 1.0) if kd == "link" else 0.5
+    return np.array([PREFERENCE.get(nm.split("_", 1)[0], 1.0) if kd == "link" else PREFERENCE.get(kd, 0.5)
                      for nm, kd in zip(params.names, params.kind)])
 
 

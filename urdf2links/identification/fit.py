@@ -2,7 +2,7 @@
 
 With the base parameters of :mod:`urdf2links.identification.base` (E87), ``tau = Y_I beta`` over every
 sample. The samples are taken in blocks (``block`` rows): each block's regressor is computed (compiled,
-:func:`~urdf2links.identification.regressor.regressor_block`), its independent columns ``Y_I`` are kept
+:func:`~urdf2links.identification.regression.regressor_block`), its independent columns ``Y_I`` are kept
 and only the normal equations are accumulated, per coordinate ``j`` (``W_j`` its weight):
 
     G_j = sum Y_I[:, j]^T Y_I[:, j],   b_j = sum Y_I[:, j]^T tau_j,   t_j = sum tau_j^2
@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .base import BaseParameters, base_parameters
-from .regressor import regressor_columns
+from .regression import regressor_columns
 from ..dynamics.rows import kernel_array
 
 __all__ = ["Identification", "NormalEquations", "identify", "normal_equations"]
@@ -148,7 +148,7 @@ def identify(params, q, qd, qdd, tau, *, base: BaseParameters | None = None, wei
     (n,) per coordinate (default 1; e.g. the inverse of each joint's noise). ``consistent=True``: every
     link's H positive definite (E88, :func:`~urdf2links.identification.consistency.consistent_fit`,
     options ``consistency_options``). ``tau``: the joints' generalized forces, applied loads already
-    subtracted (:func:`~urdf2links.identification.regressor.regressor`)."""
+    subtracted (:func:`~urdf2links.identification.regression.regressor`)."""
     if base is None:
         base = base_parameters(params, q, qd, qdd, samples=samples, rtol=rtol, base=base_motion, t=t)
     ne = normal_equations(base, q, qd, qdd, tau, block=block, base_motion=base_motion, t=t)
