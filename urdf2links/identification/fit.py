@@ -65,19 +65,30 @@ def normal_equations(base: BaseParameters, q, qd, qdd, tau, *, block: int = 512,
     S = arrs[0].shape[0]
     ind = base.independent
     r = ind.size
-    G, b, tt = np.zeros((n, r, r)), np.zeros((n, r)), np.zeros(n)
-    buf = np.empty((n, min(block, S), r))
+    own = base.row_columns()                   # per coordinate: its structurally non-zero base columns (positions in ind)
+    ptr = np.concatenate(([0], np.cumsum([o.size for o in own]))).astype(np.int64)
+    cols = ind[np.concatenate(own)] if ptr[-1] else np.zeros(0, np.int64)
+    Gc = [np.zeros((o.size, o.size)) for o in own]
+    bc = [np.zeros(o.size) for o in own]
+    tt = np.zeros(n)
+    buf = np.empty(min(block, S) * ptr[-1])
     for s0 in range(0, S, block):
         s1 = min(S, s0 + block)
+        B = s1 - s0
         Q, QD, QDD = (kernel_array(a[s0:s1]) for a in arrs[:3])
-        YI = buf if s1 - s0 == buf.shape[1] else np.empty((n, s1 - s0, r))
-        regressor_columns(params, Q, QD, QDD, ind, YI, base=base_motion, t=t)     # (n, B, r)
+        out = buf if B * ptr[-1] == buf.size else np.empty(B * ptr[-1])
+        regressor_columns(params, Q, QD, QDD, ptr, cols, out, base=base_motion, t=t)
         T = arrs[3][s0:s1]
         for j in range(n):
+            Yj = out[B * ptr[j]:B * ptr[j + 1]].reshape(B, -1)     # (B, r_j), contiguous: BLAS
             Tj = np.ascontiguousarray(T[:, j])
-            G[j] += YI[j].T @ YI[j]
-            b[j] += YI[j].T @ Tj
+            Gc[j] += Yj.T @ Yj
+            bc[j] += Yj.T @ Tj
             tt[j] += Tj @ Tj
+    G, b = np.zeros((n, r, r)), np.zeros((n, r))
+    for j, o in enumerate(own):
+        G[j][np.ix_(o, o)] = Gc[j]
+        b[j][o] = bc[j]
     return NormalEquations(base=base, G=G, b=b, t=tt, samples=S)
 
 
@@ -140,7 +151,7 @@ class Identification:
         return out
 
 
-def identify(params, q, qd, qdd, tau, *, base: BaseParameters | None = None, weights=None, samples: int | None = 1000,
+def identify(params, q, qd, qdd, tau, *, base: BaseParameters | None = None, weights=None, samples: int | None = 500,
              rtol: float = 1e-9, block: int = 512, consistent: bool = False, base_motion=None, t=0.0,
              consistency_options: dict | None = None) -> Identification:
     """Fit ``params`` to the samples ``q, q', q'', tau`` (S, n) (module doc): the base parameters from
