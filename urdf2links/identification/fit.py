@@ -151,7 +151,7 @@ class Identification:
         return out
 
 
-def identify(params, q, qd, qdd, tau, *, base: BaseParameters | None = None, weights=None, samples: int | None = 500,
+def identify(params, q, qd, qdd, tau, *, base: BaseParameters | None = None, weights=None, samples: int | None = 200,
              rtol: float = 1e-9, block: int = 512, consistent: bool = False, base_motion=None, t=0.0,
              consistency_options: dict | None = None) -> Identification:
     """Fit ``params`` to the samples ``q, q', q'', tau`` (S, n) (module doc): the base parameters from
