@@ -26,8 +26,10 @@ grow with the samples (the normal equations hold them): a 7-joint arm (146 param
 tens of milliseconds. cvxpy and clarabel are the optional extra ``identify`` (pyproject.toml).
 
 :func:`consistent_fit` returns the fit with :class:`Consistency` attached: the consistent values, each
-link's smallest eigenvalue of H before (least squares) and after, and for every link the fit had to move,
-a sentence saying so.
+link's smallest eigenvalue of H in the least-squares fit, in the same program solved without its
+constraints (a linear solve: what the regularisation alone gives) and in the consistent fit; a link the
+constraint moved (it differs from that free solution) gets a sentence saying what moved and why, and so
+does a joint term held at zero.
 """
 
 from __future__ import annotations
