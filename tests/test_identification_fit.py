@@ -259,3 +259,18 @@ def test_constraint_forces_projected_out():
     assert abs(fit.values[params.index("damping_j1")] - 0.4) < 1e-9
     plain = fit_rows(params, Y.reshape(-1, params.p), tau.reshape(-1))     # unprojected: lambda spoils it
     assert np.abs(plain.rms_after).max() > 1e-3
+
+
+def test_consistent_fit_without_cvxpy_names_the_extra(monkeypatch):
+    """Without cvxpy (the extra ``identify``) the consistent fit says what to install."""
+    import sys
+
+    model = load_urdf_string(MIMIC)
+    params = ParameterSet.from_model(model, joints=())
+    Q, QD, QDD = _states(model.n, 50, 15)
+    fit = identify(params, Q, QD, QDD, regressor(params, Q, QD, QDD) @ params.values)
+    monkeypatch.setitem(sys.modules, "cvxpy", None)
+    from urdf2links.identification import consistent_fit
+
+    with pytest.raises(ImportError, match=r"urdf2links\[identify\]"):
+        consistent_fit(fit)
