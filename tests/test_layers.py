@@ -25,6 +25,7 @@ LAYERS = [
     ("robot logs", ("urdf2links.robot_logs",)),
     ("scenes", ("urdf2links.scenes",)),
     ("integration", ("urdf2links.integration",)),
+    ("identification", ("urdf2links.identification",)),
     ("view", ("urdf2links.view",)),
     ("api", ("urdf2links",)),
     ("compare: shared output", ("urdf2links.compare.formatting", "urdf2links.compare.figures")),
