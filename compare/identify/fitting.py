@@ -1,0 +1,156 @@
+"""DESCRIPTION's parameters fitted to OTHER's recorded motion: base parameters, the fit, the parameter table.
+
+The equations (docs/identify.md, "The command"): every recorded sample ``s`` and coordinate ``j`` gives one
+row ``tau_sj = Y_sj pi``. Rows where ``|q'_sj| < band`` are left out: there MuJoCo's frictionloss (a soft
+constraint, linear in ``q'`` near 0) and the regularised Coulomb law of the fit differ; everywhere else
+both are ``f sign(q')`` (to ``exp(-2 band / eps)``).
+
+Base parameters by pivoted QR of the column-scaled ``Y`` (a column of rounding only, :data:`ZERO_COLUMN`, is zero:
+scaled, it would look independent) (numerical rank at :data:`RANK_TOL`): the
+independent columns ``B`` and the rest ``D`` with ``Y_D = Y_B K``, so ``Y pi = Y_B beta``, ``beta = pi_B +
+K pi_D``: each base parameter is one named combination. ``beta`` by least squares; the identified ``pi``
+keeps ``pi_D`` at the description's values (what the data cannot identify stays as it is) and takes
+``pi_B = beta - K pi_D``. Standard deviations from ``sigma^2 (Y_B^T Y_B)^-1``, ``sigma^2`` the residual
+variance (0 for noise-free data: then they say the rounding).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.linalg import qr, solve_triangular
+
+from .regressor import H_ENTRIES, Parameters
+
+__all__ = ["Fit", "BaseParameters", "base_parameters", "fit", "FRICTION_BAND", "RANK_TOL", "rows_of"]
+
+#: Rows with ``|q'| <`` this (rad/s or m/s) left out (module doc).
+FRICTION_BAND = 0.05
+#: Numerical rank: ``|R_ii| / |R_00|`` of the column-scaled QR below this is dependent.
+RANK_TOL = 1e-9
+#: A column whose norm is below this fraction of the largest is zero (rounding of a term that vanishes exactly).
+ZERO_COLUMN = 1e-10
+#: A parameter "changed" when it moved more than this relative to its size (and 1e-12 absolute).
+CHANGED = 1e-6
+
+
+@dataclass(frozen=True)
+class BaseParameters:
+    """``independent`` (r,) and ``dependent`` (P - r,) column indices, ``K`` (r, P - r), ``names`` (r,) the
+    combinations in words, ``condition`` the condition number of the column-scaled base regressor."""
+
+    independent: np.ndarray
+    dependent: np.ndarray
+    K: np.ndarray
+    names: tuple[str, ...]
+    condition: float
+
+    def of(self, pi) -> np.ndarray:
+        """``beta = pi_B + K pi_D`` (r,)."""
+        pi = np.asarray(pi, float)
+        return pi[self.independent] + self.K @ pi[self.dependent]
+
+
+def rows_of(Y, tau, qd, *, band: float = FRICTION_BAND) -> tuple[np.ndarray, np.ndarray]:
+    """The rows ``(S n, P)``, ``(S n,)`` of the samples kept (module doc)."""
+    keep = (np.abs(qd) >= band).reshape(-1)
+    return Y.reshape(-1, Y.shape[-1])[keep], np.asarray(tau).reshape(-1)[keep]
+
+
+def _name(p: Parameters, i: int, dependent, k_row) -> str:
+    words = [p.labels[i]]
+    for d, k in zip(dependent, k_row):
+        if abs(k) > 1e-10:
+            words.append(f"{'+' if k > 0 else '-'} {abs(k):.4g} {p.labels[d]}" if abs(abs(k) - 1) > 1e-10
+                         else f"{'+' if k > 0 else '-'} {p.labels[d]}")
+    return " ".join(words)
+
+
+def base_parameters(p: Parameters, A) -> BaseParameters:
+    """The base parameters of the rows ``A`` (R, P) (module doc)."""
+    scale = np.linalg.norm(A, axis=0)
+    used = scale > ZERO_COLUMN * np.max(scale)      # a column of rounding only (a mass on both axes of a shoulder)
+    scale = np.where(used, scale, 0.0)
+    As = np.where(used, A / np.where(used, scale, 1.0), 0.0)
+    R0 = np.linalg.qr(As, mode="r")                              # (P, P): the same column geometry, cheaper
+    _Q, R, perm = qr(R0, mode="economic", pivoting=True)
+    diag = np.abs(np.diag(R))
+    r = int(np.sum(diag > RANK_TOL * diag[0]))
+    B, D = perm[:r], perm[r:]
+    Ks = solve_triangular(R[:r, :r], R[:r, r:])                  # scaled: As_D = As_B Ks
+    K = Ks * scale[D][None, :] / scale[B][:, None] if len(D) else np.zeros((r, 0))
+    K[np.abs(K) < 1e-12 * max(1.0, np.max(np.abs(K), initial=0.0))] = 0.0
+    cond = float(np.linalg.cond(R0[:, B]))
+    order = np.argsort(B)
+    B, K = B[order], K[order]
+    names = tuple(_name(p, int(i), D, K[k]) for k, i in enumerate(B))
+    return BaseParameters(B, D, K, names, cond)
+
+
+@dataclass(frozen=True, eq=False)
+class Fit:
+    """The fit's result: ``parameters`` (labels), ``described`` and ``identified`` pi (P,), ``std`` (P,) (NaN where
+    not identifiable), ``identifiable`` (P,) bool (an independent column), ``changed`` (P,) bool, ``base``
+    (:class:`BaseParameters`), ``beta`` (r,) and ``beta_std``, ``rows`` used, ``residual_rms``."""
+
+    parameters: Parameters
+    described: np.ndarray
+    identified: np.ndarray
+    std: np.ndarray
+    identifiable: np.ndarray
+    changed: np.ndarray
+    base: BaseParameters
+    beta: np.ndarray
+    beta_std: np.ndarray
+    rows: int
+    residual_rms: float
+
+    def link_H(self, which: str = "identified") -> np.ndarray:
+        """(L, 4, 4) the links' H of ``described`` or ``identified`` pi."""
+        pi = getattr(self, which)
+        L = len(self.parameters.links)
+        H = np.zeros((L, 4, 4))
+        for t in range(L):
+            for k, (i, j) in enumerate(H_ENTRIES):
+                H[t, i, j] = H[t, j, i] = pi[10 * t + k]
+        return H
+
+    def min_eigenvalues(self, which: str = "identified") -> np.ndarray:
+        """(L,) the smallest eigenvalue of each link's H (> 0: physically consistent; 0 rows: massless links)."""
+        return np.array([np.linalg.eigvalsh(H)[0] for H in self.link_H(which)])
+
+    def rows_table(self) -> list[dict]:
+        """The parameter table, one dict per parameter."""
+        out = []
+        for i, label in enumerate(self.parameters.labels):
+            out.append({"parameter": label, "described": float(self.described[i]),
+                        "identified": float(self.identified[i]),
+                        "std": None if not np.isfinite(self.std[i]) else float(self.std[i]),
+                        "identifiable": bool(self.identifiable[i]), "changed": bool(self.changed[i])})
+        return out
+
+
+def fit(p: Parameters, described, A, b) -> Fit:
+    """The fit of the rows ``A`` (R, P), ``b`` (R,) (module doc), from the description's ``described`` pi (P,)."""
+    described = np.asarray(described, float)
+    base = base_parameters(p, A)
+    YB = A[:, base.independent]
+    scale = np.linalg.norm(YB, axis=0)
+    x, *_ = np.linalg.lstsq(YB / scale, b, rcond=None)
+    beta = x / scale
+    res = b - YB @ beta
+    dof = max(len(b) - len(beta), 1)
+    sigma2 = float(res @ res) / dof
+    cov = sigma2 * np.linalg.inv((YB / scale).T @ (YB / scale)) / np.outer(scale, scale)
+    beta_std = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    identified = described.copy()
+    identified[base.independent] = beta - base.K @ described[base.dependent]
+    std = np.full(len(p), np.nan)
+    std[base.independent] = beta_std
+    identifiable = np.zeros(len(p), bool)
+    identifiable[base.independent] = True
+    size = np.maximum(np.abs(described), np.abs(identified))
+    changed = np.abs(identified - described) > np.maximum(CHANGED * size, 1e-12)
+    return Fit(p, described, identified, std, identifiable, changed, base, beta, beta_std, len(b),
+               float(np.sqrt(np.mean(res**2))))
