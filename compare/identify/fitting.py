@@ -21,7 +21,6 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg import qr, solve_triangular
 
-from .regressor import H_ENTRIES, Parameters
 
 __all__ = ["Fit", "BaseParameters", "base_parameters", "fit", "FRICTION_BAND", "RANK_TOL", "rows_of"]
 
@@ -58,16 +57,16 @@ def rows_of(Y, tau, qd, *, band: float = FRICTION_BAND) -> tuple[np.ndarray, np.
     return Y.reshape(-1, Y.shape[-1])[keep], np.asarray(tau).reshape(-1)[keep]
 
 
-def _name(p: Parameters, i: int, dependent, k_row) -> str:
-    words = [p.labels[i]]
+def _name(labels, i: int, dependent, k_row) -> str:
+    words = [labels[i]]
     for d, k in zip(dependent, k_row):
         if abs(k) > 1e-10:
-            words.append(f"{'+' if k > 0 else '-'} {abs(k):.4g} {p.labels[d]}" if abs(abs(k) - 1) > 1e-10
-                         else f"{'+' if k > 0 else '-'} {p.labels[d]}")
+            words.append(f"{'+' if k > 0 else '-'} {abs(k):.4g} {labels[d]}" if abs(abs(k) - 1) > 1e-10
+                         else f"{'+' if k > 0 else '-'} {labels[d]}")
     return " ".join(words)
 
 
-def base_parameters(p: Parameters, A) -> BaseParameters:
+def base_parameters(labels, A) -> BaseParameters:
     """The base parameters of the rows ``A`` (R, P) (module doc)."""
     scale = np.linalg.norm(A, axis=0)
     used = scale > ZERO_COLUMN * np.max(scale)      # a column of rounding only (a mass on both axes of a shoulder)
@@ -84,17 +83,17 @@ def base_parameters(p: Parameters, A) -> BaseParameters:
     cond = float(np.linalg.cond(R0[:, B]))
     order = np.argsort(B)
     B, K = B[order], K[order]
-    names = tuple(_name(p, int(i), D, K[k]) for k, i in enumerate(B))
+    names = tuple(_name(labels, int(i), D, K[k]) for k, i in enumerate(B))
     return BaseParameters(B, D, K, names, cond)
 
 
 @dataclass(frozen=True, eq=False)
 class Fit:
-    """The fit's result: ``parameters`` (labels), ``described`` and ``identified`` pi (P,), ``std`` (P,) (NaN where
+    """The fit's result: ``parameters`` (:class:`urdf2links.identification.ParameterSet`), ``described`` and ``identified`` pi (P,), ``std`` (P,) (NaN where
     not identifiable), ``identifiable`` (P,) bool (an independent column), ``changed`` (P,) bool, ``base``
     (:class:`BaseParameters`), ``beta`` (r,) and ``beta_std``, ``rows`` used, ``residual_rms``."""
 
-    parameters: Parameters
+    parameters: object
     described: np.ndarray
     identified: np.ndarray
     std: np.ndarray
@@ -108,22 +107,16 @@ class Fit:
 
     def link_H(self, which: str = "identified") -> np.ndarray:
         """(L, 4, 4) the links' H of ``described`` or ``identified`` pi."""
-        pi = getattr(self, which)
-        L = len(self.parameters.links)
-        H = np.zeros((L, 4, 4))
-        for t in range(L):
-            for k, (i, j) in enumerate(H_ENTRIES):
-                H[t, i, j] = H[t, j, i] = pi[10 * t + k]
-        return H
+        return self.parameters.H(getattr(self, which))
 
     def min_eigenvalues(self, which: str = "identified") -> np.ndarray:
-        """(L,) the smallest eigenvalue of each link's H (> 0: physically consistent; 0 rows: massless links)."""
+        """(L,) the smallest eigenvalue of each tree link's H (> 0: physically consistent; massless links: 0)."""
         return np.array([np.linalg.eigvalsh(H)[0] for H in self.link_H(which)])
 
     def rows_table(self) -> list[dict]:
         """The parameter table, one dict per parameter."""
         out = []
-        for i, label in enumerate(self.parameters.labels):
+        for i, label in enumerate(self.parameters.names):
             out.append({"parameter": label, "described": float(self.described[i]),
                         "identified": float(self.identified[i]),
                         "std": None if not np.isfinite(self.std[i]) else float(self.std[i]),
@@ -131,9 +124,10 @@ class Fit:
         return out
 
 
-def fit(p: Parameters, described, A, b) -> Fit:
-    """The fit of the rows ``A`` (R, P), ``b`` (R,) (module doc), from the description's ``described`` pi (P,)."""
-    described = np.asarray(described, float)
+def fit(params, A, b) -> Fit:
+    """The fit of the rows ``A`` (R, P), ``b`` (R,) (module doc), from the description's pi (``params.values``)."""
+    described = np.asarray(params.values, float)
+    p = params.names
     base = base_parameters(p, A)
     YB = A[:, base.independent]
     scale = np.linalg.norm(YB, axis=0)
@@ -152,5 +146,5 @@ def fit(p: Parameters, described, A, b) -> Fit:
     identifiable[base.independent] = True
     size = np.maximum(np.abs(described), np.abs(identified))
     changed = np.abs(identified - described) > np.maximum(CHANGED * size, 1e-12)
-    return Fit(p, described, identified, std, identifiable, changed, base, beta, beta_std, len(b),
+    return Fit(params, described, identified, std, identifiable, changed, base, beta, beta_std, len(b),
                float(np.sqrt(np.mean(res**2))))

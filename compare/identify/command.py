@@ -1,0 +1,47 @@
+"""The ``identify`` command's handler (its options: :mod:`urdf2links.commands.identify`)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from urdf2links.locations import DEFAULT_OUT
+
+from ..pairs.mapping import parse_map
+from .pipeline import identify
+from .report import write_outputs
+from .writers import write_urdf
+
+__all__ = ["identify_command"]
+
+
+def identify_command(args) -> int:
+    """Record, fit, write the report (and the corrected URDF); print the changes and the residuals."""
+    if not args.against:
+        print("urdf2links identify: --against OTHER is required (the description whose motion to fit)", file=sys.stderr)
+        return 2
+    seeds = tuple(range(args.seed, args.seed + args.runs))
+    ident = identify(args.file, args.against, seeds=seeds, held_out_seed=args.seed + 100, t_end=args.t_end,
+                     band=args.band, explicit_map=parse_map(args.map))
+    changes = []
+    if args.write_urdf:
+        changes = write_urdf(ident, args.write_urdf)
+    elif args.write_mjcf:
+        print("urdf2links identify: --write-mjcf is not available yet (only --write-urdf)", file=sys.stderr)
+        return 2
+    out = Path(args.out) if args.out else DEFAULT_OUT / "identify" / Path(args.file).stem
+    s = write_outputs(ident, out, changes)
+    f = ident.fit
+    print(f"identify {args.file} --against {args.against}: {s['samples']} samples, {s['rank']} base parameters of "
+          f"{s['parameters_total']}, condition {s['condition']:.3g}")
+    for i, nm in enumerate(ident.names):
+        print(f"  {nm:<24} torque residual RMS {ident.residual_before[i]:.3e} -> {ident.residual_after[i]:.3e} N m "
+              f"(held out {ident.heldout_before[i]:.3e} -> {ident.heldout_after[i]:.3e})")
+    if args.write_urdf:
+        print(f"wrote {args.write_urdf}: {len(changes)} change(s)")
+        for c in changes:
+            print("  " + c.line())
+    else:
+        print(f"{int(f.changed.sum())} parameter(s) changed (--write-urdf OUT writes them)")
+    print(f"report: {out / 'report.html'}")
+    return 0

@@ -1,0 +1,131 @@
+"""The corrected description: ``--write-urdf OUT`` (and the list of every change, nothing changed silently).
+
+A tree link's identified ``H`` goes back to the body that carries it (the first body folded into that tree
+link, :class:`urdf2links.parsers.parts.PartsModel` ``frame_of``: ``r_t = X r_b``): ``H_b' = H_b + X^-1 (H_t' -
+H_t) X^-T``, so the bodies folded with it keep their own. From ``H_b'`` (E10 inverted): ``m = H[3, 3]``, ``c =
+H[:3, 3] / m``, ``S_C = H[:3, :3] - m c c^T`` and the inertia about the center of mass ``I = tr(S_C) 1 - S_C``,
+written as ``<inertial>`` with ``rpy="0 0 0"``. A joint's damping and Coulomb friction go to ``<dynamics>``. The
+armature has no URDF element: a changed armature is listed as not written.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from lxml import etree
+
+__all__ = ["Change", "planned_changes", "write_urdf", "inertial_of"]
+
+
+@dataclass(frozen=True)
+class Change:
+    """One change: ``element`` (``link panda_link3`` / ``joint panda_joint2``), ``what`` (mass, com, inertia,
+    damping, friction, armature), ``before``, ``after`` (numbers or lists), ``written`` (False: no place for it
+    in the file's format, ``note`` says why)."""
+
+    element: str
+    what: str
+    before: object
+    after: object
+    written: bool = True
+    note: str = ""
+
+    def line(self) -> str:
+        def fmt(v):
+            return "[" + ", ".join(f"{x:.6g}" for x in v) + "]" if isinstance(v, (list, tuple)) else f"{v:.6g}"
+        return (f"{self.element} {self.what}: {fmt(self.before)} -> {fmt(self.after)}"
+                + ("" if self.written else f" (not written: {self.note})"))
+
+    def to_json(self) -> dict:
+        return {"element": self.element, "what": self.what, "before": self.before, "after": self.after,
+                "written": self.written, "note": self.note}
+
+
+def inertial_of(H) -> tuple[float, np.ndarray, np.ndarray]:
+    """``(m, c (3,), I (3, 3) about the center of mass)`` of a pseudo-inertia ``H`` (module doc)."""
+    H = np.asarray(H, float)
+    m = float(H[3, 3])
+    c = H[:3, 3] / m
+    S = H[:3, :3] - m * np.outer(c, c)
+    return m, c, np.trace(S) * np.eye(3) - S
+
+
+def _carriers(built) -> dict:
+    out = {}
+    for body, (t, X) in built.frame_of.items():
+        if t is not None and t not in out:
+            out[t] = (body, X)
+    return out
+
+
+def planned_changes(ident) -> tuple[list[Change], dict]:
+    """Every change the fit asks for, and the new ``H`` of each carrying body (body -> (4, 4) in its frame)."""
+    f, pair = ident.fit, ident.pair
+    params = f.parameters
+    H0, H1 = f.link_H("described"), f.link_H("identified")
+    changes, new_H = [], {}
+    for t, (body, X) in sorted(_carriers(pair.built).items()):
+        if np.allclose(H0[t], H1[t], rtol=0, atol=1e-12 * max(1.0, np.abs(H0[t]).max())):
+            continue
+        Xi = np.linalg.inv(X)
+        Hb = pair.parts.body(body).H + Xi @ (H1[t] - H0[t]) @ Xi.T
+        new_H[body] = Hb
+        m0, c0, I0 = inertial_of(pair.parts.body(body).H) if pair.parts.body(body).H[3, 3] > 0 else (0.0, np.zeros(3), np.zeros((3, 3)))
+        m1, c1, I1 = inertial_of(Hb)
+        changes += [Change(f"link {body}", "mass", m0, m1), Change(f"link {body}", "com", c0.tolist(), c1.tolist()),
+                    Change(f"link {body}", "inertia (ixx iyy izz ixy ixz iyz)", _six(I0), _six(I1))]
+    for i, name in enumerate(params.names):
+        kind = params.kind[i]
+        if kind in ("damping", "friction", "armature") and f.changed[i]:
+            written = kind != "armature" or pair.parts.format == "mjcf"
+            changes.append(Change(f"joint {params.owner[i]}", kind, float(f.described[i]), float(f.identified[i]),
+                                  written, "" if written else "URDF has no armature element; --write-mjcf keeps it"))
+        elif kind == "offset" and f.changed[i]:
+            changes.append(Change(f"joint {params.owner[i]}", "offset", float(f.described[i]),
+                                  float(f.identified[i]), False, "a constant torque has no element in a description"))
+    return changes, new_H
+
+
+def _six(I) -> list:
+    return [float(I[0, 0]), float(I[1, 1]), float(I[2, 2]), float(I[0, 1]), float(I[0, 2]), float(I[1, 2])]
+
+
+def _g(x) -> str:
+    return repr(float(x))
+
+
+def write_urdf(ident, out) -> list[Change]:
+    """DESCRIPTION (a URDF) with the identified values written to ``out`` (module doc); returns the changes."""
+    pair = ident.pair
+    if pair.parts.format != "urdf":
+        raise ValueError(f"--write-urdf: {pair.description} is not a URDF; use --write-mjcf")
+    changes, new_H = planned_changes(ident)
+    root = etree.parse(str(pair.description), etree.XMLParser(remove_comments=False)).getroot()
+    links = {el.get("name"): el for el in root.findall("link")}
+    for body, H in new_H.items():
+        m, c, I = inertial_of(H)
+        link = links[body]
+        old = link.find("inertial")
+        inertial = etree.Element("inertial")
+        etree.SubElement(inertial, "origin", xyz=" ".join(_g(x) for x in c), rpy="0 0 0")
+        etree.SubElement(inertial, "mass", value=_g(m))
+        six = _six(I)
+        etree.SubElement(inertial, "inertia", **{k: _g(v) for k, v in zip(("ixx", "iyy", "izz", "ixy", "ixz", "iyz"), six)})
+        if old is not None:
+            inertial.tail = old.tail
+            link.replace(old, inertial)
+        else:
+            link.insert(0, inertial)
+    joints = {el.get("name"): el for el in root.findall("joint")}
+    for ch in changes:
+        if ch.element.startswith("joint ") and ch.written and ch.what in ("damping", "friction"):
+            el = joints[ch.element[6:]]
+            dyn = el.find("dynamics")
+            if dyn is None:
+                dyn = etree.SubElement(el, "dynamics")
+            dyn.set(ch.what, _g(ch.after))
+    Path(out).parent.mkdir(parents=True, exist_ok=True)
+    Path(out).write_text(etree.tostring(root, encoding="unicode") + "\n")
+    return changes
