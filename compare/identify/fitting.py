@@ -9,8 +9,10 @@ Base parameters by pivoted QR of the column-scaled ``Y`` (a column of rounding o
 scaled, it would look independent) (numerical rank at :data:`RANK_TOL`): the
 independent columns ``B`` and the rest ``D`` with ``Y_D = Y_B K``, so ``Y pi = Y_B beta``, ``beta = pi_B +
 K pi_D``: each base parameter is one named combination. ``beta`` by least squares; the identified ``pi``
-keeps ``pi_D`` at the description's values (what the data cannot identify stays as it is) and takes
-``pi_B = beta - K pi_D``. Standard deviations from ``sigma^2 (Y_B^T Y_B)^-1``, ``sigma^2`` the residual
+is the description's moved so that it has the fitted ``beta`` with the fewest, smallest moves (least sum of
+``|column scale x move|``, masses, damping, friction and armature kept >= 0: a linear program): what the data
+cannot identify stays at the description's unless a fitted combination asks for it; a move below :data:`CHANGED` (relative) or :data:`NEGLIGIBLE` (absolute) is rounding, and
+the description's value stays. Standard deviations from ``sigma^2 (Y_B^T Y_B)^-1``, ``sigma^2`` the residual
 variance (0 for noise-free data: then they say the rounding).
 """
 
@@ -30,8 +32,10 @@ FRICTION_BAND = 0.05
 RANK_TOL = 1e-9
 #: A column whose norm is below this fraction of the largest is zero (rounding of a term that vanishes exactly).
 ZERO_COLUMN = 1e-10
-#: A parameter "changed" when it moved more than this relative to its size (and 1e-12 absolute).
+#: A parameter "changed" when it moved more than this relative to its size and more than :data:`NEGLIGIBLE`
+#: (SI units: kg, kg m, kg m^2, N m s, N m); a smaller move is the fit's rounding, and the description's value stays.
 CHANGED = 1e-6
+NEGLIGIBLE = 1e-9
 
 
 @dataclass(frozen=True)
@@ -124,6 +128,39 @@ class Fit:
         return out
 
 
+def _lower_bounds(params) -> np.ndarray:
+    """(P,) 0 for masses and the joints' damping, friction and armature; -inf for the rest."""
+    names = params.names
+    return np.array([0.0 if (k in ("damping", "friction", "armature") or (k == "link" and nm.startswith("m_")))
+                     else -np.inf for k, nm in zip(params.kind, names)])
+
+
+def _fewest_moves(base: BaseParameters, dbeta, scale, described, lower) -> np.ndarray:
+    """The move ``d`` (P,) of least ``sum |scale_i d_i|`` (a linear program: few parameters move, each weighed by
+    what it does to the torques) with ``beta(pi + d) = beta(pi) + dbeta`` and ``pi + d >= lower`` (masses,
+    damping, friction, armature not negative). Along what the data cannot identify nothing moves unless the
+    fitted combinations ask for it. Falls back to ``pi_B = beta - K pi_D`` when the program finds no solution."""
+    from scipy.optimize import linprog
+
+    P = len(scale)
+    M = np.zeros((len(dbeta), P))
+    M[:, base.independent] = np.eye(len(dbeta))
+    M[:, base.dependent] = base.K
+    s = np.where(scale > ZERO_COLUMN * np.max(scale), scale, 1.0)
+    lo = np.where(np.isfinite(lower), lower - described, -np.inf)
+    # d = (u - v) / s with u, v >= 0: minimise sum(u + v)
+    bounds = [(0, None)] * (2 * P)
+    A_ub = np.hstack([-np.eye(P) / s[:, None], np.eye(P) / s[:, None]])       # -(u - v)/s <= -lo
+    keep = np.isfinite(lo)
+    res = linprog(np.ones(2 * P), A_ub=A_ub[keep], b_ub=-lo[keep], A_eq=np.hstack([M / s, -M / s]), b_eq=dbeta,
+                  bounds=bounds, method="highs")
+    if res.status != 0:
+        d = np.zeros(P)
+        d[base.independent] = dbeta
+        return d
+    return (res.x[:P] - res.x[P:]) / s
+
+
 def fit(params, A, b) -> Fit:
     """The fit of the rows ``A`` (R, P), ``b`` (R,) (module doc), from the description's pi (``params.values``)."""
     described = np.asarray(params.values, float)
@@ -138,13 +175,14 @@ def fit(params, A, b) -> Fit:
     sigma2 = float(res @ res) / dof
     cov = sigma2 * np.linalg.inv((YB / scale).T @ (YB / scale)) / np.outer(scale, scale)
     beta_std = np.sqrt(np.maximum(np.diag(cov), 0.0))
-    identified = described.copy()
-    identified[base.independent] = beta - base.K @ described[base.dependent]
+    identified = described + _fewest_moves(base, beta - base.of(described), np.linalg.norm(A, axis=0), described,
+                                           _lower_bounds(params))
     std = np.full(len(p), np.nan)
     std[base.independent] = beta_std
     identifiable = np.zeros(len(p), bool)
     identifiable[base.independent] = True
     size = np.maximum(np.abs(described), np.abs(identified))
-    changed = np.abs(identified - described) > np.maximum(CHANGED * size, 1e-12)
+    changed = np.abs(identified - described) > np.maximum(CHANGED * size, NEGLIGIBLE)
+    identified = np.where(changed, identified, described)
     return Fit(params, described, identified, std, identifiable, changed, base, beta, beta_std, len(b),
                float(np.sqrt(np.mean(res**2))))

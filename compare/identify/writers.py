@@ -67,7 +67,7 @@ def planned_changes(ident) -> tuple[list[Change], dict]:
     H0, H1 = f.link_H("described"), f.link_H("identified")
     changes, new_H = [], {}
     for t, (body, X) in sorted(_carriers(pair.built).items()):
-        if np.allclose(H0[t], H1[t], rtol=0, atol=1e-12 * max(1.0, np.abs(H0[t]).max())):
+        if np.array_equal(H0[t], H1[t]):          # no entry of this link changed (fitting.CHANGED)
             continue
         Xi = np.linalg.inv(X)
         Hb = pair.parts.body(body).H + Xi @ (H1[t] - H0[t]) @ Xi.T
