@@ -21,5 +21,8 @@ The API is written down in docs/identify.md.
 
 from .parameters import LINK_ENTRIES, ParameterSet, link_matrix, link_vector
 from .regressor import regressor, regressor_block
+from .base import BaseParameters, base_parameters
+from .fit import Identification, NormalEquations, identify, normal_equations
 
-__all__ = ["ParameterSet", "LINK_ENTRIES", "link_vector", "link_matrix", "regressor", "regressor_block"]
+__all__ = ["ParameterSet", "LINK_ENTRIES", "link_vector", "link_matrix", "regressor", "regressor_block",
+           "BaseParameters", "base_parameters", "Identification", "NormalEquations", "identify", "normal_equations"]
