@@ -32,7 +32,8 @@ def identify_command(args) -> int:
     out = Path(args.out) if args.out else DEFAULT_OUT / "identify" / Path(args.file).stem
     s = write_outputs(ident, out, changes)
     f = ident.fit
-    print(f"identify {args.file} --against {args.against}: {s['samples']} samples, {s['rank']} base parameters of "
+    print(f"identify {args.file} --against {args.against}: {s['samples']} samples ({s['samples_fitted']} fitted), "
+          f"{s['rank']} base parameters of "
           f"{s['parameters_total']}, condition {s['condition']:.3g}")
     for i, nm in enumerate(ident.names):
         print(f"  {nm:<24} torque residual RMS {ident.residual_before[i]:.3e} -> {ident.residual_after[i]:.3e} N m "

@@ -25,14 +25,14 @@ def summary(ident, changes=()) -> dict:
     return json_ready({
         "description": str(ident.pair.description), "against": str(ident.pair.engine.path),
         "coordinates": list(ident.names),
-        "samples": int(sum(r.samples for r in ident.recordings)), "rows_fitted": f.rows,
+        "samples": int(sum(r.samples for r in ident.recordings)), "samples_fitted": f.samples,
         "seeds": [r.seed for r in ident.recordings], "held_out_seed": ident.held_out.seed,
         "mj_inverse_consistency": ident.consistency, "friction_band": ident.band,
-        "rank": len(f.beta), "parameters_total": len(f.described), "condition": f.base.condition,
+        "rank": int(f.base.r), "parameters_total": len(f.described), "condition": f.base.condition_number,
+        "consistent_fit": f.consistent, "unidentifiable": list(f.base.unidentifiable()),
         "residual_rms": {"before": ident.residual_before.tolist(), "after": ident.residual_after.tolist()},
         "held_out_rms": {"before": ident.heldout_before.tolist(), "after": ident.heldout_after.tolist()},
-        "base_parameters": [{"combination": n, "described": float(d), "identified": float(b), "std": float(s)}
-                            for n, d, b, s in zip(f.base.names, f.base.of(f.described), f.beta, f.beta_std)],
+        "base_parameters": f.base_table(),
         "parameters": f.rows_table(),
         "changes": [c.to_json() for c in changes],
         "times_s": ident.times, "notes": ident.notes})
@@ -69,7 +69,7 @@ def _table_md(rows) -> list[str]:
 
 def _markdown(s: dict) -> str:
     lines = [f"# identify {s['description']} --against {s['against']}", "",
-             f"{s['samples']} samples, {s['rows_fitted']} rows fitted; {s['rank']} base parameters of "
+             f"{s['samples']} samples, {s['samples_fitted']} fitted; {s['rank']} base parameters of "
              f"{s['parameters_total']}; condition number {s['condition']:.3g}; mj_inverse consistency "
              f"{s['mj_inverse_consistency']:.1e} N m.", "", "## Torque residual RMS per joint (N m)", "",
              "| joint | fitted, description | fitted, identified | held-out, description | held-out, identified |",
@@ -108,7 +108,7 @@ def _html(s: dict, png: str) -> str:
 <style>body{{font-family:sans-serif;max-width:1100px;margin:1em auto;font-size:14px}}table{{border-collapse:collapse;font-size:12px}}
 td,th{{border:1px solid #ccc;padding:2px 6px;text-align:right}}td:first-child{{text-align:left}}</style></head><body>
 <h1>identify {html.escape(s['description'])}<br><small>against {html.escape(s['against'])}</small></h1>
-<p>{s['samples']} samples, {s['rows_fitted']} rows fitted; {s['rank']} base parameters of {s['parameters_total']};
+<p>{s['samples']} samples, {s['samples_fitted']} fitted; {s['rank']} base parameters of {s['parameters_total']};
 condition number {s['condition']:.3g}; mj_inverse consistency {s['mj_inverse_consistency']:.1e} N m.</p>
 <h2>Torque residual RMS per joint (N m)</h2>
 {table(("joint", "fitted, description", "fitted, identified", "held-out, description", "held-out, identified"), res)}
