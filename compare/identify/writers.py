@@ -4,8 +4,10 @@ A tree link's identified ``H`` goes back to the body that carries it (the first 
 link, :class:`urdf2links.parsers.parts.PartsModel` ``frame_of``: ``r_t = X r_b``): ``H_b' = H_b + X^-1 (H_t' -
 H_t) X^-T``, so the bodies folded with it keep their own. From ``H_b'`` (E10 inverted): ``m = H[3, 3]``, ``c =
 H[:3, 3] / m``, ``S_C = H[:3, :3] - m c c^T`` and the inertia about the center of mass ``I = tr(S_C) 1 - S_C``,
-written as ``<inertial>`` with ``rpy="0 0 0"``. A joint's damping and Coulomb friction go to ``<dynamics>``. The
-armature has no URDF element: a changed armature is listed as not written.
+written as ``<inertial>`` with ``rpy="0 0 0"``. A joint's damping and Coulomb friction go to ``<dynamics>``
+(a negative value of rounding is written as 0). The armature has no URDF element: where the data cannot tell an
+armature from the links' inertias the change goes to the inertias (:func:`urdf_values`, a move along the
+unidentifiable directions, no torque changes); an armature identified by itself is listed as not written.
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ from pathlib import Path
 import numpy as np
 from lxml import etree
 
-__all__ = ["Change", "planned_changes", "write_urdf", "inertial_of"]
+__all__ = ["Change", "planned_changes", "write_urdf", "inertial_of", "urdf_values"]
 
 
 @dataclass(frozen=True)
@@ -60,11 +62,31 @@ def _carriers(built) -> dict:
     return out
 
 
-def planned_changes(ident) -> tuple[list[Change], dict]:
-    """Every change the fit asks for, and the new ``H`` of each carrying body (body -> (4, 4) in its frame)."""
+def urdf_values(fit) -> np.ndarray:
+    """The identified values moved along the unidentifiable directions (the base parameters' null space: no
+    torque changes) so that every armature the data cannot tell from the links' inertias is back at the
+    description's value: a URDF has no armature element, its links' inertias carry the change instead. An
+    armature identified by itself keeps its value (and is listed as not written)."""
+    params, v = fit.parameters, fit.identified.copy()
+    idx = np.array([i for i, k in enumerate(params.kind) if k == "armature"], int)
+    N = fit.base.null_space
+    if idx.size == 0 or N.size == 0:
+        return v
+    z, *_ = np.linalg.lstsq(N[idx], fit.described[idx] - v[idx], rcond=None)
+    moved = v + N @ z
+    size = np.maximum(np.abs(fit.described), np.abs(moved))
+    keep = np.abs(moved - fit.described) <= np.maximum(1e-6 * size, 1e-9)      # fitting.CHANGED, NEGLIGIBLE
+    return np.where(keep, fit.described, moved)
+
+
+def planned_changes(ident, values=None) -> tuple[list[Change], dict]:
+    """Every change the fit asks for (``values``: the vector written, default the identified one), and the new
+    ``H`` of each carrying body (body -> (4, 4) in its frame)."""
     f, pair = ident.fit, ident.pair
     params = f.parameters
-    H0, H1 = f.link_H("described"), f.link_H("identified")
+    values = f.identified if values is None else values
+    changed = values != f.described
+    H0, H1 = f.link_H("described"), params.H(values)
     changes, new_H = [], {}
     for t, (body, X) in sorted(_carriers(pair.built).items()):
         if np.array_equal(H0[t], H1[t]):          # no entry of this link changed (fitting.CHANGED)
@@ -78,13 +100,14 @@ def planned_changes(ident) -> tuple[list[Change], dict]:
                     Change(f"link {body}", "inertia (ixx iyy izz ixy ixz iyz)", _six(I0), _six(I1))]
     for i, name in enumerate(params.names):
         kind = params.kind[i]
-        if kind in ("damping", "friction", "armature") and f.changed[i]:
+        if kind in ("damping", "friction", "armature") and changed[i]:
             written = kind != "armature" or pair.parts.format == "mjcf"
-            changes.append(Change(f"joint {params.owner[i]}", kind, float(f.described[i]), float(f.identified[i]),
-                                  written, "" if written else "URDF has no armature element; --write-mjcf keeps it"))
-        elif kind == "offset" and f.changed[i]:
+            changes.append(Change(f"joint {params.owner[i]}", kind, float(f.described[i]), float(values[i]),
+                                  written, "" if written else "URDF has no armature element, and the data tell this "
+                                  "one from the links' inertias"))
+        elif kind == "offset" and changed[i]:
             changes.append(Change(f"joint {params.owner[i]}", "offset", float(f.described[i]),
-                                  float(f.identified[i]), False, "a constant torque has no element in a description"))
+                                  float(values[i]), False, "a constant torque has no element in a description"))
     return changes, new_H
 
 
@@ -101,7 +124,7 @@ def write_urdf(ident, out) -> list[Change]:
     pair = ident.pair
     if pair.parts.format != "urdf":
         raise ValueError(f"--write-urdf: {pair.description} is not a URDF; use --write-mjcf")
-    changes, new_H = planned_changes(ident)
+    changes, new_H = planned_changes(ident, urdf_values(ident.fit))
     root = etree.parse(str(pair.description), etree.XMLParser(remove_comments=False)).getroot()
     links = {el.get("name"): el for el in root.findall("link")}
     for body, H in new_H.items():
@@ -125,7 +148,7 @@ def write_urdf(ident, out) -> list[Change]:
             dyn = el.find("dynamics")
             if dyn is None:
                 dyn = etree.SubElement(el, "dynamics")
-            dyn.set(ch.what, _g(ch.after))
+            dyn.set(ch.what, _g(max(ch.after, 0.0)))
     Path(out).parent.mkdir(parents=True, exist_ok=True)
     Path(out).write_text(etree.tostring(root, encoding="unicode") + "\n")
     return changes
