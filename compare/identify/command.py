@@ -15,8 +15,28 @@ from .writers import write_urdf
 __all__ = ["identify_command"]
 
 
+def design_command(args) -> int:
+    """``--design OUT.toml``: the excitation scene (:mod:`.design`)."""
+    from urdf2links.parsers.parts import parts_model, robot_parts
+
+    from .design import design_trajectory, scene_toml
+    from .excitation import bounds_of_parts
+
+    parts = robot_parts(args.file)
+    model = parts_model(parts).model
+    d = design_trajectory(model, bounds_of_parts(parts, model.coordinate_names), seed=args.seed)
+    Path(args.design).parent.mkdir(parents=True, exist_ok=True)
+    Path(args.design).write_text(scene_toml(d, args.file, out=args.design))
+    print(f"wrote {args.design}: condition number of the base regressor {d.condition:.4g} (first candidate "
+          f"{d.start_condition:.4g}, {d.evaluations} evaluations); period {d.trajectory.period:g} s; peak |tau| "
+          + ", ".join(f"{x:.3g}" for x in d.peak_effort))
+    return 0
+
+
 def identify_command(args) -> int:
     """Record, fit, write the report (and the corrected URDF); print the changes and the residuals."""
+    if args.design:
+        return design_command(args)
     if not args.against:
         print("urdf2links identify: --against OTHER is required (the description whose motion to fit)", file=sys.stderr)
         return 2
