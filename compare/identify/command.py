@@ -5,6 +5,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from urdf2links.locations import DEFAULT_OUT
 
 from ..pairs.mapping import parse_map
@@ -58,6 +60,9 @@ def identify_command(args) -> int:
     for i, nm in enumerate(ident.names):
         print(f"  {nm:<24} torque residual RMS {ident.residual_before[i]:.3e} -> {ident.residual_after[i]:.3e} N m "
               f"(held out {ident.heldout_before[i]:.3e} -> {ident.heldout_after[i]:.3e})")
+    for v in ident.validation:
+        print(f"  held-out run, {v.label} on {v.engine}: " + (f"max |q - q_OTHER| {np.max(v.error):.3e}"
+                                                              if v.error is not None else v.note))
     if args.write_urdf:
         print(f"wrote {args.write_urdf}: {len(changes)} change(s)")
         for c in changes:

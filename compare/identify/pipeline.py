@@ -23,6 +23,7 @@ from urdf2links.identification import ParameterSet, regressor
 from .excitation import bounds_of_parts, random_trajectory
 from .fitting import FRICTION_BAND, Fit, fit, kept_samples
 from .recording import Recording, inverse_consistency, open_pair, record
+from .validation import validate
 
 __all__ = ["identify", "Identification", "SLIP_SPEED", "stacked"]
 
@@ -54,6 +55,7 @@ class Identification:
     band: float
     times: dict
     notes: list = field(default_factory=list)
+    validation: list = field(default_factory=list)
 
     @property
     def names(self) -> tuple:
@@ -65,9 +67,10 @@ def _rms(Y, pi, tau) -> np.ndarray:
 
 
 def identify(description, other, *, seeds=(1, 2, 3), held_out_seed: int = 101, t_end: float = 6.0,
-             band: float = FRICTION_BAND, explicit_map: dict | None = None, trajectory=None) -> Identification:
+             band: float = FRICTION_BAND, explicit_map: dict | None = None, trajectory=None,
+             simulate: bool = True) -> Identification:
     """DESCRIPTION's parameters fitted to OTHER's motion in MuJoCo (module doc). ``trajectory``: a designed
-    :class:`~.excitation.FourierTrajectory` used instead of the seeded ones (its seed is reported as 0)."""
+    :class:`~.excitation.FourierTrajectory` used instead of the seeded ones (its seed is reported as 0). ``simulate``: the held-out run on both engines too (:mod:`.validation`)."""
     times = {}
     start = clock()
     pair = open_pair(description, other, explicit_map=explicit_map)
@@ -75,7 +78,7 @@ def identify(description, other, *, seeds=(1, 2, 3), held_out_seed: int = 101, t
     trajectories = [(0, trajectory)] if trajectory is not None else [(s, random_trajectory(bounds, seed=s))
                                                                         for s in seeds]
     recs = tuple(record(pair, tr, seed=s, t_end=t_end) for s, tr in trajectories)
-    held = record(pair, random_trajectory(bounds, seed=held_out_seed), seed=held_out_seed, t_end=t_end)
+    held = record(pair, random_trajectory(bounds, seed=held_out_seed), seed=held_out_seed, t_end=t_end, decimate=1)
     consistency = max(inverse_consistency(pair, r) for r in recs + (held,))
     times["record"] = clock() - start
     joints = {j.name: j for j, _b in pair.parts.joints}
@@ -103,6 +106,11 @@ def identify(description, other, *, seeds=(1, 2, 3), held_out_seed: int = 101, t
         if bad:
             notes.append("identified H not positive definite (physically inconsistent) for links " + ", ".join(bad)
                          + ": the unconstrained fit; see the library's consistent fit")
-    return Identification(pair, recs, held, result, _rms(Y, result.described, tau), _rms(Y, result.identified, tau),
-                          _rms(Yh, result.described, held.tau), _rms(Yh, result.identified, held.tau),
-                          consistency, band, times, notes)
+    out = Identification(pair, recs, held, result, _rms(Y, result.described, tau), _rms(Y, result.identified, tau),
+                         _rms(Yh, result.described, held.tau), _rms(Yh, result.identified, held.tau),
+                         consistency, band, times, notes)
+    if simulate:
+        start = clock()
+        out.validation.extend(validate(out, {"description": result.described, "identified": result.identified}))
+        times["validation"] = clock() - start
+    return out

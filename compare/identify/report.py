@@ -35,6 +35,7 @@ def summary(ident, changes=()) -> dict:
         "base_parameters": f.base_table(),
         "parameters": f.rows_table(),
         "changes": [c.to_json() for c in changes],
+        "validation": [r.to_json() for r in ident.validation],
         "times_s": ident.times, "notes": ident.notes})
 
 
@@ -77,7 +78,13 @@ def _markdown(s: dict) -> str:
     for i, nm in enumerate(s["coordinates"]):
         lines.append(f"| {nm} | {s['residual_rms']['before'][i]:.3e} | {s['residual_rms']['after'][i]:.3e} | "
                      f"{s['held_out_rms']['before'][i]:.3e} | {s['held_out_rms']['after'][i]:.3e} |")
-    lines += ["", "![residuals](residuals.png)", "", "## Changes", ""]
+    lines += ["", "![residuals](residuals.png)", "", "## Held-out run simulated (max |q - q_OTHER|, rad or m)", "",
+              "| model | engine | " + " | ".join(s["coordinates"]) + " |", "|---|---|" + "---|" * len(s["coordinates"])]
+    for v in s["validation"]:
+        cells = [f"{x:.2e}" for x in v["max_error"]] if v["max_error"] is not None else [v["note"]] + [""] * (
+            len(s["coordinates"]) - 1)
+        lines.append(f"| {v['model']} | {v['engine']} | " + " | ".join(cells) + " |")
+    lines += ["", "## Changes", ""]
     lines += [f"- {c['element']} {c['what']}: {c['before']} -> {c['after']}"
               + ("" if c["written"] else f" (not written: {c['note']})") for c in s["changes"]] or ["- none"]
     lines += ["", "## Base parameters (identifiable combinations)", "", "| combination | description | identified | std |",
@@ -113,6 +120,8 @@ condition number {s['condition']:.3g}; mj_inverse consistency {s['mj_inverse_con
 <h2>Torque residual RMS per joint (N m)</h2>
 {table(("joint", "fitted, description", "fitted, identified", "held-out, description", "held-out, identified"), res)}
 <p><img src="data:image/png;base64,{png}" alt="residuals"></p>
+<h2>Held-out run simulated: max |q - q_OTHER| (rad or m)</h2>
+{table(("model", "engine") + tuple(s["coordinates"]), [(v["model"], v["engine"]) + (tuple(f"{x:.2e}" for x in v["max_error"]) if v["max_error"] is not None else (v["note"],)) for v in s["validation"]])}
 <h2>Changes</h2>{table(("element", "what", "before", "after", "written"), changes) if changes else "<p>none</p>"}
 <h2>Base parameters</h2>{table(("combination", "description", "identified", "std"), base)}
 <h2>Parameters</h2>{table(("parameter", "description", "identified", "std", "identifiable", "changed"), params)}
