@@ -113,7 +113,13 @@ def validate(ident, values: dict) -> list[ValidationRun]:
     kp, kd = m0 * wn * wn, 2 * m0 * wn
     runs = []
     for label, v in values.items():
-        model = params.to_model(np.where([k == "armature" for k in params.kind], np.maximum(v, 0.0), v))
+        arm = np.array([k == "armature" for k in params.kind])
+        if np.any(v[arm] < 0):
+            bad = [params.names[i] for i in np.flatnonzero(arm & (v < 0))]
+            runs += [ValidationRun(label, e, None, f"negative armature {bad}: no tree holds it")
+                     for e in ("urdf2links", "MuJoCo")]
+            continue
+        model = params.to_model(v)
         jv = params.joint_values(v)
         joints = {c: (jv.get("damping", {}).get(c, 0.0), jv.get("friction", {}).get(c, 0.0)) for c in pair.names}
         try:
