@@ -5,7 +5,7 @@ link, :class:`urdf2links.parsers.parts.PartsModel` ``frame_of``: ``r_t = X r_b``
 H_t) X^-T``, so the bodies folded with it keep their own. From ``H_b'`` (E10 inverted): ``m = H[3, 3]``, ``c =
 H[:3, 3] / m``, ``S_C = H[:3, :3] - m c c^T`` and the inertia about the center of mass ``I = tr(S_C) 1 - S_C``,
 written as ``<inertial>`` with ``rpy="0 0 0"``. A joint's damping and Coulomb friction go to ``<dynamics>``
-(a negative value of rounding is written as 0). The armature has no URDF element: where the data cannot tell an
+(a negative value is written as 0, and its change says so). The armature has no URDF element: where the data cannot tell an
 armature from the links' inertias the change goes to the inertias (:func:`urdf_values`, a move along the
 unidentifiable directions, no torque changes); an armature identified by itself is listed as not written.
 """
@@ -18,7 +18,8 @@ from pathlib import Path
 import numpy as np
 from lxml import etree
 
-__all__ = ["Change", "planned_changes", "write_urdf", "inertial_of", "urdf_values"]
+__all__ = ["Change", "planned_changes", "write_urdf", "write_mjcf", "inertial_of", "urdf_values",
+           "inconsistent_bodies"]
 
 
 @dataclass(frozen=True)
@@ -38,7 +39,7 @@ class Change:
         def fmt(v):
             return "[" + ", ".join(f"{x:.6g}" for x in v) + "]" if isinstance(v, (list, tuple)) else f"{v:.6g}"
         return (f"{self.element} {self.what}: {fmt(self.before)} -> {fmt(self.after)}"
-                + ("" if self.written else f" (not written: {self.note})"))
+                + (f" (not written: {self.note})" if not self.written else f" ({self.note})" if self.note else ""))
 
     def to_json(self) -> dict:
         return {"element": self.element, "what": self.what, "before": self.before, "after": self.after,
@@ -119,12 +120,29 @@ def _g(x) -> str:
     return repr(float(x))
 
 
+def _clamped(changes, new_H):
+    """A negative damping, friction or armature is written as 0, and its change says so."""
+    out = []
+    for c in changes:
+        if c.element.startswith("joint ") and c.what in ("damping", "friction", "armature") and c.after < 0:
+            import dataclasses
+
+            c = dataclasses.replace(c, note=(c.note + "; " if c.note else "") + f"fitted {c.after:.3g} < 0: written as 0")
+        out.append(c)
+    return out, new_H
+
+
+def inconsistent_bodies(new_H: dict) -> list[str]:
+    """The bodies whose new H is not positive definite (a file MuJoCo refuses: the consistent fit is needed)."""
+    return [b for b, H in new_H.items() if np.linalg.eigvalsh(H)[0] <= 0]
+
+
 def write_urdf(ident, out) -> list[Change]:
     """DESCRIPTION (a URDF) with the identified values written to ``out`` (module doc); returns the changes."""
     pair = ident.pair
     if pair.parts.format != "urdf":
         raise ValueError(f"--write-urdf: {pair.description} is not a URDF; use --write-mjcf")
-    changes, new_H = planned_changes(ident, urdf_values(ident.fit))
+    changes, new_H = _clamped(*planned_changes(ident, urdf_values(ident.fit)))
     root = etree.parse(str(pair.description), etree.XMLParser(remove_comments=False)).getroot()
     links = {el.get("name"): el for el in root.findall("link")}
     for body, H in new_H.items():
@@ -149,6 +167,46 @@ def write_urdf(ident, out) -> list[Change]:
             if dyn is None:
                 dyn = etree.SubElement(el, "dynamics")
             dyn.set(ch.what, _g(max(ch.after, 0.0)))
+    Path(out).parent.mkdir(parents=True, exist_ok=True)
+    Path(out).write_text(etree.tostring(root, encoding="unicode") + "\n")
+    return changes
+
+
+def write_mjcf(ident, out) -> list[Change]:
+    """DESCRIPTION (an MJCF file) with the identified values written to ``out``: each carrying body's ``<inertial>``
+    (``pos``, ``mass``, ``fullinertia`` about the centre of mass, no ``quat``; added when the body took its inertia
+    from its geoms), each joint's ``damping``, ``frictionloss`` and ``armature`` set on the ``<joint>`` (over its
+    defaults); every number at full precision. Raises ValueError naming the body or joint the file does not hold
+    itself (an ``<include>``d part)."""
+    pair = ident.pair
+    if pair.parts.format != "mjcf":
+        raise ValueError(f"--write-mjcf: {pair.description} is not an MJCF file; use --write-urdf")
+    changes, new_H = _clamped(*planned_changes(ident, urdf_values(ident.fit)))
+    tree = etree.parse(str(pair.description), etree.XMLParser(remove_comments=False))
+    root = tree.getroot()
+    bodies = {el.get("name"): el for el in root.iter("body")}
+    joints = {el.get("name"): el for el in root.iter("joint") if el.get("name")}
+    for body, H in new_H.items():
+        if body not in bodies:
+            raise ValueError(f"--write-mjcf: body {body!r} is not written in {pair.description} itself (an include?); "
+                             "write the change listed by hand")
+        m, c, I = inertial_of(H)
+        el = bodies[body]
+        old = el.find("inertial")
+        inertial = etree.Element("inertial", pos=" ".join(_g(x) for x in c), mass=_g(m),
+                                 fullinertia=" ".join(_g(x) for x in _six(I)))
+        if old is not None:
+            inertial.tail = old.tail
+            el.replace(old, inertial)
+        else:
+            el.insert(0, inertial)
+    attribute = {"damping": "damping", "friction": "frictionloss", "armature": "armature"}
+    for ch in changes:
+        if ch.element.startswith("joint ") and ch.what in attribute:
+            name = ch.element[6:]
+            if name not in joints:
+                raise ValueError(f"--write-mjcf: joint {name!r} is not written in {pair.description} itself")
+            joints[name].set(attribute[ch.what], _g(max(ch.after, 0.0)))
     Path(out).parent.mkdir(parents=True, exist_ok=True)
     Path(out).write_text(etree.tostring(root, encoding="unicode") + "\n")
     return changes
