@@ -24,6 +24,7 @@ LAYERS = [
     ("parsers", ("urdf2links.parsers",)),
     ("scenes", ("urdf2links.scenes",)),
     ("integration", ("urdf2links.integration",)),
+    ("identification", ("urdf2links.identification",)),
     ("view", ("urdf2links.view",)),
     ("api", ("urdf2links",)),
     ("compare: shared output", ("urdf2links.compare.formatting", "urdf2links.compare.figures")),
