@@ -63,21 +63,58 @@ def _carriers(built) -> dict:
     return out
 
 
+def _move_armature(params, N, v, fixed: dict, scale):
+    """``v + N z`` with the entries of ``fixed`` ({index: value}) at their values, every link's H positive definite (margin 1e-9 of its mass),
+    the least scaled move: a small semidefinite program (cvxpy, the identify extra); None when there is none."""
+    import cvxpy as cp
+
+    from urdf2links.identification import link_matrix
+
+    z = cp.Variable(N.shape[1])
+    x = v + N @ z
+    E = [link_matrix(np.eye(10)[k]) for k in range(10)]
+    cons = [x[i] == t for i, t in fixed.items()]
+    for c in params.link_col:
+        if c >= 0:
+            H = sum(x[c + k] * E[k] for k in range(10))
+            cons.append(H >> 1e-9 * max(v[c + 9], 1e-3) * np.eye(4))
+    prob = cp.Problem(cp.Minimize(cp.sum_squares(cp.multiply(1.0 / scale, N @ z))), cons)
+    try:
+        prob.solve(solver="CLARABEL")
+    except cp.error.SolverError:
+        return None
+    if prob.status != "optimal":
+        return None
+    out = v + N @ z.value
+    for i, t in fixed.items():
+        out[i] = t
+    return out if all(np.linalg.eigvalsh(H)[0] > 0 for H in params.H(out)[params.link_col >= 0]) else None
+
+
 def urdf_values(fit) -> np.ndarray:
     """The identified values moved along the unidentifiable directions (the base parameters' null space: no
-    torque changes) so that every armature the data cannot tell from the links' inertias is back at the
-    description's value: a URDF has no armature element, its links' inertias carry the change instead. An
-    armature identified by itself keeps its value (and is listed as not written)."""
+    torque changes) so that each armature the data cannot tell from the links' inertias is back at the
+    description's value, one joint at a time, every link's H kept positive definite (the least such move): a
+    URDF has no armature element, its links' inertias carry the change instead. An armature identified by itself
+    (or with no consistent move) keeps its value, and is listed as not written."""
     params, v = fit.parameters, fit.identified.copy()
-    idx = np.array([i for i, k in enumerate(params.kind) if k == "armature"], int)
     N = fit.base.null_space
-    if idx.size == 0 or N.size == 0:
+    if N.size == 0:
         return v
-    z, *_ = np.linalg.lstsq(N[idx], fit.described[idx] - v[idx], rcond=None)
-    moved = v + N @ z
-    size = np.maximum(np.abs(fit.described), np.abs(moved))
-    keep = np.abs(moved - fit.described) <= np.maximum(1e-6 * size, 1e-9)      # fitting.CHANGED, NEGLIGIBLE
-    return np.where(keep, fit.described, moved)
+    scale = np.maximum(np.abs(fit.described), 1e-3)
+    fixed = {}
+    for i in (i for i, k in enumerate(params.kind) if k == "armature"):
+        if v[i] == fit.described[i] or np.max(np.abs(N[i])) <= 1e-12:
+            continue                            # unchanged, or identified by itself: no unidentifiable direction
+        try:
+            moved = _move_armature(params, N, v, {**fixed, i: fit.described[i]}, scale)
+        except ImportError:                     # without cvxpy: the armature stays, listed as not written
+            moved = None
+        if moved is not None:
+            v, fixed[i] = moved, fit.described[i]
+    size = np.maximum(np.abs(fit.described), np.abs(v))
+    keep = np.abs(v - fit.described) <= np.maximum(1e-6 * size, 1e-9)      # fitting.CHANGED, NEGLIGIBLE
+    return np.where(keep, fit.described, v)
 
 
 def planned_changes(ident, values=None) -> tuple[list[Change], dict]:
