@@ -141,8 +141,9 @@ def planned_changes(ident, values=None) -> tuple[list[Change], dict]:
         if kind in ("damping", "friction", "armature") and changed[i]:
             written = kind != "armature" or pair.parts.format == "mjcf"
             changes.append(Change(f"joint {params.owner[i]}", kind, float(f.described[i]), float(values[i]),
-                                  written, "" if written else "URDF has no armature element, and the data tell this "
-                                  "one from the links' inertias"))
+                                  written, "" if written else "a URDF has no armature element, and the links' "
+                                  "inertias cannot carry this one (identified by itself, or only with an "
+                                  "inconsistent inertia)"))
         elif kind == "offset" and changed[i]:
             changes.append(Change(f"joint {params.owner[i]}", "offset", float(f.described[i]),
                                   float(values[i]), False, "a constant torque has no element in a description"))
