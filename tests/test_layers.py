@@ -36,6 +36,7 @@ LAYERS = [
     ("compare: pairs", ("urdf2links.compare.pairs",)),
     ("compare: corpus", ("urdf2links.compare.corpus",)),
     ("compare: check", ("urdf2links.compare.check",)),
+    ("compare: identify", ("urdf2links.compare.identify",)),
     ("compare: commands", ("urdf2links.compare", "urdf2links.compare.commands")),
     ("command line", ("urdf2links.cli", "urdf2links.commands", "urdf2links.__main__", "urdf2links.pytest_plugin")),
 ]

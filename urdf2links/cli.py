@@ -17,7 +17,7 @@ import os
 import sys
 from typing import Callable, NamedTuple
 
-from .commands import comparisons, inspect, run
+from .commands import comparisons, identify, inspect, run
 from .errors import DescriptionError, DynamicsError, IntegrationError, SceneError
 
 __all__ = ["main", "build_parser", "format_tree", "scene_from_args", "xacro_args_of", "write_scene_option",
@@ -103,6 +103,14 @@ COMMANDS: dict[str, Command] = {
                     "accepted fingerprint fails), compare every pair part by part (a difference not accepted by "
                     "name fails), run every scene against its baselines. Exit 0 when all hold, 1 when a check "
                     "falls short, 2 when the configuration or a file cannot be used (docs/ci.md)."),
+    "identify": Command(
+        identify.add_identify, identify.run_identify,
+        help="fit a description's dynamic parameters so that it moves as a second description does in MuJoCo",
+        description="Run OTHER in MuJoCo along excitation trajectories (known applied torques), record q, q', q'' "
+                    "and the torques in the description's coordinates, fit the description's link inertias and "
+                    "joint damping, friction, armature and offsets (base parameters, named), and write "
+                    "report.html, identify.json, identify.md; --write-urdf OUT the corrected file, every change "
+                    "listed (docs/identify.md)."),
     "cache": Command(
         run.add_cache, run.run_cache,
         help="list (default) or clear numba's cache of compiled code (the first run of a command compiles; the "
