@@ -39,26 +39,35 @@ def cut_scope(model, load_options: dict | None = None, plan=None) -> dict:
     file (MuJoCo's run disables them; the tree has none), ``mimic`` couplings of a URDF loaded with
     ``mimic="independent"``; ``text`` is :data:`FULL_SCOPE` when nothing was cut, else
     "open tree of a closed mechanism (N constraints, M tendons dropped)". With ``plan``, what its
-    constraints model is not cut (issue 36: ``[constraints] from_file``, ``mimic``): the file's equalities it
-    solves, its fixed tendons, and every fixed tendon that carries no force (nothing to drop)."""
+    constraints model is not cut (issue 36; issue 45: an MJCF file's equalities and fixed tendons act by default):
+    the file's equalities it solves, its fixed tendons, every fixed tendon that carries no force (nothing to drop)
+    and the file's inactive equalities (off in MuJoCo too: :func:`switched_off` lists them). A scene that opens
+    the loops (``--open-loops``, ``[constraints] from_file = false``) says so: "loops open: ..." (``opened``)."""
     closed = model.info.get("closed") or {}
     eq, tendons = int(closed.get("equalities", 0)), int(closed.get("tendons", 0))
     coupled = (load_options or {}).get("mimic", "independent") == "independent"
     mimic = sum(1 for j in model.info.get("joints", []) if j.get("mimic")) if coupled else 0
     scene = getattr(plan, "scene", None)
-    if scene is not None and getattr(scene, "file_constraints", False):
+    eq -= sum(1 for e in model.info.get("equalities", []) if e["supported"] and not e["active"])
+    named = {a.name for a in getattr(scene, "actuators", ())}   # the others act on neither engine (notes)
+    inert = [t for t in model.info.get("tendons", []) if t["fixed"] and not (
+        t["stiffness"] or t["damping"] or set(t["actuators"]) & named or t["limited"] or t["frictionloss"])]
+    tendons -= len(inert)
+    opened = scene is not None and not getattr(scene, "file_constraints", True)
+    if scene is not None and not opened:
         cons = plan.constraints
         eq -= 0 if cons is None else sum(1 for c in cons.cset.constraints if c.source.startswith("MJCF"))
-        named = {a.name for a in getattr(scene, "actuators", ())}   # the others act on neither engine (notes)
-        inert = [t for t in model.info.get("tendons", []) if t["fixed"] and not (
-            t["stiffness"] or t["damping"] or set(t["actuators"]) & named or t["limited"] or t["frictionloss"])]
-        tendons -= (0 if cons is None else len(cons.tendons)) + len(inert)
+        tendons -= 0 if cons is None else len(cons.tendons)
     if scene is not None and getattr(scene, "mimic_constraints", False):
         mimic = 0
-    out = {"equalities": eq, "tendons": tendons, "mimic": mimic, "cut": bool(eq or tendons or mimic)}
+    opened = opened and bool(eq or tendons)
+    out = {"equalities": eq, "tendons": tendons, "mimic": mimic, "cut": bool(eq or tendons or mimic),
+           "opened": opened}
     if eq or tendons:
-        out["text"] = (f"open tree of a closed mechanism ({eq} constraint{'s' * (eq != 1)}, {tendons} "
-                       f"tendon{'s' * (tendons != 1)} dropped)" + (f", {mimic} mimic couplings dropped" if mimic else ""))
+        out["text"] = (("loops open: the " if opened else "") + f"open tree of a closed mechanism ({eq} "
+                       f"constraint{'s' * (eq != 1)}, {tendons} tendon{'s' * (tendons != 1)} dropped"
+                       + (" on both engines: --open-loops or [constraints] from_file = false" if opened else "") + ")"
+                       + (f", {mimic} mimic couplings dropped" if mimic else ""))
     elif mimic:
         out["text"] = (f"open tree of a coupled mechanism ({mimic} mimic coupling{'s' * (mimic != 1)} dropped: the "
                        "mimic joints move as independent coordinates)")
@@ -107,6 +116,9 @@ def switched_off(model, plan, file_model=None) -> list[dict]:
     if not getattr(scene, "urdf_damping", False):
         springs += [j["name"] for j in own if j.get("damping") and j["name"] not in springs]
     out.append(_effect("springs", "the file's joint springs and dampers", springs, "joint"))
+    out.append(_effect("inactive", "the file's inactive equalities (active=\"false\": off in MuJoCo too)",
+                       [e["name"] for e in model.info.get("equalities", []) if e["supported"] and not e["active"]],
+                       "equality"))
     named = {a.name for a in plan.actuator_set.actuators}
     acts = [a.get("name") or f"#{k}" + (f" on {a['joint']}" if a.get("joint") else "")   # an unnamed one by its
             for k, a in enumerate(model.info.get("actuators", []))                          # index and joint
@@ -150,7 +162,8 @@ def comparison_verdict(agreement: str, *, scope: dict, coverage, mujoco_integrat
     implausible = plausibility is not None and not plausibility.plausible
     parts = [plausibility.text() if implausible else agreement.rstrip(".")]
     if scope["cut"]:
-        parts.append(f"as the {scope['text']}, not the whole mechanism")
+        parts.append(f"{scope['text']}, not the whole mechanism" if scope.get("opened") else
+                     f"as the {scope['text']}, not the whole mechanism")
     if off:
         parts.append(f"without its {', '.join(x['text'] for x in off)} (switched off on both engines)")
     mj = _mujoco_part(mujoco_integrator, mujoco_timestep, blow_ups, fallback)

@@ -122,7 +122,7 @@ def run_inspect(args) -> int:
 
     if args.scene or str(args.file).endswith(".toml"):
         scene = scene_or_robot(args.file, q0=args.q0, seed=args.seed, t_end=args.t_end, load=load_options_of(args),
-                               hold=hold_of(args))
+                               hold=hold_of(args), open_loops=bool(getattr(args, "open_loops", False)))
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             model = scene.model()

@@ -13,7 +13,8 @@ Scene form (docs/equations.md (E68)-(E70); every key checked, errors name the bl
 
 For ``connect`` a single point (``points = [[...]]``) takes the second as MuJoCo does: the point of
 link 2 (or of the world) where the first one is at the scene's initial state. An MJCF file's own
-``<equality>`` elements (connect, weld, joint) are read too (``[constraints] from_file = true``).
+``<equality>`` elements (connect, weld, joint) are read too and act by default, as in MuJoCo (issue 45;
+``[constraints] from_file = false`` or ``--open-loops`` drops them).
 
 :class:`SceneConstraints` is what the plan carries: the :class:`~urdf2links.dynamics.constraints.ConstraintSet`
 on the model, the fixed tendons (E76), and notes. A constrained scene runs through
@@ -58,13 +59,13 @@ class ConstraintSpec:
 
 
 def constraint_options(r, data: dict) -> dict:
-    """``[constraints]``: ``from_file`` (an MJCF file's equalities and fixed tendons act) and ``mimic`` (a
+    """``[constraints]``: ``from_file`` (an MJCF file's equalities and fixed tendons act; default true) and ``mimic`` (a
     URDF's ``<mimic>`` joints as joint constraints; load the robot with ``mimic = "independent"``)."""
     t = data.get("constraints", {})
     r.keys(t, ("from_file", "mimic"), "constraints")
     out = {}
     for key, field_ in (("from_file", "file_constraints"), ("mimic", "mimic_constraints")):
-        v = t.get(key, False)
+        v = t.get(key, key == "from_file")      # issue 45: the file's own equalities act unless the scene says not
         if not isinstance(v, bool):
             r.fail(f"constraints.{key}", f"must be true or false, got {v!r}")
         out[field_] = v
@@ -249,7 +250,7 @@ def constraint_toml(scene, value) -> list[str]:
     """The scene's ``[constraints]`` options and ``[[constraint]]`` blocks as TOML lines (``value`` formats a
     value), for :func:`~urdf2links.scenes.scene_toml.scene_toml`."""
     out = []
-    if getattr(scene, "file_constraints", False) or getattr(scene, "mimic_constraints", False):
+    if not getattr(scene, "file_constraints", True) or getattr(scene, "mimic_constraints", False):
         out += ["[constraints]", f"from_file = {value(scene.file_constraints)}",
                 f"mimic = {value(scene.mimic_constraints)}", ""]
     for c in scene.constraints:
