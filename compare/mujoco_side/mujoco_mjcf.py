@@ -279,6 +279,8 @@ def _tendons_off(m, plan, notes: list[str]) -> list[str]:
     m.tendon_damping[:] = 0.0
     if plan.constraints is not None and plan.scene.file_constraints:    # the file's equalities and
         changed = route2_constraints(m, plan, tendons, notes)          # fixed tendons act, as written
+    elif m.neq:     # issue 45: none acts (opened, inactive or not modelled): off one by one too, not only the flag
+        m.eq_active0[:] = 0
     return changed
 
 

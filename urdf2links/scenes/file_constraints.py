@@ -81,11 +81,11 @@ def tendon_actuator_names(model) -> set:
     return {a for t in model.info.get("tendons", []) for a in t["actuators"]}
 
 
-def _tendon(model, row, specs, where) -> FixedTendon:
+def _tendon(model, row, scene, where) -> FixedTendon:
     coef, offset = _length(model, row, where)      # the offset only shifts the length
     table = {a["name"]: a for a in model.info.get("actuators", [])}
     acts = []
-    for spec in specs:
+    for spec in scene.actuators:
         if spec.coordinate is None and spec.name in row["actuators"]:
             a = table[spec.name]
             acts.append(Actuator(spec.name, row["name"], -1, a["kind"], a["gain"], tuple(a["bias"]), a["gear"],
@@ -123,7 +123,7 @@ def file_constraints(model, scene, where) -> tuple[list[ConstraintSpec], list[Fi
             continue
         if row["frictionloss"]:
             notes.append(f"tendon {row['name']!r}: friction loss not modelled")
-        td = _tendon(model, row, scene.actuators, where)
+        td = _tendon(model, row, scene, where)
         if td.stiffness or td.damping or td.actuators or td.limited:
             tendons.append(td)
     return specs, tendons, notes
