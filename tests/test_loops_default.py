@@ -192,3 +192,57 @@ def test_an_inactive_equality_is_off_on_both_engines_and_listed(tmp_path):
     off = {x["effect"]: x for x in s["verdict"]["switched_off"]}
     assert off["inactive"]["names"] == ["wrist_follows_elbow"]
     assert s["trajectory"]["max_abs_error"] < 1e-6
+
+
+def _import_run(path, traj, tau):
+    """MuJoCo's own URDF import of ``path`` (route 2's reader) with its mimic equality on at solref ``(tau, 1)``,
+    RK4 at 1e-5 s from our run's first sample: ``q`` at our samples in our coordinate order."""
+    from urdf2links.compare.mujoco_side.mujoco_constraints import SOLIMP
+    from urdf2links.compare.mujoco_side.mujoco_urdf import mujoco_from_urdf
+
+    mj = mujoco_from_urdf(str(path), gravity=(0.0, 0.0, -9.81))
+    m = mj.model
+    m.opt.disableflags &= ~int(mujoco.mjtDisableBit.mjDSBL_EQUALITY)
+    m.eq_solref[:] = (tau, 1.0)
+    m.eq_solimp[:] = SOLIMP
+    m.opt.integrator, m.opt.timestep = int(mujoco.mjtIntegrator.mjINT_RK4), 1e-5
+    names = traj.coordinate_names
+    d = mujoco.MjData(m)
+    for i, nm in enumerate(names):
+        d.qpos[mj.qpos_of_joint[nm]], d.qvel[mj.dof_of_joint[nm]] = traj.q[0, i], traj.qd[0, i]
+    out = [traj.q[0]]
+    for k in range(1, len(traj.t)):
+        mujoco.mj_step(m, d, nstep=int(round((traj.t[k] - traj.t[k - 1]) / 1e-5)))
+        out.append([d.qpos[mj.qpos_of_joint[nm]] for nm in names])
+    return m, np.array(out)
+
+
+def test_urdf_mimic_follows_mujocos_import():
+    """A URDF's ``<mimic>``: MuJoCo 4's URDF import makes it a joint equality (joint1 the follower, polycoef
+    [offset, multiplier]); the project's default makes it the same joint constraint (E70). Our run of the mimic
+    gripper (no [constraints] table) against MuJoCo's import with that equality on: MuJoCo approaches our run at
+    least 5x per 10x smaller solref tau, and is within the divergence threshold at the comparison's 1e-3 s.
+    ``--open-loops`` drops it, and the scope says "loops open"."""
+    path = LOOPS / "mimic_gripper.urdf"
+    scene = scene_from_dict({"robot": {"urdf": str(path)}, "gravity": {"magnitude": 9.81},
+                             "initial": {"q": {"left_finger_joint": 0.5, "right_finger_joint": -0.5}},
+                             "run": {"t_end": 0.5, "samples": 51, "rtol": 1e-12, "atol": 1e-12}}, where="m.toml")
+    plan = as_plan(scene)
+    (c,) = plan.constraints.cset.constraints
+    names = plan.model.coordinate_names
+    assert (c.kind, names[c.coord1], names[c.coord2]) == ("joint", "right_finger_joint", "left_finger_joint")
+    traj = simulate(plan, progress=False)
+    assert traj.stats["constraints"]["max_residual"] < RESIDUAL
+    errors = []
+    for tau in (1e-2, 1e-3, 1e-4):
+        m, q = _import_run(path, traj, tau)
+        errors.append(float(np.abs(q - traj.q).max()))
+    assert m.neq == 1 and mujoco.mjtEq(int(m.eq_type[0])).name == "mjEQ_JOINT"
+    assert mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, int(m.eq_obj1id[0])) == "right_finger_joint"
+    assert np.allclose(m.eq_data[0, :5], c.poly) and c.ref1 == c.ref2 == 0.0    # the same law (E70)
+    ratios = [a / b for a, b in zip(errors, errors[1:])]
+    print(f"\nmimic_gripper.urdf: residual {traj.stats['constraints']['max_residual']:.1e}, MuJoCo's import at tau "
+          f"1e-2, 1e-3, 1e-4 s: {[f'{e:.2e}' for e in errors]}, ratios {[round(r, 1) for r in ratios]}")
+    assert errors[1] < DIVERGENCE_THRESHOLD and all(r >= RATE for r in ratios), (errors, ratios)
+    s = compare_scene(open_loops(scene), progress=False, mujoco_fallback=False).summary()
+    assert s["verdict"]["scope"].startswith("loops open: the open tree of a coupled mechanism (1 mimic coupling")

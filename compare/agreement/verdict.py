@@ -54,13 +54,14 @@ def cut_scope(model, load_options: dict | None = None, plan=None) -> dict:
         t["stiffness"] or t["damping"] or set(t["actuators"]) & named or t["limited"] or t["frictionloss"])]
     tendons -= len(inert)
     opened = scene is not None and not getattr(scene, "file_constraints", True)
+    mimic_opened = scene is not None and not getattr(scene, "mimic_constraints", True)
     if scene is not None and not opened:
         cons = plan.constraints
         eq -= 0 if cons is None else sum(1 for c in cons.cset.constraints if c.source.startswith("MJCF"))
         tendons -= 0 if cons is None else len(cons.tendons)
-    if scene is not None and getattr(scene, "mimic_constraints", False):
-        mimic = 0
-    opened = opened and bool(eq or tendons)
+    if scene is not None and getattr(scene, "mimic_constraints", False) and plan.constraints is not None:
+        mimic -= sum(1 for c in plan.constraints.cset.constraints if c.source == "URDF <mimic>")
+    opened = (opened and bool(eq or tendons)) or (mimic_opened and bool(mimic))
     out = {"equalities": eq, "tendons": tendons, "mimic": mimic, "cut": bool(eq or tendons or mimic),
            "opened": opened}
     if eq or tendons:
@@ -69,8 +70,8 @@ def cut_scope(model, load_options: dict | None = None, plan=None) -> dict:
                        + (" on both engines: --open-loops or [constraints] from_file = false" if opened else "") + ")"
                        + (f", {mimic} mimic couplings dropped" if mimic else ""))
     elif mimic:
-        out["text"] = (f"open tree of a coupled mechanism ({mimic} mimic coupling{'s' * (mimic != 1)} dropped: the "
-                       "mimic joints move as independent coordinates)")
+        out["text"] = (("loops open: the " if opened else "") + f"open tree of a coupled mechanism ({mimic} mimic "
+                       f"coupling{'s' * (mimic != 1)} dropped: the mimic joints move as independent coordinates)")
     else:
         out["text"] = FULL_SCOPE
     return out

@@ -59,13 +59,14 @@ class ConstraintSpec:
 
 
 def constraint_options(r, data: dict) -> dict:
-    """``[constraints]``: ``from_file`` (an MJCF file's equalities and fixed tendons act; default true) and ``mimic`` (a
-    URDF's ``<mimic>`` joints as joint constraints; load the robot with ``mimic = "independent"``)."""
+    """``[constraints]``: ``from_file`` (an MJCF file's equalities and fixed tendons act) and ``mimic`` (a
+    URDF's ``<mimic>`` joints as joint constraints, when loaded with ``mimic = "independent"``); both default true
+    (issue 45: as in MuJoCo)."""
     t = data.get("constraints", {})
     r.keys(t, ("from_file", "mimic"), "constraints")
     out = {}
     for key, field_ in (("from_file", "file_constraints"), ("mimic", "mimic_constraints")):
-        v = t.get(key, key == "from_file")      # issue 45: the file's own equalities act unless the scene says not
+        v = t.get(key, True)        # issue 45: the file's own equalities and mimic act unless the scene says not
         if not isinstance(v, bool):
             r.fail(f"constraints.{key}", f"must be true or false, got {v!r}")
         out[field_] = v
@@ -73,7 +74,8 @@ def constraint_options(r, data: dict) -> dict:
 
 
 def mimic_specs(model, where) -> list[ConstraintSpec]:
-    """A URDF's ``<mimic>`` joints as joint constraints ``q_f = k q_l + offset`` (E70)."""
+    """A URDF's ``<mimic>`` joints as joint constraints ``q_f = k q_l + offset`` (E70): MuJoCo's URDF import makes
+    each the same joint equality (``joint1`` the follower, ``polycoef [offset, multiplier]``; issue 45)."""
     joints = {j["name"]: j for j in model.info.get("joints", [])}
     out = []
     for j in joints.values():
@@ -88,10 +90,7 @@ def mimic_specs(model, where) -> list[ConstraintSpec]:
         out.append(ConstraintSpec(f"mimic_{j['name']}", "joint", coordinates=(j["coordinates"][0], lead["coordinates"][0]),
                                   coefficients=(j.get("mimic_offset", 0.0), j.get("mimic_multiplier", 1.0), 0.0, 0.0,
                                                 0.0), source="URDF <mimic>"))
-    if not out:
-        raise SceneError(f"{where}: [constraints] mimic = true, but robot {model.name!r} has no <mimic> joint with "
-                         "its own coordinate (loaded with mimic = 'coupled'? then the coupling is already exact)")
-    return out
+    return out      # none: no <mimic>, or mimic = "coupled" (the coupling is already exact, E42)
 
 
 def parse_constraints(r, data: dict) -> tuple[ConstraintSpec, ...]:
@@ -250,7 +249,7 @@ def constraint_toml(scene, value) -> list[str]:
     """The scene's ``[constraints]`` options and ``[[constraint]]`` blocks as TOML lines (``value`` formats a
     value), for :func:`~urdf2links.scenes.scene_toml.scene_toml`."""
     out = []
-    if not getattr(scene, "file_constraints", True) or getattr(scene, "mimic_constraints", False):
+    if not getattr(scene, "file_constraints", True) or not getattr(scene, "mimic_constraints", True):
         out += ["[constraints]", f"from_file = {value(scene.file_constraints)}",
                 f"mimic = {value(scene.mimic_constraints)}", ""]
     for c in scene.constraints:

@@ -148,6 +148,9 @@ def plan_constraints(scene, model) -> SceneConstraints | None:
     ``model``; None without any that act (the notes on what is not modelled are the model's own then)."""
     specs, tendons, notes = list(scene.constraints), [], []
     where = str(scene.path or scene.name)
+    own = getattr(scene, "mimic_constraints", False) or getattr(scene, "file_constraints", False)
+    if scene.base is not None and own:      # constraints with a moving base are not modelled: the file's own
+        return scene_constraints(scene, model, specs)      # are dropped on both engines (the scope counts them)
     if getattr(scene, "mimic_constraints", False):
         specs = mimic_specs(model, where) + specs
     if getattr(scene, "file_constraints", False):
