@@ -246,3 +246,50 @@ def test_urdf_mimic_follows_mujocos_import():
     assert errors[1] < DIVERGENCE_THRESHOLD and all(r >= RATE for r in ratios), (errors, ratios)
     s = compare_scene(open_loops(scene), progress=False, mujoco_fallback=False).summary()
     assert s["verdict"]["scope"].startswith("loops open: the open tree of a coupled mechanism (1 mimic coupling")
+
+
+def _limited_gripper(tmp_path):
+    """gripper2f.xml with its tendon ``split`` limited to [0, 0.2] (solreflimit 0.005 s), the scene's servo
+    driving the fingers toward 0.63 rad: the tendon is pushed past its upper end and held there by the limit."""
+    file = tmp_path / "gripper2f_limited.xml"
+    file.write_text((LOOPS / "gripper2f.xml").read_text().replace(
+        '<fixed name="split">', '<fixed name="split" limited="true" range="0 0.2" solreflimit="0.005 1">'))
+    scene = scene_from_dict({"robot": {"mjcf": str(file)}, "gravity": {"magnitude": 9.81},
+                             "actuator": [{"name": "fingers_actuator", "ctrl": 200.0}],
+                             "initial": {"q": {"left_driver_joint": 0.1, "right_driver_joint": 0.1}},
+                             "run": {"t_end": 0.5, "samples": 51, "rtol": 1e-12, "atol": 1e-12}}, where="g.toml")
+    return file, scene
+
+
+def test_tendon_limit_law_agrees_with_mujoco(tmp_path):
+    """A limited fixed tendon driven past its range: the project's limit law (E89) on both engines (MuJoCo's own
+    limit disabled, the law added as a tendon spring whose dead band is the range) agree within the divergence threshold while the tendon
+    sits past its end; the plan, the verdict's scope and MuJoCo's notes say "tendon limit of split: the project's
+    law on both engines". Planted: our law with twice the stiffness is seen (far past the threshold)."""
+    import dataclasses
+
+    file, scene = _limited_gripper(tmp_path)
+    model = _load(file)
+    plan = as_plan(scene, model=model)
+    split, law = plan.constraints.tendons
+    assert (law.name, law.lengthspring, law.damping) == ("split__limit", (0.0, 0.2), 0.0) and law.stiffness > 0
+    assert any("tendon limit of split: the project's law on both engines" in line
+               for line in plan.describe().splitlines())
+    cmp = compare_scene(scene, model=model, progress=False, mujoco_fallback=False)
+    s = cmp.summary()
+    length = cmp.traj.q @ split.coef
+    err = s["trajectory"]["max_abs_error"]
+    print(f"\ntendon limit: k {law.stiffness:.4g}, length up to {length.max():.4f} (range end 0.2), MuJoCo {err:.2e} rad")
+    assert length.max() > 0.2 + 1e-3                 # past its end: the law acts
+    assert err < DIVERGENCE_THRESHOLD, err
+    assert any("tendon limit of split: the project's law on both engines" in n for n in s["notes"])
+    assert "tendon limit of split: the project's law on both engines" in s["verdict"]["scope"]
+    assert not s["verdict"]["cut"]["cut"], s["verdict"]["scope"]
+    mf = mujoco_from_mjcf(plan, timestep=1e-4, integrator="RK4")
+    assert not mf.model.tendon_limited.any() or mf.model.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_LIMIT)
+    mj = run_file(mf, plan, t_end=0.5, samples=51)
+    plan.constraints.tendons = (split, dataclasses.replace(law, stiffness=2 * law.stiffness))
+    wrong = simulate(plan, progress=False)
+    planted = float(np.abs(wrong.q - mj.q).max())
+    print(f"tendon limit, planted 2x stiffness: {planted:.2e} rad")
+    assert planted > 10 * DIVERGENCE_THRESHOLD, planted

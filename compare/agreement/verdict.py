@@ -58,12 +58,15 @@ def cut_scope(model, load_options: dict | None = None, plan=None) -> dict:
     if scene is not None and not opened:
         cons = plan.constraints
         eq -= 0 if cons is None else sum(1 for c in cons.cset.constraints if c.source.startswith("MJCF"))
-        tendons -= 0 if cons is None else len(cons.tendons)
+        tendons -= 0 if cons is None else len({td.name.removesuffix("__limit") for td in cons.tendons})
     if scene is not None and getattr(scene, "mimic_constraints", False) and plan.constraints is not None:
         mimic -= sum(1 for c in plan.constraints.cset.constraints if c.source == "URDF <mimic>")
     opened = (opened and bool(eq or tendons)) or (mimic_opened and bool(mimic))
+    laws = [] if scene is None or plan.constraints is None else [  # issue 45: the tendon-limit law (E89)
+        f"tendon limit of {td.name.removesuffix('__limit')}: the project's law on both engines"
+        for td in plan.constraints.tendons if td.name.endswith("__limit")]
     out = {"equalities": eq, "tendons": tendons, "mimic": mimic, "cut": bool(eq or tendons or mimic),
-           "opened": opened}
+           "opened": opened, "laws": laws}
     if eq or tendons:
         out["text"] = (("loops open: the " if opened else "") + f"open tree of a closed mechanism ({eq} "
                        f"constraint{'s' * (eq != 1)}, {tendons} tendon{'s' * (tendons != 1)} dropped"
@@ -132,10 +135,12 @@ def run_scope(cut: dict, off: list[dict]) -> str:
     """The scope in words: :data:`FULL_SCOPE`, or the cut mechanism (:func:`cut_scope`) and the effects
     :func:`switched_off` names: "the model without its joint limits (6 joints: ...), ... (switched off on
     both engines)"."""
+    laws = "".join(f"; {w}" for w in cut.get("laws", ()))
     if not cut["cut"] and not off:
-        return FULL_SCOPE
+        return FULL_SCOPE + laws
     head = cut["text"] if cut["cut"] else "the model"
-    return head + (f" without its {', '.join(x['text'] for x in off)} (switched off on both engines)" if off else "")
+    return head + (f" without its {', '.join(x['text'] for x in off)} (switched off on both engines)" if off
+                   else "") + laws
 
 
 def _mujoco_part(run_integrator: str, run_timestep: float, blow_ups: dict, fallback: dict | None) -> str | None:

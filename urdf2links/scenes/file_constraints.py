@@ -19,7 +19,7 @@ from ..errors import SceneError
 from .actuators import Actuator
 from ..dynamics.constraints import ConstraintSet
 from .constraints import ConstraintSpec, SceneConstraints, mimic_specs, scene_constraints
-from .tendons import FixedTendon, limit_gains
+from .tendons import FixedTendon, limit_tendon
 
 __all__ = ["file_constraints", "plan_constraints", "tendon_actuator_names", "open_loops"]
 
@@ -92,16 +92,18 @@ def _tendon(model, row, scene, where) -> FixedTendon:
                                  spec.ctrl, a["ctrlrange"], a["forcerange"], "file", row["name"], a.get("kp"),
                                  a.get("kv")))
     a, b = row["lengthspring"]
-    limit, gains = None, (0.0, 0.0)
-    if row.get("limited"):      # issue 45: the project's limit law on both engines (E89)
-        lo, hi = row["range"]
-        limit = (lo - offset, hi - offset)
-        try:
-            gains = limit_gains(model, coef, scene.initial_state(model)[0], row.get("solref_lim", (0.02, 1.0)))
-        except ValueError as err:
-            raise SceneError(f"{where}: tendon {row['name']!r}: {err}") from None
-    return FixedTendon(row["name"], coef, row["stiffness"], row["damping"], (a - offset, b - offset), tuple(acts),
-                       limit, gains)
+    return FixedTendon(row["name"], coef, row["stiffness"], row["damping"], (a - offset, b - offset), tuple(acts))
+
+
+def _limit(model, row, td, scene, where) -> FixedTendon:
+    """Issue 45: a limited tendon's limit law (E89) as the tendon ``<name>__limit`` (:func:`limit_tendon`)."""
+    _, offset = _length(model, row, where)
+    lo, hi = row["range"]
+    try:
+        return limit_tendon(model, td, (lo - offset, hi - offset), scene.initial_state(model)[0],
+                            row.get("solref_lim", (0.02, 1.0)))
+    except ValueError as err:
+        raise SceneError(f"{where}: tendon {row['name']!r}: {err}") from None
 
 
 def file_constraints(model, scene, where) -> tuple[list[ConstraintSpec], list[FixedTendon], list[str]]:
@@ -124,8 +126,13 @@ def file_constraints(model, scene, where) -> tuple[list[ConstraintSpec], list[Fi
         if row["frictionloss"]:
             notes.append(f"tendon {row['name']!r}: friction loss not modelled")
         td = _tendon(model, row, scene, where)
-        if td.stiffness or td.damping or td.actuators or td.limited:
+        if td.stiffness or td.damping or td.actuators:
             tendons.append(td)
+        if row["limited"]:      # issue 45: the project's limit law on both engines (E89)
+            tendons.append(_limit(model, row, td, scene, where))
+            notes.append(f"tendon limit of {row['name']}: the project's law on both engines (E89: a one-sided "
+                         f"spring past [{row['range'][0]:g}, {row['range'][1]:g}], tendon {row['name']}__limit; "
+                         "MuJoCo's own soft limit disabled)")
     return specs, tendons, notes
 
 

@@ -8,13 +8,13 @@ is ``c f_t``. The spring is a potential (``V`` gains ``0.5 k (l - l_0)^2``); the
 work (``P``). Spatial tendons and tendon friction loss are not modelled: the file's notes say so
 (:mod:`urdf2links.scenes.file_constraints`).
 
-A ``limited`` tendon (MuJoCo's ``range``) gets the project's tendon-limit law (E89, issue 45): past its range
-by ``p = s (l - l_lim)`` (``s = +1`` above the upper end, ``-1`` below the lower), the force on the tendon is
-``f = -s max(0, k p + b p')``, ``p' = s l'``: a stiff spring-damper that only pushes back, the contact law's
-form (E79). ``k = m_t / (tau zeta)^2`` and ``b = 2 m_t / tau`` from the tendon's limit ``solref (tau, zeta)``
-and its effective mass ``m_t = 1 / (c A(q0)^-1 c)`` at the scene's initial state (:func:`limit_gains`): MuJoCo's
-reference acceleration for its own soft limit, made a force. Both engines apply this law (MuJoCo's own limit is
-disabled for the run). It does work (``P``): its spring part is not in ``V``.
+A ``limited`` tendon (MuJoCo's ``range [l_lo, l_hi]``) gets the project's tendon-limit law (E89, issue 45): a stiff
+one-sided spring on the length past the range, ``f = -k (l - l_hi)`` above it, ``k (l_lo - l)`` below it, 0 inside,
+with ``k = m_t / (tau zeta)^2`` from the limit's ``solref (tau, zeta)`` and the tendon's effective mass
+``m_t = 1 / (c A(q0)^-1 c)`` at the scene's initial state (:func:`limit_tendon`; MuJoCo's reference stiffness of its
+own soft limit, ``1 / (tau zeta)^2`` per unit of effective mass, made a force). That is a spring with a dead band
+(E76's spring, ``l_0 = [l_lo, l_hi]``): it runs as a second fixed tendon ``<name>__limit`` on the same coordinates,
+conservative (its energy is in ``V``), on both engines; MuJoCo's own soft limit is disabled for the run.
 """
 
 from __future__ import annotations
@@ -23,7 +23,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["FixedTendon", "limit_gains"]
+__all__ = ["FixedTendon", "limit_tendon", "LIMIT_SUFFIX"]
+
+#: The name of a limited tendon's limit law (E89) as a tendon of its own: ``<tendon>__limit``.
+LIMIT_SUFFIX = "__limit"
 
 
 @dataclass(frozen=True)
@@ -37,26 +40,6 @@ class FixedTendon:
     damping: float = 0.0
     lengthspring: tuple = (0.0, 0.0)
     actuators: tuple = ()
-    limit: tuple | None = None
-    """``(l_lo, l_hi)`` of a ``limited`` tendon (in the model's coordinates), else None (E89)."""
-    limit_gains: tuple = (0.0, 0.0)
-    """``(k, b)`` of the limit law (E89): :func:`limit_gains`."""
-
-    @property
-    def limited(self) -> bool:
-        return self.limit is not None
-
-    def limit_force(self, l: float, ld: float) -> float:
-        """The limit law's force on the tendon (E89): ``-s max(0, k p + b p')`` past the range, else 0."""
-        if self.limit is None:
-            return 0.0
-        lo, hi = self.limit
-        k, b = self.limit_gains
-        if l > hi:
-            return -max(0.0, k * (l - hi) + b * ld)
-        if l < lo:
-            return max(0.0, k * (lo - l) - b * ld)
-        return 0.0
 
     def length(self, q) -> float:
         return float(self.coef @ q)
@@ -70,8 +53,7 @@ class FixedTendon:
         damper and actuators."""
         l, ld = self.length(q), float(self.coef @ qd)
         spring = -self.stiffness * self._stretch(l)
-        work = (-self.damping * ld + sum(a.gear * a.force(t, l, ld) for a in self.actuators)
-                + self.limit_force(l, ld))
+        work = -self.damping * ld + sum(a.gear * a.force(t, l, ld) for a in self.actuators)
         return self.coef * (spring + work), work * ld
 
     def energy(self, q) -> float:
@@ -82,20 +64,20 @@ class FixedTendon:
         a, b = self.lengthspring
         sl = f"{a:g}" if a == b else f"[{a:g}, {b:g}]"
         acts = "".join(f"; actuator {a.name!r} (gear {a.gear:g})" for a in self.actuators)
-        lim = ("" if self.limit is None else f"; limited to [{self.limit[0]:g}, {self.limit[1]:g}]: the project's "
-               f"law on both engines (E89, k {self.limit_gains[0]:.4g}, b {self.limit_gains[1]:.4g})")
         return (f"{self.name!r}: length = " + " + ".join(f"{c:g} q{i}" for i, c in enumerate(self.coef) if c)
-                + f", stiffness {self.stiffness:g}, damping {self.damping:g}, spring length {sl}{acts}{lim}")
+                + f", stiffness {self.stiffness:g}, damping {self.damping:g}, spring length {sl}{acts}")
 
 
-def limit_gains(model, coef, q0, solref) -> tuple[float, float]:
-    """``(k, b)`` of the tendon-limit law (E89): ``m_t = 1 / (c A(q0)^-1 c)`` the tendon's effective mass at
-    ``q0``, ``k = m_t / (tau zeta)^2``, ``b = 2 m_t / tau`` from ``solref = (tau, zeta)`` (MuJoCo's reference
-    acceleration ``-b' l' - k' p`` of a soft limit, ``b' = 2 / tau``, ``k' = 1 / (tau zeta)^2``, times ``m_t``)."""
+def limit_tendon(model, tendon: FixedTendon, limit, q0, solref) -> FixedTendon:
+    """The tendon-limit law (E89) of ``tendon`` limited to ``limit = (l_lo, l_hi)`` (the model's coordinates) as a
+    fixed tendon ``<name>__limit``: ``k = m_t / (tau zeta)^2``, ``m_t = 1 / (c A(q0)^-1 c)`` at ``q0``, the spring
+    length the range (a dead band: no force inside it); no damping. ValueError for a ``solref`` that is not
+    ``(tau > 0, zeta > 0)``."""
     tau, zeta = float(solref[0]), float(solref[1])
     if tau <= 0.0 or zeta <= 0.0:
-        raise ValueError(f"tendon limit solref {list(solref)}: the limit law (E89) takes a time constant and a "
-                         "damping ratio, both > 0 (MuJoCo's direct form with negative numbers is not read)")
-    A = model.mass_matrix(np.asarray(q0, float))
-    m_t = 1.0 / float(coef @ np.linalg.solve(A, coef))
-    return m_t / (tau * zeta) ** 2, 2.0 * m_t / tau
+        raise ValueError(f"limit solref {list(solref)}: the limit law (E89) takes a time constant and a damping ratio, "
+                         "both > 0 (MuJoCo's direct form with negative numbers is not read)")
+    c = np.asarray(tendon.coef, float)
+    m_t = 1.0 / float(c @ np.linalg.solve(model.mass_matrix(np.asarray(q0, float)), c))
+    return FixedTendon(tendon.name + LIMIT_SUFFIX, c, m_t / (tau * zeta) ** 2, 0.0,
+                       (float(limit[0]), float(limit[1])))
