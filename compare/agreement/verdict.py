@@ -46,7 +46,9 @@ def cut_scope(model, load_options: dict | None = None, plan=None) -> dict:
     closed = model.info.get("closed") or {}
     eq, tendons = int(closed.get("equalities", 0)), int(closed.get("tendons", 0))
     coupled = (load_options or {}).get("mimic", "independent") == "independent"
-    mimic = sum(1 for j in model.info.get("joints", []) if j.get("mimic")) if coupled else 0
+    joints = {j["name"]: j for j in model.info.get("joints", [])}     # a <mimic> of a fixed joint couples nothing
+    mimic = sum(1 for j in joints.values() if j.get("mimic") and j.get("coordinates")
+                and (joints.get(j["mimic"]) or {}).get("coordinates")) if coupled else 0
     scene = getattr(plan, "scene", None)
     eq -= sum(1 for e in model.info.get("equalities", []) if e["supported"] and not e["active"])
     named = {a.name for a in getattr(scene, "actuators", ())}   # the others act on neither engine (notes)

@@ -73,7 +73,7 @@ def constraint_options(r, data: dict) -> dict:
     return out
 
 
-def mimic_specs(model, where) -> list[ConstraintSpec]:
+def mimic_specs(model, where, notes: list | None = None) -> list[ConstraintSpec]:
     """A URDF's ``<mimic>`` joints as joint constraints ``q_f = k q_l + offset`` (E70): MuJoCo's URDF import makes
     each the same joint equality (``joint1`` the follower, ``polycoef [offset, multiplier]``; issue 45)."""
     joints = {j["name"]: j for j in model.info.get("joints", [])}
@@ -83,10 +83,10 @@ def mimic_specs(model, where) -> list[ConstraintSpec]:
             continue
         lead = joints.get(j["mimic"])
         if not j["coordinates"] or lead is None or not lead["coordinates"]:
-            if model.coupling is not None:
-                continue
-            raise SceneError(f"{where}: [constraints] mimic: joint {j['name']!r} mimics {j['mimic']!r}, and one of them "
-                             "has no coordinate (fixed, or coupled: load the robot with mimic = 'independent')")
+            if model.coupling is None and notes is not None:   # a fixed joint's (or a missing leader's): MuJoCo's
+                notes.append(f"<mimic> of joint {j['name']!r} (on {j['mimic']!r}): one of them has no coordinate "
+                             "(fixed or missing): no coupling, as MuJoCo's URDF import adds none")   # import adds none
+            continue
         out.append(ConstraintSpec(f"mimic_{j['name']}", "joint", coordinates=(j["coordinates"][0], lead["coordinates"][0]),
                                   coefficients=(j.get("mimic_offset", 0.0), j.get("mimic_multiplier", 1.0), 0.0, 0.0,
                                                 0.0), source="URDF <mimic>"))

@@ -158,11 +158,13 @@ def plan_constraints(scene, model) -> SceneConstraints | None:
     own = getattr(scene, "mimic_constraints", False) or getattr(scene, "file_constraints", False)
     if scene.base is not None and own:      # constraints with a moving base are not modelled: the file's own
         return scene_constraints(scene, model, specs)      # are dropped on both engines (the scope counts them)
+    mimic_notes = []
     if getattr(scene, "mimic_constraints", False):
-        specs = mimic_specs(model, where) + specs
+        specs = mimic_specs(model, where, mimic_notes) + specs
     if getattr(scene, "file_constraints", False):
         fs, tendons, notes = file_constraints(model, scene, where)
         specs = fs + specs
+    notes = mimic_notes + list(notes)
     sc = scene_constraints(scene, model, specs)
     if tendons:
         sc = SceneConstraints(ConstraintSet(model, [] if sc is None else sc.cset.constraints), tuple(tendons),
