@@ -293,3 +293,16 @@ def test_tendon_limit_law_agrees_with_mujoco(tmp_path):
     planted = float(np.abs(wrong.q - mj.q).max())
     print(f"tendon limit, planted 2x stiffness: {planted:.2e} rad")
     assert planted > 10 * DIVERGENCE_THRESHOLD, planted
+
+
+def test_open_loops_is_an_option_wherever_a_scene_is_made():
+    """``--open-loops`` parses on every command that runs a scene or a robot's default scene (planted: a
+    command without it is an argparse error, exit 2)."""
+    from urdf2links.cli import build_parser
+
+    p = build_parser()
+    for argv in (["simulate", "x.xml"], ["compare", "x.xml"], ["report"], ["check"], ["inspect", "x.xml"],
+                 ["sweep", "x.xml"], ["tradeoff", "x.xml"]):
+        assert p.parse_args(argv + ["--open-loops"]).open_loops, argv
+    with pytest.raises(SystemExit):
+        p.parse_args(["list", "--open-loops"])

@@ -149,6 +149,21 @@ def open_loops(scene, *, why: str = "--open-loops"):
                                notes=tuple(scene.notes) + (note,))
 
 
+def _singular(scene, model) -> bool:
+    """Whether the robot's own loops (the file's equalities, a URDF's mimic) cannot be solved: its mass matrix at
+    the scene's initial state is not positive definite (massless links: the multipliers' solve, E72, and the
+    projection, E74, need ``A^-1``). Then they are dropped on both engines and the verdict's scope counts them."""
+    has = bool(model.info.get("equalities") or any(t.get("fixed") for t in model.info.get("tendons", []))
+               or any(j.get("mimic") for j in model.info.get("joints", [])))
+    if not has or model.n == 0:
+        return False
+    try:
+        np.linalg.cholesky(model.mass_matrix(scene.initial_state(model)[0]))
+    except np.linalg.LinAlgError:
+        return True
+    return False
+
+
 def plan_constraints(scene, model) -> SceneConstraints | None:
     """The scene's ``[[constraint]]`` blocks and, unless the scene opens them (``[constraints] from_file =
     false``, ``--open-loops``), the file's equalities and fixed tendons (:func:`file_constraints`), on
@@ -159,6 +174,8 @@ def plan_constraints(scene, model) -> SceneConstraints | None:
     if scene.base is not None and own:      # constraints with a moving base are not modelled: the file's own
         return scene_constraints(scene, model, specs)      # are dropped on both engines (the scope counts them)
     mimic_notes = []
+    if own and not scene.constraints and _singular(scene, model):      # E72 needs A positive definite
+        return None
     if getattr(scene, "mimic_constraints", False):
         specs = mimic_specs(model, where, mimic_notes) + specs
     if getattr(scene, "file_constraints", False):
