@@ -76,6 +76,8 @@ def constraint_options(r, data: dict) -> dict:
 def mimic_specs(model, where, notes: list | None = None) -> list[ConstraintSpec]:
     """A URDF's ``<mimic>`` joints as joint constraints ``q_f = k q_l + offset`` (E70): MuJoCo's URDF import makes
     each the same joint equality (``joint1`` the follower, ``polycoef [offset, multiplier]``; issue 45)."""
+    if model.coupling is not None:      # mimic = "coupled": the coupling is already exact (E42)
+        return []
     joints = {j["name"]: j for j in model.info.get("joints", [])}
     out = []
     for j in joints.values():
@@ -83,7 +85,7 @@ def mimic_specs(model, where, notes: list | None = None) -> list[ConstraintSpec]
             continue
         lead = joints.get(j["mimic"])
         if not j["coordinates"] or lead is None or not lead["coordinates"]:
-            if model.coupling is None and notes is not None:   # a fixed joint's (or a missing leader's): MuJoCo's
+            if notes is not None:   # a fixed joint's (or a missing leader's): MuJoCo's
                 notes.append(f"<mimic> of joint {j['name']!r} (on {j['mimic']!r}): one of them has no coordinate "
                              "(fixed or missing): no coupling, as MuJoCo's URDF import adds none")   # import adds none
             continue
