@@ -540,7 +540,8 @@ def _projected_start(plan, traj, say):
     if plan.constraints is None or not plan.constraints.cset.m or not len(traj.q):
         return plan
     q0, qd0 = plan.scene.initial_state(plan.model)
-    moved = max(float(np.max(np.abs(traj.q[0] - q0), initial=0.0)), float(np.max(np.abs(traj.qd[0] - qd0), initial=0.0)))
+    moved = max(float(np.max(np.abs(traj.q[0] - q0), initial=0.0)),
+                float(np.max(np.abs(traj.qd[0] - qd0), initial=0.0)))
     if moved == 0.0:
         return plan
     names = plan.model.coordinate_names

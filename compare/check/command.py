@@ -83,7 +83,8 @@ def _context(config: CheckConfig, write: bool, open_loops: bool = False) -> RunC
     return RunContext(baselines, shown_path(config.baselines), config.factor, write, open_loops)
 
 
-def run_check(path=".", *, changed_since: str | None = None, jobs: int = 1, write: bool = False, open_loops: bool = False,
+def run_check(path=".", *, changed_since: str | None = None, jobs: int = 1, write: bool = False,
+              open_loops: bool = False,
               on_result: Callable[[CaseResult], None] | None = None) -> CheckRun:
     """The check of the configuration that holds for ``path`` (module doc); ``write``: accept the scenes' figures
     as their baselines. ConfigError, ValueError (a git reference), OSError: cannot be used (exit 2)."""
