@@ -127,7 +127,8 @@ def _compare_cmd(args) -> str:
                               (f"--inertia {args.inertia}", args.inertia), (f"--mimic {args.mimic}", args.mimic),
                               ("--strict", args.strict), ("--hold", getattr(args, "hold", False)),
                               ("--ground", getattr(args, "ground", False)),     # issue 43: and the file's floor
-                              ("--no-floor", getattr(args, "no_floor", False))) if on]
+                              ("--no-floor", getattr(args, "no_floor", False)),
+                              ("--open-loops", getattr(args, "open_loops", False))) if on]
     parts += [f"--package-dir {shown_path(d)}" for d in args.package_dir] + [f"--xacro-arg {a}" for a in args.xacro_arg]
     for flag, value, default in (("--t-end", args.t_end, None), ("--mujoco-integrator", args.mujoco_integrator, "RK4"),
                                  ("--mujoco-dt", args.mujoco_dt, 1e-4), ("--method", args.method, None),
@@ -283,6 +284,10 @@ def _report_scene(args, f: Path, *, label: str, load: dict, out: Path, baselines
     checked against its baseline, its report written; ``runs`` gets what it gave."""
     t0 = clock()
     scene = override_loading(load_scene(f), load)
+    if getattr(args, "open_loops", False):      # issue 45: the file's equalities dropped, noted
+        from urdf2links.scenes.file_constraints import open_loops
+
+        scene = open_loops(scene)
     T, note = report_t_end(scene, t_end=args.t_end, cap=args.cap)
     err(f"{label} {Path(scene.robot).stem}/{scene.name}: t = 0..{T:g} s"
         + (f" (capped; scene {scene.run.t_end:g} s)" if note and args.t_end is None else ""))

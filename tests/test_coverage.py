@@ -163,11 +163,17 @@ def test_mjcf_hand_blow_up_is_replaced_on_the_file_route_and_the_verdict_says_so
 
 
 def test_a_closed_mechanism_cut_to_an_open_tree_says_so(tmp_path):
-    """An MJCF pair of hinges closed by an equality and a tendon: both are dropped on both sides, so the
-    verdict, verdict.scope and the corpus row say "open tree of a closed mechanism (1 constraint, 1
-    tendon dropped)", never a plain "agree"; the corpus index shows the coverage column and its filter."""
+    """An MJCF pair of hinges closed by an equality and a tendon that the project does not model (issue 45: the
+    ones it models act by default; here a site-semantic connect and a tendon with friction loss): both are dropped
+    on both sides, so the verdict, verdict.scope and the corpus row say "open tree of a closed mechanism (1
+    constraint, 1 tendon dropped)", never a plain "agree"; the corpus index shows the coverage column and its
+    filter."""
     f = tmp_path / "closed_pair.xml"
-    f.write_text(CLOSED_MJCF)
+    f.write_text(CLOSED_MJCF.replace('<joint joint1="j1" joint2="j2" polycoef="0 1 0 0 0"/>',
+                                     '<connect site1="tip" site2="anchor"/>')
+                 .replace('<fixed name="t">', '<fixed name="t" frictionloss="0.1">')
+                 .replace('<body name="b" pos="0.4 0 0">', '<body name="b" pos="0.4 0 0"><site name="tip" pos="0.3 0 0"/>')
+                 .replace('<worldbody>', '<worldbody><site name="anchor" pos="0.7 0 1"/>'))
     res = evaluate_robot(find_robots([f])[0], CorpusSettings(t_end=0.1, states=1, pages=False))
     row, s = res.row, res.summary
     scope = "open tree of a closed mechanism (1 constraint, 1 tendon dropped)"

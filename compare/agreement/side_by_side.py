@@ -32,13 +32,31 @@ def project_at(traj, plan, t, T):
     if traj.t.shape == t.shape and np.max(np.abs(traj.t - t)) <= 1e-12 * max(1.0, T):
         EV = traj.energy["kinetic"] + traj.energy["potential"]
         return traj.q, traj.qd, traj.energy["work"], EV, traj.energy["function"], False
-    if traj.sol is None:
-        raise RuntimeError("the project's run has no dense output to sample at MuJoCo's times")
+    if traj.sol is None:        # issue 45: a constrained run (its samples only): cubic Hermite on (q, q')
+        q, qd, W = _hermite(traj, np.clip(t, traj.t[0], traj.t[-1]), n)
+        E, V, h = plan.energies(t, q, qd)
+        return q, qd, W, E + V, h, True
     Y = traj.sol(np.clip(t, traj.t[0], traj.t[-1]))
     q, qd, W = Y[:, :n], Y[:, n:2 * n], Y[:, 2 * n]
     E, V, h = plan.energies(t, q, qd)
     return q, qd, W, E + V, h, True
 
+
+
+def _hermite(traj, t, n):
+    """A run without dense output (the constrained path's samples) at times ``t``: ``q`` by the cubic Hermite
+    polynomial of its samples' ``(q, q')`` (error O(h^4)), ``q'`` and ``W`` linearly between samples."""
+    ts = np.asarray(traj.t, float)
+    k = np.clip(np.searchsorted(ts, t, side="right") - 1, 0, len(ts) - 2)
+    h = ts[k + 1] - ts[k]
+    s = ((t - ts[k]) / h)[:, None]
+    q0, q1, v0, v1 = traj.q[k], traj.q[k + 1], traj.qd[k] * h[:, None], traj.qd[k + 1] * h[:, None]
+    q = ((2 * s**3 - 3 * s**2 + 1) * q0 + (s**3 - 2 * s**2 + s) * v0 + (-2 * s**3 + 3 * s**2) * q1
+         + (s**3 - s**2) * v1)
+    qd = (1 - s) * traj.qd[k] + s * traj.qd[k + 1]
+    w = np.asarray(traj.energy["work"], float)
+    W = (1 - s[:, 0]) * w[k] + s[:, 0] * w[k + 1]
+    return q, qd, W
 
 
 def energy_balances(scene, plan, mj, run, traj, EV_o, h_o, W) -> tuple[dict, dict]:

@@ -519,6 +519,7 @@ def _run_mujoco(setup: _Setup, models: _MujocoModels, traj, *, mujoco_dt, mujoco
         if step_note:
             say(step_note)
     say(f"MuJoCo: {mujoco_integrator} dt {mujoco_dt:g}, {int(round(T / mujoco_dt))} steps")
+    plan = _projected_start(plan, traj, say)
     file_run = mf is not None and not file_route_inputs(setup.scene, plan)
     runner = (file_runner(mf, plan, t_end=T, samples=samples, reference=traj.q if len(traj.q) == samples else None)
               if file_run else None)     # the file's route falls back like route 1 when MuJoCo blows up
@@ -527,6 +528,28 @@ def _run_mujoco(setup: _Setup, models: _MujocoModels, traj, *, mujoco_dt, mujoco
     if fallback is not None:
         say(fallback["note"])
     return _Runs(traj, run, np.asarray(run.t, float), fallback, file_run, step_note)
+
+
+def _projected_start(plan, traj, say):
+    """Issue 45: a constrained run starts from its initial state projected onto the constraints (E74); MuJoCo
+    starts there too (not off the loop, where its soft constraint would snap it back in its first steps). The
+    plan unchanged when the projection moved nothing, else a copy whose scene starts at the projected state."""
+    import copy
+    import dataclasses
+
+    if plan.constraints is None or not plan.constraints.cset.m or not len(traj.q):
+        return plan
+    q0, qd0 = plan.scene.initial_state(plan.model)
+    moved = max(float(np.max(np.abs(traj.q[0] - q0), initial=0.0)),
+                float(np.max(np.abs(traj.qd[0] - qd0), initial=0.0)))
+    if moved == 0.0:
+        return plan
+    names = plan.model.coordinate_names
+    out = copy.copy(plan)
+    out.scene = dataclasses.replace(plan.scene, q0={nm: float(v) for nm, v in zip(names, traj.q[0])},
+                                    qd0={nm: float(v) for nm, v in zip(names, traj.qd[0])})
+    say(f"MuJoCo starts from the project's initial state projected onto the constraints (moved by {moved:.3g})")
+    return out
 
 
 def _agreement(setup: _Setup, models: _MujocoModels, runs: _Runs, *, threshold) -> _Agreement:

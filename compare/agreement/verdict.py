@@ -39,32 +39,47 @@ def cut_scope(model, load_options: dict | None = None, plan=None) -> dict:
     file (MuJoCo's run disables them; the tree has none), ``mimic`` couplings of a URDF loaded with
     ``mimic="independent"``; ``text`` is :data:`FULL_SCOPE` when nothing was cut, else
     "open tree of a closed mechanism (N constraints, M tendons dropped)". With ``plan``, what its
-    constraints model is not cut (issue 36: ``[constraints] from_file``, ``mimic``): the file's equalities it
-    solves, its fixed tendons, and every fixed tendon that carries no force (nothing to drop)."""
+    constraints model is not cut (issue 36; issue 45: an MJCF file's equalities and fixed tendons act by default):
+    the file's equalities it solves, its fixed tendons, every fixed tendon that carries no force (nothing to drop)
+    and the file's inactive equalities (off in MuJoCo too: :func:`switched_off` lists them). A scene that opens
+    the loops (``--open-loops``, ``[constraints] from_file = false``) says so: "loops open: ..." (``opened``)."""
     closed = model.info.get("closed") or {}
     eq, tendons = int(closed.get("equalities", 0)), int(closed.get("tendons", 0))
     coupled = (load_options or {}).get("mimic", "independent") == "independent"
-    mimic = sum(1 for j in model.info.get("joints", []) if j.get("mimic")) if coupled else 0
+    joints = {j["name"]: j for j in model.info.get("joints", [])}     # a <mimic> of a fixed joint couples nothing
+    mimic = sum(1 for j in joints.values() if j.get("mimic") and j.get("coordinates")
+                and (joints.get(j["mimic"]) or {}).get("coordinates")) if coupled else 0
     scene = getattr(plan, "scene", None)
-    if scene is not None and getattr(scene, "file_constraints", False):
+    eq -= sum(1 for e in model.info.get("equalities", []) if e["supported"] and not e["active"])
+    named = {a.name for a in getattr(scene, "actuators", ())}   # the others act on neither engine (notes)
+    inert = [t for t in model.info.get("tendons", []) if t["fixed"] and not (
+        t["stiffness"] or t["damping"] or set(t["actuators"]) & named or t["limited"] or t["frictionloss"])]
+    tendons -= len(inert)
+    opened = scene is not None and not getattr(scene, "file_constraints", True)
+    mimic_opened = scene is not None and not getattr(scene, "mimic_constraints", True)
+    if scene is not None and not opened:
         cons = plan.constraints
         eq -= 0 if cons is None else sum(1 for c in cons.cset.constraints if c.source.startswith("MJCF"))
-        named = {a.name for a in getattr(scene, "actuators", ())}   # the others act on neither engine (notes)
-        inert = [t for t in model.info.get("tendons", []) if t["fixed"] and not (
-            t["stiffness"] or t["damping"] or set(t["actuators"]) & named or t["limited"] or t["frictionloss"])]
-        tendons -= (0 if cons is None else len(cons.tendons)) + len(inert)
-    if scene is not None and getattr(scene, "mimic_constraints", False):
-        mimic = 0
-    out = {"equalities": eq, "tendons": tendons, "mimic": mimic, "cut": bool(eq or tendons or mimic)}
+        tendons -= 0 if cons is None else len({td.name.removesuffix("__limit") for td in cons.tendons})
+    if scene is not None and getattr(scene, "mimic_constraints", False) and plan.constraints is not None:
+        mimic -= sum(1 for c in plan.constraints.cset.constraints if c.source == "URDF <mimic>")
+    opened = (opened and bool(eq or tendons)) or (mimic_opened and bool(mimic))
+    laws = [] if scene is None or plan.constraints is None else [  # issue 45: the tendon-limit law (E85)
+        f"tendon limit of {td.name.removesuffix('__limit')}: the project's law on both engines"
+        for td in plan.constraints.tendons if td.name.endswith("__limit")]
+    out = {"equalities": eq, "tendons": tendons, "mimic": mimic, "cut": bool(eq or tendons or mimic),
+           "opened": opened, "laws": laws}
     loops = loop_scope(model, plan, load_options)      # issue 45: which loops were closed, on which side
     if loops is not None:
         out["loops"] = loops
     if eq or tendons:
-        out["text"] = (f"open tree of a closed mechanism ({eq} constraint{'s' * (eq != 1)}, {tendons} "
-                       f"tendon{'s' * (tendons != 1)} dropped)" + (f", {mimic} mimic couplings dropped" if mimic else ""))
+        out["text"] = (("loops open: the " if opened else "") + f"open tree of a closed mechanism ({eq} "
+                       f"constraint{'s' * (eq != 1)}, {tendons} tendon{'s' * (tendons != 1)} dropped"
+                       + (" on both engines: --open-loops or [constraints] from_file = false" if opened else "") + ")"
+                       + (f", {mimic} mimic couplings dropped" if mimic else ""))
     elif mimic:
-        out["text"] = (f"open tree of a coupled mechanism ({mimic} mimic coupling{'s' * (mimic != 1)} dropped: the "
-                       "mimic joints move as independent coordinates)")
+        out["text"] = (("loops open: the " if opened else "") + f"open tree of a coupled mechanism ({mimic} mimic "
+                       f"coupling{'s' * (mimic != 1)} dropped: the mimic joints move as independent coordinates)")
     else:
         out["text"] = FULL_SCOPE
     return out
@@ -177,6 +192,9 @@ def switched_off(model, plan, file_model=None) -> list[dict]:
     if not getattr(scene, "urdf_damping", False):
         springs += [j["name"] for j in own if j.get("damping") and j["name"] not in springs]
     out.append(_effect("springs", "the file's joint springs and dampers", springs, "joint"))
+    out.append(_effect("inactive", "the file's inactive equalities (active=\"false\": off in MuJoCo too)",
+                       [e["name"] for e in model.info.get("equalities", []) if e["supported"] and not e["active"]],
+                       "equality"))
     named = {a.name for a in plan.actuator_set.actuators}
     cons = getattr(plan, "constraints", None)       # issue 45: a fixed tendon's actuators act on both engines
     named |= {a.name for td in (cons.tendons if cons is not None else ()) for a in td.actuators}
@@ -191,10 +209,12 @@ def run_scope(cut: dict, off: list[dict]) -> str:
     """The scope in words: :data:`FULL_SCOPE`, or the cut mechanism (:func:`cut_scope`) and the effects
     :func:`switched_off` names: "the model without its joint limits (6 joints: ...), ... (switched off on
     both engines)"."""
+    laws = "".join(f"; {w}" for w in cut.get("laws", ()))
     if not cut["cut"] and not off:
-        return FULL_SCOPE
+        return FULL_SCOPE + laws
     head = cut["text"] if cut["cut"] else "the model"
-    return head + (f" without its {', '.join(x['text'] for x in off)} (switched off on both engines)" if off else "")
+    return head + (f" without its {', '.join(x['text'] for x in off)} (switched off on both engines)" if off
+                   else "") + laws
 
 
 def _mujoco_part(run_integrator: str, run_timestep: float, blow_ups: dict, fallback: dict | None) -> str | None:
@@ -222,7 +242,8 @@ def comparison_verdict(agreement: str, *, scope: dict, coverage, mujoco_integrat
     implausible = plausibility is not None and not plausibility.plausible
     parts = [plausibility.text() if implausible else agreement.rstrip(".")]
     if scope["cut"]:
-        parts.append(f"as the {scope['text']}, not the whole mechanism")
+        parts.append(f"{scope['text']}, not the whole mechanism" if scope.get("opened") else
+                     f"as the {scope['text']}, not the whole mechanism")
     if scope.get("loops"):      # issue 45: the loops closed, on which side, and those left open
         parts.append(scope["loops"]["text"])
     if off:

@@ -96,6 +96,8 @@ class RunContext:
     source: str = ""
     factor: float | None = None
     writing: bool = False
+    open_loops: bool = False
+    """``--open-loops`` (issue 45): every scene's file equalities, fixed tendons and mimic constraints dropped."""
 
 
 def _load(robot: RobotEntry, **extra):
@@ -219,15 +221,16 @@ def check_pair(res: CaseResult, pair: PairEntry) -> None:
                                         math.inf if limit == 0 else value / limit))
 
 
-def _scene(entry: SceneEntry):
+def _scene(entry: SceneEntry, open_loops: bool = False):
     from urdf2links.scenes.default_scenes import default_scene
+    from urdf2links.scenes.file_constraints import open_loops as opened
     from urdf2links.scenes.scene_read import load_scene
 
     if entry.path is not None:
-        return load_scene(entry.path)
+        return opened(load_scene(entry.path)) if open_loops else load_scene(entry.path)
     load = dict(entry.robot.load)
     return default_scene(entry.robot.path, t_end=entry.t_end, q0=entry.q0, seed=entry.seed,
-                         floating=load.pop("floating_base", False), **load)
+                         floating=load.pop("floating_base", False), open_loops=open_loops, **load)
 
 
 def check_scene(res: CaseResult, entry: SceneEntry, ctx: RunContext) -> None:
@@ -237,7 +240,7 @@ def check_scene(res: CaseResult, entry: SceneEntry, ctx: RunContext) -> None:
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        c = compare_scene(_scene(entry), progress=False, log=lambda m: None)
+        c = compare_scene(_scene(entry, ctx.open_loops), progress=False, log=lambda m: None)
     summary = json_ready(c.summary())
     summary["key"] = entry.id
     res.summary = summary

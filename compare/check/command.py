@@ -76,14 +76,15 @@ def run_cases(cases: list[Case], ctx: RunContext, *, jobs: int = 1,
         return out
 
 
-def _context(config: CheckConfig, write: bool) -> RunContext:
+def _context(config: CheckConfig, write: bool, open_loops: bool = False) -> RunContext:
     baselines = None
     if config.baselines.is_file():
         baselines = load_baselines(config.baselines)
-    return RunContext(baselines, shown_path(config.baselines), config.factor, write)
+    return RunContext(baselines, shown_path(config.baselines), config.factor, write, open_loops)
 
 
 def run_check(path=".", *, changed_since: str | None = None, jobs: int = 1, write: bool = False,
+              open_loops: bool = False,
               on_result: Callable[[CaseResult], None] | None = None) -> CheckRun:
     """The check of the configuration that holds for ``path`` (module doc); ``write``: accept the scenes' figures
     as their baselines. ConfigError, ValueError (a git reference), OSError: cannot be used (exit 2)."""
@@ -96,7 +97,7 @@ def run_check(path=".", *, changed_since: str | None = None, jobs: int = 1, writ
         note = (f"{len(cases)} of {len(every)} checks from {shown_path(config.source)}: those that depend on the "
                 f"{len(changed)} file(s) changed since {changed_since}")
     run = CheckRun(config, skipped=[c for c in every if c not in cases], note=note)
-    run.results = run_cases(cases, _context(config, write), jobs=jobs, on_result=on_result)
+    run.results = run_cases(cases, _context(config, write, open_loops), jobs=jobs, on_result=on_result)
     if write:
         accepted = [r.summary for r in run.results if r.summary is not None and no_evidence(r.summary) is None]
         run.baselines = write_baselines(accepted, config.baselines, factor=config.factor, about=_BASELINES_ABOUT)
@@ -155,6 +156,7 @@ def check_command(args) -> int:
         write = True
     try:
         run = run_check(folder, changed_since=args.changed_since, jobs=args.jobs or 1, write=write,
+                        open_loops=bool(getattr(args, "open_loops", False)),
                         on_result=None if args.quiet else (lambda r: print(_line(r), flush=True)))
     except ConfigError as exc:
         err(f"urdf2links check: error: {exc}")

@@ -46,7 +46,7 @@ from .mujoco_inputs import CompiledInputs
 from .mujoco_run import MujocoRun
 from .mujoco_stepping import (blow_up_counts, implicit_note, instability_note, integrator_name, recorded_energies,
                               set_stepping, step_samples)
-from .tendon_controls import tendon_actuators
+from .tendon_controls import add_limit_tendons, limit_tendons, tendon_actuators
 
 __all__ = ["MujocoFile", "mujoco_from_mjcf", "file_terms", "run_file", "file_runner", "FILE_LABEL",
            "file_route_inputs"]
@@ -130,13 +130,19 @@ def _carried(plan, a):
     return joint.name == plan.model.coordinate_names[a.index] or False
 
 
-def _edit(actuators, gravcomp: dict, notes: list[str]):
+def _edit(actuators, gravcomp: dict, notes: list[str], limited=None):
     """An ``MjSpec`` edit: the scene's own actuators (not the file's) added on their joints, as route 1
     writes them (``general``: dynamics none, gain fixed, bias affine, E55), and the scene's gravcomp on the
     bodies (MuJoCo counts the bodies with gravcomp when it compiles: ``ngravcomp``; a gravcomp set
     afterwards on a model compiled without any would not act)."""
 
     def edit(spec):
+        if limited is not None:     # issue 45: the tendon-limit law (E85), noted
+            rows = {r["name"]: r for r in limited.model.info.get("tendons", [])}
+            names = add_limit_tendons(spec, limited, rows)
+            notes.append("tendon limit of " + ", ".join(n.removesuffix("__limit") for n in names) + ": the project's "
+                         "law on both engines (E85: MuJoCo's own soft limit disabled, the law added as the tendon "
+                         + ", ".join(names) + ", a spring whose dead band is the range)")
         for body, f in gravcomp.items():
             b = spec.body(body)
             if b is None:
@@ -194,7 +200,9 @@ def mujoco_from_mjcf(plan, *, timestep: float | None = None, integrator: str | N
     tendon_acts = [ta.actuator for ta in tendon_actuators(plan)]     # issue 43: fed their controls too
     own = [a for a in carried_acts if a.source != "file"]
     table = scene.gravcomp_table(model)
-    m, where = compile_mjcf(str(scene.robot), notes, edit=_edit(own, table, notes) if own or table else None)
+    limits = limit_tendons(plan) if scene.file_constraints else ()     # issue 45: E85 as tendons of their own
+    m, where = compile_mjcf(str(scene.robot), notes, edit=_edit(own, table, notes, plan if limits else None)
+                            if own or table or limits else None)
     g = np.zeros(3) if scene.gravity is None else np.asarray(scene.gravity, float)
     springs = plan.spring_set.springs
     off_flags = _scene_flags(m, g, springs, actuated=bool(acts or tendon_acts), gravcomp=bool(table))
@@ -279,6 +287,8 @@ def _tendons_off(m, plan, notes: list[str]) -> list[str]:
     m.tendon_damping[:] = 0.0
     if plan.constraints is not None and plan.scene.file_constraints:    # the file's equalities and
         changed = route2_constraints(m, plan, tendons, notes)          # fixed tendons act, as written
+    elif m.neq:     # issue 45: none acts (opened, inactive or not modelled): off one by one too, not only the flag
+        m.eq_active0[:] = 0
     return changed
 
 

@@ -300,9 +300,10 @@ def _restrict_physics(model: mujoco.MjModel, gravity, notes: list[str], *, dampi
                  + " zeroed" + (f" (non-zero before: {', '.join(changed)})" if changed else "")
                  + ("; MuJoCo's own dof_damping from the URDF's <dynamics damping> kept (the scene asks for URDF "
                     "damping)" if damping else ""))
-    if model.neq:
-        notes.append(f"{model.neq} equality constraint(s) (URDF <mimic>?) are disabled: "
-                     "mimic joints are independent coordinates here")
+    if model.neq:       # issue 45: MuJoCo's import makes each <mimic> a joint equality; so does the project
+        notes.append(f"{model.neq} equality constraint(s) of MuJoCo's import (each URDF <mimic> a joint equality, "
+                     "the same as the project's mimic constraint, E70) are off for the terms at identical states (a "
+                     "constraint does not enter A or e + G); the trajectory runs them on both engines")
 
 
 def mujoco_from_urdf(path_or_text, *, strip_meshes: bool = True, fusestatic: bool = True,

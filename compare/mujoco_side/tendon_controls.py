@@ -19,6 +19,11 @@ project's run through its tendon (docs/equations.md (E76): MuJoCo's law (E55) on
 An actuator MuJoCo's model does not hold under that name is an error naming it (it would otherwise act on one
 engine only). Site transmissions and spatial tendons are not modelled: the plan refuses a scene that names
 such an actuator (:func:`urdf2links.scenes.actuators.resolve_actuators`), on both engines.
+
+Issue 45: a ``limited`` fixed tendon gets the project's limit law (E85, :mod:`urdf2links.scenes.tendons`) on both
+engines. MuJoCo's own soft limit is disabled for the run (``mjDSBL_LIMIT``) and the law is applied instead as a
+second fixed tendon on the same joints (:func:`add_limit_tendons`): a spring whose dead band is the range is the
+law exactly, evaluated by MuJoCo's own compiled passive forces at every stage (no control, no callback code).
 """
 
 from __future__ import annotations
@@ -29,8 +34,10 @@ import mujoco
 import numpy as np
 
 from urdf2links.scenes.scene_arrays import function_data
+from urdf2links.scenes.tendons import LIMIT_SUFFIX
 
-__all__ = ["TendonActuator", "tendon_actuators", "tendon_actuator_ids", "add_tendon_controls"]
+__all__ = ["TendonActuator", "tendon_actuators", "tendon_actuator_ids", "add_tendon_controls", "limit_tendons",
+           "add_limit_tendons"]
 
 
 @dataclass(frozen=True)
@@ -103,3 +110,29 @@ def add_tendon_controls(plan, m, ints: dict, floats: dict) -> list[int]:
     ints.update({"fn_kind": kind, "fn_ptr": ptr, "act_fn": fn, "act_ctrl": ctrl})
     floats["fn_data"] = np.concatenate(data)
     return ids
+
+
+# -- issue 45: tendon limits, the project's law (E85) on MuJoCo's side ------------------------------------------
+
+
+def limit_tendons(plan) -> tuple:
+    """The plan's limit laws (E85): its tendons named ``<tendon>__limit``
+    (:func:`urdf2links.scenes.tendons.limit_tendon`), each a one-sided spring with the range as its dead band."""
+    cons = getattr(plan, "constraints", None)
+    return () if cons is None else tuple(td for td in cons.tendons if td.name.endswith(LIMIT_SUFFIX))
+
+
+def add_limit_tendons(spec, plan, joints_of: dict) -> list[str]:
+    """Each of :func:`limit_tendons` added to MuJoCo's ``MjSpec`` of the file as a fixed tendon on the limited
+    tendon's own joints and coefficients (``joints_of``: ``{tendon: [(joint, coef)]}``, the file's), with the law's
+    stiffness and the file's range as its spring length (MuJoCo's length, ``range`` as written): MuJoCo's passive
+    tendon spring with a dead band is the law exactly. Returns their names."""
+    names = []
+    for td in limit_tendons(plan):
+        base = td.name.removesuffix(LIMIT_SUFFIX)
+        lo, hi = joints_of[base]["range"]
+        t = spec.add_tendon(name=td.name, stiffness=td.stiffness, damping=0.0, springlength=[lo, hi])
+        for joint, coef in joints_of[base]["joints"]:
+            t.wrap_joint(joint, coef)
+        names.append(td.name)
+    return names

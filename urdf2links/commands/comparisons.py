@@ -7,7 +7,7 @@ Their options are declared here; their handlers live in ``urdf2links.compare`` (
 
 from __future__ import annotations
 
-from .options import add_load_options, add_mujoco_options, add_scene_input
+from .options import add_load_options, add_mujoco_options, add_open_loops, add_scene_input
 
 __all__ = ["add_compare", "run_compare", "add_report", "run_report", "add_tradeoff", "run_tradeoff", "add_check",
            "run_check"]
@@ -57,6 +57,7 @@ def add_report(p) -> None:
     p.add_argument("--seed", type=int, default=0, help="--corpus: seed of each robot's random q0 and qd0 and of the "
                    "terms' states (default 0)")
     add_load_options(p)
+    add_open_loops(p)
     p.add_argument("--no-thumbnails", action="store_true", help="--corpus: no picture of each robot in the index "
                    "(saves the few seconds a robot its meshes take)")
     add_mujoco_options(p)
@@ -114,6 +115,7 @@ def add_check(p) -> None:
                    "to .github/workflows/urdf2links-check.yml (or FILE)")
     p.add_argument("--from", dest="source", metavar="GIT_URL@COMMIT|PATH", help="where the workflow installs urdf2links")
     p.add_argument("--quiet", action="store_true", help="no line per check while it runs")
+    add_open_loops(p)
 
 
 def run_check(args) -> int:

@@ -56,16 +56,16 @@ def format_tree(model) -> str:
 
 
 def _constraint_lines(info) -> list[str]:
-    """An MJCF model's equalities and tendons (issue 36): read, and acting in scenes with ``[constraints]
-    from_file = true`` (docs/constraints.md)."""
+    """An MJCF model's equalities and tendons (issue 36): read, and acting in every scene unless it opens the
+    loops (issue 45: ``--open-loops``, ``[constraints] from_file = false``; docs/constraints.md)."""
     from ..parsers.mjcf_constraints import inspect_rows
 
     eq, td = inspect_rows(info)
     out = []
     if eq:
-        out += ["", "equalities (read; constraints of scenes with [constraints] from_file = true, E68-E70):"] + _table(eq)
+        out += ["", "equalities (read; constraints of every scene unless --open-loops or from_file = false, E68-E70):"] + _table(eq)
     if td:
-        out += ["", "tendons (fixed ones act in scenes with [constraints] from_file = true, E76):"] + _table(td)
+        out += ["", "tendons (fixed ones act in every scene unless --open-loops or from_file = false, E76; limits: E85):"] + _table(td)
     return out
 
 
@@ -122,7 +122,7 @@ def run_inspect(args) -> int:
 
     if args.scene or str(args.file).endswith(".toml"):
         scene = scene_or_robot(args.file, q0=args.q0, seed=args.seed, t_end=args.t_end, load=load_options_of(args),
-                               hold=hold_of(args))
+                               hold=hold_of(args), open_loops=bool(getattr(args, "open_loops", False)))
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             model = scene.model()

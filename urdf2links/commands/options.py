@@ -9,7 +9,7 @@ import argparse
 from ..ranges import INERTIA_POLICIES, MIMIC_POLICIES, Q0_CHOICES
 
 __all__ = ["INPUT", "add_scene_input", "add_load_options", "add_default_scene_options", "add_mujoco_options",
-           "add_animation_option", "add_max_wall"]
+           "add_animation_option", "add_max_wall", "add_open_loops"]
 
 #: The help of a command's scene argument, before what the command does with a robot file.
 INPUT = ("a scene .toml, a robot (.urdf, .xacro), or the name of a shipped one from any folder (`urdf2links "
@@ -87,9 +87,18 @@ def add_default_scene_options(p, *, seed: bool = True, write_scene: bool = True)
     g.add_argument("--hold-bandwidth", type=float, metavar="HZ", help="the servos' bandwidth with --hold (default 2 Hz)")
     g.add_argument("--ground", action="store_true", help="a floating robot standing on the ground (docs/contact.md)")
     g.add_argument("--no-floor", action="store_true", help="drop an MJCF file's own floor (kept by default)")
+    add_open_loops(g)
     if write_scene:
         g.add_argument("--write-scene", metavar="FILE.toml", help="also write the default scene to FILE.toml, to "
                        "edit and run by name")
+
+
+def add_open_loops(p) -> None:
+    """``--open-loops`` (issue 45): the file's own equalities and fixed tendons (and a URDF's mimic constraints)
+    dropped on both engines, as a scene's ``[constraints] from_file = false`` does; the verdict says so."""
+    p.add_argument("--open-loops", action="store_true", help="drop the robot file's own closed loops and couplings "
+                   "(an MJCF file's equalities and fixed tendons, a URDF's mimic constraints) on both engines; they "
+                   "act by default, as in MuJoCo (a scene file: its [constraints] from_file = false says the same)")
 
 
 def add_scene_input(p, *, seed: bool = True, write_scene: bool = True,

@@ -12,8 +12,9 @@ tendons (E76) when a scene asks (``[constraints] from_file = true``). MuJoCo's o
 - ``joint``: ``qpos_1 - qpos0_1 = sum_k c_k (qpos_2 - qpos0_2)^k`` (``polycoef``, ``qpos0``);
 - ``tendon`` (of fixed tendons): the same law on the tendons' lengths, ``tendon_length0`` their lengths at
   ``qpos0``;
-- a fixed tendon: its joints and coefficients, stiffness, damping, spring length (a range), its limits and
-  friction loss (not modelled: noted), and the actuators whose transmission it is.
+- a fixed tendon: its joints and coefficients, stiffness, damping, spring length (a range), its limits (the
+  project's limit law, E85, on both engines) with their ``solref``, its friction loss (not modelled: noted), and
+  the actuators whose transmission it is.
 
 Site-semantic equalities, ``tendon`` equalities of spatial tendons, ``flex`` equalities and spatial tendons
 are listed with why they are not read.
@@ -101,14 +102,14 @@ def tendon_rows(b) -> tuple[list[dict], list[str]]:
                "damping": float(np.ravel(m.tendon_damping)[t]), "lengthspring": [float(spring[0]), float(spring[-1])],
                "limited": bool(m.tendon_limited[t]), "range": [float(x) for x in m.tendon_range[t]],
                "frictionloss": float(m.tendon_frictionloss[t]), "actuators": acts.get(t, []),
+               "solref_lim": [float(x) for x in m.tendon_solref_lim[t]],
                "joints": [(b.name("mjOBJ_JOINT", int(m.wrap_objid[adr + w]), f"joint{int(m.wrap_objid[adr + w])}"),
                            float(m.wrap_prm[adr + w])) for w in range(num)] if fixed else []}
         if not fixed:
             notes.append(f"tendon {name!r} is spatial (it wraps sites or geoms): not modelled; MuJoCo's run zeroes its "
                          "stiffness and damping")
-        elif row["limited"] or row["frictionloss"]:
-            notes.append(f"tendon {name!r}: its " + " and ".join(w for w, on in (("limits", row["limited"]), (
-                "friction loss", row["frictionloss"])) if on) + " are not modelled (MuJoCo's run disables them)")
+        elif row["frictionloss"]:
+            notes.append(f"tendon {name!r}: its friction loss is not modelled (MuJoCo's run disables it)")
         rows.append(row)
     return rows, notes
 
@@ -131,7 +132,7 @@ def inspect_rows(info: dict) -> tuple[list[tuple], list[tuple]]:
     td = [("tendon", "kind", "length", "stiffness", "damping", "spring length", "actuators", "not modelled")]
     for r in info.get("tendons", []):
         length = " + ".join(f"{c:g} {j}" for j, c in r["joints"]) if r["fixed"] else "(wraps sites/geoms)"
-        nm = [w for w, on in (("limits", r["limited"]), ("friction loss", r["frictionloss"]),
+        nm = [w for w, on in (("friction loss", r["frictionloss"]),
                               ("spatial", not r["fixed"])) if on]
         td.append((r["name"], "fixed" if r["fixed"] else "spatial", length, f"{r['stiffness']:g}", f"{r['damping']:g}",
                    " .. ".join(f"{x:g}" for x in dict.fromkeys(r["lengthspring"])), ", ".join(r["actuators"]) or "-",

@@ -16,7 +16,8 @@ __all__ = ["inventory", "MUJOCO_OFF"]
 
 #: What MuJoCo's run of an MJCF file switches off (``mjtDisableBit`` names): contacts, every constraint
 #: (equality, limits, friction loss), and actuation unless the scene names actuators (then the ones it
-#: does not name are switched off one by one).
+#: does not name are switched off one by one). The file's own equalities and fixed tendons are switched back on
+#: (issue 45: by default; :func:`urdf2links.compare.mujoco_side.mujoco_constraints.route2_constraints`).
 MUJOCO_OFF = ("mjDSBL_CONTACT", "mjDSBL_CONSTRAINT", "mjDSBL_EQUALITY", "mjDSBL_LIMIT", "mjDSBL_FRICTIONLOSS",
               "mjDSBL_ACTUATION")
 
@@ -60,15 +61,21 @@ def inventory(m, joint_kinds: dict) -> list[str]:
         "compiler took inertia from geometry); contacts are not modelled and MuJoCo's run disables them")
     add(m.npair + m.nexclude, f"{m.npair} contact pair(s), {m.nexclude} exclude(s)", "contacts are disabled on both sides")
     add(m.ntendon, f"{m.ntendon} tendon(s) ({_names(m, 'mjOBJ_TENDON', m.ntendon)})",
-        "fixed tendons are read (stiffness, damping, spring length, actuators on them; E76) and act when a scene says "
-        "[constraints] from_file = true; otherwise MuJoCo's run zeroes their stiffness and damping and disables their "
-        "limits")
+        "fixed tendons are read (stiffness, damping, spring length, actuators on them; E76) and act in every scene, as in "
+        "MuJoCo (issue 45); a limited one gets the project's limit law on both engines (E85: a one-sided spring past "
+        "its range, MuJoCo's own soft limit disabled); --open-loops or [constraints] from_file = false drops them "
+        "(MuJoCo's run then zeroes their stiffness and damping); spatial tendons and tendon friction loss are not "
+        "modelled")
     add(m.neq, f"{m.neq} equality constraint(s) ({_names(m, 'mjOBJ_EQUALITY', m.neq)})",
-        "connect, weld and joint are read (E68-E70; tendon equalities of fixed tendons too: E70 on their lengths) and act when a scene says [constraints] from_file = true "
-        "(urdf2links inspect --scene shows them); otherwise the joints stay independent and MuJoCo's run disables them")
+        "connect, weld and joint are read (E68-E70; tendon equalities of fixed tendons too: E70 on their lengths) and "
+        "act in every scene on both engines, as in MuJoCo (issue 45; urdf2links inspect --scene shows them); an "
+        "inactive one (active=\"false\") is off on both and listed in the verdict's scope; --open-loops or "
+        "[constraints] from_file = false drops them (the joints stay independent, MuJoCo's run disables them, the "
+        "scope says 'loops open')")
     add(m.nu, f"{m.nu} actuator(s) ({_names(m, 'mjOBJ_ACTUATOR', m.nu)})",
         "scene effects when a scene names them ([[actuator]] name = '...', ctrl = ...: MuJoCo's law on both engines; "
-        "one on a fixed tendon with [constraints] from_file = true; one on a site or a spatial tendon is refused); "
+        "one on a fixed tendon through its tendon, unless the loops are open; one on a site or a spatial tendon is "
+        "refused); "
         "the others act on neither engine (MuJoCo's run switches them off)")
     add(m.nsensor, f"{m.nsensor} sensor(s)", "not used (they do not change the dynamics)")
     add(m.nsite, f"{m.nsite} site(s)", "not used (frames only)")

@@ -275,8 +275,9 @@ def resolve_actuators(specs, model, *, where="<scene>", file_tendons: bool | Non
         if row["trntype"] == "tendon" and fixed:
             if file_tendons is False:
                 raise SceneError(f"{where}: [[actuator]] {s.name!r} drives the file's fixed tendon {fixed[0]!r}: a "
-                                 "tendon acts only in a scene with [constraints] from_file = true (the file's "
-                                 "equalities and tendons then act too); add it, or drive the joints with scene "
+                                 "tendon acts only in a scene with [constraints] from_file = true (the default; "
+                                 "not with from_file = false or --open-loops: the file's equalities and tendons act "
+                                 "with it); remove from_file = false or --open-loops, or drive the joints with scene "
                                  "actuators (coordinate = ...)")
             continue        # issue 36: an actuator on a fixed tendon acts through its tendon (scenes/file_constraints.py)
         why = file_actuator(row)

@@ -13,7 +13,8 @@ Scene form (docs/equations.md (E68)-(E70); every key checked, errors name the bl
 
 For ``connect`` a single point (``points = [[...]]``) takes the second as MuJoCo does: the point of
 link 2 (or of the world) where the first one is at the scene's initial state. An MJCF file's own
-``<equality>`` elements (connect, weld, joint) are read too (``[constraints] from_file = true``).
+``<equality>`` elements (connect, weld, joint) are read too and act by default, as in MuJoCo (issue 45;
+``[constraints] from_file = false`` or ``--open-loops`` drops them).
 
 :class:`SceneConstraints` is what the plan carries: the :class:`~urdf2links.dynamics.constraints.ConstraintSet`
 on the model, the fixed tendons (E76), and notes. A constrained scene runs through
@@ -59,20 +60,24 @@ class ConstraintSpec:
 
 def constraint_options(r, data: dict) -> dict:
     """``[constraints]``: ``from_file`` (an MJCF file's equalities and fixed tendons act) and ``mimic`` (a
-    URDF's ``<mimic>`` joints as joint constraints; load the robot with ``mimic = "independent"``)."""
+    URDF's ``<mimic>`` joints as joint constraints, when loaded with ``mimic = "independent"``); both default true
+    (issue 45: as in MuJoCo)."""
     t = data.get("constraints", {})
     r.keys(t, ("from_file", "mimic"), "constraints")
     out = {}
     for key, field_ in (("from_file", "file_constraints"), ("mimic", "mimic_constraints")):
-        v = t.get(key, False)
+        v = t.get(key, True)        # issue 45: the file's own equalities and mimic act unless the scene says not
         if not isinstance(v, bool):
             r.fail(f"constraints.{key}", f"must be true or false, got {v!r}")
         out[field_] = v
     return out
 
 
-def mimic_specs(model, where) -> list[ConstraintSpec]:
-    """A URDF's ``<mimic>`` joints as joint constraints ``q_f = k q_l + offset`` (E70)."""
+def mimic_specs(model, where, notes: list | None = None) -> list[ConstraintSpec]:
+    """A URDF's ``<mimic>`` joints as joint constraints ``q_f = k q_l + offset`` (E70): MuJoCo's URDF import makes
+    each the same joint equality (``joint1`` the follower, ``polycoef [offset, multiplier]``; issue 45)."""
+    if model.coupling is not None:      # mimic = "coupled": the coupling is already exact (E42)
+        return []
     joints = {j["name"]: j for j in model.info.get("joints", [])}
     out = []
     for j in joints.values():
@@ -80,17 +85,14 @@ def mimic_specs(model, where) -> list[ConstraintSpec]:
             continue
         lead = joints.get(j["mimic"])
         if not j["coordinates"] or lead is None or not lead["coordinates"]:
-            if model.coupling is not None:
-                continue
-            raise SceneError(f"{where}: [constraints] mimic: joint {j['name']!r} mimics {j['mimic']!r}, and one of them "
-                             "has no coordinate (fixed, or coupled: load the robot with mimic = 'independent')")
+            if notes is not None:   # a fixed joint's (or a missing leader's): MuJoCo's
+                notes.append(f"<mimic> of joint {j['name']!r} (on {j['mimic']!r}): one of them has no coordinate "
+                             "(fixed or missing): no coupling, as MuJoCo's URDF import adds none")   # import adds none
+            continue
         out.append(ConstraintSpec(f"mimic_{j['name']}", "joint", coordinates=(j["coordinates"][0], lead["coordinates"][0]),
                                   coefficients=(j.get("mimic_offset", 0.0), j.get("mimic_multiplier", 1.0), 0.0, 0.0,
                                                 0.0), source="URDF <mimic>"))
-    if not out:
-        raise SceneError(f"{where}: [constraints] mimic = true, but robot {model.name!r} has no <mimic> joint with "
-                         "its own coordinate (loaded with mimic = 'coupled'? then the coupling is already exact)")
-    return out
+    return out      # none: no <mimic>, or mimic = "coupled" (the coupling is already exact, E42)
 
 
 def parse_constraints(r, data: dict) -> tuple[ConstraintSpec, ...]:
@@ -249,7 +251,7 @@ def constraint_toml(scene, value) -> list[str]:
     """The scene's ``[constraints]`` options and ``[[constraint]]`` blocks as TOML lines (``value`` formats a
     value), for :func:`~urdf2links.scenes.scene_toml.scene_toml`."""
     out = []
-    if getattr(scene, "file_constraints", False) or getattr(scene, "mimic_constraints", False):
+    if not getattr(scene, "file_constraints", True) or not getattr(scene, "mimic_constraints", True):
         out += ["[constraints]", f"from_file = {value(scene.file_constraints)}",
                 f"mimic = {value(scene.mimic_constraints)}", ""]
     for c in scene.constraints:

@@ -35,7 +35,7 @@ def _random_q0(model, rng) -> dict:
 
 def default_scene(robot, *, floating: bool = False, q0: str = "excite", seed: int = 0, t_end: float = 1.0,
                   xacro_args=None, package_dirs=(), inertia: str = "audit", mimic: str = "independent",
-                  strict: bool = False, model=None, hold: float | None = None) -> Scene:
+                  strict: bool = False, model=None, hold: float | None = None, open_loops: bool = False) -> Scene:
     """The scene ``urdf2links simulate|compare ROBOT.urdf`` runs when no scene file is given.
 
     Gravity (9.81 m/s^2 along -z); a fixed base, or with ``floating`` six coordinates for the root
@@ -51,6 +51,8 @@ def default_scene(robot, *, floating: bool = False, q0: str = "excite", seed: in
     ``--hold``): a position servo on every coordinate holding the initial ``q``
     (:func:`~urdf2links.scenes.actuators.hold_actuators`). The scene is named
     :func:`default_scene_name`; :func:`urdf2links.scenes.scene_toml.write_scene` writes it as TOML to edit.
+    An MJCF file's own equalities and fixed tendons act (issue 45, as in MuJoCo); ``open_loops``
+    (``--open-loops``) drops them (:func:`~urdf2links.scenes.file_constraints.open_loops`, noted).
     """
     where = f"default scene of {robot}"
     r = SceneReader(where)
@@ -84,8 +86,13 @@ def default_scene(robot, *, floating: bool = False, q0: str = "excite", seed: in
                               bandwidth=hold)
         held_text = f", held at q0 by position servos (critically damped at {hold:g} Hz)"
     run = RunSettings(t_end=t_end, samples=min(MAX_SAMPLES, max(101, int(round(500 * t_end)) + 1)))
-    name = default_scene_name(floating=floating, q0=q0, seed=seed, inertia=inertia, mimic=mimic, hold=hold)
+    name = default_scene_name(floating=floating, q0=q0, seed=seed, inertia=inertia, mimic=mimic, hold=hold,
+                              open_loops=open_loops)
     scene = _default_scene(robot, mjcf, model, options, name, state + held_text, q_init, qd_init, run, held, floating)
+    if open_loops:
+        from .file_constraints import open_loops as opened
+
+        scene = opened(scene)
     if q0 in ("excite", "random"):      # issue 45: a random start carried onto the closed loops, when they act
         from .loop_start import start_on_loops
 
@@ -131,7 +138,7 @@ def _default_state(model, q0: str, seed: int, t_end: float, mjcf: bool) -> tuple
 
 
 def default_scene_name(*, floating: bool = False, q0: str = "excite", seed: int = 0, inertia: str = "audit",
-                       mimic: str = "independent", hold: float | None = None) -> str:
+                       mimic: str = "independent", hold: float | None = None, open_loops: bool = False) -> str:
     """:data:`DEFAULT_SCENE_NAME`, with what differs from the plain default scene appended
     (``default-floating-random-seed3-repair``, ``default-rest``, ``default-seed2``), so that reports of
     one robot in other settings do not replace each other."""
@@ -141,4 +148,5 @@ def default_scene_name(*, floating: bool = False, q0: str = "excite", seed: int 
     parts += [inertia] if inertia != "audit" else []
     parts += [mimic] if mimic != "independent" else []
     parts += [] if hold is None else ["hold" if hold == 2.0 else f"hold{hold:g}hz"]
+    parts += ["open-loops"] if open_loops else []
     return "-".join(parts)

@@ -121,9 +121,11 @@ class Scene:
     gravcomp_bodies: tuple[tuple[str, float], ...] = ()
     constraints: tuple = ()
     """``[[constraint]]`` blocks (:mod:`urdf2links.scenes.constraints`; issue 36)."""
-    file_constraints: bool = False    # [constraints] from_file: an MJCF file's own equalities and fixed tendons act
-    mimic_constraints: bool = False
-    """``[constraints] mimic``: a URDF's ``<mimic>`` joints as exact joint constraints (E70)."""
+    file_constraints: bool = True     # [constraints] from_file: an MJCF file's own equalities and fixed tendons act
+                                      # (issue 45: on by default, as in MuJoCo; --open-loops or from_file = false drop them)
+    mimic_constraints: bool = True
+    """``[constraints] mimic``: a URDF's ``<mimic>`` joints (loaded ``mimic = "independent"``) as exact joint
+    constraints (E70); on by default since issue 45, as MuJoCo's URDF import makes each a joint equality."""
     contacts: tuple = ()          # [[contact]] blocks (issue 37): urdf2links.scenes.contact.ContactSpec
     expected_stop: ExpectedStop | None = None     # [expect]: a hard case that stops by design (issue 42)
 

@@ -174,7 +174,8 @@ LOAD_OPTIONS = ("floating_base", "inertia", "mimic", "strict", "package_dirs", "
 
 
 def scene_or_robot(path, *, floating: bool = False, q0: str = "excite", seed: int = 0, t_end: float | None = None,
-                   xacro_args=None, package_dirs=(), load: dict | None = None, hold: float | None = None) -> Scene:
+                   xacro_args=None, package_dirs=(), load: dict | None = None, hold: float | None = None,
+                   open_loops: bool = False) -> Scene:
     """A scene file (``.toml``), or the default scene of a robot file (``.urdf``, ``.xacro``, ...) with
     these options (``t_end`` default 1 s). ``load``: loading options given on the command line
     (``inertia``, ``mimic``, ``strict``, ``package_dirs``, ``xacro_args``; :func:`load_options_of`);
@@ -194,11 +195,16 @@ def scene_or_robot(path, *, floating: bool = False, q0: str = "excite", seed: in
         if given:
             raise SceneError(f"{path}: {', '.join(given)} apply to a robot file run in its default scene; a scene "
                              "file names its robot, initial state and actuators in [robot], [initial] and [[actuator]]")
-        return override_loading(load_scene(path), load)
+        scene = override_loading(load_scene(path), load)
+        if open_loops:      # issue 45: --open-loops drops the file's equalities (noted)
+            from .file_constraints import open_loops as opened
+
+            scene = opened(scene)
+        return scene
     opts = {k: v for k, v in load.items() if k in ("inertia", "mimic", "strict")}
     return default_scene(path, floating=floating or bool(load.get("floating_base")), q0=q0, seed=seed,
                          t_end=1.0 if t_end is None else t_end, xacro_args=load.get("xacro_args"),
-                         package_dirs=load.get("package_dirs", ()), hold=hold, **opts)
+                         package_dirs=load.get("package_dirs", ()), hold=hold, open_loops=open_loops, **opts)
 
 
 def override_loading(scene: Scene, load: dict) -> Scene:
@@ -251,7 +257,8 @@ def scene_from_args(args):
     file (with the loading options given), or a robot file in its default scene with ``--floating``,
     ``--q0``, ``--seed``, ``--t-end``, ``--hold``, ``--ground`` and the loading options."""
     scene = scene_or_robot(args.scene, q0=getattr(args, "q0", "excite"), seed=getattr(args, "seed", 0),
-                           t_end=getattr(args, "t_end", None), load=load_options_of(args), hold=hold_of(args))
+                           t_end=getattr(args, "t_end", None), load=load_options_of(args), hold=hold_of(args),
+                           open_loops=bool(getattr(args, "open_loops", False)))
     return ground_of(args, scene)
 
 

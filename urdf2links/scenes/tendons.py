@@ -5,8 +5,16 @@ MuJoCo's passive law gives it a spring ``-k (l - l_0)`` (``l_0`` a dead band ``[
 inside it) and a damper ``-b l'``; an actuator whose transmission is the tendon acts with MuJoCo's
 actuator law (E55) on ``(gear l, gear l')`` and its force ``gear F`` on the tendon. The generalized force
 is ``c f_t``. The spring is a potential (``V`` gains ``0.5 k (l - l_0)^2``); the damper and actuators do
-work (``P``). Tendon limits, spatial tendons and tendon friction loss are not modelled: the file's notes
-say so (:mod:`urdf2links.scenes.file_constraints`).
+work (``P``). Spatial tendons and tendon friction loss are not modelled: the file's notes say so
+(:mod:`urdf2links.scenes.file_constraints`).
+
+A ``limited`` tendon (MuJoCo's ``range [l_lo, l_hi]``) gets the project's tendon-limit law (E85, issue 45): a stiff
+one-sided spring on the length past the range, ``f = -k (l - l_hi)`` above it, ``k (l_lo - l)`` below it, 0 inside,
+with ``k = m_t / (tau zeta)^2`` from the limit's ``solref (tau, zeta)`` and the tendon's effective mass
+``m_t = 1 / (c A(q0)^-1 c)`` at the scene's initial state (:func:`limit_tendon`; MuJoCo's reference stiffness of its
+own soft limit, ``1 / (tau zeta)^2`` per unit of effective mass, made a force). That is a spring with a dead band
+(E76's spring, ``l_0 = [l_lo, l_hi]``): it runs as a second fixed tendon ``<name>__limit`` on the same coordinates,
+conservative (its energy is in ``V``), on both engines; MuJoCo's own soft limit is disabled for the run.
 """
 
 from __future__ import annotations
@@ -15,7 +23,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["FixedTendon"]
+__all__ = ["FixedTendon", "limit_tendon", "LIMIT_SUFFIX"]
+
+#: The name of a limited tendon's limit law (E85) as a tendon of its own: ``<tendon>__limit``.
+LIMIT_SUFFIX = "__limit"
 
 
 @dataclass(frozen=True)
@@ -55,3 +66,18 @@ class FixedTendon:
         acts = "".join(f"; actuator {a.name!r} (gear {a.gear:g})" for a in self.actuators)
         return (f"{self.name!r}: length = " + " + ".join(f"{c:g} q{i}" for i, c in enumerate(self.coef) if c)
                 + f", stiffness {self.stiffness:g}, damping {self.damping:g}, spring length {sl}{acts}")
+
+
+def limit_tendon(model, tendon: FixedTendon, limit, q0, solref) -> FixedTendon:
+    """The tendon-limit law (E85) of ``tendon`` limited to ``limit = (l_lo, l_hi)`` (the model's coordinates) as a
+    fixed tendon ``<name>__limit``: ``k = m_t / (tau zeta)^2``, ``m_t = 1 / (c A(q0)^-1 c)`` at ``q0``, the spring
+    length the range (a dead band: no force inside it); no damping. ValueError for a ``solref`` that is not
+    ``(tau > 0, zeta > 0)``."""
+    tau, zeta = float(solref[0]), float(solref[1])
+    if tau <= 0.0 or zeta <= 0.0:
+        raise ValueError(f"limit solref {list(solref)}: the limit law (E85) takes a time constant and a damping ratio, "
+                         "both > 0 (MuJoCo's direct form with negative numbers is not read)")
+    c = np.asarray(tendon.coef, float)
+    m_t = 1.0 / float(c @ np.linalg.solve(model.mass_matrix(np.asarray(q0, float)), c))
+    return FixedTendon(tendon.name + LIMIT_SUFFIX, c, m_t / (tau * zeta) ** 2, 0.0,
+                       (float(limit[0]), float(limit[1])))
