@@ -113,7 +113,8 @@ class Terms:
         return {"A": dA / scale_A if scale_A > 0 else (0.0 if dA == 0 else np.inf),
                 "G": dG / scale_G if scale_G > 0 else (0.0 if dG == 0 else np.inf),
                 "worst_A": worst_A, "worst_G": worst_G, "scale_A": scale_A, "scale_G": scale_G,
-                "sq_A": sA, "sq_G": sG, "terms": (np.array(mapped_A), np.array(mapped_G), tuple(im))}
+                "sq_A": sA, "sq_G": sG, "terms": (np.array(mapped_A), np.array(mapped_G), tuple(im)),
+                "first_coordinates": tuple(iu)}
 
 
 def _home(parts: RobotParts, names) -> np.ndarray:
@@ -194,18 +195,47 @@ def unseen_group(terms: Terms, diffs: list[Difference], *, signs: bool = True) -
     (tests/test_identify_compare.py checks the ranks agree with 64 states), so ``A`` agrees everywhere, and with it
     its derivatives: the velocity terms, which follow from ``A`` (E20), agree too."""
     for kinds in UNSEEN_CANDIDATES:
-        group = [i for i, d in enumerate(diffs) if d.kind in kinds and d.undo is not None
-                 and not (d.effect or {}).get("at_rounding")]
-        if len(group) < 2:
+        group = [i for i, d in enumerate(diffs) if d.kind in kinds and d.undo is not None]
+        if sum(not (diffs[i].effect or {}).get("at_rounding") for i in group) < 2:
             continue
         rest = [d for i, d in enumerate(diffs) if i not in group]
         if any(d.undo is None and d.kind not in NOT_IN_A_G and d.kind != "root_pose" for d in rest):
             return None
-        r = _undo_all(terms, rest, signs=signs)
+        r = _residual(terms, rest, [d.urdf for d in rest if d.kind == "armature"], signs=signs)
         if r["A"] <= EFFECT_ROUNDING and r["G"] <= EFFECT_ROUNDING:
-            return {"indices": group, "kinds": sorted({diffs[i].kind for i in group}), "A": r["A"], "G": r["G"],
-                    "states": int(len(terms.Q))}
+            return {"indices": group, "kinds": sorted({diffs[i].kind for i in group}), "states": int(len(terms.Q)),
+                    **r}
     return None
+
+
+def _residual(terms: Terms, rest: list[Difference], armature_joints: list, *, signs: bool) -> dict:
+    """A and G of the first description against the second with ``rest`` undone (relative, as :meth:`Terms.compare`),
+    less a constant diagonal of ``A`` on the coordinates of ``armature_joints`` (the first description's joints
+    whose armature differs, that difference undone in ``rest``): the inertias of a group may carry part of an
+    armature (a URDF cannot hold one, and ``identify --write-urdf`` moves what it can of one into the links, E49),
+    which the armature's difference, listed and dynamic, accounts for; that part is ``carried`` ({coordinate:
+    kg m^2})."""
+    side = Side(terms.ctx.mjcf)
+    for d in sorted(rest, key=lambda d: _UNDO_ORDER.get(d.kind, 3)):
+        if d.undo is not None:
+            side = d.undo(side)
+    r = terms.compare(side, signs=signs)
+    Am, Gm, _im = r["terms"]
+    iu = np.array(r["first_coordinates"], dtype=int)
+    if not iu.size:
+        return {"A": r["A"], "G": r["G"], "carried": {}}
+    dA = terms.A[:, iu][:, :, iu] - Am
+    dG = terms.G[:, iu] - Gm
+    carried = {}
+    joints = {j.name: j.coordinates for j, _b in terms.ctx.urdf.joints}
+    for name in armature_joints:
+        for c in joints.get(name, ()):
+            k = [terms.names[i] for i in iu].index(c) if c in [terms.names[i] for i in iu] else None
+            if k is not None:
+                carried[c] = float(np.mean(dA[:, k, k]))
+                dA[:, k, k] -= carried[c]
+    return {"A": float(np.max(np.abs(dA))) / r["scale_A"] if r["scale_A"] > 0 else r["A"],
+            "G": float(np.max(np.abs(dG))) / r["scale_G"] if r["scale_G"] > 0 else r["G"], "carried": carried}
 
 
 def _summary(base, rows, diffs, label) -> dict:
