@@ -99,6 +99,8 @@ class PairComparison:
                                                  if d.kind not in DYNAMIC_KINDS and d.kind != "root_pose"})},
                 "dynamics_equal": {"count": len(equal), "kinds": sorted({d.kind for d in equal}),
                                    "states": group.get("states"), "A": group.get("A"), "G": group.get("G"),
+                                   "carried_armature": {c: v for c, v in (group.get("carried") or {}).items()
+                                                        if abs(v) > 1e-9},
                                    "what": DYNAMICS_EQUAL_WORDS},
                 "root_pose": {"count": counts.get("root_pose", 0),
                               "floating": bool(self.mapping.root and all(self.mapping.root.floating))}}
