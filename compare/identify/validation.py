@@ -9,7 +9,7 @@ recording and one that does not drifts from it, boundedly. The engines:
   frames, H, armature) with the joints' damping and Coulomb friction as ``damping`` and ``frictionloss``, stepped
   as OTHER was (semi-implicit Euler, 1 ms); MuJoCo refuses a body whose inertia is not positive definite: then
   that run is not made and the result says why;
-- urdf2links: the project's own simulation (:func:`urdf2links.simulate`) of a scene built in Python
+- urdf2links: the project's own simulation (:func:`urdf2links.integration.simulate.simulate`) of a scene built in Python
   (:func:`held_out_scene`): the same law as one MuJoCo ``general`` actuator per coordinate (E55) whose control
   is a cubic spline through OTHER's recorded steps, the joints' damping as the scene's dampers, gravity, the
   project's integrator at the scenes' tolerances (rtol 1e-10, atol 1e-12). The scenes do not model Coulomb
@@ -114,7 +114,7 @@ def held_out_scene(model, joints: dict, names, held, kp, kd, *, robot=None):
 
 def _project_run(model, joints, names, held, kp, kd) -> np.ndarray:
     """q (T, n) of urdf2links' model in the held-out scene (:func:`held_out_scene`), simulated by the project
-    (:func:`urdf2links.simulate`), sampled at OTHER's recorded times."""
+    (:func:`urdf2links.integration.simulate.simulate`), sampled at OTHER's recorded times."""
     from urdf2links.integration.simulate import simulate
 
     scene = held_out_scene(model, joints, names, held, kp, kd)
