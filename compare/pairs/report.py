@@ -137,7 +137,9 @@ def _verdict(s: dict, failures) -> str:
             head += (f"<br><b>{e['count']}</b> values differ, dynamics equal ({_E(', '.join(e['kinds']))}): with every "
                      f"other difference undone, A and G agree to {fmt(e['A'])} and {fmt(e['G'])} (relative) at "
                      f"{e['states']} seeded states; these parameters are not seen by the equations of motion of this "
-                     "tree (only combinations of them are), and are not counted as dynamic.")
+                     "tree (only combinations of them are), and are not counted as dynamic."
+                     + "".join(f" They carry {fmt(v)} kg m^2 of <code>{_E(c)}</code>'s armature, which its listed "
+                               "armature difference accounts for." for c, v in (e.get("carried_armature") or {}).items()))
     cls = "box" if not diffs else ("box bad" if failures else "box warn")
     check = ""
     if failures is not None:
@@ -275,6 +277,11 @@ def pair_markdown(s: dict, *, title: str, failures=None) -> str:
         by = eff[term].get("explained_by")
         lines.append(f"- {term}: max relative difference {fmt_md(eff[term]['max_rel_difference'])}"
                      + (f", {_share(by['explains'])} explained by {by['kind']} of {by['urdf'] or by['mjcf']}" if by else ""))
+    e = (s.get("description_counts") or {}).get("dynamics_equal") or {}
+    if e.get("count"):
+        lines.append(f"- {e['count']} values differ, dynamics equal ({', '.join(e['kinds'])}): with every other "
+                     f"difference undone, A and G agree to {fmt_md(e['A'])} and {fmt_md(e['G'])} at {e['states']} "
+                     "seeded states (not seen by the equations of motion of this tree; not counted as dynamic)")
     if failures is not None:
         lines += ["", "Tolerances: " + ("pass" if not failures else "FAIL: " + "; ".join(failures))]
     lines += ["", f"Differences above rounding: {len(s['description_differences'])}. Order: {ORDER_WORDS}.", "",
