@@ -266,7 +266,8 @@ def test_a_real_mass_change_stays_dynamic(planted, tmp_path):
 def test_seeded_states_see_every_combination(planted):
     """Why 8 seeded states suffice (effects.unseen_group): the linear map from the links' H to A and G has the same
     rank at the 8 states ``compare`` evaluates as at 64 states, so a change of H unseen at those 8 is unseen at
-    every state (and so are the velocity terms, which follow from A)."""
+    every state (and so are the velocity terms, which follow from A). Measured: rank 45 of the 70 link parameters at
+    8 states and at 64. Planted wrong once: with 2 states the rank is 42 (1 state: 29), and the test fails."""
     from urdf2links.compare.pairs.effects import seeded_states
     from urdf2links.identification import ParameterSet, regressor
     from urdf2links.parsers.parts import parts_model, robot_parts
