@@ -88,8 +88,12 @@ def planted(tmp_path_factory):
     fixed, out = d / "fixed.urdf", d / "report"
     r = run_cli("identify", str(urdf), "--against", str(twin), "--write-urdf", str(fixed), "--out", str(out))
     assert r.returncode == 0, r.stderr
+    fixed_xml, out_xml = d / "fixed.xml", d / "report_mjcf"
+    rx = run_cli("identify", str(urdf), "--against", str(twin), "--write-mjcf", str(fixed_xml), "--out", str(out_xml))
+    assert rx.returncode == 0, rx.stderr
     return {"urdf": urdf, "twin": twin, "fixed": fixed, "out": out, "stdout": r.stdout,
-            "summary": json.loads((out / "identify.json").read_text())}
+            "summary": json.loads((out / "identify.json").read_text()), "fixed_xml": fixed_xml,
+            "summary_xml": json.loads((out_xml / "identify.json").read_text())}
 
 
 def _truth(twin) -> dict:
@@ -177,3 +181,128 @@ def test_compare_fixed_against_twin_shows_no_dynamic_difference(planted):
             assert abs(d.urdf_value - d.mjcf_value) <= 1e-6 * abs(d.mjcf_value)
         if d.kind == "friction":
             assert abs(d.urdf_value - d.mjcf_value) <= 0.02 * abs(d.mjcf_value)
+
+
+def _planted_part(d) -> bool:
+    return bool({d.urdf, d.mjcf} & (set(PLANTED_LINKS) | set(PLANTED_JOINTS)))
+
+
+def _dynamic(pc) -> list:
+    from urdf2links.compare.pairs.pair import DYNAMIC_KINDS
+
+    return [d for d in pc.differences if d.kind in DYNAMIC_KINDS and not (d.effect or {}).get("dynamics_equal")]
+
+
+def _joint_terms_recovered(d) -> bool:
+    """A planted damping back to 1e-6 relative, the frictionloss to 2% (the recovery bounds of the issue)."""
+    bound = {"damping": 1e-6, "friction": 0.02}.get(d.kind)
+    return bound is not None and abs(d.urdf_value - d.mjcf_value) <= bound * abs(d.mjcf_value)
+
+
+def test_compare_fixed_urdf_lists_no_dynamic_difference_in_the_planted_parts(planted):
+    """``compare FIXED.urdf --against TWIN``: the single links' masses, centres of mass and inertias that differ
+    form one group "values differ, dynamics equal" (with every other difference undone, A and G agree to rounding:
+    only their identifiable combinations are fixed by the motion), not counted as dynamic; what stays dynamic in
+    the planted parts is the armature a URDF cannot hold (explained so, and listed by identify as not written, with
+    ``--write-mjcf`` named as what writes it) and the damping and friction as recovered (their bounds).
+    Planted wrong once: with the armature-shaped part the inertias carry (panda_joint2's 1.8e-4 kg m^2) not taken
+    out of the group's residual, the group's A residual was 5.3e-5 > 1e-5 and the 21 inertial differences stayed
+    dynamic: this test failed."""
+    from urdf2links.compare.pairs.pair import compare_descriptions_of
+
+    pc = compare_descriptions_of(planted["fixed"], planted["twin"])
+    s = pc.summary()
+    eq = s["description_counts"]["dynamics_equal"]
+    assert eq["count"] >= 3 * len(PLANTED_LINKS) and set(eq["kinds"]) <= {"mass", "com", "inertia"}, eq
+    assert eq["A"] <= 1e-9 and eq["G"] <= 1e-9, eq           # measured 1.0e-11, 7.0e-12
+    not_written = {c["element"][6:]: c for c in planted["summary"]["changes"] if c["what"] == "armature"
+                   and not c["written"]}
+    for d in _dynamic(pc):
+        assert d.kind not in ("mass", "com", "inertia"), d.label()
+        if not _planted_part(d):
+            continue
+        if d.kind == "armature":
+            assert d.explanation and d.explanation.startswith("a URDF has no armature"), d.label()
+            assert d.urdf in not_written and "--write-mjcf" in not_written[d.urdf]["note"], d.label()
+        else:
+            assert _joint_terms_recovered(d), (d.label(), d.urdf_value, d.mjcf_value)
+    assert s["description_counts"]["dynamics"]["count"] == len(_dynamic(pc))
+
+
+def test_compare_fixed_mjcf_lists_no_dynamic_difference_in_the_planted_parts(planted):
+    """``identify ARM --against TWIN --write-mjcf FIXED.xml`` (a URDF description: its identified tree as MJCF,
+    armature included): ``compare FIXED.xml --against TWIN`` lists no armature difference, and no dynamic
+    difference in the planted parts but the damping and friction as recovered; A and G agree to 1e-9."""
+    from urdf2links.compare.pairs.pair import compare_descriptions_of
+
+    assert all(c["written"] for c in planted["summary_xml"]["changes"] if c["what"] == "armature")
+    pc = compare_descriptions_of(planted["fixed_xml"], planted["twin"])
+    eff = pc.summary()["description_effects"]["mapped"]
+    assert eff["A"]["max_rel_difference"] <= 1e-9 and eff["G"]["max_rel_difference"] <= 1e-9
+    for d in _dynamic(pc):
+        assert d.kind not in ("mass", "com", "inertia", "armature"), d.label()
+        if _planted_part(d):
+            assert _joint_terms_recovered(d), (d.label(), d.urdf_value, d.mjcf_value)
+
+
+def test_a_real_mass_change_stays_dynamic(planted, tmp_path):
+    """FIXED.urdf with panda_link5's mass x 1.01 (a real change, nothing compensates it): the inertial differences no
+    longer change nothing together, so no group "dynamics equal" is formed and panda_link5's mass is listed as a
+    dynamic difference (its effect on G above rounding)."""
+    from urdf2links.compare.pairs.effects import EFFECT_ROUNDING
+    from urdf2links.compare.pairs.pair import compare_descriptions_of
+
+    root = etree.fromstring(planted["fixed"].read_bytes())
+    mass = next(l for l in root.findall("link") if l.get("name") == "panda_link5").find("inertial/mass")
+    mass.set("value", repr(float(mass.get("value")) * 1.01))
+    heavier = tmp_path / "heavier.urdf"
+    heavier.write_text(etree.tostring(root, encoding="unicode"))
+    pc = compare_descriptions_of(heavier, planted["twin"])
+    assert pc.summary()["description_counts"]["dynamics_equal"]["count"] == 0
+    d = next(d for d in _dynamic(pc) if d.kind == "mass" and d.urdf == "panda_link5")
+    assert d.effect["changes_G"] > EFFECT_ROUNDING
+
+
+def test_seeded_states_see_every_combination(planted):
+    """Why 8 seeded states suffice (effects.unseen_group): the linear map from the links' H to A and G has the same
+    rank at the 8 states ``compare`` evaluates as at 64 states, so a change of H unseen at those 8 is unseen at
+    every state (and so are the velocity terms, which follow from A). Measured: rank 45 of the 70 link parameters at
+    8 states and at 64. Planted wrong once: with 2 states the rank is 42 (1 state: 29), and the test fails."""
+    from urdf2links.compare.pairs.effects import seeded_states
+    from urdf2links.identification import ParameterSet, regressor
+    from urdf2links.parsers.parts import parts_model, robot_parts
+
+    parts = robot_parts(planted["fixed"])
+    model = parts_model(parts).model
+    params = ParameterSet.from_model(model, joints=())
+    names = model.coordinate_names
+
+    def rank(Q):
+        n = len(names)
+        Z = np.zeros_like(Q)
+        rows = [regressor(params, Q, Z, Z)]                      # G
+        for k in range(n):                                        # the columns of A: Y(q, 0, e_k) - G
+            E = Z.copy()
+            E[:, k] = 1.0
+            rows.append(regressor(params, Q, Z, E) - rows[0])
+        Y = np.concatenate([r.reshape(-1, r.shape[-1]) for r in rows])
+        return int(np.linalg.matrix_rank(Y / np.maximum(np.abs(Y).max(axis=0), 1e-300), tol=1e-9))
+
+    eight = seeded_states(parts, names, set(names), states=8, seed=0)
+    many = seeded_states(parts, names, set(names), states=64, seed=1)
+    assert rank(eight) == rank(many) > 0
+
+
+def test_held_out_run_on_the_project_simulation(planted):
+    """The held-out validation's urdf2links runs are the project's simulation of a scene (validation.held_out_scene,
+    urdf2links.simulate at rtol 1e-10): the identified model stays within 2e-3 rad of OTHER's recording (measured
+    7.3e-4: what is left is MuJoCo's 1 ms Euler steps of the recording against a continuous run, O(dt)), ten times
+    closer than the description (2.0e-2); on MuJoCo, stepped as OTHER was, the identified model is OTHER to 1e-9.
+    Planted wrong once: without the identified damping as the scene's dampers the identified run was 4.2e-3 off
+    (fails the 2e-3 bound)."""
+    runs = {(v["model"], v["engine"]): v for v in planted["summary"]["validation"]}
+    after = max(runs["identified", "urdf2links"]["max_error"])
+    before = max(runs["description", "urdf2links"]["max_error"])
+    assert "project's simulation" in runs["identified", "urdf2links"]["note"]
+    assert after <= 2e-3 and after <= before / 10, (before, after)
+    assert max(runs["identified", "MuJoCo"]["max_error"]) <= 1e-9

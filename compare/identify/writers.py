@@ -7,7 +7,9 @@ H[:3, 3] / m``, ``S_C = H[:3, :3] - m c c^T`` and the inertia about the center o
 written as ``<inertial>`` with ``rpy="0 0 0"``. A joint's damping and Coulomb friction go to ``<dynamics>``
 (a negative value is written as 0, and its change says so). The armature has no URDF element: where the data cannot tell an
 armature from the links' inertias the change goes to the inertias (:func:`urdf_values`, a move along the
-unidentifiable directions, no torque changes); an armature identified by itself is listed as not written.
+unidentifiable directions, no torque changes); an armature identified by itself is listed as not written, and
+the change says that ``--write-mjcf OUT.xml`` writes it: for a URDF description that is the identified tree as MJCF
+(route 1), armature included (:func:`_write_tree_mjcf`).
 """
 
 from __future__ import annotations
@@ -143,7 +145,7 @@ def planned_changes(ident, values=None) -> tuple[list[Change], dict]:
             changes.append(Change(f"joint {params.owner[i]}", kind, float(f.described[i]), float(values[i]),
                                   written, "" if written else "a URDF has no armature element, and the links' "
                                   "inertias cannot carry this one (identified by itself, or only with an "
-                                  "inconsistent inertia)"))
+                                  "inconsistent inertia): --write-mjcf OUT.xml writes it (an MJCF holds armature)"))
         elif kind == "offset" and changed[i]:
             changes.append(Change(f"joint {params.owner[i]}", "offset", float(f.described[i]),
                                   float(values[i]), False, "a constant torque has no element in a description"))
@@ -210,15 +212,48 @@ def write_urdf(ident, out) -> list[Change]:
     return changes
 
 
+def _write_tree_mjcf(ident, out) -> list[Change]:
+    """A URDF (or xacro) DESCRIPTION's identified tree written as MJCF (route 1,
+    :func:`urdf2links.compare.mujoco_side.mjcf.mjcf_from_model`: the tree's frames, every link's identified ``H`` and
+    every joint's armature at full precision), each joint's identified ``damping`` and Coulomb friction as
+    ``frictionloss``: where a URDF cannot hold an armature, the MJCF does. The values are the identified ones
+    (no armature moved into the links); a negative armature, damping or friction is written as 0, its change says
+    so. The bodies and joints are named after the tree's links and coordinates."""
+    from ..mujoco_side.mjcf import mjcf_from_model
+
+    f = ident.fit
+    params = f.parameters
+    values = f.identified.copy()
+    arm = np.array([k == "armature" for k in params.kind])
+    values[arm] = np.maximum(values[arm], 0.0)
+    changes, _new_H = _clamped(*planned_changes(ident, values))
+    changes = [Change(c.element, c.what, c.before, c.after, True, "") if c.what == "armature" and not c.written
+               else c for c in changes]          # an MJCF holds armature
+    model = params.to_model(values)
+    root = etree.fromstring(mjcf_from_model(model, gravity=model.gravity_vector).xml.encode())
+    option = root.find("option")
+    flag = option.find("flag")
+    if flag is not None:
+        option.remove(flag)                 # route 1 switches damping and frictionloss off: the file has them
+    jv = params.joint_values(values)
+    for j in root.find("worldbody").iter("joint"):
+        name = j.get("name")
+        j.set("damping", _g(max(jv.get("damping", {}).get(name, 0.0), 0.0)))
+        j.set("frictionloss", _g(max(jv.get("friction", {}).get(name, 0.0), 0.0)))
+    Path(out).parent.mkdir(parents=True, exist_ok=True)
+    Path(out).write_text(etree.tostring(root, encoding="unicode") + "\n")
+    return changes
+
+
 def write_mjcf(ident, out) -> list[Change]:
-    """DESCRIPTION (an MJCF file) with the identified values written to ``out``: each carrying body's ``<inertial>``
+    """DESCRIPTION (an MJCF file; a URDF's identified tree: :func:`_write_tree_mjcf`) with the identified values written to ``out``: each carrying body's ``<inertial>``
     (``pos``, ``mass``, ``fullinertia`` about the centre of mass, no ``quat``; added when the body took its inertia
     from its geoms), each joint's ``damping``, ``frictionloss`` and ``armature`` set on the ``<joint>`` (over its
     defaults); every number at full precision. Raises ValueError naming the body or joint the file does not hold
     itself (an ``<include>``d part)."""
     pair = ident.pair
     if pair.parts.format != "mjcf":
-        raise ValueError(f"--write-mjcf: {pair.description} is not an MJCF file; use --write-urdf")
+        return _write_tree_mjcf(ident, out)
     changes, new_H = _clamped(*planned_changes(ident, urdf_values(ident.fit)))
     tree = etree.parse(str(pair.description), etree.XMLParser(remove_comments=False))
     root = tree.getroot()

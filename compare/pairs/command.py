@@ -50,6 +50,13 @@ def _headline(s: dict, label: str) -> None:
         print(f"  counts     {n['dynamics']['count']} change the dynamics (A {float(n['dynamics']['effect']['A']):.2e}, "
               f"G {float(n['dynamics']['effect']['G']):.2e}), {n['non_dynamic']['count']} do not, root pose "
               f"{n['root_pose']['count']}")
+        e = n.get("dynamics_equal") or {}
+        if e.get("count"):
+            print(f"  equal      {e['count']} values differ, dynamics equal ({', '.join(e['kinds'])}): with the others "
+                  f"undone, A and G agree to {float(e['A']):.1e}, {float(e['G']):.1e} at {e['states']} seeded states "
+                  "(not seen by the equations of motion of this tree; not counted as dynamic)"
+                  + "".join(f"; they carry {float(v):.3g} kg m^2 of {c}'s armature, which its listed armature difference "
+                            "accounts for" for c, v in (e.get("carried_armature") or {}).items()))
     print(f"  parts      {len(diffs)} difference(s) above rounding" + (f"; order: {ORDER_WORDS}" if diffs else "")
           + "".join(f"\n    {d['kind']:<10} {part_words(d)}: {float(d['difference']):.3g} {d['unit']}; effect on A, G: "
                     f"{effect_words(d)}" + (" (explained)" if d.get("explanation") else "") for d in diffs[:8])

@@ -33,7 +33,7 @@ from .context import PairContext
 from .differences import Difference, Side, side_model
 
 __all__ = ["evaluate_effects", "seeded_states", "Terms", "effect_size", "order_differences", "ORDER_WORDS",
-           "EFFECT_ROUNDING", "NOT_IN_A_G"]
+           "EFFECT_ROUNDING", "NOT_IN_A_G", "UNSEEN_CANDIDATES", "unseen_group"]
 
 
 def seeded_states(parts: RobotParts, coordinate_names, mapped: set, *, states: int = 8, seed: int = 0) -> np.ndarray:
@@ -113,7 +113,8 @@ class Terms:
         return {"A": dA / scale_A if scale_A > 0 else (0.0 if dA == 0 else np.inf),
                 "G": dG / scale_G if scale_G > 0 else (0.0 if dG == 0 else np.inf),
                 "worst_A": worst_A, "worst_G": worst_G, "scale_A": scale_A, "scale_G": scale_G,
-                "sq_A": sA, "sq_G": sG, "terms": (np.array(mapped_A), np.array(mapped_G), tuple(im))}
+                "sq_A": sA, "sq_G": sG, "terms": (np.array(mapped_A), np.array(mapped_G), tuple(im)),
+                "first_coordinates": tuple(iu)}
 
 
 def _home(parts: RobotParts, names) -> np.ndarray:
@@ -173,6 +174,70 @@ def _undo_all(terms: Terms, diffs: list[Difference], *, signs: bool) -> dict:
     return {"A": r["A"], "G": r["G"]}
 
 
+#: The groups of kinds tried, in turn, as "values differ, dynamics equal" (:func:`unseen_group`): the links'
+#: inertial values with the joints' armatures (an armature and the inertia of the link it turns can trade, E49),
+#: then the inertial values alone. ``A`` and ``G`` are linear in each link's ``H`` (E10, E85): only combinations
+#: of the ``H`` (the base parameters, E87) are seen by the equations of motion, so single values can differ while
+#: ``A`` and ``G`` agree.
+UNSEEN_CANDIDATES = (("mass", "com", "inertia", "armature"), ("mass", "com", "inertia"))
+
+
+def unseen_group(terms: Terms, diffs: list[Difference], *, signs: bool = True) -> dict | None:
+    """The largest group of differences (of the kinds of :data:`UNSEEN_CANDIDATES`, tried in turn, at least two not
+    at rounding alone) that together change neither ``A`` nor ``G`` beyond :data:`EFFECT_ROUNDING`: every other
+    difference undone in the second description, the terms still agree at every seeded state. None when there is
+    none, or when a difference outside the group that acts on ``A`` or ``G`` cannot be undone (then the group's own
+    effect cannot be told apart). ``{"indices", "kinds", "A", "G", "states"}``.
+
+    Why the seeded states suffice: ``A`` and ``G`` are linear in the links' ``H``; a change of the ``H`` that leaves
+    them equal at the states (to rounding) lies in the null space of that linear map at those states, and with
+    ``S`` random states (S (n(n+1)/2 + n) equations against 10 per link) that null space is the one of every state
+    (tests/test_identify_compare.py checks the ranks agree with 64 states), so ``A`` agrees everywhere, and with it
+    its derivatives: the velocity terms, which follow from ``A`` (E20), agree too."""
+    for kinds in UNSEEN_CANDIDATES:
+        group = [i for i, d in enumerate(diffs) if d.kind in kinds and d.undo is not None]
+        if sum(not (diffs[i].effect or {}).get("at_rounding") for i in group) < 2:
+            continue
+        rest = [d for i, d in enumerate(diffs) if i not in group]
+        if any(d.undo is None and d.kind not in NOT_IN_A_G and d.kind != "root_pose" for d in rest):
+            return None
+        r = _residual(terms, rest, [d.urdf for d in rest if d.kind == "armature"], signs=signs)
+        if r["A"] <= EFFECT_ROUNDING and r["G"] <= EFFECT_ROUNDING:
+            return {"indices": group, "kinds": sorted({diffs[i].kind for i in group}), "states": int(len(terms.Q)),
+                    **r}
+    return None
+
+
+def _residual(terms: Terms, rest: list[Difference], armature_joints: list, *, signs: bool) -> dict:
+    """A and G of the first description against the second with ``rest`` undone (relative, as :meth:`Terms.compare`),
+    less a constant diagonal of ``A`` on the coordinates of ``armature_joints`` (the first description's joints
+    whose armature differs, that difference undone in ``rest``): the inertias of a group may carry part of an
+    armature (a URDF cannot hold one, and ``identify --write-urdf`` moves what it can of one into the links, E49),
+    which the armature's difference, listed and dynamic, accounts for; that part is ``carried`` ({coordinate:
+    kg m^2})."""
+    side = Side(terms.ctx.mjcf)
+    for d in sorted(rest, key=lambda d: _UNDO_ORDER.get(d.kind, 3)):
+        if d.undo is not None:
+            side = d.undo(side)
+    r = terms.compare(side, signs=signs)
+    Am, Gm, _im = r["terms"]
+    iu = np.array(r["first_coordinates"], dtype=int)
+    if not iu.size:
+        return {"A": r["A"], "G": r["G"], "carried": {}}
+    dA = terms.A[:, iu][:, :, iu] - Am
+    dG = terms.G[:, iu] - Gm
+    carried = {}
+    joints = {j.name: j.coordinates for j, _b in terms.ctx.urdf.joints}
+    for name in armature_joints:
+        for c in joints.get(name, ()):
+            k = [terms.names[i] for i in iu].index(c) if c in [terms.names[i] for i in iu] else None
+            if k is not None:
+                carried[c] = float(np.mean(dA[:, k, k]))
+                dA[:, k, k] -= carried[c]
+    return {"A": float(np.max(np.abs(dA))) / r["scale_A"] if r["scale_A"] > 0 else r["A"],
+            "G": float(np.max(np.abs(dG))) / r["scale_G"] if r["scale_G"] > 0 else r["G"], "carried": carried}
+
+
 def _summary(base, rows, diffs, label) -> dict:
     out = {"A": {"max_rel_difference": base["A"], "largest": base["worst_A"]},
            "G": {"max_rel_difference": base["G"], "largest": base["worst_G"]}, "coordinates": label}
@@ -211,6 +276,11 @@ def evaluate_effects(ctx: PairContext, diffs: list[Difference], *, states: int =
         e["undoable"] = d.undo is not None
         e["at_rounding"] = _at_rounding(d, e)
         d.effect = e
+    group = unseen_group(terms, diffs)
+    out["dynamics_equal"] = None if group is None else {k: v for k, v in group.items() if k != "indices"} | {
+        "count": len(group["indices"])}
+    for i in (group or {}).get("indices", ()):
+        diffs[i].effect["dynamics_equal"] = True
     return out
 
 
@@ -242,6 +312,8 @@ def effect_size(d: Difference, effects: dict | None = None) -> float:
     type, a missing joint or link, a coupling: they cannot be undone alone): the order of :func:`order_differences`.
     ``effects`` is not needed (kept for callers that pass it)."""
     e = d.effect or {}
+    if e.get("dynamics_equal"):
+        return 0.0                # with the others of its group it changes neither A nor G (unseen_group)
     values = [e.get(k) for k in ("changes_A", "changes_G", "as_named_changes_A", "as_named_changes_G")]
     best = max([float(v) for v in values if v is not None] + [0.0])
     return 0.0 if best <= EFFECT_ROUNDING else best

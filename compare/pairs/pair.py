@@ -33,12 +33,19 @@ from .effects import evaluate_effects, order_differences
 from .explanations import explain
 from .mapping import JointMapping
 
-__all__ = ["PairComparison", "compare_descriptions_of", "TERM_KEYS", "check_tolerances", "exceedances", "DYNAMIC_KINDS"]
+__all__ = ["PairComparison", "compare_descriptions_of", "TERM_KEYS", "check_tolerances", "exceedances", "DYNAMIC_KINDS",
+           "DYNAMICS_EQUAL_WORDS"]
 
 #: The kinds that change the dynamics (A, G, the joint forces); the others (limits, effort, velocity, frames,
 #: collision geometry) do not, and ``root_pose`` is counted apart.
 DYNAMIC_KINDS = ("mass", "com", "inertia", "origin", "axis", "armature", "damping", "stiffness", "friction", "type",
                  "joint_missing", "link_missing", "constraint", "coupling")
+
+#: What a difference of the group "values differ, dynamics equal" is (effects.unseen_group): not counted as a
+#: dynamic difference.
+DYNAMICS_EQUAL_WORDS = ("values differ, dynamics equal: with the others of the group they change neither A nor G "
+                        "beyond rounding at the seeded states (these parameters are not seen by the equations of "
+                        "motion of this tree: only combinations of them are)")
 
 #: Tolerances a pair may give besides the kinds: the relative differences of ``A`` and ``G`` (mapped).
 TERM_KEYS = ("A", "G")
@@ -79,8 +86,10 @@ class PairComparison:
     def summary(self) -> dict:
         """The JSON of the description half (module doc)."""
         counts = {k: sum(d.kind == k for d in self.differences) for k in KINDS}
-        dyn = [d for d in self.differences if d.kind in DYNAMIC_KINDS]
+        equal = [d for d in self.differences if (d.effect or {}).get("dynamics_equal")]
+        dyn = [d for d in self.differences if d.kind in DYNAMIC_KINDS and d not in equal]
         eff = self.effects["mapped"]
+        group = self.effects.get("dynamics_equal") or {}
         head = {"dynamics": {"count": len(dyn), "kinds": sorted({d.kind for d in dyn}),
                              "effect": {"A": eff["A"]["max_rel_difference"], "G": eff["G"]["max_rel_difference"],
                                         "after_undoing_all": dict(self.effects["after_undoing_all"])}},
@@ -88,6 +97,11 @@ class PairComparison:
                                              for d in self.differences),
                                 "kinds": sorted({d.kind for d in self.differences
                                                  if d.kind not in DYNAMIC_KINDS and d.kind != "root_pose"})},
+                "dynamics_equal": {"count": len(equal), "kinds": sorted({d.kind for d in equal}),
+                                   "states": group.get("states"), "A": group.get("A"), "G": group.get("G"),
+                                   "carried_armature": {c: v for c, v in (group.get("carried") or {}).items()
+                                                        if abs(v) > 1e-9},
+                                   "what": DYNAMICS_EQUAL_WORDS},
                 "root_pose": {"count": counts.get("root_pose", 0),
                               "floating": bool(self.mapping.root and all(self.mapping.root.floating))}}
         return {

@@ -71,6 +71,8 @@ def effect_words(d: dict) -> str:
     e = d.get("effect") or {}
     if d.get("kind") in NOT_IN_A_G:
         return "none: not a term of A or G"
+    if e.get("dynamics_equal"):
+        return "values differ, dynamics equal (with the others of its group: A and G agree to rounding)"
     if d.get("kind") == "root_pose" and e.get("at_rounding") is True and not e.get("undoable", True):
         return "none: a floating root's pose is a state"
     if e.get("at_rounding") is True:
@@ -130,6 +132,14 @@ def _verdict(s: dict, failures) -> str:
                  f"({_E(', '.join(n['non_dynamic']['kinds']) or 'limits, frames, collision geometry')}); root pose: <b>{n['root_pose']['count']}</b>"
                  + (" (a floating root's pose at home: a state)" if n['root_pose']['floating'] and
                     n['root_pose']['count'] else "") + ".")
+        e = n.get("dynamics_equal") or {}
+        if e.get("count"):
+            head += (f"<br><b>{e['count']}</b> values differ, dynamics equal ({_E(', '.join(e['kinds']))}): with every "
+                     f"other difference undone, A and G agree to {fmt(e['A'])} and {fmt(e['G'])} (relative) at "
+                     f"{e['states']} seeded states; these parameters are not seen by the equations of motion of this "
+                     "tree (only combinations of them are), and are not counted as dynamic."
+                     + "".join(f" They carry {fmt(v)} kg m^2 of <code>{_E(c)}</code>'s armature, which its listed "
+                               "armature difference accounts for." for c, v in (e.get("carried_armature") or {}).items()))
     cls = "box" if not diffs else ("box bad" if failures else "box warn")
     check = ""
     if failures is not None:
@@ -267,6 +277,11 @@ def pair_markdown(s: dict, *, title: str, failures=None) -> str:
         by = eff[term].get("explained_by")
         lines.append(f"- {term}: max relative difference {fmt_md(eff[term]['max_rel_difference'])}"
                      + (f", {_share(by['explains'])} explained by {by['kind']} of {by['urdf'] or by['mjcf']}" if by else ""))
+    e = (s.get("description_counts") or {}).get("dynamics_equal") or {}
+    if e.get("count"):
+        lines.append(f"- {e['count']} values differ, dynamics equal ({', '.join(e['kinds'])}): with every other "
+                     f"difference undone, A and G agree to {fmt_md(e['A'])} and {fmt_md(e['G'])} at {e['states']} "
+                     "seeded states (not seen by the equations of motion of this tree; not counted as dynamic)")
     if failures is not None:
         lines += ["", "Tolerances: " + ("pass" if not failures else "FAIL: " + "; ".join(failures))]
     lines += ["", f"Differences above rounding: {len(s['description_differences'])}. Order: {ORDER_WORDS}.", "",
