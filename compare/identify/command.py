@@ -35,6 +35,18 @@ def design_command(args) -> int:
     return 0
 
 
+def _print_written(path, changes, new_H) -> None:
+    """The changes written to ``path``, and a warning where a body's new H is not positive definite."""
+    print(f"wrote {path}: {len(changes)} change(s)")
+    for c in changes:
+        print("  " + c.line())
+    bad = inconsistent_bodies(new_H)
+    if bad:
+        print(f"urdf2links identify: warning: {path}: the inertia of {', '.join(bad)} is not positive definite "
+              "(physically inconsistent: MuJoCo refuses the file); the fit kept the unidentifiable parameters at "
+              "the description's values without the consistency constraint", file=sys.stderr)
+
+
 def identify_command(args) -> int:
     """Record, fit, write the report (and the corrected URDF); print the changes and the residuals."""
     if args.design:
@@ -45,11 +57,12 @@ def identify_command(args) -> int:
     seeds = tuple(range(args.seed, args.seed + args.runs))
     ident = identify(args.file, args.against, seeds=seeds, held_out_seed=args.seed + 100, t_end=args.t_end,
                      band=args.band, explicit_map=parse_map(args.map))
-    changes = []
+    written = {}       # path -> (changes, the vector written): --write-urdf and --write-mjcf may both be given
     if args.write_urdf:
-        changes = write_urdf(ident, args.write_urdf)
-    elif args.write_mjcf:
-        changes = write_mjcf(ident, args.write_mjcf)
+        written[args.write_urdf] = (write_urdf(ident, args.write_urdf), urdf_values(ident.fit))
+    if args.write_mjcf:
+        written[args.write_mjcf] = (write_mjcf(ident, args.write_mjcf), ident.fit.identified)
+    changes = [c for ch, _ in written.values() for c in ch]
     out = Path(args.out) if args.out else DEFAULT_OUT / "identify" / Path(args.file).stem
     s = write_outputs(ident, out, changes)
     f = ident.fit
@@ -62,18 +75,9 @@ def identify_command(args) -> int:
     for v in ident.validation:
         print(f"  held-out run, {v.label} on {v.engine}: " + (f"max |q - q_OTHER| {np.max(v.error):.3e}"
                                                               if v.error is not None else v.note))
-    written = args.write_urdf or args.write_mjcf
-    if written:
-        print(f"wrote {written}: {len(changes)} change(s)")
-        for c in changes:
-            print("  " + c.line())
-        _, new_H = planned_changes(ident, urdf_values(ident.fit))
-        bad = inconsistent_bodies(new_H)
-        if bad:
-            print(f"urdf2links identify: warning: {written}: the inertia of {', '.join(bad)} is not positive definite "
-                  "(physically inconsistent: MuJoCo refuses the file); the fit kept the unidentifiable parameters at "
-                  "the description's values without the consistency constraint", file=sys.stderr)
-    else:
+    for path, (ch, values) in written.items():
+        _print_written(path, ch, planned_changes(ident, values)[1])
+    if not written:
         flag = "--write-mjcf" if ident.pair.parts.format == "mjcf" else "--write-urdf"
         print(f"{int(f.changed.sum())} parameter(s) changed ({flag} OUT writes them)")
     print(f"report: {out / 'report.html'}")
