@@ -132,7 +132,7 @@ def constraint_stats(plan, t, Y, *, initial, method: str) -> dict:
             gen[i] = J[keep].T @ lam[i]
             res[i], rate[i] = np.max(np.abs(phi)), np.max(np.abs(J @ Y[i, n:2 * n]))
         Xr = rhs.X
-        st = Xr[xc + lay[11]:xc + lay[11] + 6]
+        st = Xr[xc + lay[11]:xc + lay[11] + 8]
         ev = Xr[xc + lay[12]:xc + lay[12] + 3 * int(min(st[2], 32))].reshape(-1, 3)
         stats = {"min_schur_pivot": float(st[0]), "min_schur_pivot_t": float(st[1]), "max_step_drift": float(st[4]),
                  "events": [{"t": float(e[0]), "row": cset.rows[int(e[1])], "pivot": float(e[2]),

@@ -22,7 +22,7 @@ actuators' :data:`~urdf2links.scenes.scene_arrays.KA` numbers.
 Scratch (:func:`x_layout`, from ``CX``): Phi, gamma (m,), J (m, n), Y = A^-1 J^T stored as rows (m, n), S and
 its pivoted factor (m, m), lambda, the Schur right-hand side, the rows solved and at the evaluation before (m,),
 a vector (n,), the statistics (smallest pivot, its time, events recorded, the failing row, the largest
-|Phi| before a projection, projections) and :data:`KEV`
+|Phi| before a projection, projections, 1 while a projection evaluates) and :data:`KEV`
 events (time, row, pivot), the pivot order (m,), one point's Jacobian rows in the tree's coordinates (3, nt).
 """
 
@@ -61,7 +61,7 @@ def x_layout(m, n, nt):
     prev = act + m
     tmp = prev + m
     stats = tmp + max(n, 9)     # a vector (n,), or one point's r, v, a (9,)
-    events = stats + 6
+    events = stats + 8
     perm = events + 3 * KEV
     jt = perm + m
     size = jt + 3 * nt
@@ -78,7 +78,7 @@ def reset_constraint_stats(SI, X):
     m, n, nt = int(SI[c0 + CM]), int(SI[0]), int(SI[1])
     lay = x_layout(m, n, nt)
     xc = int(SI[c0 + CX])
-    X[xc + lay[11]:xc + lay[11] + 6] = (np.inf, 0.0, 0.0, -1.0, 0.0, 0.0)
+    X[xc + lay[11]:xc + lay[11] + 8] = (np.inf, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0)
     X[xc + lay[9]:xc + lay[9] + m] = 0.0
 
 
@@ -192,6 +192,6 @@ def change_point_error(plan, t: float, y, row: int):
         return DynamicsError(f"{e} (the scene stops here: [constraints] change_point = \"stop\"; \"continue\" "
                              "drops the row there and goes on)")
     return DynamicsError(f"{where}: the constraint rows {cset.rows[row]} are not independent here (a pivot of "
-                         "J A^-1 J^T scaled to a unit diagonal at or below 1e-12): a singular configuration of "
+                         "J A^-1 J^T at or below 1e-12 of its largest diagonal): a singular configuration of "
                          "the loop, a change point; the scene stops here ([constraints] change_point = \"stop\"; "
                          "\"continue\" drops the row there and goes on)")

@@ -38,7 +38,8 @@ from .scene_inputs import fn_eval
 
 __all__ = ["SCHUR_PIVOT", "FAIL_BASE", "tendon_forces", "constraint_terms", "kkt", "schur_correction", "a_solve"]
 
-SCHUR_PIVOT = 1e-12     # a pivot of S scaled to a unit diagonal at or below this: the row is dependent there
+SCHUR_PIVOT = 1e-12     # a pivot of S at or below this fraction of its largest diagonal: the row is dependent there
+CHANGE_POINT_PIVOT = 1e-12  # the same with change_point = "continue": the row is dropped there
 FAIL_BASE = 1 << 40     # the right-hand side's return value for a constraint row that stops the run: + row
 
 
@@ -283,10 +284,10 @@ def constraint_terms(tree, scene, y):
 
 @one_signature
 @kernel
-def _pivoted_cholesky(X, xl, xd, xperm, r, m):
+def _pivoted_cholesky(X, xl, xd, xperm, r, m, tol):
     """``P D S D P^T = L L^T`` in place (r, r) with row stride ``m`` at ``X[xl:]`` (E77): the largest diagonal
-    left first; stops at a pivot at or below :data:`SCHUR_PIVOT`. Swaps the order ``X[xperm:]`` and the
-    scales ``X[xd:]`` with the rows. Returns ``(rank, smallest pivot, the pivot where it stopped)``."""
+    left first; stops at a pivot at or below ``tol``. Swaps the order ``X[xperm:]`` and the scales ``X[xd:]``
+    with the rows. Returns ``(rank, smallest pivot, the pivot where it stopped)``."""
     smallest = np.inf
     for j in range(r):
         p = j
@@ -305,7 +306,7 @@ def _pivoted_cholesky(X, xl, xd, xperm, r, m):
         piv = X[xl + j * m + j]
         if piv < smallest:
             smallest = piv
-        if not piv > SCHUR_PIVOT:
+        if not piv > tol:
             return j, smallest, piv
         s = np.sqrt(piv)
         X[xl + j * m + j] = s
@@ -323,8 +324,11 @@ def _pivoted_cholesky(X, xl, xd, xperm, r, m):
 @one_signature
 @kernel
 def _events(SI, X, c0, m, xact, xprev, xst, xev, keep, t, piv):
-    """A row solved before and dropped now: an event ``(t, row, pivot)`` (the first :data:`KEV` kept, all
-    counted)."""
+    """A row solved at the accepted step before and dropped at this one: an event ``(t, row, pivot)`` (the
+    first :data:`KEV` kept, all counted). Only the evaluations of the projection after an accepted step count
+    (``X[xst + 6]`` set): trial stages near a change point would flicker."""
+    if X[xst + 6] == 0.0:
+        return
     for k in range(m):
         dropped = 1.0 if (SI[keep + k] != 0 and X[xact + k] == 0.0) else 0.0
         if dropped != 0.0 and X[xprev + k] == 0.0:
@@ -375,13 +379,15 @@ def kkt(tree, scene, t, y, out, coupled):
                 s += X[xj + ka * n + i] * X[xy + kb * n + i]
             X[xl + a * m + b] = s
             X[xl + b * m + a] = s
+    big = 0.0      # the pivots compare with S's largest diagonal (a row whose J vanishes is dependent too)
     for a in range(r):
-        d = X[xl + a * m + a]
-        X[xs + a] = 1.0 / np.sqrt(d) if d > 0.0 else 0.0
-    for a in range(r):
-        for b in range(r):
-            X[xl + a * m + b] *= X[xs + a] * X[xs + b]
-    rank, smallest, piv = _pivoted_cholesky(X, xl, xs, xperm, r, m)
+        X[xs + a] = 1.0
+        big = max(big, X[xl + a * m + a])
+    tol = (SCHUR_PIVOT if SI[c0 + CMODE] == 1 else CHANGE_POINT_PIVOT) * big
+    rank, smallest, piv = _pivoted_cholesky(X, xl, xs, xperm, r, m, tol)
+    if big > 0.0:
+        smallest /= big
+        piv /= big
     if smallest < X[xst]:
         X[xst] = smallest
         X[xst + 1] = t

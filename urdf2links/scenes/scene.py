@@ -123,6 +123,7 @@ class Scene:
     """``[[constraint]]`` blocks (:mod:`urdf2links.scenes.constraints`; issue 36)."""
     file_constraints: bool = False    # [constraints] from_file: an MJCF file's own equalities and fixed tendons act
     mimic_constraints: bool = False
+    change_point: str = "continue"    # [constraints] change_point (issue 45): "continue" drops the row there, "stop"
     """``[constraints] mimic``: a URDF's ``<mimic>`` joints as exact joint constraints (E70)."""
     contacts: tuple = ()          # [[contact]] blocks (issue 37): urdf2links.scenes.contact.ContactSpec
     expected_stop: ExpectedStop | None = None     # [expect]: a hard case that stops by design (issue 42)

@@ -126,7 +126,10 @@ def project(t, y, f, args, counters):
     dq = np.empty(n)
     last = np.inf
     for it in range(PROJECTION_MAXITER + 1):
-        if not evaluate(t, y, f, args, counters):
+        X[xst + 6] = 1.0 if it == 0 else 0.0      # the change-point events of accepted steps only
+        ok = evaluate(t, y, f, args, counters)
+        X[xst + 6] = 0.0
+        if not ok:
             return False
         res = 0.0
         for k in range(m):
