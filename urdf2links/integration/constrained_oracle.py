@@ -144,7 +144,7 @@ def simulate_interpreted(plan, run, q, qd, *, progress=None, max_wall=None, max_
     """The run of a plan with constraints (module doc) -> :class:`~urdf2links.integration.trajectory.Trajectory`."""
     started, compiled0 = compilation.clock(), compilation.seconds()    # numba's compilation left out (one clock)
     rhs = ConstrainedRHS(plan)
-    method = check_constrained_method(run, rhs.where)      # refused before any work: the method, scene, accepted
+    method = check_constrained_method(run, rhs.where, oracle=True)      # refused before any work: the method, scene, accepted
     model, n = plan.model, plan.model.n
     y, initial = _initial(rhs, np.asarray(q, float), np.asarray(qd, float))
     t_eval = np.linspace(0.0, run.t_end, max(run.samples, 2))

@@ -34,6 +34,7 @@ from ..scenes.scene import RunSettings, Scene
 from ..scenes.scene_checks import check_run
 from .charts import integrate_charted, link_poses
 from .constrained import constraint_stats, initial_state, project_samples
+from .constrained_steps import check_constrained_method
 from .trajectory import TIMED_REGION, Trajectory
 
 __all__ = ["Trajectory", "simulate", "Progress", "warm_up", "record_compilation", "Compilation", "TIMED_REGION",
@@ -79,6 +80,7 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
         return _trajectory(plan, run, res, started=started, compiled0=compiled0, max_wall=max_wall)
     # issue 45: constraints and fixed tendons in the compiled loops (E72)-(E77): the start projected, every
     # accepted step projected inside the loops, the samples projected here (integration.constrained)
+    check_constrained_method(run, str(scene.path or scene.name))     # refused by name before any work
     y0, initial = initial_state(plan, q, qd)
     res = _integrate(plan, run, y0, progress=progress, max_wall=max_wall, max_steps=max_steps)
     project_samples(plan, res.t, res.y)
@@ -102,6 +104,7 @@ def _constrained_trajectory(plan, run, res, initial, *, started, compiled0, max_
     info = constraint_stats(plan, traj.t, np.c_[traj.q, traj.qd, traj.energy["work"]], initial=initial, method=method)
     traj.stats["constraints"] = info
     traj.stats["integrator"] = f"{run.method}+projection"
+    traj.stats["scene_method"] = plan.scene.run.method
     traj.stats["wall_time"] = res.wall_time
     return traj
 
