@@ -71,8 +71,7 @@ def test_auto_runs_its_stretches_compiled_and_says_so(crank):
 def test_radau5_runs_projected(crank):
     """Issue 45: Radau5 (refused before: its Newton matrices did not follow the projected state) runs in the
     compiled loop with the projection after every step: on the loop to rounding (1e-12) and within 1e-7 rad
-    of DOP853 at 1e-12 (Radau5 at rtol 1e-10, order 5; measured below 1e-8). Planted: Radau5 without the
-    projection (the open tree's right-hand side) would not keep |Phi| below 1e-12."""
+    of DOP853 at 1e-12 (Radau5 at rtol 1e-10, order 5)."""
     plan, ref = crank
     tr = simulate(plan, t_end=T_END, samples=11, progress=False, method="Radau5", rtol=1e-10, atol=1e-10)
     assert tr.stats["method"] == "Radau5" and tr.stats["njev"] > 0
