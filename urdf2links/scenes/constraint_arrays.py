@@ -105,16 +105,16 @@ def _lengths(c, n):
     return u1, u2, c.coord2 >= 0
 
 
-def constraint_arrays(plan, tendon_fn, *, sf_at: int, x_at: int) -> tuple[np.ndarray, np.ndarray]:
+def constraint_arrays(plan, tendon_fn, *, sf_at: int, x_at: int, rows: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """``(int block, float block)`` of the plan's constraints (module doc); ``tendon_fn`` the tendon actuators'
     control functions' indices, ``sf_at`` where the float block will start in ``SF``, ``x_at`` where the
-    constraints' scratch starts in ``X``."""
+    constraints' scratch starts in ``X``; ``rows`` False: the fixed tendons alone (no constraint row)."""
     from .scene_arrays import KA
 
     closure, model = plan.constraints, plan.model
     n, nt = model.n, model.tree.n
-    cons = closure.cset.constraints
-    m = closure.cset.m
+    cons = closure.cset.constraints if rows else ()
+    m = closure.cset.m if rows else 0
     moves = _moves(model)
     ints, floats, recs = [], [], []
     row = 0

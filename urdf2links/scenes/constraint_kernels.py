@@ -1,5 +1,5 @@
 """The constrained right-hand side compiled (issue 45): fixed tendons (E76), constraint terms (E71), the KKT
-block elimination (E72) with a pivoted Schur factorisation (E77), and the pieces the projection (E74) reuses.
+block elimination (E72) with a pivoted Schur factorisation (E90), and the pieces the projection (E74) reuses.
 
 Called from :func:`urdf2links.scenes.scene_kernels._rhs` behind its ``constraints`` marker, after the free
 solve: ``out[n:2n]`` holds ``q''_free = A^-1 f`` and the tree's scratch ``W`` the kinematics pass of the
@@ -12,7 +12,7 @@ coordinates). Nothing is computed twice:
 - :func:`constraint_terms`: ``Phi``, ``Phi_q``, ``gamma`` (E68)-(E71) from the pass already in ``W`` (the
   linear accelerations carry ``-g``: a point's ``a_0`` gets ``+g`` back, E32);
 - :func:`kkt`: ``Y = A^-1 J^T`` (m solves with A's factor), ``S = J Y``, scaled to a unit diagonal and
-  factorised by a Cholesky with diagonal pivoting (E77); ``lambda = S^-1 (-gamma - J q''_free)``,
+  factorised by a Cholesky with diagonal pivoting (E90); ``lambda = S^-1 (-gamma - J q''_free)``,
   ``q'' = q''_free + Y lambda`` (E72). A pivot at or below :data:`SCHUR_PIVOT` (a row dependent on the solved
   ones here: a change point of the loop) either drops the rows left (``[constraints] change_point =
   "continue"``; an event (t, row, pivot) is recorded when a row starts being dropped) or fails the
@@ -285,7 +285,7 @@ def constraint_terms(tree, scene, y):
 @one_signature
 @kernel
 def _pivoted_cholesky(X, xl, xd, xperm, r, m, tol):
-    """``P D S D P^T = L L^T`` in place (r, r) with row stride ``m`` at ``X[xl:]`` (E77): the largest diagonal
+    """``P D S D P^T = L L^T`` in place (r, r) with row stride ``m`` at ``X[xl:]`` (E90): the largest diagonal
     left first; stops at a pivot at or below ``tol``. Swaps the order ``X[xperm:]`` and the scales ``X[xd:]``
     with the rows. Returns ``(rank, smallest pivot, the pivot where it stopped)``."""
     smallest = np.inf

@@ -148,9 +148,10 @@ def _blocks(plan):
     return sizes, ints, floats, more_sizes, more_ints, more_floats, tendon_fn
 
 
-def compile_scene(plan, *, constraints: bool = True) -> tuple[np.ndarray, np.ndarray]:
+def compile_scene(plan, *, constraints: bool = True, rows: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """``(SI, SF)`` of a :class:`~urdf2links.scenes.plan.Plan` (see the module doc); ``constraints`` False: the
-    free scene, without the constraints' and tendons' block (the oracle's free forces)."""
+    free scene, without the constraints' and tendons' block (the oracle's free forces); ``rows`` False: the
+    fixed tendons kept, the constraint rows left out (the scene with its constraints removed, for benchmarks)."""
     sizes, ints, floats, more_sizes, more_ints, more_floats, tendon_fn = _blocks(plan)
     ints = [np.asarray(a, dtype=np.int64).ravel() for a in ints + more_ints]
     floats = [np.asarray(a, dtype=float).ravel() for a in floats + more_floats]
@@ -174,7 +175,7 @@ def compile_scene(plan, *, constraints: bool = True) -> tuple[np.ndarray, np.nda
     if constraints and getattr(plan, "constraints", None) is not None:     # issue 45: the constraints' block, after every other
         from .constraint_arrays import CX_SIZE, constraint_arrays
 
-        ci, cf = constraint_arrays(plan, tendon_fn, sf_at=SF.size, x_at=head_x)
+        ci, cf = constraint_arrays(plan, tendon_fn, sf_at=SF.size, x_at=head_x, rows=rows)
         SI[S_CON] = SI.size
         SI[S_XSIZE] = head_x + int(ci[CX_SIZE])
         SI, SF = np.concatenate([SI, ci]), np.concatenate([SF, cf])

@@ -361,10 +361,11 @@ class CompiledScene:
     compiled integration loops (:mod:`urdf2links.integration.loops`). A failing pivot raises the model's named
     :class:`~urdf2links.errors.DynamicsError`."""
 
-    def __init__(self, plan, *, constraints: bool = True):
+    def __init__(self, plan, *, constraints: bool = True, rows: bool = True):
         self.plan = plan
         model = plan.model
-        self.SI, self.SF = compile_scene(plan, constraints=constraints)   # False: the free scene (issue 45)
+        # issue 45: constraints False: the free scene; rows False: its fixed tendons without the constraint rows
+        self.SI, self.SF = compile_scene(plan, constraints=constraints, rows=rows)
         self.I, self.F = model.compiled              # the tree flattened once, by the model
         self.W = np.zeros(int(self.I[W_SIZE]))
         self.X = np.zeros(int(self.SI[S_XSIZE]))
