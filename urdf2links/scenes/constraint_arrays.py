@@ -17,7 +17,7 @@ control's function index, its flags (ctrlrange, forcerange).
 Float block: per constraint ``KCF + 2 n``: point1, point2 (3,), frame1, frame2 (9,) row-major, the polynomial
 (5,), ref1, ref2, the two lengths' coefficients u1, u2 (n,) (a joint row: unit vectors); per tendon ``n + 4``:
 its coefficients c (n,), stiffness, damping, the spring's dead band (l_a, l_b); per tendon actuator the
-actuators' :data:`~urdf2links.scenes.scene_arrays.KA` numbers.
+actuators' :data:`KA` numbers.
 
 Scratch (:func:`x_layout`, from ``CX``): Phi, gamma (m,), J (m, n), Y = A^-1 J^T stored as rows (m, n), S and
 its pivoted factor (m, m), lambda, the Schur right-hand side, the rows solved and at the evaluation before (m,),
@@ -31,10 +31,13 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["constraint_arrays", "x_layout", "KCH", "KCI", "KCF", "KEV", "CM", "CNC", "CNT", "CNA", "CMODE", "CX",
+__all__ = ["S_CON", "S_XSIZE", "KA", "constraint_arrays", "x_layout", "KCH", "KCI", "KCF", "KEV", "CM", "CNC", "CNT", "CNA", "CMODE", "CX",
            "CX_SIZE", "CF", "CKEEP", "CREC", "CACT", "CNPOINT", "KIND_CONNECT", "KIND_WELD", "KIND_POLY", "MODES",
            "reset_constraint_stats", "set_keep", "kept", "change_point_error"]
 
+(S_CON, S_XSIZE) = (40, 41)    # the scene's SI header slots (urdf2links.scenes.scene_arrays): this block's start,
+                               # the scratch's size
+KA = 9                         # floats per actuator (scene_arrays' actuators and the tendons' here)
 (CM, CNC, CNT, CNA, CMODE, CX, CX_SIZE, CF, CKEEP, CREC, CACT, CNPOINT) = range(12)
 KCH = 12
 KCI = 5          # ints per constraint before its two masks (nt,) each
@@ -70,8 +73,6 @@ def x_layout(m, n, nt):
 
 def reset_constraint_stats(SI, X):
     """A run's start in the scratch ``X``: no smallest pivot yet (inf), no event, no row dropped before."""
-    from .scene_arrays import S_CON
-
     c0 = int(SI[S_CON])
     if c0 <= 0:
         return
@@ -109,8 +110,6 @@ def constraint_arrays(plan, tendon_fn, *, sf_at: int, x_at: int, rows: bool = Tr
     """``(int block, float block)`` of the plan's constraints (module doc); ``tendon_fn`` the tendon actuators'
     control functions' indices, ``sf_at`` where the float block will start in ``SF``, ``x_at`` where the
     constraints' scratch starts in ``X``; ``rows`` False: the fixed tendons alone (no constraint row)."""
-    from .scene_arrays import KA
-
     closure, model = plan.constraints, plan.model
     n, nt = model.n, model.tree.n
     cons = closure.cset.constraints if rows else ()
@@ -154,8 +153,6 @@ def constraint_arrays(plan, tendon_fn, *, sf_at: int, x_at: int, rows: bool = Tr
 
 def set_keep(SI, keep) -> None:
     """The rows solved (E73): ``keep`` the indices of the independent rows; the others left out."""
-    from .scene_arrays import S_CON
-
     c0 = int(SI[S_CON])
     m = int(SI[c0 + CM])
     flags = np.zeros(m, np.int64)
@@ -165,8 +162,6 @@ def set_keep(SI, keep) -> None:
 
 def kept(SI) -> np.ndarray:
     """The rows solved (E73) as flags (m,) of ints."""
-    from .scene_arrays import S_CON
-
     c0 = int(SI[S_CON])
     m = int(SI[c0 + CM])
     return SI[c0 + SI[c0 + CKEEP]:c0 + SI[c0 + CKEEP] + m].copy()

@@ -18,6 +18,7 @@ from collections import namedtuple
 
 import numpy as np
 
+from .constraint_arrays import CX_SIZE, KA, S_CON, S_XSIZE, constraint_arrays
 from .contact import contact_arrays
 from .functions import Constant, Sines, Table
 
@@ -37,9 +38,9 @@ S_ACT_PRM = 36                                      # per actuator: gain, b0, b1
 (S_NCONTACT, S_CONTACT_LINK, S_CONTACT_DATA) = range(37, 40)
 # issue 45: constraints and fixed tendons, compiled (urdf2links.scenes.constraint_kernels reads the block at
 # SI[S_CON]; 0 without one); S_XSIZE the scratch's size (scratch_size plus the constraints' part)
-(S_CON, S_XSIZE) = range(40, 42)
+# (S_CON, S_XSIZE) = 40, 41: defined in urdf2links.scenes.constraint_arrays (no import circle), imported above
 SHEAD = 42
-KA = 9                                              # floats per actuator
+# KA = 9: floats per actuator, defined in urdf2links.scenes.constraint_arrays (tendon actuators use it too)
 ACT_CTRL_LIMITED, ACT_FORCE_LIMITED = 1, 2          # act_flags bits
 
 Scene = namedtuple("Scene", ["SI", "SF", "X"])
@@ -173,8 +174,6 @@ def compile_scene(plan, *, constraints: bool = True, rows: bool = True) -> tuple
     head_x = scratch_size(plan.model.n, plan.model.tree.n)
     SI[S_XSIZE] = head_x
     if constraints and getattr(plan, "constraints", None) is not None:     # issue 45: the constraints' block, after every other
-        from .constraint_arrays import CX_SIZE, constraint_arrays
-
         ci, cf = constraint_arrays(plan, tendon_fn, sf_at=SF.size, x_at=head_x, rows=rows)
         SI[S_CON] = SI.size
         SI[S_XSIZE] = head_x + int(ci[CX_SIZE])
