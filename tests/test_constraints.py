@@ -257,7 +257,8 @@ def test_sweeps_carry_constraints_and_poses_are_recorded():
     """Issue 45: a sweep runs a constrained scene in its compiled loop (each start and every accepted step
     projected, E74): each trajectory is simulate()'s for the same start (DOP853 landing on the samples vs
     dense output: the same tolerance, 1e-8 apart), on the loop to rounding. Planted: the same sweep on the free
-    scene (CompiledScene(plan, constraints=False): the open tree) ends 5.2 rad away. A constrained run records the poses [record] asks for (the
+    scene (CompiledScene(plan, constraints=False): the open tree) ends 5.2 rad away. A constrained run records
+    the poses [record] asks for (the
     rocker's tip stays on the ground pivot)."""
     from urdf2links.integration import simulate_batch
 

@@ -31,7 +31,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["S_CON", "S_XSIZE", "KA", "constraint_arrays", "x_layout", "KCH", "KCI", "KCF", "KEV", "CM", "CNC", "CNT", "CNA", "CMODE", "CX",
+__all__ = ["S_CON", "S_XSIZE", "KA", "constraint_arrays", "x_layout", "KCH", "KCI", "KCF", "KEV", "CM", "CNC", "CNT",
+           "CNA", "CMODE", "CX",
            "CX_SIZE", "CF", "CKEEP", "CREC", "CACT", "CNPOINT", "KIND_CONNECT", "KIND_WELD", "KIND_POLY", "MODES",
            "reset_constraint_stats", "set_keep", "kept", "change_point_error"]
 

@@ -31,7 +31,7 @@ from numba import njit
 from ..compilation import kernel, one_signature
 from ..dynamics.factor import cholesky_solve, ltdl_solve
 from ..dynamics.tree_arrays import AC, KL, O_, W_COORD, W_LINK, WV, nonneg
-from .constraint_arrays import (CACT, CF, CKEEP, CM, CMODE, CNA, CNC, CNPOINT, CNT, CREC, CX, KCF, KCI, KEV,
+from .constraint_arrays import (CACT, CF, CKEEP, CM, CMODE, CNA, CNC, CNT, CREC, CX, KCF, KCI, KEV,
                                 KIND_POLY, KIND_WELD, x_layout)
 from .scene_arrays import KA, S_C, S_CON, S_GRAV
 from .scene_inputs import fn_eval

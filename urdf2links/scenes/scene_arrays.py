@@ -173,7 +173,7 @@ def compile_scene(plan, *, constraints: bool = True, rows: bool = True) -> tuple
     SI, SF = np.concatenate([head] + ints + [c_links]), np.concatenate(floats + [c_data])
     head_x = scratch_size(plan.model.n, plan.model.tree.n)
     SI[S_XSIZE] = head_x
-    if constraints and getattr(plan, "constraints", None) is not None:     # issue 45: the constraints' block, after every other
+    if constraints and getattr(plan, "constraints", None) is not None:     # issue 45: the constraints' block, last
         ci, cf = constraint_arrays(plan, tendon_fn, sf_at=SF.size, x_at=head_x, rows=rows)
         SI[S_CON] = SI.size
         SI[S_XSIZE] = head_x + int(ci[CX_SIZE])
