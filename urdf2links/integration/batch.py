@@ -27,7 +27,7 @@ from numba import njit, prange
 from .. import compilation
 from ..scenes.plan import as_plan
 from ..scenes.constraint_arrays import reset_constraint_stats
-from .constrained import project_state
+from .constrained import project_state, refresh_rhs
 from .simulate import Compilation, record_compilation
 from .loops import TABLEAUX, erk_chunk, evaluate, initial_step
 
@@ -211,6 +211,7 @@ def simulate_batch(scene, q0, qd0=None, *, t_end: float | None = None, samples: 
         return replace(_on_cluster(client, scene, model, Q0, QD0, chunks, options), notes=notes)
     nb, d = Q0.shape[0], 2 * n + 1
     Y0 = np.ascontiguousarray(np.hstack([Q0, QD0, np.zeros((nb, 1))]))
+    refresh_rhs(plan)
     if plan.constraints is not None:     # issue 45: each start projected onto the constraints (E74); every
         for b in range(nb):              # accepted step is projected inside the loop (erk_chunk)
             Y0[b] = project_state(plan.rhs, 0.0, Y0[b])[0]

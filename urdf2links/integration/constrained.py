@@ -32,8 +32,18 @@ from ..scenes.scene_kernels import scene_rhs
 from .constrained_oracle import ConstrainedRHS
 from .loops.common import project
 
-__all__ = ["ConstrainedRHS", "initial_state", "project_state", "project_samples", "constraint_stats",
+__all__ = ["ConstrainedRHS", "refresh_rhs", "initial_state", "project_state", "project_samples", "constraint_stats",
            "prepare_run", "has_constraints", "refuse_constrained"]
+
+
+def refresh_rhs(plan) -> None:
+    """``plan.rhs`` compiled again when the plan's ``constraints`` were replaced after it was compiled (a test, a
+    study dropping one constraint on our side): the compiled right-hand side carries the constraints it was
+    built with."""
+    from ..scenes.scene_kernels import CompiledScene
+
+    if getattr(plan.rhs, "closure", None) is not getattr(plan, "constraints", None):
+        plan.rhs = CompiledScene(plan)
 
 
 def has_constraints(plan) -> bool:

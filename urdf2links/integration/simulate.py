@@ -33,7 +33,7 @@ from ..scenes.plan import Plan, as_plan, compile_plan
 from ..scenes.scene import RunSettings, Scene
 from ..scenes.scene_checks import check_run
 from .charts import integrate_charted, link_poses
-from .constrained import constraint_stats, initial_state, project_samples
+from .constrained import constraint_stats, initial_state, project_samples, refresh_rhs
 from .constrained_steps import check_constrained_method
 from .trajectory import TIMED_REGION, Trajectory
 
@@ -69,6 +69,7 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
     run = _run_settings(scene, t_end=t_end, method=method, rtol=rtol, atol=atol, dt=dt, samples=samples,
                         recharting=recharting)
     plan = plan or compile_plan(scene, model)
+    refresh_rhs(plan)       # issue 45: constraints replaced on a compiled plan are compiled in again
     q, qd = scene.initial_state(model)
     if q0 is not None:
         q = model.vector(q0, "q0").copy()

@@ -366,6 +366,9 @@ class CompiledScene:
         model = plan.model
         # issue 45: constraints False: the free scene; rows False: its fixed tendons without the constraint rows
         self.SI, self.SF = compile_scene(plan, constraints=constraints, rows=rows)
+        self.closure = getattr(plan, "constraints", None) if constraints else None
+        """The constraints compiled in (issue 45): a plan whose ``constraints`` were replaced since is compiled
+        again (:func:`urdf2links.integration.constrained.refresh_rhs`)."""
         self.I, self.F = model.compiled              # the tree flattened once, by the model
         self.W = np.zeros(int(self.I[W_SIZE]))
         self.X = np.zeros(int(self.SI[S_XSIZE]))
