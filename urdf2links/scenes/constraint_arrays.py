@@ -19,7 +19,7 @@ Float block: per constraint ``KCF + 2 n``: point1, point2 (3,), frame1, frame2 (
 its coefficients c (n,), stiffness, damping, the spring's dead band (l_a, l_b); per tendon actuator the
 actuators' :data:`KA` numbers.
 
-Scratch (:func:`x_layout`, from ``CX``): Phi, gamma (m,), J (m, n), Y = A^-1 J^T stored as rows (m, n), S and
+Scratch (:func:`x_layout`, from ``CX``): Phi, gamma (m,), J (m, n), Z = L^-T J^T stored as rows (m, n), S and
 its pivoted factor (m, m), lambda, the Schur right-hand side, the rows solved and at the evaluation before (m,),
 a vector (n,), the statistics (smallest pivot, its time, events recorded, the failing row, the largest
 |Phi| before a projection, projections, 1 while a projection evaluates) and :data:`KEV`

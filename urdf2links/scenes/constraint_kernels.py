@@ -11,13 +11,14 @@ coordinates). Nothing is computed twice:
   factor, and its power;
 - :func:`constraint_terms`: ``Phi``, ``Phi_q``, ``gamma`` (E68)-(E71) from the pass already in ``W`` (the
   linear accelerations carry ``-g``: a point's ``a_0`` gets ``+g`` back, E32);
-- :func:`kkt`: ``Y = A^-1 J^T`` (m solves with A's factor), ``S = J Y``, scaled to a unit diagonal and
-  factorised by a Cholesky with diagonal pivoting (E90); ``lambda = S^-1 (-gamma - J q''_free)``,
-  ``q'' = q''_free + Y lambda`` (E72). A pivot at or below :data:`SCHUR_PIVOT` (a row dependent on the solved
+- :func:`kkt`: ``Z = L^-T J^T`` (one half solve per row with A's factor ``L^T D L``, from the leaves: a
+  sparse row costs its coordinates' ancestors only), ``S = J A^-1 J^T = Z^T D^-1 Z``, factorised by a
+  Cholesky with diagonal pivoting (E90); ``lambda = S^-1 (-gamma - J q''_free)``, ``q'' = q''_free + A^-1
+  (J^T lambda)`` (one full solve) (E72). A pivot at or below :data:`SCHUR_PIVOT` (a row dependent on the solved
   ones here: a change point of the loop) either drops the rows left (``[constraints] change_point =
   "continue"``; an event (t, row, pivot) is recorded when a row starts being dropped) or fails the
   evaluation with the row (``"stop"``: the run then raises the named DynamicsError);
-- :func:`schur_correction`: ``Y S^-1 v`` for rows' values ``v`` (the projection's Gauss-Newton step and its
+- :func:`schur_correction`: ``A^-1 J^T S^-1 v`` for rows' values ``v`` (the projection's Gauss-Newton step and its
   velocity step, E74).
 
 The block's arrays: :mod:`urdf2links.scenes.constraint_arrays`.
@@ -30,7 +31,7 @@ from numba import njit
 
 from ..compilation import kernel, one_signature
 from ..dynamics.factor import cholesky_solve, ltdl_solve
-from ..dynamics.tree_arrays import AC, KL, O_, W_COORD, W_LINK, WV, nonneg
+from ..dynamics.tree_arrays import AC, I_ANCIDX, I_ANCPTR, I_RUNPTR, I_RUNS, KL, O_, W_A, W_COORD, W_LINK, WV, nonneg
 from .constraint_arrays import (CACT, CF, CKEEP, CM, CMODE, CNA, CNC, CNT, CREC, CX, KCF, KCI, KEV,
                                 KIND_POLY, KIND_WELD, x_layout)
 from .scene_arrays import KA, S_C, S_CON, S_GRAV
@@ -53,6 +54,59 @@ def a_solve(tree, scene, v, at, coupled):
         cholesky_solve(X, 2 * nt + 18 + n * n, n, v, at)
     else:
         ltdl_solve(tree.TI, tree.W, v, at)
+
+
+@one_signature
+@kernel
+def half_solve(tree, scene, v, at, coupled):
+    """``v[at:at + n] <- Z = L^-T v`` with the factor of A left by the evaluation (the tree's ``A = L^T D L``: from
+    the leaves, a zero entry skipped, so a sparse row costs its ancestors only; coupled coordinates'
+    ``A = L L^T``: forward), so that ``J A^-1 J^T = Z^T W Z`` with :func:`weights` ``W`` (E90)."""
+    SI, X = scene.SI, scene.X
+    n, nt = SI[0], SI[1]
+    at = nonneg(at)
+    if coupled:
+        l0 = 2 * nt + 18 + n * n
+        for i in range(n):
+            s = v[at + i]
+            for k in range(i):
+                s -= X[l0 + i * n + k] * v[at + k]
+            v[at + i] = s / X[l0 + i * n + i]
+        return
+    TI, W = tree.TI, tree.W
+    ap, ai, rp, rs = nonneg(TI[I_ANCPTR]), nonneg(TI[I_ANCIDX]), nonneg(TI[I_RUNPTR]), nonneg(TI[I_RUNS])
+    wa = nonneg(TI[W_A])
+    for kk in range(n):                     # L^T z = x: from the leaves (factor.ltdl_solve's first half)
+        k = nonneg(n - 1 - kk)
+        r0 = nonneg(TI[ap + k])
+        m = nonneg(TI[ap + k + 1] - 1 - r0)
+        j = wa + r0
+        xk = v[at + k]
+        if xk == 0.0:
+            continue
+        if TI[rp + k + 1] - TI[rp + k] == 1:
+            c0 = at + nonneg(TI[rs + 2 * nonneg(TI[rp + k])])
+            for u in range(m):
+                v[c0 + u] -= W[j + u] * xk
+        else:
+            for u in range(m):
+                v[at + nonneg(TI[ai + r0 + u])] -= W[j + u] * xk
+
+
+@one_signature
+@kernel
+def weights(tree, scene, w, w_at, coupled):
+    """``w[w_at:w_at + n]``: ``1 / D`` of the tree's ``A = L^T D L`` (ones for the coupled ``L L^T``), the weights of
+    :func:`half_solve`'s ``Z^T W Z``."""
+    n = scene.SI[0]
+    if coupled:
+        for i in range(n):
+            w[w_at + i] = 1.0
+        return
+    TI, W = tree.TI, tree.W
+    ap, wa = nonneg(TI[I_ANCPTR]), nonneg(TI[W_A])
+    for k in range(n):
+        w[w_at + k] = 1.0 / W[wa + nonneg(TI[ap + k + 1] - 1)]
 
 
 @one_signature
@@ -357,8 +411,10 @@ def kkt(tree, scene, t, y, out, coupled):
     lay = x_layout(m, n, nt)
     xj, xy, xs, xl, xlam = xc + lay[2], xc + lay[3], xc + lay[4], xc + lay[5], xc + lay[6]
     xgam, xact, xprev, xst, xev, xperm = xc + lay[1], xc + lay[8], xc + lay[9], xc + lay[11], xc + lay[12], xc + lay[13]
+    xtmp = xc + lay[10]
     keep = c0 + SI[c0 + CKEEP]
     constraint_terms(tree, scene, y)
+    weights(tree, scene, X, xtmp, coupled)
     r = 0
     for k in range(m):
         X[xact + k] = 0.0
@@ -369,14 +425,14 @@ def kkt(tree, scene, t, y, out, coupled):
         r += 1
         for i in range(n):
             X[xy + k * n + i] = X[xj + k * n + i]
-        a_solve(tree, scene, X, xy + k * n, coupled)
+        half_solve(tree, scene, X, xy + k * n, coupled)     # Z = L^-T J^T, row by row
     for a in range(r):
         ka = int(X[xperm + a])
         for b in range(a + 1):
             kb = int(X[xperm + b])
             s = 0.0
             for i in range(n):
-                s += X[xj + ka * n + i] * X[xy + kb * n + i]
+                s += X[xy + ka * n + i] * X[xtmp + i] * X[xy + kb * n + i]
             X[xl + a * m + b] = s
             X[xl + b * m + a] = s
     big = 0.0      # the pivots compare with S's largest diagonal (a row whose J vanishes is dependent too)
@@ -404,11 +460,16 @@ def kkt(tree, scene, t, y, out, coupled):
             s -= X[xj + k * n + i] * out[n + i]
         X[xlam + k] = s
     schur_solve(X, xc, m, n, nt, rank)
+    for i in range(n):              # q'' = q''_free + A^-1 J^T lambda: one solve
+        X[xtmp + i] = 0.0
     for a in range(rank):
         k = int(X[xperm + a])
         lam = X[xlam + k]
         for i in range(n):
-            out[n + i] += X[xy + k * n + i] * lam
+            X[xtmp + i] += X[xj + k * n + i] * lam
+    a_solve(tree, scene, X, xtmp, coupled)
+    for i in range(n):
+        out[n + i] += X[xtmp + i]
     return -1
 
 
@@ -438,15 +499,16 @@ def schur_solve(X, xc, m, n, nt, rank):
 
 @one_signature
 @kernel
-def schur_correction(SI, X, v, v_at, dst):
-    """``dst (n,) = Y S^-1 v = A^-1 J^T S^-1 v`` for the rows' values ``v[v_at:v_at + m]`` over the rows solved
-    at the last evaluation (E74's steps); uses the ``lam`` block as its scratch."""
+def schur_correction(tree, scene, v, v_at, dst):
+    """``dst (n,) = A^-1 J^T S^-1 v`` for the rows' values ``v[v_at:v_at + m]`` over the rows solved at the last
+    evaluation, with its factors (E74's steps); uses the ``lam`` block as its scratch."""
+    SI, X = scene.SI, scene.X
     n, nt = SI[0], SI[1]
     c0 = SI[S_CON]
     m = SI[c0 + CM]
     xc = SI[c0 + CX]
     lay = x_layout(m, n, nt)
-    xy, xlam, xact = xc + lay[3], xc + lay[6], xc + lay[8]
+    xj, xlam, xact = xc + lay[2], xc + lay[6], xc + lay[8]
     rank = 0
     for k in range(m):
         X[xlam + k] = v[v_at + k]
@@ -459,4 +521,5 @@ def schur_correction(SI, X, v, v_at, dst):
         lam = X[xlam + k]
         if lam != 0.0:
             for i in range(n):
-                dst[i] += X[xy + k * n + i] * lam
+                dst[i] += X[xj + k * n + i] * lam
+    a_solve(tree, scene, dst, 0, SI[4] != 0)

@@ -15,7 +15,8 @@ from numba import njit
 from ...compilation import one_signature
 from ...scenes.constraint_arrays import CKEEP, CM, CX, x_layout
 from ...scenes.constraint_kernels import schur_correction
-from ...scenes.scene_arrays import S_CON
+from ...dynamics.tree_arrays import Tree
+from ...scenes.scene_arrays import S_CON, Scene
 
 __all__ = ["AngleGuard", "evaluate", "rms", "finite", "guard_fires", "EPS", "has_rows", "project", "settle",
            "PROJECTION_TOL", "PROJECTION_MAXITER"]
@@ -112,9 +113,10 @@ def project(t, y, f, args, counters):
     """``y = (q, q', W)`` projected in place onto ``Phi = 0`` (Gauss-Newton ``q <- q - A^-1 J^T S^-1 Phi``
     until ``max |Phi| <= PROJECTION_TOL`` or it stops decreasing) and ``Phi' = 0`` (``q' <- q' - A^-1 J^T S^-1
     J q'``, the nearest in the metric of A) (E74), every term from the compiled right-hand side's own
-    evaluation (its Y = A^-1 J^T and pivoted factor of S); ``f`` left as ``y'`` at the projected state. Records
+    evaluation (A's factor and the pivoted factor of S); ``f`` left as ``y'`` at the projected state. Records
     the largest ``max |Phi|`` before a projection. False when an evaluation failed (``evaluate``)."""
     SI, X = args[3], args[5]
+    tree, scene = Tree(args[0], args[1], args[2]), Scene(SI, args[4], X)
     n, nt = SI[0], SI[1]
     c0 = SI[S_CON]
     m = SI[c0 + CM]
@@ -142,7 +144,7 @@ def project(t, y, f, args, counters):
         last = res
         for k in range(m):
             v[k] = X[xphi + k] if SI[keep + k] != 0 else 0.0
-        schur_correction(SI, X, v, 0, dq)
+        schur_correction(tree, scene, v, 0, dq)
         for i in range(n):
             y[i] -= dq[i]
     rate = 0.0
@@ -154,7 +156,7 @@ def project(t, y, f, args, counters):
         v[k] = s
         rate = max(rate, abs(s))
     if rate > 0.0:
-        schur_correction(SI, X, v, 0, dq)
+        schur_correction(tree, scene, v, 0, dq)
         for i in range(n):
             y[n + i] -= dq[i]
         if not evaluate(t, y, f, args, counters):
