@@ -33,7 +33,7 @@ from .constrained_oracle import ConstrainedRHS
 from .loops.common import project
 
 __all__ = ["ConstrainedRHS", "refresh_rhs", "initial_state", "project_state", "project_samples", "constraint_stats",
-           "prepare_run", "has_constraints", "refuse_constrained"]
+           "has_rows"]
 
 
 def refresh_rhs(plan) -> None:
@@ -44,15 +44,6 @@ def refresh_rhs(plan) -> None:
 
     if getattr(plan.rhs, "closure", None) is not getattr(plan, "constraints", None):
         plan.rhs = CompiledScene(plan)
-
-
-def has_constraints(plan) -> bool:
-    return getattr(plan, "constraints", None) is not None
-
-
-def refuse_constrained(plan, what: str) -> None:
-    """Kept for callers of issue 36: every path carries constraints now (issue 45), nothing is refused."""
-    return None
 
 
 def _layout(rhs):
@@ -103,11 +94,6 @@ def initial_state(plan, q, qd) -> tuple[np.ndarray, dict]:
     return y, {"note": note, "residual_before": before, "q_moved": float(np.max(np.abs(y[:n] - q), initial=0.0)),
                "qd_moved": float(np.max(np.abs(y[n:2 * n] - qd), initial=0.0)), "redundant": list(sel.notes),
                "rank": sel.rank}
-
-
-def prepare_run(plan) -> None:
-    """A run's start: the scratch's statistics cleared (smallest pivot, events, drift)."""
-    reset_constraint_stats(plan.rhs.SI, plan.rhs.X)
 
 
 def project_samples(plan, t, Y) -> None:
