@@ -1,7 +1,8 @@
-"""A constrained scene's ``method`` and ``dt`` honoured, or refused by name (issue 42;
-urdf2links/integration/constrained_steps.py): RK4 with its dt, projected after every step, converges to the
-DOP853 run as dt shrinks; RK45 runs its own steps; a method the constrained path cannot carry is a SceneError
-naming the method, the scene and what is accepted."""
+"""A constrained scene's ``method`` and ``dt`` honoured, or refused by name (issues 42, 45;
+urdf2links/integration/constrained_steps.py): in the compiled loops, RK4 with its dt, projected after every step,
+converges to the DOP853 run as dt shrinks; RK45 runs its own steps; Radau5 and auto (its stretches) run and say
+so; a method that takes no projection (scipy's Radau, BDF, the implicit midpoint) is a SceneError naming the
+method, the scene and what is accepted."""
 
 from __future__ import annotations
 
@@ -35,7 +36,7 @@ def test_rk4_with_dt_converges_to_dop853(crank):
     16x; measured 21.6x and 19.6x, 1.9e-5 then 9.8e-7 rad). A run that ignored method and dt (DOP853 at the
     scene's rtol, as before issue 42) would give the same ~1e-10 at every dt and fail the ratio."""
     plan, ref = crank
-    assert ref.stats["method"] == "DOP853"
+    assert ref.stats["method"] == "auto"
     errors = []
     for dt in (0.01, 0.005, 0.0025):
         tr = simulate(plan, t_end=T_END, samples=11, progress=False, method="RK4", dt=dt)
@@ -58,17 +59,31 @@ def test_rk45_runs_its_own_steps(crank):
     assert np.abs(tr.q - ref.q).max() < 1e-8
 
 
-def test_auto_runs_dop853_and_says_so(crank):
-    """The scene's method is auto: the run is DOP853 (no stiffness test on this path), and the statistics say it."""
+def test_auto_runs_its_stretches_compiled_and_says_so(crank):
+    """Issue 45: the scene's method is auto: the compiled loops run its stretches (DOP853 on this non-stiff
+    run), and the statistics say it (the interpreted path ran DOP853 with no stiffness test)."""
     plan, ref = crank
     assert plan.scene.run.method == "auto" and ref.stats["scene_method"] == "auto"
-    assert "auto: DOP853" in ref.stats["constraints"]["method"]
+    assert ref.stats["stretches"] and ref.stats["stretches"][0]["method"] == "DOP853"
+    assert "compiled" in ref.stats["constraints"]["method"]
 
 
-@pytest.mark.parametrize("method", ["Radau5", "BDF", "midpoint"])
+def test_radau5_runs_projected(crank):
+    """Issue 45: Radau5 (refused before: its Newton matrices did not follow the projected state) runs in the
+    compiled loop with the projection after every step: on the loop to rounding (1e-12) and within 1e-7 rad
+    of DOP853 at 1e-12 (Radau5 at rtol 1e-10, order 5)."""
+    plan, ref = crank
+    tr = simulate(plan, t_end=T_END, samples=11, progress=False, method="Radau5", rtol=1e-10, atol=1e-10)
+    assert tr.stats["method"] == "Radau5" and tr.stats["njev"] > 0
+    assert tr.stats["constraints"]["max_residual"] < 1e-12
+    assert np.abs(tr.q - ref.q).max() < 1e-7
+
+
+@pytest.mark.parametrize("method", ["Radau", "BDF", "midpoint"])
 def test_a_method_the_constrained_path_cannot_carry_is_refused(crank, method):
-    """Implicit or multistep methods are refused before any step, naming the method, the scene and the
-    accepted methods (a planted run of each: none may run silently as DOP853)."""
+    """Methods that take no projection after each step (scipy's Radau, BDF; the implicit midpoint) are refused
+    before any step, naming the method, the scene and the accepted methods (a planted run of each: none may
+    run silently without its projection)."""
     plan, _ = crank
     with pytest.raises(SceneError) as info:
         simulate(plan, t_end=0.1, progress=False, method=method, dt=0.01)
@@ -79,14 +94,14 @@ def test_a_method_the_constrained_path_cannot_carry_is_refused(crank, method):
 
 def test_simulate_command_honours_method_and_dt(tmp_path):
     """``urdf2links simulate four_bar_crank --method RK4 --dt 0.01`` runs RK4 (issue 42: it ran DOP853 silently);
-    ``--method Radau5`` exits 2 with the refusal."""
+    ``--method BDF`` exits 2 with the refusal."""
     out = run_cli("simulate", "four_bar_crank", "--method", "RK4", "--dt", "0.01", "--t-end", "0.2", "--out",
                   tmp_path, cwd=tmp_path)
     assert out.returncode == 0, out.stderr
     m = re.search(r", (\w+) \(rtol [^,]+, dt ([0-9.e+-]+)\): (\d+) steps", out.stdout)
     assert m and m.group(1) == "RK4" and float(m.group(2)) == 0.01 and int(m.group(3)) == 20, out.stdout
-    bad = run_cli("simulate", "four_bar_crank", "--method", "Radau5", "--t-end", "0.2", "--out", tmp_path, cwd=tmp_path)
-    assert bad.returncode == 2 and "method 'Radau5' does not run on the constrained path" in bad.stderr
+    bad = run_cli("simulate", "four_bar_crank", "--method", "BDF", "--t-end", "0.2", "--out", tmp_path, cwd=tmp_path)
+    assert bad.returncode == 2 and "method 'BDF' does not run a scene with constraints" in bad.stderr
 
 
 def test_step_times_end_at_t_end():

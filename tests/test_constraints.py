@@ -216,15 +216,62 @@ def test_change_point_hard_case():
     assert tr.q[:, 0].max() > 1.5 and c["max_residual"] < 1e-9 and tr.energy_error < 1e-9
 
 
-def test_paths_without_constraints_refuse_and_poses_are_recorded():
-    """A sweep (and the work-precision study) has no constraint solve: it refuses a constrained scene by
-    name instead of running the open tree; a constrained run records the poses [record] asks for (the
+def test_change_point_continue_passes_through():
+    """Issue 45: the same throw with ``change_point = "continue"`` (robots/loops/closed_leg_change_point_continue.toml)
+    passes the change point: the dependent row (knee_loop.x) is dropped there and the run goes on to t_end, the
+    event named (time within 2e-4 rad of hip = pi/2's time, as above; the row; its pivot at or below 1e-12 of S's
+    largest diagonal) in the stats and in the plan's text; the residual stays at rounding level (1e-12: the
+    projection keeps every solved row below 1e-13) and the energy balance at the integration's level (1e-7
+    relative: rtol 1e-12 but thousands of steps through a near-singular solve). Planted: the same scene with
+    ``change_point = "stop"`` raises (the hard case above), and the run without the event would name none."""
+    scene = load_scene(LOOPS / "closed_leg_change_point_continue.toml")
+    assert scene.change_point == "continue"
+    assert "change_point = 'continue'" in as_plan(scene).describe()
+    tr = simulate(scene, progress=False, t_end=0.15, samples=31)
+    c = tr.stats["constraints"]
+    assert tr.t[-1] == pytest.approx(0.15)
+    ev = c["events"]
+    assert ev and ev[0]["row"] == "knee_loop.x" and 0.0 < ev[0]["pivot"] <= 1e-12
+    i = int(np.searchsorted(tr.t, ev[0]["t"]))
+    assert abs(tr.q[i - 1, 0] - math.pi / 2) < 0.05 or abs(tr.q[i, 0] - math.pi / 2) < 0.05
+    assert c["max_residual"] < 1e-12 and tr.energy_error < 1e-7
+    assert "knee_loop.x" in ev[0]["what"] and "goes on" in ev[0]["what"]
+    stop = dataclasses.replace(scene, change_point="stop")
+    with pytest.raises(DynamicsError, match=r"knee_loop\.x are not independent"):
+        simulate(stop, progress=False, t_end=0.15, samples=3)
+
+
+def test_change_point_key_is_checked():
+    """``[constraints] change_point`` takes "continue" or "stop", with a did-you-mean (planted: "stpo")."""
+    import tomllib
+
+    from urdf2links.scenes.scene_read import scene_from_dict
+
+    data = tomllib.loads((LOOPS / "closed_leg_change_point.toml").read_text())
+    data["constraints"]["change_point"] = "stpo"
+    with pytest.raises(SceneError, match=r"constraints\.change_point.*'stpo' is not one of.*did you mean 'stop'"):
+        scene_from_dict(data, directory=LOOPS)
+
+
+def test_sweeps_carry_constraints_and_poses_are_recorded():
+    """Issue 45: a sweep runs a constrained scene in its compiled loop (each start and every accepted step
+    projected, E74): each trajectory is simulate()'s for the same start (DOP853 landing on the samples vs
+    dense output: the same tolerance, 1e-8 apart), on the loop to rounding. Planted: the same sweep on the free
+    scene (CompiledScene(plan, constraints=False): the open tree) ends 5.2 rad away. A constrained run records
+    the poses [record] asks for (the
     rocker's tip stays on the ground pivot)."""
     from urdf2links.integration import simulate_batch
 
     scene = load_scene(LOOPS / "four_bar_crank.toml")
-    with pytest.raises(SceneError, match="simulate_batch .* does not carry constraints"):
-        simulate_batch(as_plan(scene), np.zeros((2, 3)), np.zeros((2, 3)), t_end=0.1)
+    plan = as_plan(scene)
+    q0, qd0 = scene.initial_state(plan.model)
+    Q0 = np.array([q0, q0 + [0.05, 0.0, 0.0]])
+    res = simulate_batch(plan, Q0, np.array([qd0, qd0]), t_end=0.5, samples=6, method="DOP853")
+    assert res.success
+    for b in range(2):
+        tr = simulate(plan, q0=Q0[b], qd0=qd0, t_end=0.5, samples=6, method="DOP853", progress=False)
+        assert np.abs(res.q[b] - tr.q).max() < 1e-8
+        assert max(np.abs(plan.constraints.cset.residual(q)).max() for q in res.q[b]) < 1e-12
     tr = simulate(dataclasses.replace(scene, link_poses=("rocker",)), t_end=0.1, samples=5, progress=False)
     tips = tr.poses["rocker"] @ np.array([0.25, 0.0, 0.0, 1.0])
     assert np.abs(tips[:, :3] - [0.3, 0.0, 0.0]).max() < 1e-12

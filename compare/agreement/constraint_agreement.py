@@ -164,11 +164,12 @@ def run_notes(plan, traj, mj=None) -> list[str]:
                  f"{t['generalized_force']['max_abs']:.2e} (of {t['generalized_force']['scale']:.3g})"]
     if not c["rows"]:       # fixed tendons alone (a stiffness, a damping): nothing to solve or project
         return [f"fixed tendons ({', '.join(td.name for td in plan.constraints.tendons)}) act on both engines "
-                "(E76); no constraint rows: the run takes the constrained path (DOP853) for their forces alone"]
+                "(E76); no constraint rows: their forces act in the compiled right-hand side"]
     return terms + ([f"constraints ({', '.join(c['rows'])}): solved with multipliers and projected after every step "
-             f"(E72-E74, DOP853 + projection); max |Phi| {c['max_residual']:.2e} at the samples, "
+             f"(E72-E74, {c['method']}); max |Phi| {c['max_residual']:.2e} at the samples, "
              f"{c['max_step_drift']:.2e} before any projection; lambda {c['lambda'].min():.4g} .. "
              f"{c['lambda'].max():.4g}", c["initial"]["note"]] + list(c["initial"]["redundant"])
+            + [e["what"] for e in c.get("events", ())]      # issue 45: change points passed (change_point continue)
             + [f"MuJoCo's constraints are soft (solref {list(COMPARE_SOLREF)}, solimp {SOLIMP[0]:g}): how its run "
                "approaches the exact one as solref's time constant shrinks is the report's solref study (section "
                "'Closed loops'; the full-length study: python -m urdf2links.compare.reports.loops SCENE)"])

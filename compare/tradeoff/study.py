@@ -73,7 +73,6 @@ from urdf2links.console import shown_path
 from urdf2links.integration.charts import floating_links
 from urdf2links.integration.integrators import METHODS, integrate
 from urdf2links.integration.simulate import simulate, warm_up
-from urdf2links.integration.constrained import refuse_constrained
 from urdf2links.scenes.plan import compile_plan
 from urdf2links.scenes.scene import robot_label
 from urdf2links.scenes.scene_read import load_scene
@@ -81,6 +80,7 @@ from urdf2links.scenes.scene_read import load_scene
 from ..agreement.trajectory import scene_key
 from ..formatting import json_ready, machine_info
 from ..mujoco_side.mjcf import mjcf_from_scene
+from ..mujoco_side.mujoco_constraints import with_constraints
 from ..mujoco_side.mujoco_run import energy_function, run_mujoco
 from .crossover import crossover
 
@@ -513,8 +513,10 @@ def run_study(scene, *, t_end: float | None = None, quick: bool = False, repeats
         warnings.simplefilter("ignore")
         model = scene.model()
     plan = compile_plan(scene, model)
-    refuse_constrained(plan, "the work-precision study (urdf2links tradeoff)")    # issue 36: no KKT in its loops
-    st = _Study(scene, model, plan, mjcf_from_scene(scene, model), T, S)
+    mj = mjcf_from_scene(scene, model)
+    if plan.constraints is not None:    # issue 45: our loops carry the constraints; MuJoCo gets them as equalities
+        mj = with_constraints(mj, plan.constraints)
+    st = _Study(scene, model, plan, mj, T, S)
     q0, qd0 = scene.initial_state(model)
     st.y0 = np.r_[q0, qd0, 0.0]
     st.charted = bool(floating_links(model)) and bool(scene.run.recharting)

@@ -81,6 +81,11 @@ def run_simulate(args) -> int:
         print(f"  note: {note}")
     for e in s["limit_excursions"]:
         print(f"  note: {LimitExcursion(**e).text()}")
+    c = s.get("constraints")       # issue 45: the loop's residual and the change points passed
+    if c is not None and c["rows"]:
+        print(f"  constraints: max |Phi| {c['max_residual']:.2e}; {c['method']}")
+        for ev in c.get("events", ()):
+            print(f"  note: {ev['what']}")
     print(f"  wrote {npz} and {csv_path}")
     if args.plot:
         from ..view.plots import plot_trajectory

@@ -4,7 +4,8 @@
 right-hand side (:mod:`urdf2links.scenes.scene_kernels`) and the compiled loops of
 :mod:`urdf2links.integration.loops`, one trajectory per thread (numba ``prange``; each thread
 has its own scratch). Samples are taken by landing steps exactly on the sample times (the step
-size controller carries over), so no dense output is needed. A sweep pays Python's per-run costs
+size controller carries over), so no dense output is needed. A constrained scene's starts are projected onto
+its constraints and every accepted step inside the loop (issue 45, E74), as in :func:`simulate`. A sweep pays Python's per-run costs
 (plan compilation, result objects, energy bookkeeping) once instead of ``B`` times.
 
 ``simulate_batch(..., client=dask_client)`` splits the ``B`` states into chunks (one per worker by
@@ -25,7 +26,8 @@ from numba import njit, prange
 
 from .. import compilation
 from ..scenes.plan import as_plan
-from .constrained import refuse_constrained
+from ..scenes.constraint_arrays import reset_constraint_stats
+from .constrained import project_state, refresh_rhs
 from .simulate import Compilation, record_compilation
 from .loops import TABLEAUX, erk_chunk, evaluate, initial_step
 
@@ -188,7 +190,6 @@ def simulate_batch(scene, q0, qd0=None, *, t_end: float | None = None, samples: 
     ``dask.distributed.Client`` to split the states across its workers in ``chunks`` chunks
     (default: one per worker); the same result as on one machine (module doc)."""
     plan = as_plan(scene, model=model)        # compiled once; a Plan passed in is used as it is
-    refuse_constrained(plan, "simulate_batch (urdf2links sweep)")     # issue 36: the batch loops have no KKT solve
     scene, model = plan.scene, plan.model
     run = scene.run
     notes = ()
@@ -210,6 +211,10 @@ def simulate_batch(scene, q0, qd0=None, *, t_end: float | None = None, samples: 
         return replace(_on_cluster(client, scene, model, Q0, QD0, chunks, options), notes=notes)
     nb, d = Q0.shape[0], 2 * n + 1
     Y0 = np.ascontiguousarray(np.hstack([Q0, QD0, np.zeros((nb, 1))]))
+    refresh_rhs(plan)
+    if plan.constraints is not None:     # issue 45: each start projected onto the constraints (E74); every
+        for b in range(nb):              # accepted step is projected inside the loop (erk_chunk)
+            Y0[b] = project_state(plan.rhs, 0.0, Y0[b])[0]
     T = run.t_end if t_end is None else float(t_end)
     ts = np.linspace(0.0, T, max(int(samples or run.samples), 2))
     tol_r = float(run.rtol if rtol is None else rtol)
@@ -218,6 +223,8 @@ def simulate_batch(scene, q0, qd0=None, *, t_end: float | None = None, samples: 
     rhs = plan.rhs
     W = np.zeros((nb, rhs.W.size))
     X = np.zeros((nb, rhs.X.size))
+    for b in range(nb):
+        reset_constraint_stats(rhs.SI, X[b])
     out = np.empty((nb, ts.size, d))
     nfev = np.zeros(nb, np.int64)
     status = np.zeros(nb, np.int64)

@@ -1,304 +1,141 @@
-"""A scene with constraints integrated: the KKT right-hand side, one step at a time, projection after each step.
+"""A scene with constraints integrated in the compiled loops (issue 45): what a run adds around them.
 
-This is the documented interpreted path of constrained scenes (docs/equations.md (E72)-(E75)): the compiled
-integration loops (:mod:`urdf2links.integration.loops`) carry no constraint solve, so a scene with
-``[[constraint]]`` (or an MJCF file's equalities, or fixed tendons) runs here instead:
+The constrained right-hand side is the scene's compiled one (:mod:`urdf2links.scenes.scene_kernels` with its
+``constraints`` effect: the free forces, the fixed tendons (E76), the constraint terms from the evaluation's
+own kinematics pass and the KKT block elimination (E72) with a pivoted Schur factorisation (E85),
+:mod:`urdf2links.scenes.constraint_kernels`), so every loop runs it as it runs any scene: RK4, RK45, DOP853,
+Radau5, ``auto`` (its stretches) and the batched sweeps. After every accepted step (and at the initial state
+and at every dense-output sample) the loops project the state onto ``Phi = 0``, ``Phi' = 0`` (E74,
+:func:`urdf2links.integration.loops.common.project`), with the same evaluation's ``A^-1 J^T`` and factor of
+``S``; the derivative is evaluated again at the projected state (the next step's first stage). The
+residual stays at rounding level (the projection stops at ``max |Phi| <= 1e-13``).
 
-- the right-hand side is the scene's compiled one, ``plan.rhs`` (every term the scene names: ``q''`` of
-  the free tree and the power ``P``), turned into ``f = A q''_free = Q - e - G + ...`` with the compiled
-  mass matrix, plus the fixed tendons' forces (E76), then solved with the multipliers (E72);
-- the scene's method takes one step at a time (:mod:`urdf2links.integration.constrained_steps`: DOP853 or
-  RK45 with the scene's ``rtol``, ``atol``; ``auto`` as DOP853; RK4 with its ``dt``; any other refused by
-  name); after every accepted step
-  the state is projected onto ``Phi = 0`` and ``Phi' = 0`` (E74) and the step's derivative is evaluated
-  again at the projected state (the next step's first stage is the last one of the step before). Drift is
-  thus bounded by one step's integration error and removed before it can grow: the residual stays at
-  rounding level (the projection stops at ``max |Phi| <= 1e-13``). Samples are read from the step's dense
-  output and projected the same way.
-- the constraint forces do no work on the manifold (``lambda . Phi_q q' = 0`` there, fixed base), so
-  ``W`` counts only the scene's own forces and ``h - h(0) - W`` stays the integration's energy error;
-  the projection's own energy change is part of it.
+A change point (a Schur pivot at or below 1e-12: a row dependent on the others there) either drops that row
+locally and goes on, the event recorded (``[constraints] change_point = "continue"``, the default), or stops
+with the named DynamicsError (``"stop"``).
 
-``Trajectory.stats["constraints"]`` reports: the rows, the redundant ones (E73), the residual
-``max |Phi|`` at every sample and the largest drift of any step before its projection, ``|Phi'|``,
-the multipliers ``lambda`` (S, m) and the generalized constraint forces ``J^T lambda`` (S, n) at the
-samples, and the initial projection.
+This module does what is around the loops: the initial projection (:func:`initial_state`), the samples'
+projection (:func:`project_samples`), and ``Trajectory.stats["constraints"]`` (:func:`constraint_stats`):
+rows, solved rows, residual ``max |Phi|`` and ``|Phi'|`` at every sample, the largest drift of any step
+before its projection, ``lambda`` (S, m_solved) and ``J^T lambda`` (S, n) at the samples, the initial
+projection, the method, the smallest Schur pivot and its time, and the change-point ``events``. The same law
+in numpy, step by step, is the tests' oracle (:mod:`urdf2links.integration.constrained_oracle`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .. import compilation
-from ..console import Progress
-from ..dynamics.constrained import independent_rows, kkt_solve, project_position, project_velocity
-from ..errors import DynamicsError, IntegrationError
-from .constrained_steps import check_constrained_method, constrained_stepper
-from .trajectory import Trajectory
+from ..scenes.constraint_arrays import CM, CX, kept, reset_constraint_stats, set_keep, x_layout
+from ..scenes.scene_arrays import S_CON
+from ..scenes.scene_kernels import scene_rhs
+from .constrained_oracle import ConstrainedRHS
+from .loops.common import project
 
-__all__ = ["ConstrainedRHS", "simulate_constrained", "refuse_constrained"]
-
-
-def refuse_constrained(plan, what: str) -> None:
-    """A clear error where a constrained plan would run on a path that does not carry its constraints."""
-    if getattr(plan, "constraints", None) is not None:
-        from ..errors import SceneError
-
-        raise SceneError(f"{plan.scene.path or plan.scene.name}: {what} does not carry constraints or fixed tendons "
-                         f"yet (the scene's {', '.join(t for t in plan.terms if t in ('constraint', 'tendon'))}); "
-                         "run it with urdf2links simulate or compare (docs/constraints.md)")
+__all__ = ["ConstrainedRHS", "refresh_rhs", "initial_state", "project_state", "project_samples", "constraint_stats",
+           "has_rows"]
 
 
-class ConstrainedRHS:
-    """``y' = (q', q'', P)`` of a plan with constraints (E72); :meth:`solve` also gives ``lambda``."""
+def refresh_rhs(plan) -> None:
+    """``plan.rhs`` compiled again when the plan's ``constraints`` were replaced after it was compiled (a test, a
+    study dropping one constraint on our side): the compiled right-hand side carries the constraints it was
+    built with."""
+    from ..scenes.scene_kernels import CompiledScene
 
-    def __init__(self, plan, *, q0=None):
-        self.plan = plan
-        self.model = plan.model
-        self.closure = plan.constraints
-        self.cset = self.closure.cset
-        self.where = str(plan.scene.path or plan.scene.name)
-        self.nfev = 0
-        self.min_pivot = (np.inf, 0.0)
-        """The smallest eigenvalue of J A^-1 J^T scaled to a unit diagonal over every solve, and its time."""
-        self.keep = np.arange(self.cset.m)
-        self.selection = None
-        if q0 is not None:
-            self.select(q0)
-
-    def select(self, q):
-        """Redundant rows at ``q`` (E73): the solve keeps the independent ones."""
-        T = self.cset.terms(q)
-        self.selection = independent_rows(T.J, T.rows)
-        self.keep = self.selection.keep
-        return self.selection
-
-    @property
-    def kept_rows(self):
-        return [self.cset.rows[k] for k in self.keep]
-
-    def mass(self, t, q):
-        return self.model.mass_matrix(q, t=t, base=self.plan.base_state(t))
-
-    def free_forces(self, t, y, A):
-        """``f`` of (E72): ``A q''_free`` of the scene's compiled right-hand side, plus the tendons (E76);
-        and the free right-hand side (its ``P``, power of the scene's forces)."""
-        n = self.model.n
-        free = self.plan.rhs(t, y)
-        f = A @ free[n:2 * n]
-        if self.closure.tendons:
-            ft, pt = self.closure.tendon_forces(t, y[:n], y[n:2 * n])
-            f = f + ft
-            free[2 * n] += pt
-        return f, free
-
-    def solve(self, t, y):
-        """``(y', lambda, terms)`` at ``(t, y)`` (E72)."""
-        self.nfev += 1
-        n = self.model.n
-        q, qd = y[:n], y[n:2 * n]
-        A = self.mass(t, q)
-        f, out = self.free_forces(t, y, A)
-        T = self.cset.terms(q, qd, t=t, base=self.plan.base_state(t))
-        k = self.keep
-        qdd, lam, Ls = kkt_solve(A, f, T.J[k], T.gamma[k], rows=self.kept_rows,
-                                where=f"{self.where}: t = {t:.6g} s, q = {np.round(q, 6).tolist()}")
-        if Ls is not None:      # how close the rows came to dependence (E72): the smallest eigenvalue of
-            S = Ls @ Ls.T       # J A^-1 J^T scaled to a unit diagonal (rows of different units compare)
-            d = 1.0 / np.sqrt(np.diag(S))
-            pivot = float(np.linalg.eigvalsh(S * d[:, None] * d[None, :])[0])
-            if pivot < self.min_pivot[0]:
-                self.min_pivot = (pivot, float(t))
-        out[n:2 * n] = qdd
-        return out, lam, T
-
-    def __call__(self, t, y):
-        return trial_stage(self, t, y)
-
-    def project(self, t, y):
-        """``y`` with ``(q, q')`` projected onto ``Phi = 0``, ``Phi' = 0`` (E74); and the residual before."""
-        n = self.model.n
-        q, qd = y[:n], y[n:2 * n]
-        base = self.plan.base_state(t)
-        terms_of = lambda x: self.cset.terms(x, t=t, base=base)  # noqa: E731
-        before = float(np.max(np.abs(terms_of(q).phi), initial=0.0))   # 0 rows: fixed tendons alone
-        q2, _, _ = project_position(q, terms_of, lambda x: self.mass(t, x), self.keep, rows=self.cset.rows,
-                                    where=f"{self.where}: projection at t = {t:.6g} s")
-        T = self.cset.terms(q2, qd, t=t, base=base)
-        qd2 = project_velocity(qd, T.J[self.keep], self.mass(t, q2), rows=self.kept_rows, where=self.where)
-        out = np.array(y, float)
-        out[:n], out[n:2 * n] = q2, qd2
-        return out, before
+    if getattr(plan.rhs, "closure", None) is not getattr(plan, "constraints", None):
+        plan.rhs = CompiledScene(plan)
 
 
-def trial_stage(rhs, t, y):
-    """``y'`` at a trial stage of a step; where the solve fails there (a non-finite state, ``A`` not positive
-    definite, the rows dependent: an unstable trial step, e.g. a stage deep into a stiff contact) a NaN vector,
-    so the stepper rejects the step with its smallest factor, as the compiled loops do (``loops.common.evaluate``);
-    the failure is kept in ``rhs.failed`` (t, y, error), raised if the step size runs out (:func:`_stepper_failed`)."""
-    try:
-        with np.errstate(all="ignore"):
-            return rhs.solve(t, y)[0]
-    except (DynamicsError, FloatingPointError, np.linalg.LinAlgError) as exc:
-        if isinstance(exc, DynamicsError) or getattr(rhs, "failed", None) is None:    # the named error kept
-            rhs.failed = (float(t), np.array(y, float), exc)
-        return np.full(len(y), np.nan)
+def _layout(rhs):
+    SI = rhs.SI
+    c0 = int(SI[S_CON])
+    m, n, nt = int(SI[c0 + CM]), int(SI[0]), int(SI[1])
+    return m, n, int(SI[c0 + CX]), x_layout(m, n, nt)
 
 
-def follow_rows(rhs, t, y):
-    """Between steps, the solved rows chosen again at ``y`` (E73), as many as at the start: a floating base turns a
-    planar loop's plane, so the world-axis row left out at the start (its out-of-plane row) is no longer the
-    redundant one, and the rows kept would become dependent as the base rolls or yaws (issue 45). The pivoted QR
-    of ``Phi_q^T`` keeps the best-conditioned ones; every row's residual is zero on the constraints, so the
-    choice changes nothing else. The count is kept: at a loop's change point the rows still lose their
-    independence and the run stops with the named error. Nothing to do without redundant rows."""
-    sel = rhs.selection
-    if sel is None or not sel.redundant.size:
-        return
-    import scipy.linalg as sla
-
-    n = rhs.model.n
-    J = rhs.cset.terms(y[:n], t=t, base=rhs.plan.base_state(t)).J
-    _, _, piv = sla.qr(J.T, mode="economic", pivoting=True)
-    keep = np.sort(piv[:sel.rank])
-    if not np.array_equal(keep, rhs.keep):
-        rhs.keep = keep
-        rhs.row_changes = getattr(rhs, "row_changes", 0) + 1
+def project_state(rhs, t: float, y, *, args=None) -> tuple[np.ndarray, float]:
+    """``(y projected (E74), max |Phi| before)`` with the compiled projection; raises the named error where the
+    right-hand side fails (A not positive definite, a change point where the scene stops)."""
+    y = np.array(y, dtype=float)
+    if not has_rows(rhs):
+        return y, 0.0
+    args = rhs.fresh_args() if args is None else args
+    X = args[5]
+    m, n, xc, lay = _layout(rhs)
+    X[xc + lay[11] + 4] = 0.0
+    f = np.empty(rhs.dim)
+    counters = (np.zeros(4, np.int64), np.full(rhs.dim + 1, np.nan))
+    if not project(float(t), y, f, args, counters):
+        rhs.failure(float(counters[1][0]), counters[1][1:])
+    return y, float(X[xc + lay[11] + 4])
 
 
-def angle_guard(rhs, t, y):
-    """A floating link's ZYX angles at their chart's singularity (``|cos phi_y| <`` ``charts.SINGULAR_COS_MIN``):
-    the constrained path does not re-chart (E45), so it stops there with the named error, as an unconstrained run
-    with re-charting off does, instead of integrating through the lost digits of ``q''``."""
-    from .charts import SINGULAR_COS_MIN, floating_links
-
-    links = getattr(rhs, "_floating", None)
-    if links is None:
-        links = rhs._floating = floating_links(rhs.model)
-    for ln in links:
-        c = abs(np.cos(y[ln.angles[1]]))
-        if c < SINGULAR_COS_MIN:
-            raise DynamicsError(f"{rhs.where}: ZYX angles of link {ln.name!r} reach the singularity of their chart at "
-                                f"t = {t:.6g} s: |cos phi_y| = {c:.2e} < {SINGULAR_COS_MIN:g}; the constrained path does "
-                                "not re-chart them (docs/constraints.md, 'Loops on a floating base'): start the root "
-                                "further from phi_y = +-pi/2, or run without the constraints",
-                                q=y[:rhs.model.n], coordinates=tuple(rhs.model.coordinate_names[i] for i in ln.angles))
+def has_rows(rhs) -> bool:
+    SI = rhs.SI
+    return SI[S_CON] > 0 and SI[SI[S_CON] + CM] > 0
 
 
-def _stepper_failed(rhs, label, run, solver, msg):
-    """The run's error when the stepper gives up: the named error of the last failed solve when there is one
-    (:func:`trial_stage`), else the stepper's message."""
-    try:
-        rhs.solve(solver.t, solver.y)       # where it stopped: the named error, when the solve fails there
-    except DynamicsError:
-        raise
-    except (FloatingPointError, np.linalg.LinAlgError):
-        pass
-    failed = getattr(rhs, "failed", None)
-    if failed is not None and isinstance(failed[2], DynamicsError):
-        raise failed[2]
-    raise IntegrationError(f"{rhs.where}: {label} with projection could not finish "
-                           f"the run to t_end = {run.t_end:g} s: {msg} at t = {solver.t:.6g} s")
+def initial_state(plan, q, qd) -> tuple[np.ndarray, dict]:
+    """The initial state projected (E74) and what it moved; the redundant rows at ``q`` (E73) selected."""
+    from ..dynamics.constrained import independent_rows
 
-
-def _initial(rhs, q, qd):
-    """The initial state projected (E74), with what it moved."""
-    sel = rhs.select(q)
-    y0 = np.r_[q, qd, 0.0]
-    y, before = rhs.project(0.0, y0)
-    n = rhs.model.n
-    note = (f"initial state projected onto the constraints: |Phi| {before:.3g} -> "
-            f"{float(np.max(np.abs(rhs.cset.residual(y[:n])), initial=0.0)):.3g}; q moved by {np.max(np.abs(y[:n] - q)):.3g}, "
-            f"q' by {np.max(np.abs(y[n:2 * n] - qd)):.3g} (max over coordinates)")
-    return y, {"note": note, "residual_before": before, "q_moved": float(np.max(np.abs(y[:n] - q))),
-               "qd_moved": float(np.max(np.abs(y[n:2 * n] - qd))), "redundant": list(sel.notes),
+    rhs, cset = plan.rhs, plan.constraints.cset
+    q, qd = np.asarray(q, float), np.asarray(qd, float)
+    sel = independent_rows(cset.terms(q).J, cset.rows)
+    if cset.m:
+        set_keep(rhs.SI, sel.keep)
+    reset_constraint_stats(rhs.SI, rhs.X)
+    n = plan.model.n
+    y, before = project_state(rhs, 0.0, np.r_[q, qd, 0.0])
+    after = float(np.max(np.abs(cset.residual(y[:n])), initial=0.0))
+    note = (f"initial state projected onto the constraints: |Phi| {before:.3g} -> {after:.3g}; q moved by "
+            f"{np.max(np.abs(y[:n] - q), initial=0.0):.3g}, q' by {np.max(np.abs(y[n:2 * n] - qd), initial=0.0):.3g} "
+            "(max over coordinates)")
+    return y, {"note": note, "residual_before": before, "q_moved": float(np.max(np.abs(y[:n] - q), initial=0.0)),
+               "qd_moved": float(np.max(np.abs(y[n:2 * n] - qd), initial=0.0)), "redundant": list(sel.notes),
                "rank": sel.rank}
 
 
-def simulate_constrained(plan, run, q, qd, *, progress=None, max_wall=None, max_steps=10_000_000):
-    """The run of a plan with constraints (module doc) -> :class:`~urdf2links.integration.trajectory.Trajectory`."""
-    started, compiled0 = compilation.clock(), compilation.seconds()    # numba's compilation left out (one clock)
-    rhs = ConstrainedRHS(plan)
-    method = check_constrained_method(run, rhs.where)      # refused before any work: the method, scene, accepted
-    model, n = plan.model, plan.model.n
-    y, initial = _initial(rhs, np.asarray(q, float), np.asarray(qd, float))
-    t_eval = np.linspace(0.0, run.t_end, max(run.samples, 2))
-    Y = np.empty((t_eval.size, 2 * n + 1))
-    Y[0] = y
-    solver, label = constrained_stepper(rhs, y, run, rhs.where)
-    bar = Progress(run.t_end, label=f"{plan.scene.name} {method}+projection", enabled=progress)
-    k, steps, drift = 1, 0, 0.0
-    t0 = compilation.clock()
-    try:
-        while solver.status == "running":
-            msg = solver.step()
-            if solver.status == "failed":
-                _stepper_failed(rhs, label, run, solver, msg)
-            steps += 1
-            dense = solver.dense_output()
-            while k < t_eval.size and t_eval[k] <= solver.t:
-                Y[k] = rhs.project(t_eval[k], dense(t_eval[k]))[0] if t_eval[k] < solver.t else np.nan
-                k += 1
-            follow_rows(rhs, solver.t, solver.y)
-            angle_guard(rhs, solver.t, solver.y)
-            yp, before = rhs.project(solver.t, solver.y)
-            drift = max(drift, before)
-            solver.y = yp
-            solver.f = rhs.solve(solver.t, yp)[0]       # the first stage of the next step (FSAL): failures raise
-            if np.isnan(Y[k - 1, 0]):
-                Y[k - 1] = yp
-            bar(solver.t)
-            _limits(rhs, steps, max_steps, started, max_wall, solver.t)
-    finally:
-        bar.close()
-    wall = compilation.clock() - t0
-    return _trajectory(Trajectory, plan, rhs, run, t_eval, Y, steps, drift, initial, wall, (started, compiled0),
-                       method=method)
+def project_samples(plan, t, Y) -> None:
+    """Every sample row of ``Y`` (S, 2n + 1) projected in place (E74): dense-output samples lie between two
+    projected steps, off the constraints by up to one step's error."""
+    rhs = plan.rhs
+    if not has_rows(rhs):
+        return
+    args = rhs.fresh_args()
+    for i in range(len(t)):
+        Y[i] = project_state(rhs, t[i], Y[i], args=args)[0]
 
 
-def _limits(rhs, steps, max_steps, started, max_wall, t):
-    if steps > max_steps:
-        raise IntegrationError(f"{rhs.where}: more than max_steps = {max_steps} steps at t = {t:.6g} s")
-    if max_wall is not None and compilation.clock() - started > max_wall:
-        raise IntegrationError(f"{rhs.where}: max_wall = {max_wall:g} s spent at t = {t:.6g} s")
-
-
-def _trajectory(Trajectory, plan, rhs, run, t, Y, steps, drift, initial, wall, started, *, method):
-    model, n = plan.model, plan.model.n
-    qs, qds, W = Y[:, :n], Y[:, n:2 * n], Y[:, 2 * n]
-    E, V, h = plan.energies(t, qs, qds)
-    if rhs.closure.tendons:
-        V = V + np.array([rhs.closure.tendon_energy(q) for q in qs])
-        h = h + (V - plan.energies(t, qs, qds)[1])
-    lam = np.empty((t.size, len(rhs.keep)))
-    gen = np.empty((t.size, n))
-    res, rate = np.empty(t.size), np.empty(t.size)
-    for i in range(t.size):
-        follow_rows(rhs, t[i], Y[i])        # a floating base: the rows solved there (E73, E85)
-        _, lam[i], T = rhs.solve(t[i], Y[i])
-        gen[i] = T.J[rhs.keep].T @ lam[i]
-        res[i], rate[i] = np.max(np.abs(T.phi), initial=0.0), np.max(np.abs(T.rate), initial=0.0)
-    info = {"rows": list(rhs.cset.rows), "solved_rows": rhs.kept_rows, "residual": res, "rate_residual": rate,
-            "max_residual": float(res.max()), "max_step_drift": float(drift), "lambda": lam, "forces": gen,
-            "initial": initial, "method": f"{method} + projection after every step (E74), interpreted path"
-            + (" (auto: DOP853, the constrained path has no stiffness test)" if run.method == "auto" else ""),
-            "min_schur_pivot": rhs.min_pivot[0], "min_schur_pivot_t": rhs.min_pivot[1],
-            "row_changes": getattr(rhs, "row_changes", 0)}
-    stats = {"method": method, "scene_method": run.method, "integrator": f"{method}+projection", "rtol": run.rtol,
-             "atol": run.atol, "dt": run.dt, "nfev": rhs.nfev, "nsteps": steps, "njev": 0,
-             "stretches": [], "methods_used": f"{method} with projection", "wall_time": wall, "terms": plan.terms, "success": True, "message": "",
-             "recharting": False, "n_recharts": 0, "recharts": [], "segments": 1, "limit_excursions": [],
-             "spring_notes": list(plan.spring_set.notes), "constraints": info,
-             "run_s": compilation.clock() - started[0], "compile_s": compilation.seconds() - started[1]}
-    poses = {}
-    if plan.scene.link_poses:       # [record] link_poses
-        from .charts import link_poses
-
-        poses = {link: np.empty((t.size, 4, 4)) for link in plan.scene.link_poses}
-        for i in range(t.size):
-            P = link_poses(model, list(poses), qs[i], t=t[i], base=plan.base_state(t[i]))
-            for link in poses:
-                poses[link][i] = P[link]
-    return Trajectory(t=t, q=qs, qd=qds, coordinate_names=model.coordinate_names,
-                      energy={"kinetic": E, "potential": V, "work": W, "function": h, "error": h - h[0] - W},
-                      poses=poses, stats=stats, scene=plan.scene.name, robot=model.name)
+def constraint_stats(plan, t, Y, *, initial, method: str) -> dict:
+    """``Trajectory.stats["constraints"]`` (module doc) from the compiled right-hand side at every sample and
+    the run's statistics in the scene's scratch."""
+    rhs, cset = plan.rhs, plan.constraints.cset
+    n, S = plan.model.n, len(t)
+    keep = np.nonzero(kept(rhs.SI))[0] if cset.m else np.zeros(0, int)
+    lam, gen = np.zeros((S, keep.size)), np.zeros((S, n))
+    res, rate = np.zeros(S), np.zeros(S)
+    stats = {"min_schur_pivot": np.inf, "min_schur_pivot_t": 0.0, "events": [], "max_step_drift": 0.0}
+    if cset.m:
+        m, n_, xc, lay = _layout(rhs)
+        args = rhs.fresh_args()
+        X, out = args[5], np.empty(rhs.dim)
+        for i in range(S):
+            scene_rhs(float(t[i]), np.ascontiguousarray(Y[i]), out, *args)
+            phi = X[xc + lay[0]:xc + lay[0] + m]
+            J = X[xc + lay[2]:xc + lay[2] + m * n].reshape(m, n)
+            lam[i] = X[xc + lay[6]:xc + lay[6] + m][keep]
+            gen[i] = J[keep].T @ lam[i]
+            res[i], rate[i] = np.max(np.abs(phi)), np.max(np.abs(J @ Y[i, n:2 * n]))
+        Xr = rhs.X
+        st = Xr[xc + lay[11]:xc + lay[11] + 8]
+        ev = Xr[xc + lay[12]:xc + lay[12] + 3 * int(min(st[2], 32))].reshape(-1, 3)
+        stats = {"min_schur_pivot": float(st[0]), "min_schur_pivot_t": float(st[1]), "max_step_drift": float(st[4]),
+                 "events": [{"t": float(e[0]), "row": cset.rows[int(e[1])], "pivot": float(e[2]),
+                             "what": f"change point: row {cset.rows[int(e[1])]!r} dependent on the others at "
+                                     f"t = {e[0]:.6g} s (Schur pivot {e[2]:.3g}); dropped there, the run goes on"}
+                            for e in ev],
+                 "events_total": int(st[2])}
+    return {"rows": list(cset.rows), "solved_rows": [cset.rows[k] for k in keep], "residual": res,
+            "rate_residual": rate, "max_residual": float(res.max(initial=0.0)), "lambda": lam, "forces": gen,
+            "initial": initial, "method": method, **stats}

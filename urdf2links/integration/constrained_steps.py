@@ -1,5 +1,6 @@
-"""The steppers of the constrained path (:mod:`urdf2links.integration.constrained`): a scene's ``method`` and
-``dt`` honoured there, or refused by name.
+"""The methods of constrained runs, and the steppers of their oracle (:mod:`urdf2links.integration.constrained_oracle`):
+a scene's ``method`` and ``dt`` honoured, or refused by name. Issue 45: constrained scenes run in the compiled loops
+(RK4, RK45, DOP853, Radau5, auto: :data:`CONSTRAINED_METHODS`); the steppers below serve the oracle only.
 
 The constrained path takes one step at a time and projects the state onto ``Phi = 0``, ``Phi' = 0`` after every
 step (E74), so its stepper must accept a state changed between two steps. Accepted (:data:`CONSTRAINED_METHODS`):
@@ -24,29 +25,33 @@ import numpy as np
 
 from ..errors import SceneError
 
-__all__ = ["CONSTRAINED_METHODS", "RK4Stepper", "constrained_stepper", "check_constrained_method"]
+__all__ = ["CONSTRAINED_METHODS", "ORACLE_METHODS", "RK4Stepper", "constrained_stepper", "check_constrained_method"]
 
 #: The methods the constrained path runs (module doc); any other is refused by name.
-CONSTRAINED_METHODS = ("auto", "DOP853", "RK45", "RK4")
+CONSTRAINED_METHODS = ("auto", "DOP853", "RK45", "RK4", "Radau5")
+#: The oracle's (:mod:`urdf2links.integration.constrained_oracle`): scipy's pairs step by step, and RK4.
+ORACLE_METHODS = ("auto", "DOP853", "RK45", "RK4")
 
 
-def check_constrained_method(run, where: str) -> str:
-    """The method the constrained path runs for ``run`` (``auto`` -> ``DOP853``); a SceneError naming the method,
-    the scene ``where`` and the accepted methods otherwise."""
-    if run.method not in CONSTRAINED_METHODS:
-        raise SceneError(f"{where}: method {run.method!r} does not run on the constrained path (a scene with "
-                         "constraints or fixed tendons): accepted are DOP853 and RK45 (with the scene's rtol and atol), "
-                         "auto (runs DOP853: no stiffness test there) and RK4 (with dt); the state is projected "
-                         "onto the constraints after every step (docs/constraints.md)")
+def check_constrained_method(run, where: str, *, oracle: bool = False) -> str:
+    """The method a constrained run takes for ``run``; a SceneError naming the method, the scene ``where`` and the
+    accepted methods otherwise. Compiled (issue 45): :data:`CONSTRAINED_METHODS` as named (``auto`` with its
+    stretches); the oracle (``oracle``): :data:`ORACLE_METHODS`, ``auto`` -> ``DOP853``."""
+    if run.method not in (ORACLE_METHODS if oracle else CONSTRAINED_METHODS):
+        raise SceneError(f"{where}: method {run.method!r} does not run a scene with constraints or fixed tendons: "
+                         "accepted are DOP853 and RK45 (with the scene's rtol and atol), Radau5, auto (DOP853 and "
+                         "Radau5 in stretches) and RK4 (with dt), in the compiled loops, which project the state onto "
+                         "the constraints after every step; scipy's Radau, BDF, LSODA and the implicit midpoint rule "
+                         "take no projection (docs/constraints.md)")
     if run.method == "RK4" and run.dt is None:
         raise SceneError(f"{where}: method 'RK4' takes a fixed step on the constrained path too: give dt (seconds)")
-    return "DOP853" if run.method == "auto" else run.method
+    return "DOP853" if (run.method == "auto" and oracle) else run.method
 
 
 def constrained_stepper(rhs, y0, run, where: str):
     """The stepper of ``run``'s method from ``(0, y0)`` to ``run.t_end`` (scipy's OdeSolver interface: ``status``,
     ``step()``, ``t``, ``y``, ``f``, ``dense_output()``) and its label; ``rhs(t, y)`` the constrained y'."""
-    method = check_constrained_method(run, where)
+    method = check_constrained_method(run, where, oracle=True)
     if method == "RK4":
         return RK4Stepper(rhs, y0, run.t_end, run.dt), f"RK4 dt {run.dt:g}"
     from scipy.integrate import DOP853, RK45      # here: scipy.integrate takes 0.6 s to import

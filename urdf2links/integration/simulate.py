@@ -33,7 +33,8 @@ from ..scenes.plan import Plan, as_plan, compile_plan
 from ..scenes.scene import RunSettings, Scene
 from ..scenes.scene_checks import check_run
 from .charts import integrate_charted, link_poses
-from .constrained import simulate_constrained
+from .constrained import constraint_stats, initial_state, project_samples, refresh_rhs
+from .constrained_steps import check_constrained_method
 from .trajectory import TIMED_REGION, Trajectory
 
 __all__ = ["Trajectory", "simulate", "Progress", "warm_up", "record_compilation", "Compilation", "TIMED_REGION",
@@ -68,16 +69,45 @@ def simulate(scene_or_model, *, t_end: float | None = None, method: str | None =
     run = _run_settings(scene, t_end=t_end, method=method, rtol=rtol, atol=atol, dt=dt, samples=samples,
                         recharting=recharting)
     plan = plan or compile_plan(scene, model)
+    refresh_rhs(plan)       # issue 45: constraints replaced on a compiled plan are compiled in again
     q, qd = scene.initial_state(model)
     if q0 is not None:
         q = model.vector(q0, "q0").copy()
     if qd0 is not None:
         qd = model.vector(qd0, "qd0").copy()
-    if plan.constraints is not None:    # issue 36: constraints and fixed tendons take the interpreted path (E72)-(E76)
-        return simulate_constrained(plan, run, q, qd, progress=progress, max_wall=max_wall, max_steps=max_steps)
     started, compiled0 = compilation.clock(), compilation.seconds()
-    res = _integrate(plan, run, np.r_[q, qd, 0.0], progress=progress, max_wall=max_wall, max_steps=max_steps)
-    return _trajectory(plan, run, res, started=started, compiled0=compiled0, max_wall=max_wall)
+    if plan.constraints is None:
+        res = _integrate(plan, run, np.r_[q, qd, 0.0], progress=progress, max_wall=max_wall, max_steps=max_steps)
+        return _trajectory(plan, run, res, started=started, compiled0=compiled0, max_wall=max_wall)
+    # issue 45: constraints and fixed tendons in the compiled loops (E72)-(E77): the start projected, every
+    # accepted step projected inside the loops, the samples projected here (integration.constrained)
+    check_constrained_method(run, str(scene.path or scene.name))     # refused by name before any work
+    y0, initial = initial_state(plan, q, qd)
+    res = _integrate(plan, run, y0, progress=progress, max_wall=max_wall, max_steps=max_steps)
+    project_samples(plan, res.t, res.y)
+    if not res.recharts:
+        res.y_chart[:] = res.y
+    return _constrained_trajectory(plan, run, res, initial, started=started, compiled0=compiled0, max_wall=max_wall)
+
+
+def _constrained_trajectory(plan, run, res, initial, *, started, compiled0, max_wall) -> Trajectory:
+    """:func:`_trajectory` with the fixed tendons' springs in ``V`` and ``h`` (E76) and
+    ``stats["constraints"]`` (:func:`~urdf2links.integration.constrained.constraint_stats`)."""
+    traj = _trajectory(plan, run, res, started=started, compiled0=compiled0, max_wall=max_wall)
+    closure, n = plan.constraints, plan.n
+    if closure.tendons:
+        Vt = np.array([closure.tendon_energy(q) for q in traj.q])
+        for key in ("potential", "function"):
+            traj.energy[key] = traj.energy[key] + Vt
+        traj.energy["error"] = traj.energy["function"] - traj.energy["function"][0] - traj.energy["work"]
+    method = (f"{methods_used(run.method, res.stretches)} + projection after every step (E74), compiled "
+              f"(change point: {getattr(plan.scene, 'change_point', 'continue') or 'continue'})")
+    info = constraint_stats(plan, traj.t, np.c_[traj.q, traj.qd, traj.energy["work"]], initial=initial, method=method)
+    traj.stats["constraints"] = info
+    traj.stats["integrator"] = f"{run.method}+projection"
+    traj.stats["scene_method"] = plan.scene.run.method
+    traj.stats["wall_time"] = res.wall_time
+    return traj
 
 
 def _run_settings(scene: Scene, *, t_end, method, rtol, atol, dt, samples, recharting) -> RunSettings:

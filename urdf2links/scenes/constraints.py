@@ -59,12 +59,14 @@ class ConstraintSpec:
 
 
 def constraint_options(r, data: dict) -> dict:
-    """``[constraints]``: ``from_file`` (an MJCF file's equalities and fixed tendons act) and ``mimic`` (a
+    """``[constraints]``: ``from_file`` (an MJCF file's equalities and fixed tendons act), ``mimic`` (a
     URDF's ``<mimic>`` joints as joint constraints, when loaded with ``mimic = "independent"``); both default true
-    (issue 45: as in MuJoCo)."""
+    (issue 45: as in MuJoCo); and ``change_point`` (issue 45: ``"continue"``, the default, drops a row that loses
+    its independence there and goes on, the event named; ``"stop"`` stops with the named DynamicsError)."""
     t = data.get("constraints", {})
-    r.keys(t, ("from_file", "mimic"), "constraints")
-    out = {}
+    r.keys(t, ("from_file", "mimic", "change_point"), "constraints")
+    out = {"change_point": r.choice(t.get("change_point", "continue"), "constraints.change_point",
+                                    ("continue", "stop"))}        # issue 45: at a loop's change point
     for key, field_ in (("from_file", "file_constraints"), ("mimic", "mimic_constraints")):
         v = t.get(key, True)        # issue 45: the file's own equalities and mimic act unless the scene says not
         if not isinstance(v, bool):
@@ -242,7 +244,9 @@ def describe_constraints(sc: SceneConstraints | None, model) -> list[str]:
         lines.append(f"  tendon {td.describe()}")
     lines += [f"  note: {n}" for n in sc.notes]
     lines.append("  constraints: solved with multipliers (E72), projected after every step (E74); the run takes the "
-                 "interpreted path (DOP853 + projection, urdf2links.integration.constrained); points in the tree "
+                 "scene's method in the compiled loops (urdf2links.integration.constrained); at a change point "
+                 "[constraints] change_point decides (continue: the dependent row dropped there, the event named; stop: "
+                 "the named error); points in the tree "
                  "links' axes (urdf2links inspect ROBOT shows them)")
     return lines
 
@@ -251,9 +255,10 @@ def constraint_toml(scene, value) -> list[str]:
     """The scene's ``[constraints]`` options and ``[[constraint]]`` blocks as TOML lines (``value`` formats a
     value), for :func:`~urdf2links.scenes.scene_toml.scene_toml`."""
     out = []
-    if not getattr(scene, "file_constraints", True) or not getattr(scene, "mimic_constraints", True):
+    stop = getattr(scene, "change_point", "continue") == "stop"
+    if not getattr(scene, "file_constraints", True) or not getattr(scene, "mimic_constraints", True) or stop:
         out += ["[constraints]", f"from_file = {value(scene.file_constraints)}",
-                f"mimic = {value(scene.mimic_constraints)}", ""]
+                f"mimic = {value(scene.mimic_constraints)}"] + ([f"change_point = {value('stop')}"] if stop else []) + [""]
     for c in scene.constraints:
         out += ["[[constraint]]", f"name = {value(c.name)}", f"kind = {value(c.kind)}"]
         if c.kind == "joint":

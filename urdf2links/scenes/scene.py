@@ -124,6 +124,7 @@ class Scene:
     file_constraints: bool = True     # [constraints] from_file: an MJCF file's own equalities and fixed tendons act
                                       # (issue 45: on by default, as in MuJoCo; --open-loops or from_file = false drop them)
     mimic_constraints: bool = True
+    change_point: str = "continue"    # [constraints] change_point (issue 45): "continue" drops the row there, "stop"
     """``[constraints] mimic``: a URDF's ``<mimic>`` joints (loaded ``mimic = "independent"``) as exact joint
     constraints (E70); on by default since issue 45, as MuJoCo's URDF import makes each a joint equality."""
     contacts: tuple = ()          # [[contact]] blocks (issue 37): urdf2links.scenes.contact.ContactSpec

@@ -18,6 +18,7 @@ from collections import namedtuple
 
 import numpy as np
 
+from .constraint_arrays import CX_SIZE, KA, S_CON, S_XSIZE, constraint_arrays
 from .contact import contact_arrays
 from .functions import Constant, Sines, Table
 
@@ -35,8 +36,11 @@ __all__ = ["Scene", "SceneArrays", "compile_scene", "scene_view", "function_data
 S_ACT_PRM = 36                                      # per actuator: gain, b0, b1, b2, gear, cmin, cmax, fmin, fmax
 # issue 37: ground contact, a block after every other (urdf2links.scenes.contact_kernels reads it)
 (S_NCONTACT, S_CONTACT_LINK, S_CONTACT_DATA) = range(37, 40)
-SHEAD = 40
-KA = 9                                              # floats per actuator
+# issue 45: constraints and fixed tendons, compiled (urdf2links.scenes.constraint_kernels reads the block at
+# SI[S_CON]; 0 without one); S_XSIZE the scratch's size (scratch_size plus the constraints' part)
+# (S_CON, S_XSIZE) = 40, 41: defined in urdf2links.scenes.constraint_arrays (no import circle), imported above
+SHEAD = 42
+# KA = 9: floats per actuator, defined in urdf2links.scenes.constraint_arrays (tendon actuators use it too)
 ACT_CTRL_LIMITED, ACT_FORCE_LIMITED = 1, 2          # act_flags bits
 
 Scene = namedtuple("Scene", ["SI", "SF", "X"])
@@ -126,6 +130,8 @@ def _blocks(plan):
                                                                          else 0) for a in acts]
     act_prm = [[a.gain, *a.bias, a.gear, *(a.ctrlrange or (0.0, 0.0)), *(a.forcerange or (0.0, 0.0))] for a in acts]
     ct_fn = [fid(f) for f in plan.reference_funcs] if plan.reference_funcs else []
+    closure = getattr(plan, "constraints", None)      # issue 45: the fixed tendons' actuators' controls
+    tendon_fn = [fid(a.ctrl) for td in (closure.tendons if closure is not None else ()) for a in td.actuators]
     coupled = model.coupling is not None
     C, d = model.coupling if coupled else (np.zeros((0, 0)), np.zeros(0))
     g = np.zeros(3) if plan.gravity_vector is None else np.asarray(plan.gravity_vector, float)
@@ -140,12 +146,14 @@ def _blocks(plan):
     more_sizes = [len(acts), int(bool(ct_fn))]
     more_ints = [[a.index for a in acts], act_fn, act_flags, ct_fn]
     more_floats = [np.reshape(act_prm, (-1,))]
-    return sizes, ints, floats, more_sizes, more_ints, more_floats
+    return sizes, ints, floats, more_sizes, more_ints, more_floats, tendon_fn
 
 
-def compile_scene(plan) -> tuple[np.ndarray, np.ndarray]:
-    """``(SI, SF)`` of a :class:`~urdf2links.scenes.plan.Plan` (see the module doc)."""
-    sizes, ints, floats, more_sizes, more_ints, more_floats = _blocks(plan)
+def compile_scene(plan, *, constraints: bool = True, rows: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """``(SI, SF)`` of a :class:`~urdf2links.scenes.plan.Plan` (see the module doc); ``constraints`` False: the
+    free scene, without the constraints' and tendons' block (the oracle's free forces); ``rows`` False: the
+    fixed tendons kept, the constraint rows left out (the scene with its constraints removed, for benchmarks)."""
+    sizes, ints, floats, more_sizes, more_ints, more_floats, tendon_fn = _blocks(plan)
     ints = [np.asarray(a, dtype=np.int64).ravel() for a in ints + more_ints]
     floats = [np.asarray(a, dtype=float).ravel() for a in floats + more_floats]
     head = np.zeros(SHEAD, np.int64)
@@ -162,7 +170,15 @@ def compile_scene(plan) -> tuple[np.ndarray, np.ndarray]:
     head[S_NCONTACT] = c_links.size
     head[S_CONTACT_LINK] = SHEAD + sum(a.size for a in ints)
     head[S_CONTACT_DATA] = sum(a.size for a in floats)
-    return np.concatenate([head] + ints + [c_links]), np.concatenate(floats + [c_data])
+    SI, SF = np.concatenate([head] + ints + [c_links]), np.concatenate(floats + [c_data])
+    head_x = scratch_size(plan.model.n, plan.model.tree.n)
+    SI[S_XSIZE] = head_x
+    if constraints and getattr(plan, "constraints", None) is not None:     # issue 45: the constraints' block, last
+        ci, cf = constraint_arrays(plan, tendon_fn, sf_at=SF.size, x_at=head_x, rows=rows)
+        SI[S_CON] = SI.size
+        SI[S_XSIZE] = head_x + int(ci[CX_SIZE])
+        SI, SF = np.concatenate([SI, ci]), np.concatenate([SF, cf])
+    return SI, SF
 
 
 def scene_view(SI, SF) -> SceneArrays:

@@ -50,21 +50,24 @@ from ..dynamics.kernels import base_power, clear_wrenches, dynamics, energies, k
 from ..dynamics.model_kernels import reduce_mass, reduce_vector
 from ..dynamics.tree_arrays import W_B, W_Q, W_SIZE, Tree, nonneg
 from .contact_kernels import contact_potential, contact_wrenches   # issue 37
-from .scene_arrays import (S_C, S_CT, S_CT_FN, S_GRAV, S_NA, S_NCONTACT, S_REST, S_SPRING_IDX, S_STIFFNESS, Scene,
-                           compile_scene, scratch_size)
+from .constraint_kernels import FAIL_BASE, kkt, tendon_forces     # issue 45
+from .constraint_arrays import reset_constraint_stats
+from .scene_arrays import (S_C, S_CON, S_CT, S_CT_FN, S_GRAV, S_NA, S_NCONTACT, S_REST, S_SPRING_IDX, S_STIFFNESS,
+                           S_XSIZE, Scene, compile_scene)
 from .scene_inputs import _apply_loads, _base_values, _inputs, _springs, _tree_state, fn_eval
 
 __all__ = ["CompiledScene", "scene_rhs", "rhs_function", "rhs_signature", "scene_energies", "computed_torque",
            "ct_torque_at", "EFFECTS", "effects_of"]
 
 #: The effects compiled only into the scenes that have them (module doc), in the order of ``FX``.
-EFFECTS = ("loads", "actuators", "computed_torque", "coupled")
+EFFECTS = ("loads", "actuators", "computed_torque", "coupled", "constraints")
 
 
 def effects_of(SI) -> tuple:
     """``FX``: one marker per :data:`EFFECTS`, ``1`` when the compiled scene ``SI`` has the effect, else ``None``."""
     # "loads": every wrench on links, the scene's loads (forces, moments, gravcomp) or its contact (issue 37)
-    present = {"loads": SI[5] > 0 or SI[S_NCONTACT] > 0, "actuators": SI[S_NA] > 0, "computed_torque": SI[S_CT] > 0, "coupled": SI[4] != 0}
+    present = {"loads": SI[5] > 0 or SI[S_NCONTACT] > 0, "actuators": SI[S_NA] > 0, "computed_torque": SI[S_CT] > 0, "coupled": SI[4] != 0,
+               "constraints": SI[S_CON] > 0}     # issue 45: constraints and fixed tendons (E72), (E76)
     return tuple(1 if present[name] else None for name in EFFECTS)
 
 
@@ -211,12 +214,12 @@ def scene_rhs(t, y, out, TI, TF, W, SI, SF, X, rhs):
     return rhs(t, y, out, TI, TF, W, SI, SF, X)
 
 
-def _variant(loads, actuators, ct, coupled):
+def _variant(loads, actuators, ct, coupled, constraints):
     """The right-hand side of one combination of effects: :func:`_rhs` with its markers fixed (numba
     takes a closure's variables for constants, and caches each combination apart)."""
 
     def scene_rhs_of_effects(t, y, out, TI, TF, W, SI, SF, X):
-        return _rhs(t, y, out, Tree(TI, TF, W), Scene(SI, SF, X), loads, actuators, ct, coupled)
+        return _rhs(t, y, out, Tree(TI, TF, W), Scene(SI, SF, X), loads, actuators, ct, coupled, constraints)
 
     return scene_rhs_of_effects
 
@@ -248,7 +251,7 @@ def rhs_function(FX):
 
 
 @njit(inline="always")
-def _rhs(t, y, out, tree, scene, loads, actuators, ct, coupled):
+def _rhs(t, y, out, tree, scene, loads, actuators, ct, coupled, constraints):
     """:func:`scene_rhs` with the markers of :data:`EFFECTS` as arguments of their own (numba drops
     the code behind ``if marker is not None`` when a marker is None: module doc). Inlined into each
     :func:`_variant` (numba's ``inline="always"``, before typing: the markers are the closure's
@@ -297,6 +300,9 @@ def _rhs(t, y, out, tree, scene, loads, actuators, ct, coupled):
         pivot = ltdl(TI, W)
         if pivot < 0:
             ltdl_solve(TI, W, out, n)
+    if constraints is not None and pivot < 0:    # issue 45: the tendons (E76), then the KKT solve (E72)
+        P += tendon_forces(tree, scene, t, y, out, coupled is not None)
+        pivot = kkt(tree, scene, t, y, out, coupled is not None)
     if pivot >= 0:
         for i in range(out.size):
             out[i] = np.nan
@@ -355,13 +361,18 @@ class CompiledScene:
     compiled integration loops (:mod:`urdf2links.integration.loops`). A failing pivot raises the model's named
     :class:`~urdf2links.errors.DynamicsError`."""
 
-    def __init__(self, plan):
+    def __init__(self, plan, *, constraints: bool = True, rows: bool = True):
         self.plan = plan
         model = plan.model
-        self.SI, self.SF = compile_scene(plan)
+        # issue 45: constraints False: the free scene; rows False: its fixed tendons without the constraint rows
+        self.SI, self.SF = compile_scene(plan, constraints=constraints, rows=rows)
+        self.closure = getattr(plan, "constraints", None) if constraints else None
+        """The constraints compiled in (issue 45): a plan whose ``constraints`` were replaced since is compiled
+        again (:func:`urdf2links.integration.constrained.refresh_rhs`)."""
         self.I, self.F = model.compiled              # the tree flattened once, by the model
         self.W = np.zeros(int(self.I[W_SIZE]))
-        self.X = np.zeros(scratch_size(model.n, model.tree.n))
+        self.X = np.zeros(int(self.SI[S_XSIZE]))
+        reset_constraint_stats(self.SI, self.X)
         self.dim = 2 * model.n + 1
         self.FX = effects_of(self.SI)
         self._function = None
@@ -380,7 +391,9 @@ class CompiledScene:
 
     def fresh_args(self):
         """Arguments with their own scratch (for another thread)."""
-        return (self.I, self.F, np.zeros_like(self.W), self.SI, self.SF, np.zeros_like(self.X), self.function)
+        X = np.zeros_like(self.X)
+        reset_constraint_stats(self.SI, X)
+        return (self.I, self.F, np.zeros_like(self.W), self.SI, self.SF, X, self.function)
 
     def prepare(self, t, y):
         """Compile (or load from the cache) this scene's right-hand side and :func:`scene_rhs` before a
@@ -422,7 +435,12 @@ class CompiledScene:
         y = np.ascontiguousarray(y, dtype=float)
         if not np.all(np.isfinite(y)):
             return
-        if scene_rhs(float(t), y, np.empty(self.dim), *self.fresh_args()) >= 0:
+        code = scene_rhs(float(t), y, np.empty(self.dim), *self.fresh_args())
+        if code >= FAIL_BASE:       # issue 45: a constraint row dependent here, the scene stops at its change point
+            from .constraint_arrays import change_point_error
+
+            raise change_point_error(self.plan, float(t), y, int(code - FAIL_BASE))
+        if code >= 0:
             model = self.plan.model
             q = y[:model.n]
             raise model.not_positive_definite(model.mass_matrix(q, t=t, base=self.plan.base_state(t)), q)
@@ -431,3 +449,4 @@ class CompiledScene:
         """Raise the model's error at a state where the compiled solve failed."""
         self.check(t, y)
         raise FloatingPointError(f"compiled right-hand side failed at t={t!r} (y={y!r})")
+

@@ -58,6 +58,11 @@ not computed, see :mod:`urdf2links.scenes.plan`)::
     coordinate = "elbow"                    # when the model matches; other coordinates held at [initial]
     reference = { sines = [[0.5, 0.5]] }
 
+    [constraints]                           # closed loops (docs/constraints.md): from_file = true (an MJCF file's
+                                            # equalities and fixed tendons), mimic = true (URDF <mimic> as rows),
+    change_point = "continue"               # issue 45: at a loop's change point drop the dependent row there and
+                                            # go on, the event named ("continue", default), or "stop" (DynamicsError)
+
     [initial]
     q = { shoulder = 1.2 }                  # by coordinate name; unnamed coordinates start at 0
     qd = {}

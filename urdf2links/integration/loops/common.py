@@ -13,8 +13,16 @@ import numpy as np
 from numba import njit
 
 from ...compilation import one_signature
+from ...scenes.constraint_arrays import CKEEP, CM, CX, x_layout
+from ...scenes.constraint_kernels import schur_correction
+from ...dynamics.tree_arrays import Tree
+from ...scenes.scene_arrays import S_CON, Scene
 
-__all__ = ["AngleGuard", "evaluate", "rms", "finite", "guard_fires", "EPS"]
+__all__ = ["AngleGuard", "evaluate", "rms", "finite", "guard_fires", "EPS", "has_rows", "project", "settle",
+           "PROJECTION_TOL", "PROJECTION_MAXITER"]
+
+PROJECTION_TOL = 1e-13      # the Gauss-Newton projection stops at max |Phi| <= this (E74)
+PROJECTION_MAXITER = 30
 
 EPS = 2.220446049250313e-16
 
@@ -88,3 +96,78 @@ def evaluate(t, y, out, args, counters):
     for i in range(y.size):
         fail[1 + i] = y[i]
     return False
+
+
+# -- issue 45: the projection onto the constraints (E74), after every accepted step --------------------
+@one_signature
+@njit(cache=True)
+def has_rows(args):
+    """The compiled scene ``args`` has constraint rows (fixed tendons alone need no projection)."""
+    SI = args[3]
+    return SI[S_CON] > 0 and SI[SI[S_CON] + CM] > 0
+
+
+@one_signature
+@njit(cache=True)
+def project(t, y, f, args, counters):
+    """``y = (q, q', W)`` projected in place onto ``Phi = 0`` (Gauss-Newton ``q <- q - A^-1 J^T S^-1 Phi``
+    until ``max |Phi| <= PROJECTION_TOL`` or it stops decreasing) and ``Phi' = 0`` (``q' <- q' - A^-1 J^T S^-1
+    J q'``, the nearest in the metric of A) (E74), every term from the compiled right-hand side's own
+    evaluation (A's factor and the pivoted factor of S); ``f`` left as ``y'`` at the projected state. Records
+    the largest ``max |Phi|`` before a projection. False when an evaluation failed (``evaluate``)."""
+    SI, X = args[3], args[5]
+    tree, scene = Tree(args[0], args[1], args[2]), Scene(SI, args[4], X)
+    n, nt = SI[0], SI[1]
+    c0 = SI[S_CON]
+    m = SI[c0 + CM]
+    xc = SI[c0 + CX]
+    lay = x_layout(m, n, nt)
+    xphi, xj, xst = xc + lay[0], xc + lay[2], xc + lay[11]
+    keep = c0 + SI[c0 + CKEEP]
+    v = np.empty(m)
+    dq = np.empty(n)
+    last = np.inf
+    for it in range(PROJECTION_MAXITER + 1):
+        X[xst + 6] = 1.0 if it == 0 else 0.0      # the change-point events of accepted steps only
+        ok = evaluate(t, y, f, args, counters)
+        X[xst + 6] = 0.0
+        if not ok:
+            return False
+        res = 0.0
+        for k in range(m):
+            res = max(res, abs(X[xphi + k]))
+        if it == 0:
+            X[xst + 4] = max(X[xst + 4], res)
+            X[xst + 5] += 1.0
+        if res <= PROJECTION_TOL or res >= last or it == PROJECTION_MAXITER:
+            break
+        last = res
+        for k in range(m):
+            v[k] = X[xphi + k] if SI[keep + k] != 0 else 0.0
+        schur_correction(tree, scene, v, 0, dq)
+        for i in range(n):
+            y[i] -= dq[i]
+    rate = 0.0
+    for k in range(m):
+        s = 0.0
+        if SI[keep + k] != 0:
+            for i in range(n):
+                s += X[xj + k * n + i] * y[n + i]
+        v[k] = s
+        rate = max(rate, abs(s))
+    if rate > 0.0:
+        schur_correction(tree, scene, v, 0, dq)
+        for i in range(n):
+            y[n + i] -= dq[i]
+        if not evaluate(t, y, f, args, counters):
+            return False
+    return True
+
+
+@one_signature
+@njit(cache=True)
+def settle(t, y, f, args, counters):
+    """``f = y'(t, y)`` after a step; with constraint rows, ``y`` projected first (:func:`project`)."""
+    if has_rows(args):
+        return project(t, y, f, args, counters)
+    return evaluate(t, y, f, args, counters)

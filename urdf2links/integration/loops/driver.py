@@ -46,6 +46,11 @@ def _python_evaluate(t, y, out, args, counters):
     return False
 
 
+def _python_no_rows(args):
+    """:func:`~.common.has_rows` for a Python right-hand side: none."""
+    return False
+
+
 def _python_jacobian(t, y, f, J, args, counters):
     """The user's ``jac(t, y)`` (``args[1]``) in place of finite differences."""
     J[:, :] = args[1](t, y)
@@ -79,6 +84,8 @@ def _interpreted(*, user_jac: bool) -> dict:
     for module in (fixed, erk, radau):
         ns = dict(vars(module))
         ns["evaluate"] = _python_evaluate
+        ns["settle"] = _python_evaluate           # issue 45: a Python right-hand side carries no constraint rows
+        ns["has_rows"] = _python_no_rows
         _rebound(module, ns)
         if user_jac and module is fixed:
             ns["_jacobian"] = _python_jacobian

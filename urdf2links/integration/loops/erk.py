@@ -16,7 +16,7 @@ import numpy as np
 from numba import njit
 
 from ...compilation import one_signature
-from .common import evaluate, guard_fires, rms
+from .common import evaluate, guard_fires, has_rows, project, rms
 from .stiffness import E_DETECT, explicit_stiff
 
 __all__ = ["Tableau", "TABLEAUX", "initial_step", "erk_chunk"]
@@ -278,6 +278,10 @@ def erk_chunk(tab, ctl, state, store, guard, counters, chunk, args):
         for i in range(d):
             y[i] = y_new[i]
             f[i] = f_new[i]
+        if has_rows(args) and not project(t, y, f, args, counters):    # issue 45: onto the constraints (E74)
+            status = -2
+            break
+        for i in range(d):
             ys[stored, i] = y[i]
         ts[stored] = t
         stored += 1

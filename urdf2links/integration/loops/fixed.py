@@ -13,7 +13,7 @@ from numba import njit
 
 from ...compilation import one_signature
 
-from .common import EPS, evaluate, finite, guard_fires
+from .common import EPS, evaluate, finite, guard_fires, settle
 
 __all__ = ["rk4_chunk", "midpoint_chunk", "NEWTON_MAXITER", "MAX_HALVINGS"]
 
@@ -55,7 +55,7 @@ def rk4_chunk(grid, state, guard, counters, chunk, args):
         if ok:
             for j in range(d):
                 ys[i + 1, j] = y[j] + (h / 6.0) * (k1[j] + 2.0 * (k2[j] + k3[j]) + k4[j])
-            ok = evaluate(grid[i + 1], ys[i + 1], fs[i + 1], args, counters)
+            ok = settle(grid[i + 1], ys[i + 1], fs[i + 1], args, counters)     # issue 45: projected (E74)
         if not ok:
             status = -2
             break

@@ -56,7 +56,7 @@ from numba import njit
 from ...compilation import one_signature
 from scipy.integrate._ivp import radau as _sr
 
-from .common import EPS, evaluate, guard_fires
+from .common import EPS, evaluate, guard_fires, has_rows, project
 from .lu import lu_factor, lu_solve
 from .stiffness import JAC_REFRESH, MIN_IMPLICIT_STEPS, explicit_cheaper, spectral_radius
 
@@ -498,6 +498,9 @@ def radau_chunk(ctl, state, store, guard, counters, chunk, args):
             scal[i] = atol[i] + rtol * abs(y[i])
         status = _step(ctl, st, y, f0, scal, arrays, dense3, lin, args, counters)
         if status != 0:
+            break
+        if has_rows(args) and not project(st[R_T], y, f0, args, counters):     # issue 45: (E74)
+            status = -2
             break
         ts[stored] = st[R_T]
         for i in range(d):
