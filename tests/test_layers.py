@@ -22,8 +22,10 @@ LAYERS = [
               "urdf2links.numba_cache", "urdf2links.compilation", "urdf2links.robots")),
     ("dynamics", ("urdf2links.dynamics",)),
     ("parsers", ("urdf2links.parsers",)),
+    ("robot logs", ("urdf2links.robot_logs",)),
     ("scenes", ("urdf2links.scenes",)),
     ("integration", ("urdf2links.integration",)),
+    ("identification", ("urdf2links.identification",)),
     ("view", ("urdf2links.view",)),
     ("api", ("urdf2links",)),
     ("compare: shared output", ("urdf2links.compare.formatting", "urdf2links.compare.figures")),
@@ -128,6 +130,7 @@ def test_imports_go_downward(module):
     ("urdf2links.compare.tradeoff.study", "from ..corpus import rows"),
     ("urdf2links.compare.corpus.rows", "from ..check.config import read_config"),       # corpus -> check
     ("urdf2links.scenes.scene_toml", "from ..commands.options import INPUT"),           # scenes -> command line
+    ("urdf2links.robot_logs.checks", "from ..scenes.functions import SumOfSines"),       # robot logs -> scenes
     ("urdf2links.compare.commands", "def f():\n    from urdf2links.commands import run\n"),   # compare -> command line
 ])
 def test_a_planted_wrong_way_import_is_caught(module, planted):

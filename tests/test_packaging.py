@@ -273,7 +273,8 @@ def test_every_import_is_a_declared_dependency():
     runtime, extras = _declared_dependencies()
     # imported inside a function: xacro's ImportError -> URDFError naming the extra; Dask's -> ImportError
     # naming the extra (urdf2links.integration.distributed; the corpus runner takes a client the caller made)
-    optional = {"xacro": extras["xacro"], "distributed": extras["distributed"]}
+    optional = {"xacro": extras["xacro"], "distributed": extras["distributed"],
+                "logs": extras["logs"]}     # rosbags: LogFormatError naming the extra (tests/test_robot_logs.py)
     problems = []
     used = set()
     for module, files in sorted(_third_party_imports(["urdf2links", "compare"]).items()):

@@ -6,7 +6,7 @@ definite (E12). Modules, bottom to top:
 
 - :mod:`.parameters`: :class:`ParameterSet`, the layout of ``pi`` (each link's 10 H entries; per joint
   damping, Coulomb friction, armature, offset; fixed tendons), to and from a Model;
-- :mod:`.regressor`: :func:`regressor`, ``Y`` (S, n, p) from the compiled kinematics pass (E85);
+- :mod:`.regression`: :func:`regressor`, ``Y`` (S, n, p) from the compiled kinematics pass (E85);
 - :mod:`.energy`: :func:`energy_regressor` and :func:`energy_rows`, ``E + V`` linear in ``pi`` and the
   power balance over intervals, for data without accelerations (E86);
 - :mod:`.base`: :func:`base_parameters`, the identifiable combinations by a pivoted QR, named in link
@@ -20,9 +20,12 @@ The API is written down in docs/identify.md.
 """
 
 from .parameters import LINK_ENTRIES, ParameterSet, link_matrix, link_vector
-from .regressor import regressor, regressor_block
+from .regression import regressor, regressor_block
 from .base import BaseParameters, base_parameters
 from .fit import Identification, NormalEquations, identify, normal_equations
+from .energy import EnergyRows, energy_regressor, energy_rows
+from .consistency import Consistency, consistent_fit, min_eigenvalues
 
 __all__ = ["ParameterSet", "LINK_ENTRIES", "link_vector", "link_matrix", "regressor", "regressor_block",
-           "BaseParameters", "base_parameters", "Identification", "NormalEquations", "identify", "normal_equations"]
+           "BaseParameters", "base_parameters", "Identification", "NormalEquations", "identify", "normal_equations",
+           "EnergyRows", "energy_regressor", "energy_rows", "Consistency", "consistent_fit", "min_eigenvalues"]

@@ -24,13 +24,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .regressor import regressor
+from .regression import regressor
 
 __all__ = ["BaseParameters", "base_parameters", "combination_name", "PREFERENCE"]
 
 #: the pivot's column weight by kind of parameter: an unidentifiable direction is fixed by its heaviest-weighted
-#: parameter (a mass before a first moment before a planar moment before a joint's parameter)
-PREFERENCE = {"m": 8.0, "mx": 4.0, "my": 4.0, "mz": 4.0}
+#: parameter (an armature, which the first joint's link's moment about its axis always hides, before a mass
+#: before a first moment before a planar moment before a joint's damping, friction or offset)
+PREFERENCE = {"armature": 16.0, "m": 8.0, "mx": 4.0, "my": 4.0, "mz": 4.0}
 
 
 @dataclass(frozen=True, eq=False)
@@ -41,7 +42,8 @@ class BaseParameters:
     combination in link terms; ``null_space`` (p, k) the unidentifiable directions, as columns
     ``e_D - sum K e_I`` (one per dependent parameter, with a coefficient 1 on it); ``directions`` (k,) their
     names; ``singular_values`` of the stacked regressor; ``condition_number`` of the base regressor ``Y_I``;
-    ``rows`` how many rows (samples times coordinates) decided it; ``rtol`` the rank's tolerance."""
+    ``rows`` how many rows (samples times coordinates) decided it; ``rtol`` the rank's tolerance; ``pattern``
+    (n, p) bool: the regressor's entries non-zero on the samples, by coordinate."""
 
     params: object
     independent: np.ndarray
@@ -54,6 +56,7 @@ class BaseParameters:
     condition_number: float
     rows: int
     rtol: float
+    pattern: np.ndarray
 
     @property
     def r(self) -> int:
@@ -63,6 +66,13 @@ class BaseParameters:
         """The base parameters (r,) of a parameter vector (p,): ``pi_I + K pi_D``."""
         v = self.params.vector(values)
         return v[self.independent] + self.K @ v[self.dependent]
+
+    def row_columns(self) -> list:
+        """Per coordinate ``j``, the positions in ``independent`` of the base columns that are non-zero in
+        ``j``'s rows of the regressor on the samples (``pattern``): a leg's torques never see an arm's
+        links, so the fit's normal equations per coordinate keep only these (the sums' cost drops from
+        ``n r^2`` to ``sum r_j^2`` per sample)."""
+        return [np.flatnonzero(self.pattern[j][self.independent]) for j in range(self.pattern.shape[0])]
 
     def alone(self) -> np.ndarray:
         """(p,) bool: identified by itself (independent, with no other parameter in its combination)."""
@@ -95,7 +105,7 @@ def combination_name(names, head: int, terms, *, digits: int = 4) -> str:
 
 
 def _weights(params) -> np.ndarray:
-    return np.array([PREFERENCE.get(nm.split("_", 1)[0], 1.0) if kd == "link" else 0.5
+    return np.array([PREFERENCE.get(nm.split("_", 1)[0], 1.0) if kd == "link" else PREFERENCE.get(kd, 0.5)
                      for nm, kd in zip(params.names, params.kind)])
 
 
@@ -106,7 +116,7 @@ def spread(S: int, samples: int | None) -> np.ndarray:
     return np.unique(np.linspace(0, S - 1, samples).round().astype(np.int64))
 
 
-def base_parameters(params, q=None, qd=None, qdd=None, *, Y=None, samples: int | None = 2000, rtol: float = 1e-9,
+def base_parameters(params, q=None, qd=None, qdd=None, *, Y=None, samples: int | None = 500, rtol: float = 1e-9,
                     base=None, t=0.0, clean: float = 1e-10) -> BaseParameters:
     """The base parameters of the motion ``q, q', q''`` (S, n) (module doc, E87), from ``samples`` rows
     spread over it (None: all), or from a given regressor ``Y`` (S, n, p). ``rtol``: the rank's tolerance
@@ -118,7 +128,9 @@ def base_parameters(params, q=None, qd=None, qdd=None, *, Y=None, samples: int |
         q, qd, qdd = (np.atleast_2d(np.asarray(a, float)) for a in (q, qd, qdd))
         idx = spread(q.shape[0], samples)
         Y = regressor(params, q[idx], qd[idx], qdd[idx], base=base, t=t)
-    Ys = np.asarray(Y, float).reshape(-1, params.p)
+    Y = np.asarray(Y, float)
+    pattern = np.any(Y != 0.0, axis=0) if Y.ndim == 3 else np.ones((1, params.p), bool)
+    Ys = Y.reshape(-1, params.p)
     import scipy.linalg
 
     Rs = scipy.linalg.qr(Ys, mode="r", check_finite=False)[0][:params.p]     # Y = Q R: R's singular values are Y's
@@ -146,4 +158,4 @@ def base_parameters(params, q=None, qd=None, qdd=None, *, Y=None, samples: int |
     cond = float(sI[0] / sI[-1]) if sI[-1] > 0 else float("inf")
     return BaseParameters(params=params, independent=ind, dependent=dep, K=K, names=combos, null_space=null,
                           directions=directions, singular_values=s, condition_number=cond, rows=Ys.shape[0],
-                          rtol=rtol)
+                          rtol=rtol, pattern=pattern)

@@ -2,7 +2,7 @@
 
 With the base parameters of :mod:`urdf2links.identification.base` (E87), ``tau = Y_I beta`` over every
 sample. The samples are taken in blocks (``block`` rows): each block's regressor is computed (compiled,
-:func:`~urdf2links.identification.regressor.regressor_block`), its independent columns ``Y_I`` are kept
+:func:`~urdf2links.identification.regression.regressor_block`), its independent columns ``Y_I`` are kept
 and only the normal equations are accumulated, per coordinate ``j`` (``W_j`` its weight):
 
     G_j = sum Y_I[:, j]^T Y_I[:, j],   b_j = sum Y_I[:, j]^T tau_j,   t_j = sum tau_j^2
@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .base import BaseParameters, base_parameters
-from .regressor import regressor_block
+from .regression import regressor_columns
 from ..dynamics.rows import kernel_array
 
 __all__ = ["Identification", "NormalEquations", "identify", "normal_equations"]
@@ -65,18 +65,30 @@ def normal_equations(base: BaseParameters, q, qd, qdd, tau, *, block: int = 512,
     S = arrs[0].shape[0]
     ind = base.independent
     r = ind.size
-    G, b, tt = np.zeros((n, r, r)), np.zeros((n, r)), np.zeros(n)
-    buf = np.empty((min(block, S), n, p))
+    own = base.row_columns()                   # per coordinate: its structurally non-zero base columns (positions in ind)
+    ptr = np.concatenate(([0], np.cumsum([o.size for o in own]))).astype(np.int64)
+    cols = ind[np.concatenate(own)] if ptr[-1] else np.zeros(0, np.int64)
+    Gc = [np.zeros((o.size, o.size)) for o in own]
+    bc = [np.zeros(o.size) for o in own]
+    tt = np.zeros(n)
+    buf = np.empty(min(block, S) * ptr[-1])
     for s0 in range(0, S, block):
         s1 = min(S, s0 + block)
+        B = s1 - s0
         Q, QD, QDD = (kernel_array(a[s0:s1]) for a in arrs[:3])
-        Yb = regressor_block(params, Q, QD, QDD, buf[:s1 - s0], base=base_motion, t=t)
+        out = buf if B * ptr[-1] == buf.size else np.empty(B * ptr[-1])
+        regressor_columns(params, Q, QD, QDD, ptr, cols, out, base=base_motion, t=t)
         T = arrs[3][s0:s1]
         for j in range(n):
-            YI = Yb[:, j].take(ind, axis=1)         # (B, r), C-contiguous: BLAS below
-            G[j] += YI.T @ YI
-            b[j] += YI.T @ T[:, j]
-            tt[j] += T[:, j] @ T[:, j]
+            Yj = out[B * ptr[j]:B * ptr[j + 1]].reshape(B, -1)     # (B, r_j), contiguous: BLAS
+            Tj = np.ascontiguousarray(T[:, j])
+            Gc[j] += Yj.T @ Yj
+            bc[j] += Yj.T @ Tj
+            tt[j] += Tj @ Tj
+    G, b = np.zeros((n, r, r)), np.zeros((n, r))
+    for j, o in enumerate(own):
+        G[j][np.ix_(o, o)] = Gc[j]
+        b[j][o] = bc[j]
     return NormalEquations(base=base, G=G, b=b, t=tt, samples=S)
 
 
@@ -139,7 +151,7 @@ class Identification:
         return out
 
 
-def identify(params, q, qd, qdd, tau, *, base: BaseParameters | None = None, weights=None, samples: int | None = 2000,
+def identify(params, q, qd, qdd, tau, *, base: BaseParameters | None = None, weights=None, samples: int | None = 500,
              rtol: float = 1e-9, block: int = 512, consistent: bool = False, base_motion=None, t=0.0,
              consistency_options: dict | None = None) -> Identification:
     """Fit ``params`` to the samples ``q, q', q'', tau`` (S, n) (module doc): the base parameters from
@@ -147,7 +159,7 @@ def identify(params, q, qd, qdd, tau, *, base: BaseParameters | None = None, wei
     (n,) per coordinate (default 1; e.g. the inverse of each joint's noise). ``consistent=True``: every
     link's H positive definite (E88, :func:`~urdf2links.identification.consistency.consistent_fit`,
     options ``consistency_options``). ``tau``: the joints' generalized forces, applied loads already
-    subtracted (:func:`~urdf2links.identification.regressor.regressor`)."""
+    subtracted (:func:`~urdf2links.identification.regression.regressor`)."""
     if base is None:
         base = base_parameters(params, q, qd, qdd, samples=samples, rtol=rtol, base=base_motion, t=t)
     ne = normal_equations(base, q, qd, qdd, tau, block=block, base_motion=base_motion, t=t)

@@ -220,10 +220,23 @@ class ParameterSet:
         from ..dynamics.model import Model
 
         v = self.vector(values)
-        tree = dataclasses.replace(self.model.tree, H=self.H(v), armature=self.armature(v))
+        arm = self.armature(v)
+        notes = []
+        tiny = (arm < 0) & (arm >= -1e-12 * max(1.0, float(np.abs(arm).max())))    # a fitted zero's rounding
+        if np.any(tiny):
+            notes.append(f"armature of {[self.model.tree.coordinate_names[i] for i in np.flatnonzero(tiny)]} "
+                         f"was negative at rounding level (>= -1e-12): written as 0")
+            arm = np.where(tiny, 0.0, arm)
+        if np.any(arm < 0):
+            bad = [f"{self.names[c]} = {v[c]:.6g}" for _, _, _, c in self.arm_units if v[c] < 0]
+            raise ValueError(f"model {self.model.name!r}: a negative armature cannot be written into a model ({', '.join(bad)}); "
+                             "the consistent fit (identify(..., consistent=True)) keeps it >= 0")
+        tree = dataclasses.replace(self.model.tree, H=self.H(v), armature=arm)
         m = self.model
         info = copy.deepcopy(m.info)
         info["identified"] = True
+        if notes:
+            info["identification_notes"] = notes
         coupling = None if m.coupling is None else (*m.coupling, m.coordinate_names)
         return Model(tree, gravity=m.gravity_vector, coupling=coupling, name=m.name, source=m.source, audit=m.audit,
                      info=info)

@@ -34,7 +34,7 @@ from ..dynamics.model_kernels import chunks
 from ..dynamics.rows import base_rows, kernel_array
 from ..dynamics.tree_arrays import AC, KL, O_, W_COORD, W_LINK, W_BASE, W_SIZE, WV, I_PARENT, Tree, nonneg
 
-__all__ = ["regressor", "regressor_block", "link_coordinates"]
+__all__ = ["regressor", "regressor_block", "regressor_columns", "link_coordinates"]
 
 
 def link_coordinates(tree) -> tuple[np.ndarray, np.ndarray]:
@@ -231,6 +231,32 @@ def regressor_batch(TI, TF, Q, QD, QDD, BASE, has_base, gx, gy, gz, C, d, couple
                           gx, gy, gz, C, d, coupled, link_col, lc_ptr, lc_idx, arm, jcols, tcoef, tcols, vs, OUT[b])
 
 
+@njit(cache=True, parallel=True)
+def selected_batch(TI, TF, Q, QD, QDD, BASE, has_base, gx, gy, gz, C, d, coupled, link_col, lc_ptr, lc_idx, arm,
+                   jcols, tcoef, tcols, vs, p, ptr, cols, OUT, nc):
+    """Each coordinate's own columns of every row's ``Y`` into ``OUT`` (flat): coordinate ``j``'s columns are
+    ``cols[ptr[j]:ptr[j + 1]]`` (r_j) and its block ``OUT[S ptr[j]:S ptr[j + 1]]`` is the (S, r_j) matrix of
+    them, row-major. Each row's whole ``Y`` (n, p) stays in a scratch in cache; the blocks are ready for
+    BLAS (:func:`urdf2links.identification.fit.normal_equations`)."""
+    B, nb = Q.shape[0], BASE.shape[0]
+    nt = TI[1]
+    n = Q.shape[1]
+    for c in prange(nc):
+        W = np.empty(TI[W_SIZE])
+        X = np.empty(3 * nt)
+        YT = np.empty((nt if coupled else 0, p))
+        Phi = np.empty((10, 6))
+        Y = np.empty((n, p))
+        for b in range(c * B // nc, (c + 1) * B // nc):
+            regressor_row(TI, TF, W, X, YT, Phi, Q[b], QD[b], QDD[b], BASE[b if nb > 1 else 0], has_base,
+                          gx, gy, gz, C, d, coupled, link_col, lc_ptr, lc_idx, arm, jcols, tcoef, tcols, vs, Y)
+            for j in range(n):
+                rj = ptr[j + 1] - ptr[j]
+                o = B * ptr[j] + b * rj
+                for a in range(rj):
+                    OUT[o + a] = Y[j, cols[ptr[j] + a]]
+
+
 class _Compiled:
     """The arrays of one ParameterSet the compiled rows take, built once per set (cached on it)."""
 
@@ -267,6 +293,19 @@ def regressor_block(params, Q, QD, QDD, out, *, base=None, t=0.0, gravity: bool 
     g = k.g if gravity else np.zeros(3)
     regressor_batch(k.TI, k.TF, Q, QD, QDD, BASE, has_base, g[0], g[1], g[2], k.C, k.d, k.coupled, k.link_col,
                     k.lc_ptr, k.lc_idx, k.arm, k.jcols, k.tcoef, k.tcols, params.slip_speed, out, chunks(S))
+    return out
+
+
+def regressor_columns(params, Q, QD, QDD, ptr, cols, out, *, base=None, t=0.0, gravity: bool = True) -> np.ndarray:
+    """Coordinate ``j``'s columns ``cols[ptr[j]:ptr[j + 1]]`` of ``Y`` of the rows ``Q``, ``QD``, ``QDD`` (S, n)
+    into ``out`` (S ptr[n],): block ``j`` is the (S, r_j) matrix ``out[S ptr[j]:S ptr[j + 1]]`` (:func:`selected_batch`)."""
+    k = compiled(params)
+    S = Q.shape[0]
+    BASE, has_base = base_rows(base, t, S, batched=True)
+    g = k.g if gravity else np.zeros(3)
+    selected_batch(k.TI, k.TF, Q, QD, QDD, BASE, has_base, g[0], g[1], g[2], k.C, k.d, k.coupled, k.link_col,
+                   k.lc_ptr, k.lc_idx, k.arm, k.jcols, k.tcoef, k.tcols, params.slip_speed, params.p,
+                   np.ascontiguousarray(ptr, np.int64), np.ascontiguousarray(cols, np.int64), out, chunks(S))
     return out
 
 
