@@ -8,13 +8,15 @@
 - the joint terms in closed form (damping ``q'``, Coulomb ``q' / sqrt(q'^2 + v_s^2)`` (E79), offset 1,
   armature: ``Model.inverse_dynamics`` of a model with that armature, E49), coupled (mimic) coordinates
   (E42) and fixed tendons (E76);
+- MJCF armature (a hinge's own unit, a ball's or free body's one unit on three angles) and a moving base;
 - batches equal to the single-state calls to the bit.
 
 Tolerances: ``Y pi`` and inverse dynamics are the same wrenches summed in another order: 1e-12 relative to
 the largest ``|tau|`` (measured ~1e-15). Against Pinocchio 1e-10 relative to the largest entry of its mapped
 regressor (another code; measured ~1e-14), as tests/test_pinocchio.py.
 Planted wrong cases, seen to fail once: the sign of one planar-moment column (``_jn`` with +1 on ``Hxy``:
-17 of 22 failed) and a column map with ``X^-T`` for ``X^-1`` (6 of 7 robots failed).
+17 of 22 failed), a column map with ``X^-T`` for ``X^-1`` (6 of 7 robots failed), and a ball's armature
+column without ``omega_p x (omega_p - omega_s)`` (the ball and free models failed).
 """
 
 from __future__ import annotations
@@ -191,3 +193,33 @@ def test_parameter_layout_round_trip():
         ParameterSet.from_model(model, damping={"nope": 1.0})
     with pytest.raises(ValueError, match="shape"):
         regressor(params, np.zeros(2), np.zeros(3), np.zeros(3))
+
+
+# -- MJCF armature (hinges, balls, a free body), a moving base ------------------------------------------------
+@pytest.fixture(scope="module")
+def mjcf_files(tmp_path_factory):
+    from mjcf_models import write_models
+
+    return write_models(tmp_path_factory.mktemp("mjcf_ident"))
+
+
+@pytest.mark.parametrize("name", ["hinge_anchor", "ball", "free", "multi_joint"])
+def test_armature_units_and_a_moving_base(mjcf_files, name):
+    """MJCF models with armature (E49): a hinge's own unit and a ball's or free body's one unit on its three
+    angles; ``Y pi`` equals inverse dynamics, also under a moving base {A} (E13), per row."""
+    from urdf2links import BaseState, load_mjcf
+
+    model = load_mjcf(mjcf_files[name])
+    params = ParameterSet.from_model(model)
+    assert any(k == "armature" for k in params.kind)
+    rng = np.random.default_rng(16)
+    S = 5
+    Q = model.info["q0"] + rng.uniform(-1, 1, (S, model.n))
+    QD, QDD = rng.normal(size=(S, model.n)), rng.normal(size=(S, model.n))
+    tau = model.inverse_dynamics(Q, QD, QDD)
+    Y = regressor(params, Q, QD, QDD)
+    assert np.abs(Y @ params.values - tau).max() < TOL * np.abs(tau).max()
+    base = BaseState(rng.normal(size=(S, 6)), rng.normal(size=(S, 6)), rng.normal(size=(S, 6)))
+    tau = model.inverse_dynamics(Q, QD, QDD, base=base)
+    Y = regressor(params, Q, QD, QDD, base=base)
+    assert np.abs(Y @ params.values - tau).max() < TOL * np.abs(tau).max()

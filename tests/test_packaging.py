@@ -274,7 +274,8 @@ def test_every_import_is_a_declared_dependency():
     # imported inside a function: xacro's ImportError -> URDFError naming the extra; Dask's -> ImportError
     # naming the extra (urdf2links.integration.distributed; the corpus runner takes a client the caller made)
     optional = {"xacro": extras["xacro"], "distributed": extras["distributed"],
-                "logs": extras["logs"]}     # rosbags: LogFormatError naming the extra (tests/test_robot_logs.py)
+                "logs": extras["logs"],     # rosbags: LogFormatError naming the extra (tests/test_robot_logs.py)
+                "identify": extras["identify"]}     # cvxpy: ImportError naming the extra (identification.consistency)
     problems = []
     used = set()
     for module, files in sorted(_third_party_imports(["urdf2links", "compare"]).items()):

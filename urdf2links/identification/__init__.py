@@ -22,10 +22,12 @@ The API is written down in docs/identify.md.
 from .parameters import LINK_ENTRIES, ParameterSet, link_matrix, link_vector
 from .regression import regressor, regressor_block
 from .base import BaseParameters, base_parameters
-from .fit import Identification, NormalEquations, identify, normal_equations
+from .fit import (Identification, NormalEquations, fit_rows, identify, normal_equations, project_constraints,
+                  solve_normal_equations)
 from .energy import EnergyRows, energy_regressor, energy_rows
 from .consistency import Consistency, consistent_fit, min_eigenvalues
 
 __all__ = ["ParameterSet", "LINK_ENTRIES", "link_vector", "link_matrix", "regressor", "regressor_block",
-           "BaseParameters", "base_parameters", "Identification", "NormalEquations", "identify", "normal_equations",
+           "BaseParameters", "base_parameters", "Identification", "NormalEquations", "identify", "normal_equations", "fit_rows",
+           "solve_normal_equations", "project_constraints",
            "EnergyRows", "energy_regressor", "energy_rows", "Consistency", "consistent_fit", "min_eigenvalues"]

@@ -116,7 +116,7 @@ def spread(S: int, samples: int | None) -> np.ndarray:
     return np.unique(np.linspace(0, S - 1, samples).round().astype(np.int64))
 
 
-def base_parameters(params, q=None, qd=None, qdd=None, *, Y=None, samples: int | None = 500, rtol: float = 1e-9,
+def base_parameters(params, q=None, qd=None, qdd=None, *, Y=None, samples: int | None = 200, rtol: float = 1e-9,
                     base=None, t=0.0, clean: float = 1e-10) -> BaseParameters:
     """The base parameters of the motion ``q, q', q''`` (S, n) (module doc, E87), from ``samples`` rows
     spread over it (None: all), or from a given regressor ``Y`` (S, n, p). ``rtol``: the rank's tolerance

@@ -26,8 +26,10 @@ grow with the samples (the normal equations hold them): a 7-joint arm (146 param
 tens of milliseconds. cvxpy and clarabel are the optional extra ``identify`` (pyproject.toml).
 
 :func:`consistent_fit` returns the fit with :class:`Consistency` attached: the consistent values, each
-link's smallest eigenvalue of H before (least squares) and after, and for every link the fit had to move,
-a sentence saying so.
+link's smallest eigenvalue of H in the least-squares fit, in the same program solved without its
+constraints (a linear solve: what the regularisation alone gives) and in the consistent fit; a link the
+constraint moved (it differs from that free solution) gets a sentence saying what moved and why, and so
+does a joint term held at zero.
 """
 
 from __future__ import annotations
@@ -45,16 +47,20 @@ __all__ = ["Consistency", "consistent_fit", "min_eigenvalues"]
 
 @dataclass(frozen=True)
 class Consistency:
-    """``values`` (p,) the consistent parameters; ``links`` the moving links; ``eig_before``, ``eig_after``
-    (links,) each link's smallest eigenvalue of H (least squares, consistent); ``moved`` the links whose
-    least-squares H was not positive definite or whose parameters moved by more than ``tolerance`` of
-    their scale, with ``notes`` (one sentence each); ``rms_increase`` the torque residual's root mean square
+    """``values`` (p,) the consistent parameters; ``free`` (p,) the same program's solution without the
+    constraints (a linear solve: what the regularisation alone does); ``links`` the moving links;
+    ``eig_before``, ``eig_free``, ``eig_after`` (links,) each link's smallest eigenvalue of H in the
+    least-squares fit, the free solution and the consistent one; ``moved`` the links the constraint moved
+    (a parameter differs from the free solution by more than ``tolerance`` of its scale: the constraint was
+    active there), with ``notes`` (one sentence each); ``rms_increase`` the torque residual's root mean square
     added over the least-squares fit; ``status`` the solver's; ``seconds`` its time."""
 
     values: np.ndarray
     links: tuple
     eig_before: np.ndarray
+    eig_free: np.ndarray
     eig_after: np.ndarray
+    free: np.ndarray
     moved: tuple
     notes: tuple
     rms_increase: float
@@ -90,6 +96,24 @@ def _scales(params) -> np.ndarray:
     return s
 
 
+def _beta_map(params, base) -> np.ndarray:
+    """M (r, p) with ``beta = M pi`` (E87)."""
+    M = np.zeros((base.r, params.p))
+    M[np.arange(base.r), base.independent] = 1.0
+    if base.dependent.size:
+        M[:, base.dependent] = base.K
+    return M
+
+
+def _free_solution(params, base, L, beta_ls, lam, s):
+    """The program of the module doc without its constraints, in the scaled unknowns ``z`` (``pi = pi_desc +
+    s z``): ``(B^T B + lam 1) z = B^T L (beta_ls - M pi_desc)``, ``B = L M diag(s)``."""
+    M = _beta_map(params, base)
+    B = L @ M * s[None, :]
+    z = np.linalg.solve(B.T @ B + lam * np.eye(params.p), B.T @ (L @ (beta_ls - M @ params.values)))
+    return params.values + s * z
+
+
 def consistent_fit(fit, *, regularization: float = 1e-4, margin: float = 1e-9, tolerance: float = 1e-3,
                    solver: str = "CLARABEL"):
     """``fit`` (an :class:`~urdf2links.identification.fit.Identification` with its normal equations) with
@@ -111,10 +135,12 @@ def consistent_fit(fit, *, regularization: float = 1e-4, margin: float = 1e-9, t
     L = np.linalg.cholesky(G / np.outer(d, d) + 1e-12 * np.eye(len(d))).T * d[None, :] / np.sqrt(Sn)
     s = _scales(params)
     mean_t2 = float(np.sum(fit.weights ** 2 * ne.t) / Sn)
-    x = cp.Variable(params.p)
-    beta = x[base.independent] + base.K @ x[base.dependent] if base.dependent.size else x[base.independent]
-    objective = cp.sum_squares(L @ (beta - fit.beta)) + regularization * mean_t2 * cp.sum_squares(
-        cp.multiply(1.0 / s, x - params.values))
+    # the unknowns scaled: x = pi_desc + s z, z of order 1 (the parameters' units differ by decades)
+    M = _beta_map(params, base)
+    z = cp.Variable(params.p)
+    x = params.values + cp.multiply(s, z)
+    objective = cp.sum_squares(L @ (M @ params.values - fit.beta) + (L @ M * s[None, :]) @ z) \
+        + regularization * mean_t2 * cp.sum_squares(z)
     E = [link_matrix(np.eye(10)[k]) for k in range(10)]
     cons = []
     for c in params.link_col:
@@ -127,27 +153,32 @@ def consistent_fit(fit, *, regularization: float = 1e-4, margin: float = 1e-9, t
         cons.append(x[nonneg] >= 0)
     prob = cp.Problem(cp.Minimize(objective), cons)
     prob.solve(solver=solver)
-    if prob.status not in ("optimal", "optimal_inaccurate") or x.value is None:
+    if prob.status not in ("optimal", "optimal_inaccurate") or z.value is None:
         raise RuntimeError(f"the consistent fit's semidefinite program ended {prob.status!r} (solver {solver}); "
                            "more excitation, or a larger regularization, would help")
-    v = np.asarray(x.value, float)
+    v = params.values + s * np.asarray(z.value, float)
+    free = _free_solution(params, base, L, fit.beta, regularization * mean_t2, s)
     links, before = min_eigenvalues(params, fit.values)
+    _, eig_free = min_eigenvalues(params, free)
     _, after = min_eigenvalues(params, v)
     moved, notes = [], []
-    for ln, b, a in zip(links, before, after):
+    for ln, e, a in zip(links, eig_free, after):
         sl = params.link_parameters(ln)
-        dv = (v[sl] - fit.values[sl]) / s[sl]
+        dv = (v[sl] - free[sl]) / s[sl]
         k = int(np.argmax(np.abs(dv)))
-        if b <= 0 or abs(dv[k]) > tolerance:
+        if abs(dv[k]) > tolerance:
             moved.append(ln)
-            why = (f"its least-squares H was not positive definite (smallest eigenvalue {b:.3g})" if b <= 0 else
-                   "its least-squares H was positive definite: moved with the links the constraint moved, or "
-                   "toward the description where the data do not see it")
-            notes.append(f"link {ln!r}: moved {params.names[sl.start + k]} from {fit.values[sl.start + k]:.6g} to "
-                         f"{v[sl.start + k]:.6g} ({why}); smallest eigenvalue of H now {a:.3g}")
+            notes.append(f"link {ln!r}: moved to stay physically consistent; the largest change is "
+                         f"{params.names[sl.start + k]} from {free[sl.start + k]:.6g} to {v[sl.start + k]:.6g} "
+                         f"({dv[k]:+.3g} of its scale); the smallest eigenvalue of H was {e:.3g} without the "
+                         f"constraint, {a:.3g} with it")
+    for k in nonneg:
+        if free[k] < 0.0:
+            notes.append(f"{params.names[k]}: {free[k]:.6g} without the constraint, held at {v[k]:.3g} (>= 0)")
     db = base.beta(v) - fit.beta
     rms_inc = float(np.sqrt(max(db @ G @ db, 0.0) / Sn))
-    cons_obj = Consistency(values=v, links=links, eig_before=before, eig_after=after, moved=tuple(moved),
+    cons_obj = Consistency(values=v, links=links, eig_before=before, eig_free=eig_free, eig_after=after,
+                           free=free, moved=tuple(moved),
                            notes=tuple(notes), rms_increase=rms_inc, status=str(prob.status),
                            seconds=time.perf_counter() - t0)
     return dataclasses.replace(fit, consistency=cons_obj)

@@ -28,7 +28,8 @@ from .base import BaseParameters, base_parameters
 from .regression import regressor_columns
 from ..dynamics.rows import kernel_array
 
-__all__ = ["Identification", "NormalEquations", "identify", "normal_equations"]
+__all__ = ["Identification", "NormalEquations", "identify", "normal_equations", "fit_rows", "solve_normal_equations",
+           "project_constraints"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -151,7 +152,7 @@ class Identification:
         return out
 
 
-def identify(params, q, qd, qdd, tau, *, base: BaseParameters | None = None, weights=None, samples: int | None = 500,
+def identify(params, q, qd, qdd, tau, *, base: BaseParameters | None = None, weights=None, samples: int | None = 200,
              rtol: float = 1e-9, block: int = 512, consistent: bool = False, base_motion=None, t=0.0,
              consistency_options: dict | None = None) -> Identification:
     """Fit ``params`` to the samples ``q, q', q'', tau`` (S, n) (module doc): the base parameters from
@@ -163,12 +164,56 @@ def identify(params, q, qd, qdd, tau, *, base: BaseParameters | None = None, wei
     if base is None:
         base = base_parameters(params, q, qd, qdd, samples=samples, rtol=rtol, base=base_motion, t=t)
     ne = normal_equations(base, q, qd, qdd, tau, block=block, base_motion=base_motion, t=t)
-    w = np.ones(params.n) if weights is None else np.asarray(weights, float)
-    if w.shape != (params.n,) or np.any(w <= 0):
-        raise ValueError(f"weights must be {params.n} positive numbers (one per coordinate), got {weights!r}")
+    return solve_normal_equations(ne, weights=weights, consistent=consistent, consistency_options=consistency_options)
+
+
+def fit_rows(params, Y, y, *, base: BaseParameters | None = None, rtol: float = 1e-9, consistent: bool = False,
+             consistency_options: dict | None = None) -> Identification:
+    """The same fit from given rows: ``Y`` (K, p) with ``Y pi = y`` (K,), e.g. the power balance's rows of
+    :func:`~urdf2links.identification.energy.energy_rows` (E86), or the regressor's rows projected onto a
+    constraint's null space (``N^T Y``, ``N^T tau`` remove the unknown forces ``J^T lambda`` of joint or tendon
+    equalities, E70). One group of rows: ``rms_before``, ``rms_after`` are (1,)."""
+    Y = np.asarray(Y, float)
+    y = np.asarray(y, float)
+    if Y.ndim != 2 or Y.shape[1] != params.p or y.shape != (Y.shape[0],):
+        raise ValueError(f"fit_rows needs Y (K, {params.p}) and y (K,); got {Y.shape}, {y.shape}")
+    if base is None:
+        base = base_parameters(params, Y=Y[:, None, :], rtol=rtol)
+    YI = Y[:, base.independent]
+    ne = NormalEquations(base=base, G=(YI.T @ YI)[None], b=(YI.T @ y)[None], t=np.array([y @ y]), samples=Y.shape[0])
+    return solve_normal_equations(ne, weights=np.ones(1), consistent=consistent,
+                                  consistency_options=consistency_options)
+
+
+def project_constraints(Y, tau, J) -> tuple[np.ndarray, np.ndarray]:
+    """Rows free of the constraint forces of constant linear equalities ``J q = c`` (J (k, n): a joint
+    coupling, or a tendon equality on fixed tendons' lengths, E70, E76): with ``N`` (n, n - k) an orthonormal
+    basis of ``J``'s null space, ``N^T tau = N^T Y pi`` holds whatever the multipliers (``N^T J^T = 0``).
+    Returns ``(N^T Y`` stacked (S (n - k), p), ``N^T tau`` (S (n - k),)) for :func:`fit_rows`."""
+    import scipy.linalg
+
+    Y, tau, J = (np.asarray(a, float) for a in (Y, tau, J))
+    J = np.atleast_2d(J)
+    if Y.ndim != 3 or tau.shape != Y.shape[:2] or J.shape[1] != Y.shape[1]:
+        raise ValueError(f"project_constraints needs Y (S, n, p), tau (S, n), J (k, n); got {Y.shape}, {tau.shape}, "
+                         f"{J.shape}")
+    N = scipy.linalg.null_space(J)
+    return np.einsum("jm,sjp->smp", N, Y).reshape(-1, Y.shape[2]), (tau @ N).reshape(-1)
+
+
+def solve_normal_equations(ne: NormalEquations, *, weights=None, consistent: bool = False,
+                           consistency_options: dict | None = None) -> Identification:
+    """The fit (module doc) from accumulated normal equations: ``weights`` (one per group of rows, the
+    coordinates), ``consistent`` as for :func:`identify`."""
+    base = ne.base
+    params = base.params
+    groups = ne.t.size
+    w = np.ones(groups) if weights is None else np.asarray(weights, float)
+    if w.shape != (groups,) or np.any(w <= 0):
+        raise ValueError(f"weights must be {groups} positive numbers (one per coordinate), got {weights!r}")
     G, b = ne.weighted(w)
     beta, Ginv = _solve(G, b)
-    dof = max(ne.samples * params.n - base.r, 1)
+    dof = max(ne.samples * groups - base.r, 1)
     sigma2 = float(np.sum(w ** 2 * ne.rss(beta)) / dof)
     cov_beta = sigma2 * Ginv
     ind, dep = base.independent, base.dependent
