@@ -12,7 +12,7 @@ from urdf2links.locations import DEFAULT_OUT
 from ..pairs.mapping import parse_map
 from .pipeline import identify
 from .report import write_outputs
-from .writers import write_urdf
+from .writers import inconsistent_bodies, planned_changes, urdf_values, write_mjcf, write_urdf
 
 __all__ = ["identify_command"]
 
@@ -49,8 +49,7 @@ def identify_command(args) -> int:
     if args.write_urdf:
         changes = write_urdf(ident, args.write_urdf)
     elif args.write_mjcf:
-        print("urdf2links identify: --write-mjcf is not available yet (only --write-urdf)", file=sys.stderr)
-        return 2
+        changes = write_mjcf(ident, args.write_mjcf)
     out = Path(args.out) if args.out else DEFAULT_OUT / "identify" / Path(args.file).stem
     s = write_outputs(ident, out, changes)
     f = ident.fit
@@ -63,11 +62,19 @@ def identify_command(args) -> int:
     for v in ident.validation:
         print(f"  held-out run, {v.label} on {v.engine}: " + (f"max |q - q_OTHER| {np.max(v.error):.3e}"
                                                               if v.error is not None else v.note))
-    if args.write_urdf:
-        print(f"wrote {args.write_urdf}: {len(changes)} change(s)")
+    written = args.write_urdf or args.write_mjcf
+    if written:
+        print(f"wrote {written}: {len(changes)} change(s)")
         for c in changes:
             print("  " + c.line())
+        _, new_H = planned_changes(ident, urdf_values(ident.fit))
+        bad = inconsistent_bodies(new_H)
+        if bad:
+            print(f"urdf2links identify: warning: {written}: the inertia of {', '.join(bad)} is not positive definite "
+                  "(physically inconsistent: MuJoCo refuses the file); the fit kept the unidentifiable parameters at "
+                  "the description's values without the consistency constraint", file=sys.stderr)
     else:
-        print(f"{int(f.changed.sum())} parameter(s) changed (--write-urdf OUT writes them)")
+        flag = "--write-mjcf" if ident.pair.parts.format == "mjcf" else "--write-urdf"
+        print(f"{int(f.changed.sum())} parameter(s) changed ({flag} OUT writes them)")
     print(f"report: {out / 'report.html'}")
     return 0

@@ -41,7 +41,7 @@ def summary(ident, changes=()) -> dict:
 
 def residual_figure(ident):
     """Bars of the torque residual RMS per joint, before and after, fitted data and held-out seed (log scale)."""
-    fig = figure(8.0, 3.2)
+    fig = figure(9.5, 3.2)
     ax = fig.add_subplot(111)
     n = len(ident.names)
     x = np.arange(n)
@@ -54,9 +54,14 @@ def residual_figure(ident):
     ax.set_yscale("log")
     ax.set_xticks(x, [nm.replace("_joint", "\n") for nm in ident.names], fontsize=7)
     ax.set_ylabel("torque residual RMS (N m)")
-    ax.legend(fontsize=7, ncol=2)
-    margins(fig, bottom=0.7)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    margins(fig, bottom=0.7, right=2.1)
     return fig
+
+
+def _short(v) -> str:
+    """A number or a list of numbers at 6 significant digits (the JSON keeps every digit)."""
+    return "[" + ", ".join(f"{x:.6g}" for x in v) + "]" if isinstance(v, (list, tuple)) else f"{v:.6g}"
 
 
 def _table_md(rows) -> list[str]:
@@ -85,7 +90,7 @@ def _markdown(s: dict) -> str:
             len(s["coordinates"]) - 1)
         lines.append(f"| {v['model']} | {v['engine']} | " + " | ".join(cells) + " |")
     lines += ["", "## Changes", ""]
-    lines += [f"- {c['element']} {c['what']}: {c['before']} -> {c['after']}"
+    lines += [f"- {c['element']} {c['what']}: {_short(c['before'])} -> {_short(c['after'])}"
               + ("" if c["written"] else f" (not written: {c['note']})") for c in s["changes"]] or ["- none"]
     lines += ["", "## Base parameters (identifiable combinations)", "", "| combination | description | identified | std |",
               "|---|---|---|---|"]
@@ -107,7 +112,8 @@ def _html(s: dict, png: str) -> str:
     params = [(r["parameter"], f"{r['described']:.6g}", f"{r['identified']:.6g}",
                "" if r["std"] is None else f"{r['std']:.2e}", "yes" if r["identifiable"] else "no",
                "yes" if r["changed"] else "") for r in s["parameters"]]
-    changes = [(c["element"], c["what"], str(c["before"]), str(c["after"]), "yes" if c["written"] else c["note"])
+    changes = [(c["element"], c["what"], _short(c["before"]), _short(c["after"]),
+                "yes" + (f" ({c['note']})" if c["note"] else "") if c["written"] else "no: " + c["note"])
                for c in s["changes"]]
     base = [(b["combination"], f"{b['described']:.6g}", f"{b['identified']:.6g}", f"{b['std']:.2e}")
             for b in s["base_parameters"]]

@@ -31,6 +31,8 @@ __all__ = ["ValidationRun", "validate", "SLIP"]
 
 #: The PD pull toward OTHER's recorded state (Hz, critically damped, gains from the description's A at the start).
 PULL_HZ = 2.0
+#: A negative fitted armature above -this (kg m^2) is a zero one's rounding.
+ARMATURE_ROUNDING = 1e-8
 #: The regularisation speed of the Coulomb law in the urdf2links run (rad/s): the scenes' contact default.
 SLIP = 1e-2
 
@@ -114,6 +116,7 @@ def validate(ident, values: dict) -> list[ValidationRun]:
     runs = []
     for label, v in values.items():
         arm = np.array([k == "armature" for k in params.kind])
+        v = np.where(arm & (v < 0) & (v > -ARMATURE_ROUNDING), 0.0, v)     # an armature of 0 fitted as -1e-12
         if np.any(v[arm] < 0):
             bad = [params.names[i] for i in np.flatnonzero(arm & (v < 0))]
             runs += [ValidationRun(label, e, None, f"negative armature {bad}: no tree holds it")

@@ -5,7 +5,7 @@ link, :class:`urdf2links.parsers.parts.PartsModel` ``frame_of``: ``r_t = X r_b``
 H_t) X^-T``, so the bodies folded with it keep their own. From ``H_b'`` (E10 inverted): ``m = H[3, 3]``, ``c =
 H[:3, 3] / m``, ``S_C = H[:3, :3] - m c c^T`` and the inertia about the center of mass ``I = tr(S_C) 1 - S_C``,
 written as ``<inertial>`` with ``rpy="0 0 0"``. A joint's damping and Coulomb friction go to ``<dynamics>``
-(a negative value of rounding is written as 0). The armature has no URDF element: where the data cannot tell an
+(a negative value is written as 0, and its change says so). The armature has no URDF element: where the data cannot tell an
 armature from the links' inertias the change goes to the inertias (:func:`urdf_values`, a move along the
 unidentifiable directions, no torque changes); an armature identified by itself is listed as not written.
 """
@@ -18,7 +18,8 @@ from pathlib import Path
 import numpy as np
 from lxml import etree
 
-__all__ = ["Change", "planned_changes", "write_urdf", "inertial_of", "urdf_values"]
+__all__ = ["Change", "planned_changes", "write_urdf", "write_mjcf", "inertial_of", "urdf_values",
+           "inconsistent_bodies"]
 
 
 @dataclass(frozen=True)
@@ -38,7 +39,7 @@ class Change:
         def fmt(v):
             return "[" + ", ".join(f"{x:.6g}" for x in v) + "]" if isinstance(v, (list, tuple)) else f"{v:.6g}"
         return (f"{self.element} {self.what}: {fmt(self.before)} -> {fmt(self.after)}"
-                + ("" if self.written else f" (not written: {self.note})"))
+                + (f" (not written: {self.note})" if not self.written else f" ({self.note})" if self.note else ""))
 
     def to_json(self) -> dict:
         return {"element": self.element, "what": self.what, "before": self.before, "after": self.after,
@@ -62,21 +63,58 @@ def _carriers(built) -> dict:
     return out
 
 
+def _move_armature(params, N, v, fixed: dict, scale):
+    """``v + N z`` with the entries of ``fixed`` ({index: value}) at their values, every link's H positive definite (margin 1e-9 of its mass),
+    the least scaled move: a small semidefinite program (cvxpy, the identify extra); None when there is none."""
+    import cvxpy as cp
+
+    from urdf2links.identification import link_matrix
+
+    z = cp.Variable(N.shape[1])
+    x = v + N @ z
+    E = [link_matrix(np.eye(10)[k]) for k in range(10)]
+    cons = [x[i] == t for i, t in fixed.items()]
+    for c in params.link_col:
+        if c >= 0:
+            H = sum(x[c + k] * E[k] for k in range(10))
+            cons.append(H >> 1e-9 * max(v[c + 9], 1e-3) * np.eye(4))
+    prob = cp.Problem(cp.Minimize(cp.sum_squares(cp.multiply(1.0 / scale, N @ z))), cons)
+    try:
+        prob.solve(solver="CLARABEL")
+    except cp.error.SolverError:
+        return None
+    if prob.status != "optimal":
+        return None
+    out = v + N @ z.value
+    for i, t in fixed.items():
+        out[i] = t
+    return out if all(np.linalg.eigvalsh(H)[0] > 0 for H in params.H(out)[params.link_col >= 0]) else None
+
+
 def urdf_values(fit) -> np.ndarray:
     """The identified values moved along the unidentifiable directions (the base parameters' null space: no
-    torque changes) so that every armature the data cannot tell from the links' inertias is back at the
-    description's value: a URDF has no armature element, its links' inertias carry the change instead. An
-    armature identified by itself keeps its value (and is listed as not written)."""
+    torque changes) so that each armature the data cannot tell from the links' inertias is back at the
+    description's value, one joint at a time, every link's H kept positive definite (the least such move): a
+    URDF has no armature element, its links' inertias carry the change instead. An armature identified by itself
+    (or with no consistent move) keeps its value, and is listed as not written."""
     params, v = fit.parameters, fit.identified.copy()
-    idx = np.array([i for i, k in enumerate(params.kind) if k == "armature"], int)
     N = fit.base.null_space
-    if idx.size == 0 or N.size == 0:
+    if N.size == 0:
         return v
-    z, *_ = np.linalg.lstsq(N[idx], fit.described[idx] - v[idx], rcond=None)
-    moved = v + N @ z
-    size = np.maximum(np.abs(fit.described), np.abs(moved))
-    keep = np.abs(moved - fit.described) <= np.maximum(1e-6 * size, 1e-9)      # fitting.CHANGED, NEGLIGIBLE
-    return np.where(keep, fit.described, moved)
+    scale = np.maximum(np.abs(fit.described), 1e-3)
+    fixed = {}
+    for i in (i for i, k in enumerate(params.kind) if k == "armature"):
+        if v[i] == fit.described[i] or np.max(np.abs(N[i])) <= 1e-12:
+            continue                            # unchanged, or identified by itself: no unidentifiable direction
+        try:
+            moved = _move_armature(params, N, v, {**fixed, i: fit.described[i]}, scale)
+        except ImportError:                     # without cvxpy: the armature stays, listed as not written
+            moved = None
+        if moved is not None:
+            v, fixed[i] = moved, fit.described[i]
+    size = np.maximum(np.abs(fit.described), np.abs(v))
+    keep = np.abs(v - fit.described) <= np.maximum(1e-6 * size, 1e-9)      # fitting.CHANGED, NEGLIGIBLE
+    return np.where(keep, fit.described, v)
 
 
 def planned_changes(ident, values=None) -> tuple[list[Change], dict]:
@@ -103,8 +141,9 @@ def planned_changes(ident, values=None) -> tuple[list[Change], dict]:
         if kind in ("damping", "friction", "armature") and changed[i]:
             written = kind != "armature" or pair.parts.format == "mjcf"
             changes.append(Change(f"joint {params.owner[i]}", kind, float(f.described[i]), float(values[i]),
-                                  written, "" if written else "URDF has no armature element, and the data tell this "
-                                  "one from the links' inertias"))
+                                  written, "" if written else "a URDF has no armature element, and the links' "
+                                  "inertias cannot carry this one (identified by itself, or only with an "
+                                  "inconsistent inertia)"))
         elif kind == "offset" and changed[i]:
             changes.append(Change(f"joint {params.owner[i]}", "offset", float(f.described[i]),
                                   float(values[i]), False, "a constant torque has no element in a description"))
@@ -119,12 +158,29 @@ def _g(x) -> str:
     return repr(float(x))
 
 
+def _clamped(changes, new_H):
+    """A negative damping, friction or armature is written as 0, and its change says so."""
+    out = []
+    for c in changes:
+        if c.element.startswith("joint ") and c.what in ("damping", "friction", "armature") and c.after < 0:
+            import dataclasses
+
+            c = dataclasses.replace(c, note=(c.note + "; " if c.note else "") + f"fitted {c.after:.3g} < 0: written as 0")
+        out.append(c)
+    return out, new_H
+
+
+def inconsistent_bodies(new_H: dict) -> list[str]:
+    """The bodies whose new H is not positive definite (a file MuJoCo refuses: the consistent fit is needed)."""
+    return [b for b, H in new_H.items() if np.linalg.eigvalsh(H)[0] <= 0]
+
+
 def write_urdf(ident, out) -> list[Change]:
     """DESCRIPTION (a URDF) with the identified values written to ``out`` (module doc); returns the changes."""
     pair = ident.pair
     if pair.parts.format != "urdf":
         raise ValueError(f"--write-urdf: {pair.description} is not a URDF; use --write-mjcf")
-    changes, new_H = planned_changes(ident, urdf_values(ident.fit))
+    changes, new_H = _clamped(*planned_changes(ident, urdf_values(ident.fit)))
     root = etree.parse(str(pair.description), etree.XMLParser(remove_comments=False)).getroot()
     links = {el.get("name"): el for el in root.findall("link")}
     for body, H in new_H.items():
@@ -149,6 +205,46 @@ def write_urdf(ident, out) -> list[Change]:
             if dyn is None:
                 dyn = etree.SubElement(el, "dynamics")
             dyn.set(ch.what, _g(max(ch.after, 0.0)))
+    Path(out).parent.mkdir(parents=True, exist_ok=True)
+    Path(out).write_text(etree.tostring(root, encoding="unicode") + "\n")
+    return changes
+
+
+def write_mjcf(ident, out) -> list[Change]:
+    """DESCRIPTION (an MJCF file) with the identified values written to ``out``: each carrying body's ``<inertial>``
+    (``pos``, ``mass``, ``fullinertia`` about the centre of mass, no ``quat``; added when the body took its inertia
+    from its geoms), each joint's ``damping``, ``frictionloss`` and ``armature`` set on the ``<joint>`` (over its
+    defaults); every number at full precision. Raises ValueError naming the body or joint the file does not hold
+    itself (an ``<include>``d part)."""
+    pair = ident.pair
+    if pair.parts.format != "mjcf":
+        raise ValueError(f"--write-mjcf: {pair.description} is not an MJCF file; use --write-urdf")
+    changes, new_H = _clamped(*planned_changes(ident, urdf_values(ident.fit)))
+    tree = etree.parse(str(pair.description), etree.XMLParser(remove_comments=False))
+    root = tree.getroot()
+    bodies = {el.get("name"): el for el in root.iter("body")}
+    joints = {el.get("name"): el for el in root.iter("joint") if el.get("name")}
+    for body, H in new_H.items():
+        if body not in bodies:
+            raise ValueError(f"--write-mjcf: body {body!r} is not written in {pair.description} itself (an include?); "
+                             "write the change listed by hand")
+        m, c, I = inertial_of(H)
+        el = bodies[body]
+        old = el.find("inertial")
+        inertial = etree.Element("inertial", pos=" ".join(_g(x) for x in c), mass=_g(m),
+                                 fullinertia=" ".join(_g(x) for x in _six(I)))
+        if old is not None:
+            inertial.tail = old.tail
+            el.replace(old, inertial)
+        else:
+            el.insert(0, inertial)
+    attribute = {"damping": "damping", "friction": "frictionloss", "armature": "armature"}
+    for ch in changes:
+        if ch.element.startswith("joint ") and ch.what in attribute:
+            name = ch.element[6:]
+            if name not in joints:
+                raise ValueError(f"--write-mjcf: joint {name!r} is not written in {pair.description} itself")
+            joints[name].set(attribute[ch.what], _g(max(ch.after, 0.0)))
     Path(out).parent.mkdir(parents=True, exist_ok=True)
     Path(out).write_text(etree.tostring(root, encoding="unicode") + "\n")
     return changes

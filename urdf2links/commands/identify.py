@@ -20,7 +20,7 @@ def add_identify(p) -> None:
                    "fit: MuJoCo's frictionloss is a soft constraint there (default 0.05)")
     p.add_argument("--out", help="folder of the report (default out/reports/identify/<description>/)")
     p.add_argument("--write-urdf", metavar="OUT", help="write the corrected URDF, every change listed")
-    p.add_argument("--write-mjcf", metavar="OUT", help="write the corrected MJCF (not available yet)")
+    p.add_argument("--write-mjcf", metavar="OUT", help="write the corrected MJCF (an MJCF description), every change listed")
     p.add_argument("--design", metavar="OUT.toml", help="instead: write an excitation scene, a periodic Fourier "
                    "series within the joint limits (position, velocity, effort) that lowers the condition number of "
                    "the base regressor, run by both engines (urdf2links compare OUT.toml)")
