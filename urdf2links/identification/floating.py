@@ -1,0 +1,147 @@
+"""A floating base identified from its six unactuated rows, without joint torques (docs/equations.md (E99)).
+
+A robot in flight (or hanging from a crane) has no force on its floating root's six coordinates
+``x, y, z, phi_x, phi_y, phi_z`` (E3): the base rows of ``Q = Y pi`` (E85) read ``Y_b(q, q', q'') pi = 0``
+(with a contact wrench in the log: ``Y_b pi = Q_b``, the wrench's generalized force). No joint torque is
+needed: the joints' motion alone moves the base, by an amount set by the links' inertias. The equations
+are homogeneous: a robot twice as heavy everywhere flies the same way, so one mass must be known (weighed).
+:func:`identify_floating` takes the root link's mass as known (the description's value, or ``known_mass``):
+its column moves to the right-hand side, ``Y_b' pi' = -Y_b[:, m_root] m_root``, and it is a dependent
+parameter of the base parameters (E87) of ``Y_b'``. The joints' damping, friction, armature and offsets do
+not enter the base rows and stay at the description's values (listed as unidentifiable).
+
+The base parameters come from weighted least squares with each base row's noise from its residual and
+the Newey-West covariance over the filter's correlation length (E98): the residual is the filtered
+position noise through the regressor, correlated over the filter's window. Then the semidefinite program
+(E88, :func:`~urdf2links.identification.consistency.consistent_fit`) keeps every link's H positive
+definite.
+
+Shapes: S samples, p parameters, r base parameters; the base's rows are the model's first six coordinates.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from .base import BaseParameters, base_parameters
+from .fit import Identification, NormalEquations
+from .regression import regressor
+from .weighted import WeightedFit, weighted_fit
+
+__all__ = ["FloatingIdentification", "identify_floating", "base_rows"]
+
+
+@dataclass(frozen=True, eq=False)
+class FloatingIdentification:
+    """``params`` (with the root's mass at the known value), ``base``, ``fit`` (:class:`WeightedFit` of the
+    base rows), ``values`` (p,) least squares, ``consistent`` (p,) every H positive definite (or None when
+    cvxpy is missing), ``eig`` (links,) each link's smallest eigenvalue of H at ``consistent``, ``root_mass``
+    (column, value), ``rows`` the samples used, ``notes``."""
+
+    params: object
+    base: BaseParameters
+    fit: WeightedFit
+    values: np.ndarray
+    consistent: np.ndarray | None
+    eig: np.ndarray | None
+    root_mass: tuple
+    rows: int
+    notes: tuple
+
+    def table(self) -> list[dict]:
+        out = []
+        for a, name in enumerate(self.base.names):
+            lo, hi = self.fit.intervals[a]
+            out.append({"combination": name, "description": float(self.base.beta(self.params.values)[a]),
+                        "identified": float(self.fit.beta[a]), "std": float(self.fit.std[a]),
+                        "interval95": [float(lo), float(hi)]})
+        return out
+
+    def summary(self) -> dict:
+        return {"rows": self.rows, "parameters": self.params.p, "base_parameters": self.base.r,
+                "known_mass": {"parameter": self.params.names[self.root_mass[0]], "value": self.root_mass[1]},
+                "fit": self.fit.summary(), "unidentifiable": list(self.base.unidentifiable()),
+                "all_positive_definite": None if self.eig is None else bool(np.all(self.eig > 0)),
+                "notes": list(self.notes)}
+
+
+def base_rows(params, q, qd, qdd, wrench_forces=None) -> tuple[np.ndarray, np.ndarray]:
+    """``Y_b`` (S, 6, p) and the right-hand side (S, 6): zero in flight, or ``wrench_forces`` (S, 6), the
+    contact wrenches' generalized forces on the base coordinates, subtracted as applied loads."""
+    Y = regressor(params, q, qd, qdd)[:, :6, :]
+    rhs = np.zeros(Y.shape[:2]) if wrench_forces is None else -np.asarray(wrench_forces, float)
+    return Y, rhs
+
+
+def _root_mass_column(params) -> int:
+    c = int(params.link_col[int(np.flatnonzero(params.link_col >= 0)[0])])
+    return c + 9
+
+
+def identify_floating(params, d, *, known_mass: float | None = None, wrench_forces=None, consistent: bool = True,
+                      samples: int | None = 2000) -> FloatingIdentification:
+    """Fit a floating robot's link parameters from its base rows (module doc, E99). ``params``: a
+    :class:`ParameterSet` of a floating model (coordinates: the root's six, then the joints in the log's
+    order); ``d``: the log's :class:`~urdf2links.robot_logs.Derivatives` with ``d.base``; ``known_mass``: the
+    root link's mass (default the description's); ``wrench_forces`` (S, 6): contact wrenches' generalized
+    forces on the base coordinates at ``d.times``. Raises ValueError without the base's pose in the log."""
+    if d.base is None:
+        raise ValueError(f"{d.log.source}: no floating base's pose in the log (a base topic, or base.* columns): the "
+                         "base rows need the base's motion")
+    names = tuple(params.model.coordinate_names)
+    if tuple(d.names) != names[6:]:
+        raise ValueError(f"the log's joints {list(d.names)} are not the model's joints {list(names[6:])} in order")
+    sl = d.interior
+    q, qd, qdd = (np.concatenate([d.base[k][sl], x[sl]], axis=1)
+                  for k, x in enumerate((d.positions, d.velocities, d.accelerations)))
+    c = _root_mass_column(params)
+    m0 = float(params.values[c] if known_mass is None else known_mass)
+    if known_mass is not None:
+        v = params.values.copy()
+        v[c] = m0
+        params = dataclasses.replace(params, values=v)
+    Y, rhs = base_rows(params, q, qd, qdd, None if wrench_forces is None else np.asarray(wrench_forces)[sl])
+    rhs = rhs - Y[:, :, c] * m0
+    Y[:, :, c] = 0.0
+    idx = np.unique(np.linspace(0, len(q) - 1, min(samples or len(q), len(q))).round().astype(int))
+    base = base_parameters(params, Y=Y[idx])
+    if c not in set(base.dependent.tolist()):
+        raise RuntimeError(f"the known mass {params.names[c]} was not kept fixed by the base parameters")
+    lags = int(np.ceil(d.filter.fs / d.filter.bandwidth_hz))
+    YI = Y[:, :, base.independent]
+    fit = weighted_fit(YI, rhs, lags=lags)
+    values = params.values.copy()
+    values[base.independent] = fit.beta - base.K @ params.values[base.dependent]
+    notes = [f"{len(q)} interior samples; the base's six rows, no joint torques; {params.names[c]} known: {m0:.6g} kg",
+             f"joint damping, friction, armature and offsets are not in the base rows: kept at the description's "
+             f"values"]
+    cons = eig = None
+    if consistent:
+        cons, eig = _consistent(params, base, fit, YI, rhs, values)
+        notes.append("every link's H positive definite (semidefinite program, E88)")
+    return FloatingIdentification(params=params, base=base, fit=fit, values=values, consistent=cons, eig=eig,
+                                  root_mass=(c, m0), rows=len(q), notes=tuple(notes))
+
+
+def _consistent(params, base, fit, YI, rhs, values):
+    """The consistent fit (E88) on the base rows' normal equations (weighted by the rows' noise)."""
+    from .consistency import consistent_fit, min_eigenvalues
+
+    n = params.n
+    r = base.r
+    G, b, t = np.zeros((n, r, r)), np.zeros((n, r)), np.zeros(n)
+    for j in range(6):
+        G[j], b[j], t[j] = YI[:, j].T @ YI[:, j], YI[:, j].T @ rhs[:, j], rhs[:, j] @ rhs[:, j]
+    w = np.ones(n)
+    w[:6] = np.min(fit.sigma) / fit.sigma          # relative weights (the scale cancels; keeps the program well scaled)
+    ne = NormalEquations(base=base, G=G, b=b, t=t, samples=YI.shape[0])
+    ident = Identification(params=params, base=base, values=values, std=np.zeros(params.p),
+                           covariance=np.zeros((params.p, params.p)), identifiable=np.isin(np.arange(params.p), base.independent),
+                           alone=base.alone(), beta=fit.beta, beta_std=fit.std, condition_number=fit.condition_number,
+                           sigma=1.0, rms_before=np.zeros(n), rms_after=np.zeros(n), samples=YI.shape[0], weights=w,
+                           normal=ne)
+    v = consistent_fit(ident).consistency.values
+    return v, min_eigenvalues(params, v)[1]
