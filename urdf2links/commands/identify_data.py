@@ -31,6 +31,7 @@ def add_data_options(p) -> None:
     p.add_argument("--to", dest="t_to", type=float, help="end of the segment, s")
     p.add_argument("--filter", choices=("savgol", "spline"), default="savgol", help="the derivatives' filter")
     p.add_argument("--cutoff", type=float, help="the filter's -3 dB bandwidth in Hz (default 10)")
+    p.add_argument("--order", type=int, default=5, help="Savitzky-Golay polynomial order (default 5: its acceleration is flat to 0.2%% at a tenth of the bandwidth; 3 biases it by ~1%%)")
 
 
 def _load(args):
@@ -61,7 +62,7 @@ def run_identify_data(args) -> int:
         print(log.describe())
         joints = [c for c in model.coordinate_names if "." not in c] if floating else model.coordinate_names
         log = check_log(log, joints=joints, limits=angular_limits(model))
-        d = derivatives(log, method=args.filter, cutoff_hz=args.cutoff)
+        d = derivatives(log, method=args.filter, cutoff_hz=args.cutoff, order=args.order)
         print(d.describe())
         for note in (*log.notes, *d.notes):
             print(f"  note: {note}")

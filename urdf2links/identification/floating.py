@@ -62,7 +62,7 @@ class FloatingIdentification:
 
     def summary(self) -> dict:
         return {"rows": self.rows, "parameters": self.params.p, "base_parameters": self.base.r,
-                "known_mass": {"parameter": self.params.names[self.root_mass[0]], "value": self.root_mass[1]},
+                "known_mass": {"combination": self.base.names[self.root_mass[0]], "value": self.root_mass[1]},
                 "fit": self.fit.summary(), "unidentifiable": list(self.base.unidentifiable()),
                 "all_positive_definite": None if self.eig is None else bool(np.all(self.eig > 0)),
                 "notes": list(self.notes)}
@@ -76,18 +76,35 @@ def base_rows(params, q, qd, qdd, wrench_forces=None) -> tuple[np.ndarray, np.nd
     return Y, rhs
 
 
-def _root_mass_column(params) -> int:
-    c = int(params.link_col[int(np.flatnonzero(params.link_col >= 0)[0])])
-    return c + 9
+def _mass_combination(params, base) -> int:
+    """The base parameter that carries the most mass (the total mass, when the motion sees it): the largest
+    description value among the combinations whose head or terms are masses."""
+    is_mass = np.array([nm.startswith("m_") for nm in params.names])
+    mass_like = is_mass[base.independent] | np.any((base.K != 0) & is_mass[base.dependent][None, :], axis=1)
+    if not np.any(mass_like):
+        raise ValueError("no base parameter of this flight involves a mass: the scale cannot be fixed")
+    desc = np.where(mass_like, base.beta(params.values), -np.inf)
+    return int(np.argmax(desc))
+
+
+def _with_known(sub: WeightedFit, keep, a0: int, m0: float, r: int) -> WeightedFit:
+    """``sub`` (the fit of the other base parameters) with the known one inserted at ``a0`` (std 0)."""
+    beta, std, cov = np.empty(r), np.zeros(r), np.zeros((r, r))
+    beta[keep], beta[a0] = sub.beta, m0
+    std[keep] = sub.std
+    cov[np.ix_(keep, keep)] = sub.covariance
+    return dataclasses.replace(sub, beta=beta, std=std, covariance=cov,
+                               intervals=np.stack([beta - 1.959963984540054 * std, beta + 1.959963984540054 * std], 1))
 
 
 def identify_floating(params, d, *, known_mass: float | None = None, wrench_forces=None, consistent: bool = True,
-                      samples: int | None = 2000) -> FloatingIdentification:
+                      samples: int | None = 2000, rtol: float = 1e-9) -> FloatingIdentification:
     """Fit a floating robot's link parameters from its base rows (module doc, E99). ``params``: a
     :class:`ParameterSet` of a floating model (coordinates: the root's six, then the joints in the log's
     order); ``d``: the log's :class:`~urdf2links.robot_logs.Derivatives` with ``d.base``; ``known_mass``: the
     root link's mass (default the description's); ``wrench_forces`` (S, 6): contact wrenches' generalized
-    forces on the base coordinates at ``d.times``. Raises ValueError without the base's pose in the log."""
+    forces on the base coordinates at ``d.times``; ``rtol``: the base parameters' rank tolerance (E87; a short
+    flight sees some combinations barely: a larger one leaves them at the description's values). Raises ValueError without the base's pose in the log."""
     if d.base is None:
         raise ValueError(f"{d.log.source}: no floating base's pose in the log (a base topic, or base.* columns): the "
                          "base rows need the base's motion")
@@ -97,37 +114,35 @@ def identify_floating(params, d, *, known_mass: float | None = None, wrench_forc
     sl = d.interior
     q, qd, qdd = (np.concatenate([d.base[k][sl], x[sl]], axis=1)
                   for k, x in enumerate((d.positions, d.velocities, d.accelerations)))
-    c = _root_mass_column(params)
-    m0 = float(params.values[c] if known_mass is None else known_mass)
-    if known_mass is not None:
-        v = params.values.copy()
-        v[c] = m0
-        params = dataclasses.replace(params, values=v)
     Y, rhs = base_rows(params, q, qd, qdd, None if wrench_forces is None else np.asarray(wrench_forces)[sl])
-    rhs = rhs - Y[:, :, c] * m0
-    Y[:, :, c] = 0.0
     idx = np.unique(np.linspace(0, len(q) - 1, min(samples or len(q), len(q))).round().astype(int))
-    base = base_parameters(params, Y=Y[idx])
-    if c not in set(base.dependent.tolist()):
-        raise RuntimeError(f"the known mass {params.names[c]} was not kept fixed by the base parameters")
-    lags = int(np.ceil(d.filter.fs / d.filter.bandwidth_hz))
+    base = base_parameters(params, Y=Y[idx], rtol=rtol)
+    a0 = _mass_combination(params, base)
+    m0 = float(base.beta(params.values)[a0] if known_mass is None else known_mass)
     YI = Y[:, :, base.independent]
-    fit = weighted_fit(YI, rhs, lags=lags)
+    rhs = rhs - YI[:, :, a0] * m0
+    keep = np.setdiff1d(np.arange(base.r), [a0])
+    YI = YI[:, :, keep]
+    lags = int(np.ceil(d.filter.fs / d.filter.bandwidth_hz))
+    sub = weighted_fit(YI, rhs, lags=lags)
+    fit = _with_known(sub, keep, a0, m0, base.r)
     values = params.values.copy()
     values[base.independent] = fit.beta - base.K @ params.values[base.dependent]
-    notes = [f"{len(q)} interior samples; the base's six rows, no joint torques; {params.names[c]} known: {m0:.6g} kg",
+    notes = [f"{len(q)} interior samples; the base's six rows, no joint torques; known: {base.names[a0]} = {m0:.6g} kg",
              f"joint damping, friction, armature and offsets are not in the base rows: kept at the description's "
              f"values"]
     cons = eig = None
     if consistent:
-        cons, eig = _consistent(params, base, fit, YI, rhs, values)
+        cons, eig = _consistent(params, base, fit, Y[:, :, base.independent], rhs, values)
         notes.append("every link's H positive definite (semidefinite program, E88)")
     return FloatingIdentification(params=params, base=base, fit=fit, values=values, consistent=cons, eig=eig,
-                                  root_mass=(c, m0), rows=len(q), notes=tuple(notes))
+                                  root_mass=(a0, m0), rows=len(q), notes=tuple(notes))
 
 
 def _consistent(params, base, fit, YI, rhs, values):
-    """The consistent fit (E88) on the base rows' normal equations (weighted by the rows' noise)."""
+    """The consistent fit (E88) on the base rows' normal equations (weighted by the rows' noise): ``G`` of
+    every base column (the known one too: moving it costs as moving any other); ``t`` of the known-mass
+    right-hand side ``rhs`` (its scale sets the pull toward the description)."""
     from .consistency import consistent_fit, min_eigenvalues
 
     n = params.n
