@@ -125,8 +125,11 @@ def identify_log(params, d, *, base: BaseParameters | None = None, samples: int 
     values = params.values.copy()
     values[base.independent] = acc.beta - base.K @ params.values[base.dependent]
     energy = energy_rms = agreement = None
-    if joints.size == params.n:
-        rows = energy_rows(params, d.times[sl], q, qd, tau, window=energy_window)
+    rows = energy_rows(params, d.times[sl], q, qd, tau, window=energy_window) if joints.size == params.n else None
+    if rows is not None and rows.y.size <= 2 * base.r:
+        notes.append(f"energy form not fitted: {rows.y.size} intervals of {energy_window} samples for {base.r} base "
+                     "parameters (a longer log or a shorter window)")
+    elif rows is not None:
         YE = rows.Y[:, base.independent][:, None, :]
         energy = weighted_fit(YE, rows.y[:, None], iterations=0)
         energy_rms = np.sqrt(np.mean((tau - np.einsum("sjr,r->sj", Y, energy.beta)) ** 2, axis=0))
