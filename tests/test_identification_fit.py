@@ -108,6 +108,9 @@ def test_planted_recovery_links_and_joints():
             k = params.index(f"{kind}_{cn}")
             assert fit.alone[k] and abs(fit.values[k] - truth[k]) < 1e-8, (kind, cn)
     assert len(fit.table()) == params.p and fit.summary()["identifiable_combinations"] == fit.base.r
+    combos = fit.combinations()
+    assert len(combos) == fit.base.r and all(abs(c["identified"] - b) <= 1e-8 * max(abs(b), 1e-3 * np.abs(b_true).max())
+                                             for c, b in zip(combos, b_true))
 
 
 @corpus.needs_corpus

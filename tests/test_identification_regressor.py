@@ -2,7 +2,7 @@
 
 - ``Model.inverse_dynamics`` (E54) on twelve example-robot-data robots (arms, legged robots, humanoids,
   a mobile manipulator, a hand-held arm with a gripper): ``Y pi`` with the description's ``pi``;
-- Pinocchio's ``computeJointTorqueRegressor``, columns mapped: Pinocchio's per-joint parameters
+- Pinocchio's ``computeJointTorqueRegressor`` on the same twelve, columns mapped: Pinocchio's per-joint parameters
   ``(m, m c, I about the joint frame)`` are linear in our link's H, through the constant transform ``X``
   from Pinocchio's joint frame to our link frame (``H = X H_pin X^T``, E11), written out in :func:`pin_map`;
 - the joint terms in closed form (damping ``q'``, Coulomb ``q' / sqrt(q'^2 + v_s^2)`` (E79), offset 1,
@@ -15,7 +15,7 @@ Tolerances: ``Y pi`` and inverse dynamics are the same wrenches summed in anothe
 the largest ``|tau|`` (measured ~1e-15). Against Pinocchio 1e-10 relative to the largest entry of its mapped
 regressor (another code; measured ~1e-14), as tests/test_pinocchio.py.
 Planted wrong cases, seen to fail once: the sign of one planar-moment column (``_jn`` with +1 on ``Hxy``:
-17 of 22 failed), a column map with ``X^-T`` for ``X^-1`` (6 of 7 robots failed), and a ball's armature
+17 of 22 failed), a column map with ``X^-T`` for ``X^-1`` (6 of the 7 robots then checked failed), and a ball's armature
 column without ``omega_p x (omega_p - omega_s)`` (the ball and free models failed).
 """
 
@@ -95,7 +95,7 @@ def pin_map(X) -> np.ndarray:
 
 
 @corpus.needs_corpus
-@pytest.mark.parametrize("name", ["ur5", "panda", "talos", "kinova", "z1", "solo12", "baxter"])
+@pytest.mark.parametrize("name", list(ROBOTS))
 def test_regressor_equals_pinocchios_mapped(name):
     """``Y[:, cols(p)] = Y_pin[:, cols(j)] M_p`` for every link ``p`` that carries joint ``j``'s coordinate
     (massless frame links of prismatic joints have no Pinocchio body and are left out)."""

@@ -143,6 +143,14 @@ class Identification:
                 for nm, kd, ow, d, x, s, i, a in zip(self.params.names, self.params.kind, self.params.owner,
                                                      self.params.values, v, self.std, self.identifiable, self.alone)]
 
+    def combinations(self) -> list[dict]:
+        """One row per identifiable combination (E87): its name in link terms, the description's value, the
+        identified value and its standard deviation, and whether it is a parameter alone."""
+        alone = ~np.any(self.base.K != 0.0, axis=1)
+        desc = self.base.beta(self.params.values)
+        return [{"name": nm, "description": float(d), "identified": float(b), "std": float(s), "alone": bool(a)}
+                for nm, d, b, s, a in zip(self.base.names, desc, self.beta, self.beta_std, alone)]
+
     def summary(self) -> dict:
         out = {"samples": self.samples, "parameters": self.params.p, "identifiable_combinations": self.base.r,
                "unidentifiable": list(self.base.unidentifiable()), "condition_number": self.condition_number,

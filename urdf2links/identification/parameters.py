@@ -4,7 +4,8 @@
 Its layout (:class:`ParameterSet`, built once from a :class:`~urdf2links.dynamics.model.Model`):
 
 - per link that moves (a link hanging from the base without a coordinate above it cannot change any
-  generalized force and is left out, listed in ``ParameterSet.fixed_links``), the 10 entries of its
+  generalized force and is left out, listed in ``ParameterSet.fixed_links``; so is, by default, a massless
+  frame without a coordinate of its own, ``ParameterSet.frames_left_out``), the 10 entries of its
   pseudo-inertia H (E10) in the link's frame, in the order of :data:`LINK_ENTRIES`::
 
       Hxx Hyy Hzz Hxy Hxz Hyz   the planar second moments  int x^2 dm, ..., int x y dm, ...
@@ -82,7 +83,8 @@ class ParameterSet:
     ``(kind, tree coordinate, link, column)`` (kind 0: own, 1: ball, as
     :data:`~urdf2links.dynamics.tree_arrays.ARM_ONE`/``ARM_BALL``); ``joint_cols`` (n, 3) the columns of
     damping, friction, offset per model coordinate (-1: left out); ``tendon_coef`` (t, n),
-    ``tendon_cols`` (t, 3), ``tendon_names``; ``slip_speed`` v_s (E79); ``fixed_links`` the links left out.
+    ``tendon_cols`` (t, 3), ``tendon_names``; ``slip_speed`` v_s (E79); ``fixed_links`` the links left out (fixed to the base); ``frames_left_out`` the
+    massless frames left out (:meth:`from_model`).
     """
 
     model: object
@@ -98,6 +100,7 @@ class ParameterSet:
     tendon_names: tuple
     slip_speed: float
     fixed_links: tuple
+    frames_left_out: tuple = ()
 
     @property
     def p(self) -> int:
@@ -116,12 +119,14 @@ class ParameterSet:
 
     @classmethod
     def from_model(cls, model, *, joints=("damping", "friction", "armature", "offset"), damping=None, friction=None,
-                   offset=None, tendons=(), slip_speed: float = DEFAULT_SLIP_SPEED) -> "ParameterSet":
+                   offset=None, tendons=(), slip_speed: float = DEFAULT_SLIP_SPEED, frames: bool = False) -> "ParameterSet":
         """The parameters of ``model``: every moving link's 10 H entries, and the joint parameters named in
         ``joints`` (any of damping, friction, armature, offset); ``damping``, ``friction``, ``offset``:
         description values by coordinate name (absent: 0); ``tendons``: ``(name, c (n,), damping,
         friction, armature)`` or objects with ``name``, ``coef`` (and optionally ``damping``) of the
-        file's fixed tendons (E76). Raises ValueError naming an unknown coordinate or kind."""
+        file's fixed tendons (E76); ``frames``: also the massless links without a coordinate of their own (the
+        importer's joint frames, ``<joint>.frame``: they ride rigidly on their parent and hold no mass; left
+        out by default, listed in ``frames_left_out``). Raises ValueError naming an unknown coordinate or kind."""
         bad = set(joints) - {"damping", "friction", "armature", "offset"}
         if bad:
             raise ValueError(f"joints= names unknown kinds {sorted(bad)}: use any of damping, friction, armature, offset")
@@ -130,9 +135,12 @@ class ParameterSet:
         tree: LinkTree = model.tree
         names, values, kind, owner = [], [], [], []
         moving = _moving_links(tree)
+        own = np.zeros(tree.n_links, bool)
+        own[np.asarray(tree.coord_link)] = True
+        frame = ~own & ~np.any(np.asarray(tree.H) != 0.0, axis=(1, 2))     # massless, no coordinate: a pure frame
         link_col = np.full(tree.n_links, -1, np.int64)
         for p, ln in enumerate(tree.link_names):
-            if not moving[p]:
+            if not moving[p] or (frame[p] and not frames):
                 continue
             link_col[p] = len(names)
             names += [f"{e}_{ln}" for e in LINK_ENTRIES]
@@ -182,7 +190,9 @@ class ParameterSet:
                    joint_cols=joint_cols, tendon_coef=np.array(coef, float).reshape(-1, model.n),
                    tendon_cols=np.array(tcols, np.int64).reshape(-1, 3), tendon_names=tuple(tnames),
                    slip_speed=float(slip_speed),
-                   fixed_links=tuple(ln for p, ln in enumerate(tree.link_names) if not moving[p]))
+                   fixed_links=tuple(ln for p, ln in enumerate(tree.link_names) if not moving[p]),
+                   frames_left_out=tuple(ln for p, ln in enumerate(tree.link_names)
+                                         if moving[p] and frame[p] and not frames))
 
     # -- values <-> model -----------------------------------------------------------------------------
     def vector(self, values) -> np.ndarray:
