@@ -87,7 +87,7 @@ class Fit:
 
 def polished(params, base, beta, values) -> np.ndarray:
     """``values`` (p,) moved by the least scaled step onto the fitted base parameters, ``M x = beta`` (E87), when
-    every link's H stays positive definite (else ``values``). The consistent fit (E88) trades the torques'
+    every link's H stays positive definite and no damping, friction or armature goes below 0 (else ``values``). The consistent fit (E88) trades the torques'
     residual against a pull toward the description and solves to its solver's tolerance (~1e-4 relative on
     noise-free data); on data that the fitted ``beta`` explains to rounding the step is that small, and it
     gives back the fit's own combinations exactly."""
@@ -102,7 +102,9 @@ def polished(params, base, beta, values) -> np.ndarray:
             scale[c:c + 6], scale[c + 6:c + 9], scale[c + 9] = 0.01 * m, 0.1 * m, m
     w, *_ = np.linalg.lstsq(M * scale, beta - M @ values, rcond=None)
     x = values + scale * w
-    if all(np.linalg.eigvalsh(H)[0] > 0 for H in params.H(x)[params.link_col >= 0]):
+    joint = np.array([k in ("damping", "friction", "armature") for k in params.kind])
+    if (all(np.linalg.eigvalsh(H)[0] > 0 for H in params.H(x)[params.link_col >= 0])
+            and not np.any(joint & (x < -NEGLIGIBLE) & (values >= 0))):
         return x
     return values
 

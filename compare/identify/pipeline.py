@@ -114,6 +114,7 @@ def identify(description, other, *, seeds=(1, 2, 3), held_out_seed: int = 101, t
         start = clock()
         # the identified values as written (armature the data cannot tell from the inertias moved into them: the
         # tree holds no negative armature), the same dynamics as result.identified
-        out.validation.extend(validate(out, {"description": result.described, "identified": urdf_values(result)}))
+        written = urdf_values(result) if pair.parts.format == "urdf" else result.identified
+        out.validation.extend(validate(out, {"description": result.described, "identified": written}))
         times["validation"] = clock() - start
     return out
