@@ -100,7 +100,7 @@ def _with_known(sub: WeightedFit, keep, a0: int, m0: float, r: int) -> WeightedF
 def identify_floating(params, d, *, known_mass: float | None = None, wrench_forces=None, consistent: bool = True,
                       samples: int | None = 2000, rtol: float = 1e-9) -> FloatingIdentification:
     """Fit a floating robot's link parameters from its base rows (module doc, E99). ``params``: a
-    :class:`ParameterSet` of a floating model (coordinates: the root's six, then the joints in the log's
+    :class:`ParameterSet` of a floating model, links only (``joints=()``: the base rows see no joint term; coordinates: the root's six, then the joints in the log's
     order); ``d``: the log's :class:`~urdf2links.robot_logs.Derivatives` with ``d.base``; ``known_mass``: the
     root link's mass (default the description's); ``wrench_forces`` (S, 6): contact wrenches' generalized
     forces on the base coordinates at ``d.times``; ``rtol``: the base parameters' rank tolerance (E87; a short
