@@ -5,9 +5,9 @@ A robot in flight (or hanging from a crane) has no force on its floating root's 
 (with a contact wrench in the log: ``Y_b pi = Q_b``, the wrench's generalized force). No joint torque is
 needed: the joints' motion alone moves the base, by an amount set by the links' inertias. The equations
 are homogeneous: a robot twice as heavy everywhere flies the same way, so one mass must be known (weighed).
-:func:`identify_floating` takes the root link's mass as known (the description's value, or ``known_mass``):
-its column moves to the right-hand side, ``Y_b' pi' = -Y_b[:, m_root] m_root``, and it is a dependent
-parameter of the base parameters (E87) of ``Y_b'``. The joints' damping, friction, armature and offsets do
+:func:`identify_floating` takes the base parameter (E87) of ``Y_b`` that carries the most mass (the total
+mass, when the flight sees it) as known (its description value, or ``known_mass``): its column moves to the
+right-hand side, ``Y_I' beta' = -Y_I[:, a0] beta_a0``. The joints' damping, friction, armature and offsets do
 not enter the base rows and stay at the description's values (listed as unidentifiable).
 
 The base parameters come from weighted least squares with each base row's noise from its residual and
