@@ -24,9 +24,16 @@ def add_identify(p) -> None:
     p.add_argument("--design", metavar="OUT.toml", help="instead: write an excitation scene, a periodic Fourier "
                    "series within the joint limits (position, velocity, effort) that lowers the condition number of "
                    "the base regressor, run by both engines (urdf2links compare OUT.toml)")
+    from .identify_data import add_data_options     # issue 47: --data FILE (a robot's log)
+
+    add_data_options(p)
 
 
 def run_identify(args) -> int:
+    if getattr(args, "data", None):                 # issue 47: a robot's log, no MuJoCo
+        from .identify_data import run_identify_data
+
+        return run_identify_data(args)
     from ..compare.identify.command import identify_command
 
     return identify_command(args)
