@@ -40,9 +40,10 @@ def refresh_rhs(plan) -> None:
     """``plan.rhs`` compiled again when the plan's ``constraints`` were replaced after it was compiled (a test, a
     study dropping one constraint on our side): the compiled right-hand side carries the constraints it was
     built with."""
-    from ..scenes.scene_kernels import CompiledScene
+    from ..scenes.scene_kernels import CompiledScene, closure_parts
 
-    if getattr(plan.rhs, "closure", None) is not getattr(plan, "constraints", None):
+    now, packed = closure_parts(getattr(plan, "constraints", None)), getattr(plan.rhs, "closure_parts", ())
+    if len(now) != len(packed) or any(a is not b for a, b in zip(now, packed)):     # its tendons replaced too
         plan.rhs = CompiledScene(plan)
 
 

@@ -367,6 +367,7 @@ class CompiledScene:
         # issue 45: constraints False: the free scene; rows False: its fixed tendons without the constraint rows
         self.SI, self.SF = compile_scene(plan, constraints=constraints, rows=rows)
         self.closure = getattr(plan, "constraints", None) if constraints else None
+        self.closure_parts = closure_parts(self.closure)   # what was packed: a later edit of them is seen
         """The constraints compiled in (issue 45): a plan whose ``constraints`` were replaced since is compiled
         again (:func:`urdf2links.integration.constrained.refresh_rhs`)."""
         self.I, self.F = model.compiled              # the tree flattened once, by the model
@@ -450,3 +451,9 @@ class CompiledScene:
         self.check(t, y)
         raise FloatingPointError(f"compiled right-hand side failed at t={t!r} (y={y!r})")
 
+
+def closure_parts(closure) -> tuple:
+    """What a plan's constraints packed into the compiled arrays (the constraint set and the tendons' tuple, held
+    so that their identities stay theirs): :func:`urdf2links.integration.constrained.refresh_rhs` compiles again
+    when one was replaced."""
+    return () if closure is None else (closure, closure.cset, closure.tendons)
