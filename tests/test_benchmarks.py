@@ -286,3 +286,19 @@ def test_stiff_cost_states_each_hands_ratio_to_the_ur5_and_the_bound(tmp_path):
     hand["wall_s"] = {"median": 3.0, "min": 2.9, "max": 3.1, "rounds": 2}
     md = render("stiff_cost", data, tmp_path)
     assert "| allegro_left | 3.00 (min 2.90) slower |" in md and line_of(md, "allegro_left", "yes")
+
+
+def test_identify_vs_mujoco_sysid_section_of_the_docs_is_its_report(monkeypatch):
+    """docs/identify.md's section between the script's markers is the committed report without its title
+    (the script writes both; nothing copied by hand). Planted: one digit of the docs' table changed by hand
+    made this fail (checked once)."""
+    with monkeypatch.context() as mp:            # the script's import sets OPENBLAS_NUM_THREADS: undone after
+        mp.setenv("OPENBLAS_NUM_THREADS", "1")
+        import identify_vs_mujoco_sysid as bench
+
+    report = (COMMITTED / "identify_vs_mujoco_sysid.md").read_text()
+    docs = (ROOT / "docs" / "identify.md").read_text()
+    assert docs.count(bench.BEGIN) == 1 and docs.count(bench.END) == 1
+    section = docs.split(bench.BEGIN, 1)[1].split(bench.END, 1)[0]
+    assert section == "\n" + bench.docs_section(report)
+    assert "| damping_panda_joint2 |" in section and "MuJoCo's toolbox" in section
