@@ -10,7 +10,7 @@ by ``mujoco.rollout`` (the recorded torques as controls: the same motion); noise
   three planted parameters, from the description's values, with the logged (noisy) efforts as controls and
   the logged positions as the sensors;
 - **ours**: ``identify_log`` (every link and joint parameter: 10 per link, 4 per joint; the base parameters,
-  weighted least squares, E98) on the same log.
+  weighted least squares, E96) on the same log.
 
 Timed once each (wall clock, after a warm-up of the compiled code for ours; MuJoCo's compiles nothing). Writes
 ``reports/benchmarks/identify_vs_mujoco_sysid.md`` and the table in docs/identify.md's section is that file.
