@@ -29,7 +29,7 @@ from .writers import urdf_values
 __all__ = ["identify", "Identification", "SLIP_SPEED", "stacked"]
 
 #: The Coulomb law's regularisation speed v_s (rad/s or m/s) in the fit (module doc).
-SLIP_SPEED = 1e-5
+SLIP_SPEED = 1e-8
 
 
 def stacked(recs) -> tuple[np.ndarray, ...]:
