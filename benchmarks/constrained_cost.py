@@ -8,7 +8,7 @@ Timed regions, per scene (interleaved rounds; each figure the median (min-max) o
   rows=False)``: every other term the scene names, its fixed tendons included), at one state, divided by ``K``;
 * ``constrained``: the same loop on the scene's own compiled right-hand side (the free forces, the fixed
   tendons (E76), the constraint terms from the same kinematics pass, the KKT block elimination with the
-  pivoted Schur factorisation (E72, E85)), at the same state (projected onto the constraints first);
+  pivoted Schur factorisation (E72, E88)), at the same state (projected onto the constraints first);
 * ``ratio``: constrained / free (the target: at most 1.5);
 * ``run``: ``simulate(scene)`` with the scene's method and tolerances (compiled loops, projection after every
   step, E74): its ``wall_time`` (the loop only; numba's compilation outside, warmed first) and evaluations;

@@ -10,12 +10,12 @@ Timed, warm (the compiled code loaded and run once before), numba on one thread 
 (``NUMBA_NUM_THREADS=1``, ``OPENBLAS_NUM_THREADS=1``, set before numpy loads), ``--rounds`` interleaved rounds,
 median (min-max):
 
-* ``base``: ``base_parameters`` (the regressor on 200 spread samples, the QR, the null space's pivoted QR, E87);
+* ``base``: ``base_parameters`` (the regressor on 200 spread samples, the QR, the null space's pivoted QR, E91);
 * ``normal``: ``normal_equations`` over all samples (the compiled regressor in blocks, each coordinate's own
   base columns, BLAS per coordinate);
 * ``identify``: the whole least-squares fit (``identify``: both of the above, the solve, the standard
   deviations): the figure the targets are about (Panda <= 1 s, Talos <= 10 s);
-* ``consistent``: the semidefinite program of the consistent fit (E88) on the fit's normal equations (cvxpy,
+* ``consistent``: the semidefinite program of the consistent fit (E92) on the fit's normal equations (cvxpy,
   Clarabel), beside, not in the targets.
 
 Usage::

@@ -10,8 +10,8 @@ controls: the same motion); noise as issue 47 asks (positions 1e-4 rad, efforts 
 - **MuJoCo's toolbox**, used as its README and tests use it: the planted quantities as its parameters
   (``body_inertia_param(..., InertiaType.MassIpos)`` for link3's mass and centre of mass, and the two joint
   terms: 6 numbers), its box bounds, a start at the description's values (moved off a bound by the toolbox's
-  own ``move_off_bounds``), its default ``"mujoco"`` optimizer (Gauss-Newton, finite-difference Jacobians in
-  one batched ``mujoco.rollout`` call per iteration) with 2 threads (this machine's cores). The model runs at
+  own ``move_off_bounds``), its default ``"mujoco"`` optimizer (Gauss-Newton, finite-difference Jacobians: a
+  sequence's parameter columns in one batched ``mujoco.rollout`` call) with 2 threads (this machine's cores). The model runs at
   the log's time step (1 ms). The log is cut into 0.5 s windows (multiple sequences of one
   ``ModelSequences``, as its README describes), each starting from the log's state at its first sample (the
   positions and velocities of the same zero-phase filter ours uses): a single 10 s open-loop rollout of a
@@ -20,7 +20,7 @@ controls: the same motion); noise as issue 47 asks (positions 1e-4 rad, efforts 
   ``ModelSequences`` (which compiles the model) and the residual closure are built outside the timed region;
   ``optimize`` is timed, and it recompiles the spec for every candidate by design.
 - **ours**: ``identify_log`` (every link and joint parameter: 10 per link, 4 per joint; the base parameters,
-  weighted least squares, E98) on the same log, after the derivative filter (timed apart), on one core
+  weighted least squares, E96) on the same log, after the derivative filter (timed apart), on one core
   (``OPENBLAS_NUM_THREADS=1``, set by this script unless given).
 
 What an earlier version got wrong (its MuJoCo side never left its start): the toolbox's model ran at the

@@ -133,7 +133,7 @@ def test_model_compared_with_its_constraints(name, record_figure):
 def test_what_is_not_modelled_is_named_in_the_scope(tmp_path):
     """manipulator.xml with friction loss on its grasp tendon (tendon friction loss is not modelled; MuJoCo's run
     disables it): the comparison still runs the tendon equality on both engines, and its verdict's scope names the
-    tendon it dropped instead of calling the run the whole model. (Issue 45: a tendon limit is modelled now, E85:
+    tendon it dropped instead of calling the run the whole model. (Issue 45: a tendon limit is modelled now, E87:
     the same tendon limited is the whole model, its scope naming the law; tests/test_loops_default.py.)"""
     spec = mujoco.MjSpec.from_file(str(DM / "suite/manipulator.xml"))
     t = spec.tendon("grasp")

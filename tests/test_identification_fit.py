@@ -1,5 +1,5 @@
-"""Identifiability (E87), the least-squares fit with standard deviations, the energy form (E86) and the
-physically consistent fit (E88).
+"""Identifiability (E91), the least-squares fit with standard deviations, the energy form (E90) and the
+physically consistent fit (E92).
 
 - The Panda of issue 46: joints 1-3 meet at the shoulder. Data from a Panda whose link3 was changed (mass,
   centre of mass, inertia): the fit names ``m_panda_link3`` unidentifiable, keeps it at the description's

@@ -1,4 +1,4 @@
-"""The regressor ``tau = Y(q, q', q'') pi`` (docs/equations.md (E85)), against
+"""The regressor ``tau = Y(q, q', q'') pi`` (docs/equations.md (E89)), against
 
 - ``Model.inverse_dynamics`` (E54) on twelve example-robot-data robots (arms, legged robots, humanoids,
   a mobile manipulator, a hand-held arm with a gripper): ``Y pi`` with the description's ``pi``;

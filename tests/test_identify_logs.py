@@ -272,7 +272,7 @@ def _flight(urdf, seconds=3.0, seed=7):
 
 def test_floating_base_in_flight(arm):
     """A floating arm in flight (MuJoCo, 3 s, no torques logged, positions with 1e-6 rad / 1e-6 m noise) is
-    identified from its base rows with its heaviest mass combination known (E99): every H positive definite
+    identified from its base rows with its heaviest mass combination known (E97): every H positive definite
     after the consistent fit; the identifiable combinations within their 95% intervals (measured: all 59,
     largest 1.82 standard deviations). Planted wrong once each (by hand): without the known mass (the root's
     mass column zeroed instead) the fit returned zeros for the root link, 25% covered; with the base

@@ -264,7 +264,7 @@ def _limited_gripper(tmp_path):
 
 
 def test_tendon_limit_law_agrees_with_mujoco(tmp_path):
-    """A limited fixed tendon driven past its range: the project's limit law (E85) on both engines (MuJoCo's own
+    """A limited fixed tendon driven past its range: the project's limit law (E87) on both engines (MuJoCo's own
     limit disabled, the law added as a tendon spring whose dead band is the range) agree within the divergence threshold while the tendon
     sits past its end; the plan, the verdict's scope and MuJoCo's notes say "tendon limit of split: the project's
     law on both engines". Planted: our law with twice the stiffness is seen (far past the threshold)."""

@@ -379,7 +379,7 @@ def _sines(fs=1000.0, seconds=6.0, seed=SEED):
 
 def _bound(d, k: int) -> float:
     """The error bound of derivative ``k`` in the interior: the filter's bias on each sine,
-    ``A_i w_i^k |1 - G_k(f_i)|`` (exact for a zero-phase linear filter, from its gains E95, E96), plus
+    ``A_i w_i^k |1 - G_k(f_i)|`` (exact for a zero-phase linear filter, from its gains E93, E94), plus
     5 standard deviations of the filtered white noise, ``5 sigma ||h_k||_2``, where ``h_k`` is the filter's
     response to a unit impulse (the filter is linear): a Gaussian exceeds 5 sigma with probability 6e-7
     a sample, 4e-3 over the 6,000 samples (and the seed is fixed)."""
@@ -411,7 +411,7 @@ def test_filtered_derivatives_error_is_bounded(method):
 @pytest.mark.parametrize("method", ["savgol", "spline"])
 def test_bandwidth_is_the_measured_minus_3_db(method):
     """A sine at the stated bandwidth comes out of the smoother at 1/sqrt 2 of its amplitude (to 0.2%:
-    the savgol bandwidth is found on a grid of fs/8192, the spline's (E95) is the continuous limit)."""
+    the savgol bandwidth is found on a grid of fs/8192, the spline's (E93) is the continuous limit)."""
     log, _ = _sines()
     d = derivatives(log, method=method)
     s = np.sin(2 * np.pi * d.bandwidth_hz * log.times)
@@ -422,7 +422,7 @@ def test_bandwidth_is_the_measured_minus_3_db(method):
 
 
 def test_noise_level_and_stated_filter(tmp_path):
-    """The third-difference estimate (E97) finds the planted 1e-4 (to 5%: the MAD of 6,000 samples has
+    """The third-difference estimate (E95) finds the planted 1e-4 (to 5%: the MAD of 6,000 samples has
     a relative spread near 1.3%); the filter is stated with its bandwidth, and the figure is written."""
     log, _ = _sines()
     assert noise_level(log.positions)[0] == pytest.approx(SIGMA, rel=0.05)

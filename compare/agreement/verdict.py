@@ -64,7 +64,7 @@ def cut_scope(model, load_options: dict | None = None, plan=None) -> dict:
     if scene is not None and getattr(scene, "mimic_constraints", False) and plan.constraints is not None:
         mimic -= sum(1 for c in plan.constraints.cset.constraints if c.source == "URDF <mimic>")
     opened = (opened and bool(eq or tendons)) or (mimic_opened and bool(mimic))
-    laws = [] if scene is None or plan.constraints is None else [  # issue 45: the tendon-limit law (E85)
+    laws = [] if scene is None or plan.constraints is None else [  # issue 45: the tendon-limit law (E87)
         f"tendon limit of {td.name.removesuffix('__limit')}: the project's law on both engines"
         for td in plan.constraints.tendons if td.name.endswith("__limit")]
     out = {"equalities": eq, "tendons": tendons, "mimic": mimic, "cut": bool(eq or tendons or mimic),

@@ -2,8 +2,8 @@
 parameter table (docs/identify.md, "The command").
 
 The fit is :func:`urdf2links.identification.identify` (base parameters by a pivoted QR of the null space,
-E87, masses kept first; least squares with standard deviations; with ``consistent=True`` every link's H
-positive definite, E88, when the library has it, then :func:`polished` onto the fitted base parameters). What this
+E91, masses kept first; least squares with standard deviations; with ``consistent=True`` every link's H
+positive definite, E92, when the library has it, then :func:`polished` onto the fitted base parameters). What this
 module adds:
 
 - the samples: those where some coordinate has ``|q'| < band`` are left out (:func:`kept_samples`); there
@@ -27,7 +27,7 @@ __all__ = ["Fit", "fit", "kept_samples", "FRICTION_BAND", "CHANGED", "NEGLIGIBLE
 FRICTION_BAND = 0.05
 CHANGED = 1e-6
 NEGLIGIBLE = 1e-9
-#: The consistent fit's pull toward the description (E88's rho): MuJoCo's samples are noise free, so the torques
+#: The consistent fit's pull toward the description (E92's rho): MuJoCo's samples are noise free, so the torques
 #: alone decide wherever they can (the library's default, 1e-4, moved a planted frictionloss by 19%).
 REGULARIZATION = 1e-10
 
@@ -86,8 +86,8 @@ class Fit:
 
 
 def polished(params, base, beta, values) -> np.ndarray:
-    """``values`` (p,) moved by the least scaled step onto the fitted base parameters, ``M x = beta`` (E87), when
-    every link's H stays positive definite and no damping, friction or armature goes below 0 (else ``values``). The consistent fit (E88) trades the torques'
+    """``values`` (p,) moved by the least scaled step onto the fitted base parameters, ``M x = beta`` (E91), when
+    every link's H stays positive definite and no damping, friction or armature goes below 0 (else ``values``). The consistent fit (E92) trades the torques'
     residual against a pull toward the description and solves to its solver's tolerance (~1e-4 relative on
     noise-free data); on data that the fitted ``beta`` explains to rounding the step is that small, and it
     gives back the fit's own combinations exactly."""
@@ -116,7 +116,7 @@ def fit(params, q, qd, qdd, tau) -> Fit:
                                   consistency_options={"regularization": REGULARIZATION})
         consistent = True
         values = polished(params, result.base, result.beta, result.consistency.values)
-    except ImportError:          # urdf2links.identification.consistency (E88) not there yet
+    except ImportError:          # urdf2links.identification.consistency (E92) not there yet
         result = library_identify(params, q, qd, qdd, tau)
         consistent, values = None, result.values
     described = params.values

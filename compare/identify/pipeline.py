@@ -1,7 +1,7 @@
 """``identify DESCRIPTION --against OTHER`` as one call: record, fit, validate (docs/identify.md, "The command").
 
 :func:`identify` records OTHER in MuJoCo along ``seeds`` excitation trajectories (:mod:`.recording`), builds
-the library's regressor (:func:`urdf2links.identification.regressor`, E85) of DESCRIPTION's tree at those
+the library's regressor (:func:`urdf2links.identification.regressor`, E89) of DESCRIPTION's tree at those
 samples, fits (:mod:`.fitting`), and checks the result on a held-out seed: the torque each model predicts
 along OTHER's recorded motion (inverse dynamics, before and after), and the motion itself, OTHER's servo run
 in MuJoCo with DESCRIPTION before and after (:mod:`.validation`).
@@ -29,7 +29,7 @@ from .writers import urdf_values
 __all__ = ["identify", "Identification", "SLIP_SPEED", "stacked"]
 
 #: The Coulomb law's regularisation speed v_s (rad/s or m/s) in the fit (module doc).
-SLIP_SPEED = 1e-5
+SLIP_SPEED = 1e-8
 
 
 def stacked(recs) -> tuple[np.ndarray, ...]:
@@ -99,7 +99,7 @@ def identify(description, other, *, seeds=(1, 2, 3), held_out_seed: int = 101, t
         f"samples with some |q'| < {band:g} left out of the fit ({int(keep.sum())} of {len(q)} kept): MuJoCo's "
         f"frictionloss is a soft constraint there; Coulomb law f q'/sqrt(q'^2 + v_s^2), v_s = {SLIP_SPEED:g}"]
     if result.consistent is None:
-        notes.append("the library's consistent fit (E88) is not available yet: the values are the least-squares "
+        notes.append("the library's consistent fit (E92) is not available yet: the values are the least-squares "
                      "ones, the unidentifiable kept at the description's")
     if np.any(result.min_eigenvalues() <= 0):
         bad = [ln for ln, e in zip(pair.built.model.tree.link_names, result.min_eigenvalues()) if e <= 0

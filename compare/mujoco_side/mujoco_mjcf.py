@@ -137,11 +137,11 @@ def _edit(actuators, gravcomp: dict, notes: list[str], limited=None):
     afterwards on a model compiled without any would not act)."""
 
     def edit(spec):
-        if limited is not None:     # issue 45: the tendon-limit law (E85), noted
+        if limited is not None:     # issue 45: the tendon-limit law (E87), noted
             rows = {r["name"]: r for r in limited.model.info.get("tendons", [])}
             names = add_limit_tendons(spec, limited, rows)
             notes.append("tendon limit of " + ", ".join(n.removesuffix("__limit") for n in names) + ": the project's "
-                         "law on both engines (E85: MuJoCo's own soft limit disabled, the law added as the tendon "
+                         "law on both engines (E87: MuJoCo's own soft limit disabled, the law added as the tendon "
                          + ", ".join(names) + ", a spring whose dead band is the range)")
         for body, f in gravcomp.items():
             b = spec.body(body)
@@ -200,7 +200,7 @@ def mujoco_from_mjcf(plan, *, timestep: float | None = None, integrator: str | N
     tendon_acts = [ta.actuator for ta in tendon_actuators(plan)]     # issue 43: fed their controls too
     own = [a for a in carried_acts if a.source != "file"]
     table = scene.gravcomp_table(model)
-    limits = limit_tendons(plan) if scene.file_constraints else ()     # issue 45: E85 as tendons of their own
+    limits = limit_tendons(plan) if scene.file_constraints else ()     # issue 45: E87 as tendons of their own
     m, where = compile_mjcf(str(scene.robot), notes, edit=_edit(own, table, notes, plan if limits else None)
                             if own or table or limits else None)
     g = np.zeros(3) if scene.gravity is None else np.asarray(scene.gravity, float)

@@ -20,7 +20,7 @@ An actuator MuJoCo's model does not hold under that name is an error naming it (
 engine only). Site transmissions and spatial tendons are not modelled: the plan refuses a scene that names
 such an actuator (:func:`urdf2links.scenes.actuators.resolve_actuators`), on both engines.
 
-Issue 45: a ``limited`` fixed tendon gets the project's limit law (E85, :mod:`urdf2links.scenes.tendons`) on both
+Issue 45: a ``limited`` fixed tendon gets the project's limit law (E87, :mod:`urdf2links.scenes.tendons`) on both
 engines. MuJoCo's own soft limit is disabled for the run (``mjDSBL_LIMIT``) and the law is applied instead as a
 second fixed tendon on the same joints (:func:`add_limit_tendons`): a spring whose dead band is the range is the
 law exactly, evaluated by MuJoCo's own compiled passive forces at every stage (no control, no callback code).
@@ -112,11 +112,11 @@ def add_tendon_controls(plan, m, ints: dict, floats: dict) -> list[int]:
     return ids
 
 
-# -- issue 45: tendon limits, the project's law (E85) on MuJoCo's side ------------------------------------------
+# -- issue 45: tendon limits, the project's law (E87) on MuJoCo's side ------------------------------------------
 
 
 def limit_tendons(plan) -> tuple:
-    """The plan's limit laws (E85): its tendons named ``<tendon>__limit``
+    """The plan's limit laws (E87): its tendons named ``<tendon>__limit``
     (:func:`urdf2links.scenes.tendons.limit_tendon`), each a one-sided spring with the range as its dead band."""
     cons = getattr(plan, "constraints", None)
     return () if cons is None else tuple(td for td in cons.tendons if td.name.endswith(LIMIT_SUFFIX))

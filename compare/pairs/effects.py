@@ -176,8 +176,8 @@ def _undo_all(terms: Terms, diffs: list[Difference], *, signs: bool) -> dict:
 
 #: The groups of kinds tried, in turn, as "values differ, dynamics equal" (:func:`unseen_group`): the links'
 #: inertial values with the joints' armatures (an armature and the inertia of the link it turns can trade, E49),
-#: then the inertial values alone. ``A`` and ``G`` are linear in each link's ``H`` (E10, E85): only combinations
-#: of the ``H`` (the base parameters, E87) are seen by the equations of motion, so single values can differ while
+#: then the inertial values alone. ``A`` and ``G`` are linear in each link's ``H`` (E10, E89): only combinations
+#: of the ``H`` (the base parameters, E91) are seen by the equations of motion, so single values can differ while
 #: ``A`` and ``G`` agree.
 UNSEEN_CANDIDATES = (("mass", "com", "inertia", "armature"), ("mass", "com", "inertia"))
 

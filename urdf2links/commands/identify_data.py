@@ -40,7 +40,7 @@ def _load(args):
 
     floating = bool(args.base_topic) or _has_base_columns(args.data)
     model = load_robot(args.file, floating_base=True) if floating else load_robot(args.file)
-    # a floating base's rows see no joint term, and the root's six coordinates have none: links only (E99)
+    # a floating base's rows see no joint term, and the root's six coordinates have none: links only (E97)
     return model, ParameterSet.from_model(model, joints=() if floating else ("damping", "friction", "armature",
                                                                                "offset")), floating
 

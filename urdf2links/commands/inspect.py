@@ -65,7 +65,7 @@ def _constraint_lines(info) -> list[str]:
     if eq:
         out += ["", "equalities (read; constraints of every scene unless --open-loops or from_file = false, E68-E70):"] + _table(eq)
     if td:
-        out += ["", "tendons (fixed ones act in every scene unless --open-loops or from_file = false, E76; limits: E85):"] + _table(td)
+        out += ["", "tendons (fixed ones act in every scene unless --open-loops or from_file = false, E76; limits: E87):"] + _table(td)
     return out
 
 

@@ -1,4 +1,4 @@
-"""Base parameters: what a motion can identify, named in link terms (docs/equations.md (E87)).
+"""Base parameters: what a motion can identify, named in link terms (docs/equations.md (E91)).
 
 ``tau = Y pi`` holds for every sample, but ``Y`` (the stack over the samples, (S n, p)) has a null space:
 directions of ``pi`` no motion of the data changes a torque with (a link fixed to its parent's rotation
@@ -9,7 +9,7 @@ then first moments, then the rest (the pivot's column weights), so that an unide
 a link's mass keeps that mass. The other ``r = p - k`` parameters ``I`` carry the identifiable
 combinations:
 
-    Y_D = Y_I K,   K = -N_I N_D^{-1},   so   Y pi = Y_I beta,   beta = pi_I + K pi_D     (E87)
+    Y_D = Y_I K,   K = -N_I N_D^{-1},   so   Y pi = Y_I beta,   beta = pi_I + K pi_D     (E91)
 
 ``beta`` (r,) are the base parameters, each named ``name_I + K_Ik name_Dk + ...`` (``m_link3 + m_link4``,
 ``mx_link3 - 0.333*m_link4``); ``pi_D`` stays at the description's values. The condition number is the one
@@ -36,7 +36,7 @@ PREFERENCE = {"armature": 16.0, "m": 8.0, "mx": 4.0, "my": 4.0, "mz": 4.0}
 
 @dataclass(frozen=True, eq=False)
 class BaseParameters:
-    """The identifiable combinations of one motion (module doc, E87).
+    """The identifiable combinations of one motion (module doc, E91).
 
     ``independent`` (r,) and ``dependent`` (k,) column indices of ``pi``; ``K`` (r, k); ``names`` (r,) each
     combination in link terms; ``null_space`` (p, k) the unidentifiable directions, as columns
@@ -118,7 +118,7 @@ def spread(S: int, samples: int | None) -> np.ndarray:
 
 def base_parameters(params, q=None, qd=None, qdd=None, *, Y=None, samples: int | None = 200, rtol: float = 1e-9,
                     base=None, t=0.0, clean: float = 1e-10) -> BaseParameters:
-    """The base parameters of the motion ``q, q', q''`` (S, n) (module doc, E87), from ``samples`` rows
+    """The base parameters of the motion ``q, q', q''`` (S, n) (module doc, E91), from ``samples`` rows
     spread over it (None: all), or from a given regressor ``Y`` (S, n, p). ``rtol``: the rank's tolerance
     on the singular values relative to the largest; ``clean``: entries of ``K`` below it are zero.
     Raises ValueError when no data is given."""

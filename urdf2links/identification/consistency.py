@@ -1,4 +1,4 @@
-"""Physical consistency: every link's H positive definite, regularised toward the description (docs/equations.md (E88)).
+"""Physical consistency: every link's H positive definite, regularised toward the description (docs/equations.md (E92)).
 
 A link is physically consistent exactly when its H is positive definite (E12). The least-squares fit
 (:mod:`urdf2links.identification.fit`) does not know that: noise, or a weakly excited link, gives a
@@ -9,7 +9,7 @@ semidefinite program
                + rho * mean(tau^2) * sum_k ((pi_k - pi_desc,k) / s_k)^2
     subject to H_p(pi) >= eps_p 1 (every link),   damping, friction, armature >= 0,
 
-with ``beta(pi) = pi_I + K pi_D`` (E87) and ``G`` the normal equations' matrix, so the first term is the
+with ``beta(pi) = pi_I + K pi_D`` (E91) and ``G`` the normal equations' matrix, so the first term is the
 increase of the torque residual's mean square over the least-squares fit. The second pulls every
 parameter, the unidentifiable ones too, toward the description's value with a small weight ``rho``
 (``s_k`` the scale of the parameter: the link's mass for ``m``, ``m * 0.1 m`` for a first moment, ``m * 0.01 m^2``
@@ -97,7 +97,7 @@ def _scales(params) -> np.ndarray:
 
 
 def _beta_map(params, base) -> np.ndarray:
-    """M (r, p) with ``beta = M pi`` (E87)."""
+    """M (r, p) with ``beta = M pi`` (E91)."""
     M = np.zeros((base.r, params.p))
     M[np.arange(base.r), base.independent] = 1.0
     if base.dependent.size:
@@ -117,7 +117,7 @@ def _free_solution(params, base, L, beta_ls, lam, s):
 def consistent_fit(fit, *, regularization: float = 1e-4, margin: float = 1e-9, tolerance: float = 1e-3,
                    solver: str = "CLARABEL"):
     """``fit`` (an :class:`~urdf2links.identification.fit.Identification` with its normal equations) with
-    every H positive definite (module doc, E88): the fit returned with ``consistency`` set.
+    every H positive definite (module doc, E92): the fit returned with ``consistency`` set.
     ``regularization`` rho; ``margin``: ``eps_p = margin * s_m`` (the link's mass scale); ``tolerance``: a
     link is said to be moved when a parameter moved by more than this fraction of its scale. Raises
     ImportError naming the extra when cvxpy is missing, RuntimeError naming the solver's status when it fails."""

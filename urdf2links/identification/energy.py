@@ -1,4 +1,4 @@
-"""The energy form: ``E + V`` linear in ``pi``, and the power balance over intervals (docs/equations.md (E86)).
+"""The energy form: ``E + V`` linear in ``pi``, and the power balance over intervals (docs/equations.md (E90)).
 
 For data without accelerations. A link's kinetic energy (E17, E37) in its own axes, with the body twist
 ``(omega, v_o)`` (``v_o = omega x o + v`` the origin's velocity, turned by ``R^T``), is
@@ -101,7 +101,7 @@ def _energy_batch(TI, TF, Q, QD, C, d, coupled, gx, gy, gz, link_col, arm, OUT, 
 
 
 def energy_regressor(params, q, qd) -> np.ndarray:
-    """``h`` (S, p) (or (p,) for one state) with ``E + V = h . pi`` at ``q, q'`` (S, n) (module doc, E86):
+    """``h`` (S, p) (or (p,) for one state) with ``E + V = h . pi`` at ``q, q'`` (S, n) (module doc, E90):
     the links' and the armature's columns; the joints' dissipative columns are 0 (they store no energy),
     a tendon's armature ``1/2 l'^2``. Fixed base (the power balance of a moving base has the base's work
     too, E41)."""
@@ -120,7 +120,7 @@ def energy_regressor(params, q, qd) -> np.ndarray:
 
 @dataclass(frozen=True)
 class EnergyRows:
-    """``Y`` (K, p) and ``y`` (K,): ``Y pi = y`` over ``K`` intervals (E86); ``bounds`` (K, 2) their sample
+    """``Y`` (K, p) and ``y`` (K,): ``Y pi = y`` over ``K`` intervals (E90); ``bounds`` (K, 2) their sample
     indices."""
 
     Y: np.ndarray
@@ -133,7 +133,7 @@ def _trapz(f, t):
 
 
 def energy_rows(params, t, q, qd, tau, *, window: int = 50) -> EnergyRows:
-    """The power balance (module doc, E86) over consecutive intervals of ``window`` samples of the run
+    """The power balance (module doc, E90) over consecutive intervals of ``window`` samples of the run
     ``t`` (S,), ``q, q', tau`` (S, n) (tau: the joints' generalized forces)."""
     t = np.asarray(t, float)
     q, qd, tau = (np.atleast_2d(np.asarray(a, float)) for a in (q, qd, tau))

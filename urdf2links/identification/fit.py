@@ -1,6 +1,6 @@
 """The least-squares fit of the base parameters, with standard deviations: :func:`identify`.
 
-With the base parameters of :mod:`urdf2links.identification.base` (E87), ``tau = Y_I beta`` over every
+With the base parameters of :mod:`urdf2links.identification.base` (E91), ``tau = Y_I beta`` over every
 sample. The samples are taken in blocks (``block`` rows): each block's regressor is computed (compiled,
 :func:`~urdf2links.identification.regression.regressor_block`), its independent columns ``Y_I`` are kept
 and only the normal equations are accumulated, per coordinate ``j`` (``W_j`` its weight):
@@ -15,7 +15,7 @@ covariance of ``beta`` is ``sigma^2 G^{-1}``. The parameters: ``pi_D`` at the de
 beta - K pi_D`` (so ``pi_I`` has ``beta``'s covariance and ``pi_D`` none).
 
 :func:`identify` returns an :class:`Identification`; with ``consistent=True`` it then runs
-:func:`~urdf2links.identification.consistency.consistent_fit` (E88) on the same normal equations.
+:func:`~urdf2links.identification.consistency.consistent_fit` (E92) on the same normal equations.
 """
 
 from __future__ import annotations
@@ -144,7 +144,7 @@ class Identification:
                                                      self.params.values, v, self.std, self.identifiable, self.alone)]
 
     def combinations(self) -> list[dict]:
-        """One row per identifiable combination (E87): its name in link terms, the description's value, the
+        """One row per identifiable combination (E91): its name in link terms, the description's value, the
         identified value and its standard deviation, and whether it is a parameter alone."""
         alone = ~np.any(self.base.K != 0.0, axis=1)
         desc = self.base.beta(self.params.values)
@@ -166,7 +166,7 @@ def identify(params, q, qd, qdd, tau, *, base: BaseParameters | None = None, wei
     """Fit ``params`` to the samples ``q, q', q'', tau`` (S, n) (module doc): the base parameters from
     ``samples`` rows spread over the run (or ``base`` given), then every sample in blocks. ``weights``
     (n,) per coordinate (default 1; e.g. the inverse of each joint's noise). ``consistent=True``: every
-    link's H positive definite (E88, :func:`~urdf2links.identification.consistency.consistent_fit`,
+    link's H positive definite (E92, :func:`~urdf2links.identification.consistency.consistent_fit`,
     options ``consistency_options``). ``tau``: the joints' generalized forces, applied loads already
     subtracted (:func:`~urdf2links.identification.regression.regressor`)."""
     if base is None:
@@ -178,7 +178,7 @@ def identify(params, q, qd, qdd, tau, *, base: BaseParameters | None = None, wei
 def fit_rows(params, Y, y, *, base: BaseParameters | None = None, rtol: float = 1e-9, consistent: bool = False,
              consistency_options: dict | None = None) -> Identification:
     """The same fit from given rows: ``Y`` (K, p) with ``Y pi = y`` (K,), e.g. the power balance's rows of
-    :func:`~urdf2links.identification.energy.energy_rows` (E86), or the regressor's rows projected onto a
+    :func:`~urdf2links.identification.energy.energy_rows` (E90), or the regressor's rows projected onto a
     constraint's null space (``N^T Y``, ``N^T tau`` remove the unknown forces ``J^T lambda`` of joint or tendon
     equalities, E70). One group of rows: ``rms_before``, ``rms_after`` are (1,)."""
     Y = np.asarray(Y, float)

@@ -1,19 +1,19 @@
-"""A floating base identified from its six unactuated rows, without joint torques (docs/equations.md (E99)).
+"""A floating base identified from its six unactuated rows, without joint torques (docs/equations.md (E97)).
 
 A robot in flight (or hanging from a crane) has no force on its floating root's six coordinates
-``x, y, z, phi_x, phi_y, phi_z`` (E3): the base rows of ``Q = Y pi`` (E85) read ``Y_b(q, q', q'') pi = 0``
+``x, y, z, phi_x, phi_y, phi_z`` (E3): the base rows of ``Q = Y pi`` (E89) read ``Y_b(q, q', q'') pi = 0``
 (with a contact wrench in the log: ``Y_b pi = Q_b``, the wrench's generalized force). No joint torque is
 needed: the joints' motion alone moves the base, by an amount set by the links' inertias. The equations
 are homogeneous: a robot twice as heavy everywhere flies the same way, so one mass must be known (weighed).
-:func:`identify_floating` takes the base parameter (E87) of ``Y_b`` that carries the most mass (the total
+:func:`identify_floating` takes the base parameter (E91) of ``Y_b`` that carries the most mass (the total
 mass, when the flight sees it) as known (its description value, or ``known_mass``): its column moves to the
 right-hand side, ``Y_I' beta' = -Y_I[:, a0] beta_a0``. The joints' damping, friction, armature and offsets do
 not enter the base rows and stay at the description's values (listed as unidentifiable).
 
 The base parameters come from weighted least squares with each base row's noise from its residual and
-the Newey-West covariance over the filter's correlation length (E98): the residual is the filtered
+the Newey-West covariance over the filter's correlation length (E96): the residual is the filtered
 position noise through the regressor, correlated over the filter's window. Then the semidefinite program
-(E88, :func:`~urdf2links.identification.consistency.consistent_fit`) keeps every link's H positive
+(E92, :func:`~urdf2links.identification.consistency.consistent_fit`) keeps every link's H positive
 definite.
 
 Shapes: S samples, p parameters, r base parameters; the base's rows are the model's first six coordinates.
@@ -99,11 +99,11 @@ def _with_known(sub: WeightedFit, keep, a0: int, m0: float, r: int) -> WeightedF
 
 def identify_floating(params, d, *, known_mass: float | None = None, wrench_forces=None, consistent: bool = True,
                       samples: int | None = 2000, rtol: float = 1e-9) -> FloatingIdentification:
-    """Fit a floating robot's link parameters from its base rows (module doc, E99). ``params``: a
+    """Fit a floating robot's link parameters from its base rows (module doc, E97). ``params``: a
     :class:`ParameterSet` of a floating model, links only (``joints=()``: the base rows see no joint term; coordinates: the root's six, then the joints in the log's
     order); ``d``: the log's :class:`~urdf2links.robot_logs.Derivatives` with ``d.base``; ``known_mass``: the
     root link's mass (default the description's); ``wrench_forces`` (S, 6): contact wrenches' generalized
-    forces on the base coordinates at ``d.times``; ``rtol``: the base parameters' rank tolerance (E87; a short
+    forces on the base coordinates at ``d.times``; ``rtol``: the base parameters' rank tolerance (E91; a short
     flight sees some combinations barely: a larger one leaves them at the description's values). Raises ValueError without the base's pose in the log."""
     if d.base is None:
         raise ValueError(f"{d.log.source}: no floating base's pose in the log (a base topic, or base.* columns): the "
@@ -134,13 +134,13 @@ def identify_floating(params, d, *, known_mass: float | None = None, wrench_forc
     cons = eig = None
     if consistent:
         cons, eig = _consistent(params, base, fit, Y[:, :, base.independent], rhs, values)
-        notes.append("every link's H positive definite (semidefinite program, E88)")
+        notes.append("every link's H positive definite (semidefinite program, E92)")
     return FloatingIdentification(params=params, base=base, fit=fit, values=values, consistent=cons, eig=eig,
                                   root_mass=(a0, m0), rows=len(q), notes=tuple(notes))
 
 
 def _consistent(params, base, fit, YI, rhs, values):
-    """The consistent fit (E88) on the base rows' normal equations (weighted by the rows' noise): ``G`` of
+    """The consistent fit (E92) on the base rows' normal equations (weighted by the rows' noise): ``G`` of
     every base column (the known one too: moving it costs as moving any other); ``t`` of the known-mass
     right-hand side ``rhs`` (its scale sets the pull toward the description)."""
     from .consistency import consistent_fit, min_eigenvalues

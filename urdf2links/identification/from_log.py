@@ -2,17 +2,17 @@
 
 The log is read, checked and differentiated by :mod:`urdf2links.robot_logs` (docs/logs.md); this module
 fits. :func:`identify_log` takes the :class:`~urdf2links.robot_logs.Derivatives` of a fixed-base robot's log
-and fits the base parameters (E87) twice:
+and fits the base parameters (E91) twice:
 
-- **accelerations**: ``tau = Y(q, q', q'') pi`` (E85) per sample and joint, with the filtered positions,
+- **accelerations**: ``tau = Y(q, q', q'') pi`` (E89) per sample and joint, with the filtered positions,
   velocities and accelerations on the interior rows, and the efforts as logged (white sensor noise: the
   filter's bandwidth sits far above the motion, so the unfiltered efforts and the filtered regressor see
-  the same signal); weighted least squares with each joint's noise from its residual (E98);
-- **energy**: the power balance over intervals of ``window`` samples (E86), no accelerations: the
+  the same signal); weighted least squares with each joint's noise from its residual (E96);
+- **energy**: the power balance over intervals of ``window`` samples (E90), no accelerations: the
   filtered positions and velocities only, the work of the logged efforts integrated.
 
 Both give the same base parameters ``beta``; :class:`LogIdentification` holds both fits, the parameters
-``pi`` of the acceleration fit (``pi_D`` at the description's values, E87), and per base parameter the two
+``pi`` of the acceleration fit (``pi_D`` at the description's values, E91), and per base parameter the two
 estimates' difference in units of its combined standard deviation.
 
 Shapes: S samples, n coordinates, p parameters, r base parameters.
@@ -90,7 +90,7 @@ class LogIdentification:
 
 def _relative_error(d, sl, joints) -> float:
     """The regressor's relative error from the derivatives' noise: per joint the filtered acceleration's
-    noise (position noise (E97) times the filter's gain on white noise) over the acceleration's RMS."""
+    noise (position noise (E95) times the filter's gain on white noise) over the acceleration's RMS."""
     gain = derivative_noise_gain(d.filter, order=2)
     acc = d.accelerations[sl][:, joints]
     rms = np.sqrt(np.mean(acc ** 2, axis=0))

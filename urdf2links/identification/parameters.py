@@ -1,6 +1,6 @@
 """The parameters of identification: each link's H, each joint's damping, friction, armature and offset.
 
-``pi`` (p,) is the vector the regressor multiplies, ``Q = Y(q, q', q'') pi`` (docs/equations.md (E85)).
+``pi`` (p,) is the vector the regressor multiplies, ``Q = Y(q, q', q'') pi`` (docs/equations.md (E89)).
 Its layout (:class:`ParameterSet`, built once from a :class:`~urdf2links.dynamics.model.Model`):
 
 - per link that moves (a link hanging from the base without a coordinate above it cannot change any

@@ -1,4 +1,4 @@
-"""The regressor ``Y(q, q', q'')`` with ``tau = Y pi``, compiled and batched (docs/equations.md (E85)).
+"""The regressor ``Y(q, q', q'')`` with ``tau = Y pi``, compiled and batched (docs/equations.md (E89)).
 
 One kinematics pass (:func:`urdf2links.dynamics.kernels.kinematics` given ``q''``, as inverse dynamics,
 E54) gives every link's pose ``(R, o)``, twist ``(omega, v)``, whole acceleration ``(alpha, a)`` (gravity
@@ -159,7 +159,7 @@ def _tree_rows(TI, W, X, qdd_at, link_col, lc_ptr, lc_idx, arm, Phi, Y):
 @njit(cache=True)
 def regressor_row(TI, TF, W, X, YT, Phi, q, qd, qdd, base, has_base, gx, gy, gz, C, d, coupled,
                   link_col, lc_ptr, lc_idx, arm, jcols, tcoef, tcols, vs, out):
-    """``Y`` (n, p) of one state into ``out`` (module doc, E85). Scratch: ``W`` the tree's, ``X`` (3 n_tree,)
+    """``Y`` (n, p) of one state into ``out`` (module doc, E89). Scratch: ``W`` the tree's, ``X`` (3 n_tree,)
     the tree's ``q, q', q''``, ``YT`` (n_tree, p) the tree's rows when ``coupled``, ``Phi`` (10, 6)."""
     tree = Tree(TI, TF, W)
     nt = TI[1]
@@ -311,7 +311,7 @@ def regressor_columns(params, Q, QD, QDD, ptr, cols, out, *, base=None, t=0.0, g
 
 def regressor(params, q, qd, qdd, *, base=None, t=0.0, gravity: bool = True) -> np.ndarray:
     """``Y`` (n, p) of one state ``q, q', q''`` (n,), or (S, n, p) of a batch (S, n): ``tau = Y pi`` with
-    ``pi`` laid out by ``params`` (:class:`~urdf2links.identification.parameters.ParameterSet`, E85).
+    ``pi`` laid out by ``params`` (:class:`~urdf2links.identification.parameters.ParameterSet`, E89).
     ``base`` (a moving base, as for :meth:`Model.inverse_dynamics`), ``gravity=False`` leaves ``G`` out.
     Applied loads are not in ``Y`` (they do not depend on ``pi``): subtract
     :meth:`Model.generalized_forces` from the measured torques. Raises ValueError naming the argument

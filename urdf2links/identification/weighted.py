@@ -1,4 +1,4 @@
-"""Weighted least squares of base parameters with the noise estimated from the residual (docs/equations.md (E98)).
+"""Weighted least squares of base parameters with the noise estimated from the residual (docs/equations.md (E96)).
 
 A robot's log has noise whose level nobody states: each joint's torque sensor has its own. The fit
 (:func:`weighted_fit`) is iterated: ordinary least squares, then each row kind's noise ``sigma_j`` (a
@@ -7,7 +7,7 @@ joint's torque row, or a floating base's row) from its residual, then least squa
 ``C = G^-1`` with ``G = sum_t Y_t^T W Y_t`` (``W = diag(1 / sigma_j^2)``), or, when the residual is
 correlated over ``lags`` samples (the positions' filter correlates the regressor's own noise over its
 window), the sandwich ``G^-1 B G^-1`` with Newey-West's ``B = sum_{|l| <= L} (1 - |l| / (L + 1)) sum_t u_t
-u_(t+l)^T``, ``u_t = Y_t^T W e_t`` (E98). Standard deviations are the square roots of C's diagonal and the
+u_(t+l)^T``, ``u_t = Y_t^T W e_t`` (E96). Standard deviations are the square roots of C's diagonal and the
 95% intervals ``beta +- 1.96 std``.
 
 The intervals assume the regressor exact. It is not: the velocities and accelerations carry the filtered
@@ -95,7 +95,7 @@ def _newey_west(Yw, ew, lags: int) -> np.ndarray:
 
 def weighted_fit(Y, y, *, iterations: int = 2, lags: int = 0, relative_error: float | None = None,
                  fixed_sigma=None) -> WeightedFit:
-    """The base parameters of ``y = Y beta + e`` (module doc, E98). ``Y`` (S, m, r), ``y`` (S, m);
+    """The base parameters of ``y = Y beta + e`` (module doc, E96). ``Y`` (S, m, r), ``y`` (S, m);
     ``iterations`` re-weightings after the unweighted start; ``lags`` the residual's correlation length in
     samples (0: white); ``relative_error`` the regressor's relative error from the derivatives' noise (for
     ``error_bound``); ``fixed_sigma`` (m,) with NaN where the noise is estimated, a number where it is known.

@@ -2,7 +2,7 @@
 
 The constrained right-hand side is the scene's compiled one (:mod:`urdf2links.scenes.scene_kernels` with its
 ``constraints`` effect: the free forces, the fixed tendons (E76), the constraint terms from the evaluation's
-own kinematics pass and the KKT block elimination (E72) with a pivoted Schur factorisation (E85),
+own kinematics pass and the KKT block elimination (E72) with a pivoted Schur factorisation (E88),
 :mod:`urdf2links.scenes.constraint_kernels`), so every loop runs it as it runs any scene: RK4, RK45, DOP853,
 Radau5, ``auto`` (its stretches) and the batched sweeps. After every accepted step (and at the initial state
 and at every dense-output sample) the loops project the state onto ``Phi = 0``, ``Phi' = 0`` (E74,

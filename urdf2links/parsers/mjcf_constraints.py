@@ -13,7 +13,7 @@ tendons (E76) when a scene asks (``[constraints] from_file = true``). MuJoCo's o
 - ``tendon`` (of fixed tendons): the same law on the tendons' lengths, ``tendon_length0`` their lengths at
   ``qpos0``;
 - a fixed tendon: its joints and coefficients, stiffness, damping, spring length (a range), its limits (the
-  project's limit law, E85, on both engines) with their ``solref``, its friction loss (not modelled: noted), and
+  project's limit law, E87, on both engines) with their ``solref``, its friction loss (not modelled: noted), and
   the actuators whose transmission it is.
 
 Site-semantic equalities, ``tendon`` equalities of spatial tendons, ``flex`` equalities and spatial tendons

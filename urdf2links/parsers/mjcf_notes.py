@@ -62,7 +62,7 @@ def inventory(m, joint_kinds: dict) -> list[str]:
     add(m.npair + m.nexclude, f"{m.npair} contact pair(s), {m.nexclude} exclude(s)", "contacts are disabled on both sides")
     add(m.ntendon, f"{m.ntendon} tendon(s) ({_names(m, 'mjOBJ_TENDON', m.ntendon)})",
         "fixed tendons are read (stiffness, damping, spring length, actuators on them; E76) and act in every scene, as in "
-        "MuJoCo (issue 45); a limited one gets the project's limit law on both engines (E85: a one-sided spring past "
+        "MuJoCo (issue 45); a limited one gets the project's limit law on both engines (E87: a one-sided spring past "
         "its range, MuJoCo's own soft limit disabled); --open-loops or [constraints] from_file = false drops them "
         "(MuJoCo's run then zeroes their stiffness and damping); spatial tendons and tendon friction loss are not "
         "modelled")

@@ -3,7 +3,7 @@
 :func:`derivatives` is what ``identify --data`` calls: it filters the positions (and, with the same
 filter, the efforts, so that both sides of ``Q = Y pi`` see one bandwidth) and differentiates them
 (:mod:`urdf2links.robot_logs.filters`), estimates each joint's position noise from third differences
-(E97), and returns a :class:`Derivatives` that prints its filter and plots it against the spectrum.
+(E95), and returns a :class:`Derivatives` that prints its filter and plots it against the spectrum.
 
 Near the ends a centred window does not fit: the first and last ``edge`` samples come from a one-sided
 fit (savgol ``mode="interp"``) or the spline's free ends, and are less filtered; :attr:`Derivatives.interior`
@@ -34,7 +34,7 @@ JITTER = 0.01
 
 
 def noise_level(x: np.ndarray) -> np.ndarray:
-    """(m,) standard deviation of white noise on ``x`` (S, m), from its third differences (E97):
+    """(m,) standard deviation of white noise on ``x`` (S, m), from its third differences (E95):
     ``Delta^3 e`` has variance ``20 sigma^2`` (1 + 9 + 9 + 1), and a smooth signal sampled fast leaves
     ``Delta^3 x ~ x''' dt^3``, far below the noise; robust (median absolute deviation, 1.4826)."""
     d3 = np.diff(x, n=3, axis=0)
@@ -46,7 +46,7 @@ def noise_level(x: np.ndarray) -> np.ndarray:
 class Derivatives:
     """The filtered log. Shapes: (S,) ``times``; (S, n) ``positions`` (smoothed), ``velocities``,
     ``accelerations``, ``efforts`` (smoothed by the same filter; NaN where not logged). ``filter``: the
-    stated filter and its bandwidth; ``noise`` (n,): each joint's position noise (E97), in the
+    stated filter and its bandwidth; ``noise`` (n,): each joint's position noise (E95), in the
     positions' unit; ``edge``: samples at each end less filtered (``interior`` leaves them out);
     ``log``: the log filtered (its raw samples, for the spectrum); ``wrenches`` (S, 6): the log's contact
     wrenches interpolated at ``times`` and smoothed by the same filter, or None; ``base`` (3, S, 6): a

@@ -3,10 +3,10 @@ frequency responses (the bandwidth that is printed and plotted).
 
 - ``savgol``: Savitzky-Golay (scipy.signal): a least-squares polynomial of degree ``order`` over a centred
   window of ``window`` samples, differentiated; symmetric coefficients, so zero phase. Needs one sampling
-  rate. Its gains ``G_k(f) = |H_k(f)| / (2 pi f)^k`` (E96) come from the coefficients (scipy.signal.freqz).
+  rate. Its gains ``G_k(f) = |H_k(f)| / (2 pi f)^k`` (E94) come from the coefficients (scipy.signal.freqz).
 - ``spline``: a smoothing spline (scipy.interpolate.make_smoothing_spline, any spacing), differentiated
   exactly. Its penalty ``lam`` is set from the cutoff: the spline minimises ``sum (y - g)^2 + lam int g''^2``,
-  whose response on samples ``dt`` apart is ``H(f) = 1 / (1 + lam dt (2 pi f)^4)`` (E95), the same for every
+  whose response on samples ``dt`` apart is ``H(f) = 1 / (1 + lam dt (2 pi f)^4)`` (E93), the same for every
   derivative order, so ``lam = (sqrt 2 - 1) / (dt (2 pi f_c)^4)`` puts its -3 dB point at ``f_c``.
 
 The bandwidth is the -3 dB frequency of the position smoother ``G_0``.
@@ -43,7 +43,7 @@ class Filter:
         return 1.0 / self.dt
 
     def gains(self, f: np.ndarray, orders=(0, 1, 2)) -> np.ndarray:
-        """(K, F) gains ``G_k(f) = |H_k(f)| / (2 pi f)^k`` (E95, E96) of the smoother (k = 0), the
+        """(K, F) gains ``G_k(f) = |H_k(f)| / (2 pi f)^k`` (E93, E94) of the smoother (k = 0), the
         differentiator (1) and the second derivative (2), for k in ``orders`` (K,), at frequencies ``f`` (F,)
         Hz; an ideal filter has 1 everywhere."""
         f = np.asarray(f, dtype=float)
@@ -75,7 +75,7 @@ class Filter:
 
 
 def _bandwidth(filt: Filter, k: int = 0) -> float:
-    """The first frequency where the gain ``G_k`` (E95, E96) falls to 1/sqrt 2, on a grid of fs/8192."""
+    """The first frequency where the gain ``G_k`` (E93, E94) falls to 1/sqrt 2, on a grid of fs/8192."""
     f = np.linspace(0.0, 0.5 * filt.fs, 4097)[1:]
     g = filt.gains(f, orders=(k,))[0]
     below = np.flatnonzero(g < _HALF)
@@ -120,7 +120,7 @@ def savgol(dt: float, *, window: int | None = None, order: int = 3, cutoff_hz: f
 
 
 def spline(dt: float, *, cutoff_hz: float) -> Filter:
-    """The smoothing spline whose -3 dB point (E95) is ``cutoff_hz``."""
+    """The smoothing spline whose -3 dB point (E93) is ``cutoff_hz``."""
     lam = (np.sqrt(2.0) - 1.0) / (dt * (2 * np.pi * cutoff_hz) ** 4)
     return Filter("spline", dt, float(cutoff_hz), lam=float(lam))
 

@@ -12,8 +12,8 @@ __all__ = ["plot_filter"]
 
 def plot_filter(d, path) -> Path:
     """Top: each joint's position spectrum (Welch, one-sided, detrended), the white-noise floor
-    ``2 sigma^2 / fs`` of the estimated noise (E97) and the bandwidth. Bottom: the filter's gains
-    ``G_0, G_1, G_2`` (E95, E96), 1 for an ideal smoother and differentiators. ``d``: a Derivatives."""
+    ``2 sigma^2 / fs`` of the estimated noise (E95) and the bandwidth. Bottom: the filter's gains
+    ``G_0, G_1, G_2`` (E93, E94), 1 for an ideal smoother and differentiators. ``d``: a Derivatives."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

@@ -1,5 +1,5 @@
 """The constrained right-hand side compiled (issue 45): fixed tendons (E76), constraint terms (E71), the KKT
-block elimination (E72) with a pivoted Schur factorisation (E85), and the pieces the projection (E74) reuses.
+block elimination (E72) with a pivoted Schur factorisation (E88), and the pieces the projection (E74) reuses.
 
 Called from :func:`urdf2links.scenes.scene_kernels._rhs` behind its ``constraints`` marker, after the free
 solve: ``out[n:2n]`` holds ``q''_free = A^-1 f`` and the tree's scratch ``W`` the kinematics pass of the
@@ -13,7 +13,7 @@ coordinates). Nothing is computed twice:
   linear accelerations carry ``-g``: a point's ``a_0`` gets ``+g`` back, E32);
 - :func:`kkt`: ``Z = L^-T J^T`` (one half solve per row with A's factor ``L^T D L``, from the leaves: a
   sparse row costs its coordinates' ancestors only), ``S = J A^-1 J^T = Z^T D^-1 Z``, factorised by a
-  Cholesky with diagonal pivoting (E85); ``lambda = S^-1 (-gamma - J q''_free)``, ``q'' = q''_free + A^-1
+  Cholesky with diagonal pivoting (E88); ``lambda = S^-1 (-gamma - J q''_free)``, ``q'' = q''_free + A^-1
   (J^T lambda)`` (one full solve) (E72). A pivot at or below :data:`SCHUR_PIVOT` (a row dependent on the solved
   ones here: a change point of the loop) either drops the rows left (``[constraints] change_point =
   "continue"``; an event (t, row, pivot) is recorded when a row starts being dropped) or fails the
@@ -61,7 +61,7 @@ def a_solve(tree, scene, v, at, coupled):
 def half_solve(tree, scene, v, at, coupled):
     """``v[at:at + n] <- Z = L^-T v`` with the factor of A left by the evaluation (the tree's ``A = L^T D L``: from
     the leaves, a zero entry skipped, so a sparse row costs its ancestors only; coupled coordinates'
-    ``A = L L^T``: forward), so that ``J A^-1 J^T = Z^T W Z`` with :func:`weights` ``W`` (E85)."""
+    ``A = L L^T``: forward), so that ``J A^-1 J^T = Z^T W Z`` with :func:`weights` ``W`` (E88)."""
     SI, X = scene.SI, scene.X
     n, nt = SI[0], SI[1]
     at = nonneg(at)
@@ -339,7 +339,7 @@ def constraint_terms(tree, scene, y):
 @one_signature
 @kernel
 def _pivoted_cholesky(X, xl, xd, xperm, r, m, tol):
-    """``P D S D P^T = L L^T`` in place (r, r) with row stride ``m`` at ``X[xl:]`` (E85): the largest diagonal
+    """``P D S D P^T = L L^T`` in place (r, r) with row stride ``m`` at ``X[xl:]`` (E88): the largest diagonal
     left first; stops at a pivot at or below ``tol``. Swaps the order ``X[xperm:]`` and the scales ``X[xd:]``
     with the rows. Returns ``(rank, smallest pivot, the pivot where it stopped)``."""
     smallest = np.inf

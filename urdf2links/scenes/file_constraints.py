@@ -96,7 +96,7 @@ def _tendon(model, row, scene, where) -> FixedTendon:
 
 
 def _limit(model, row, td, scene, where) -> FixedTendon:
-    """Issue 45: a limited tendon's limit law (E85) as the tendon ``<name>__limit`` (:func:`limit_tendon`)."""
+    """Issue 45: a limited tendon's limit law (E87) as the tendon ``<name>__limit`` (:func:`limit_tendon`)."""
     _, offset = _length(model, row, where)
     lo, hi = row["range"]
     try:
@@ -128,9 +128,9 @@ def file_constraints(model, scene, where) -> tuple[list[ConstraintSpec], list[Fi
         td = _tendon(model, row, scene, where)
         if td.stiffness or td.damping or td.actuators:
             tendons.append(td)
-        if row["limited"]:      # issue 45: the project's limit law on both engines (E85)
+        if row["limited"]:      # issue 45: the project's limit law on both engines (E87)
             tendons.append(_limit(model, row, td, scene, where))
-            notes.append(f"tendon limit of {row['name']}: the project's law on both engines (E85: a one-sided "
+            notes.append(f"tendon limit of {row['name']}: the project's law on both engines (E87: a one-sided "
                          f"spring past [{row['range'][0]:g}, {row['range'][1]:g}], tendon {row['name']}__limit; "
                          "MuJoCo's own soft limit disabled)")
     return specs, tendons, notes

@@ -166,7 +166,7 @@ class Plan:
         for spec in specs.values():
             on = [f"{s.link} (r {s.radius:g} m, {s.source})" for r, s in zip(self.contact_set.rows,
                                                                              self.contact_set.spheres) if r[3] is spec]
-            out.append(f"  contact (E85-E80, Q through the links' wrenches): {spec.describe()}; spheres on "
+            out.append(f"  contact (E77-E80, Q through the links' wrenches): {spec.describe()}; spheres on "
                        + ", ".join(on))
         if out and self.reference_funcs:
             out.append("  note: the computed torque (E57) leaves the contact out of its inverse dynamics")
@@ -213,7 +213,7 @@ class Plan:
         if self.constraints is not None and len(self.constraints.cset):     # issue 45
             mode = getattr(s, "change_point", "continue")
             lines.append(f"  change_point = {mode!r}: a row that loses its independence (a Schur pivot at or below "
-                         "1e-12 of S scaled to a unit diagonal, E85) " + ("stops the run with the named DynamicsError"
+                         "1e-12 of S scaled to a unit diagonal, E88) " + ("stops the run with the named DynamicsError"
                          if mode == "stop" else "is dropped there and the run goes on; each event (time, row, pivot) "
                          "is named in the report"))
         lines += self._contact_lines()

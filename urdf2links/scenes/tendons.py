@@ -8,7 +8,7 @@ is ``c f_t``. The spring is a potential (``V`` gains ``0.5 k (l - l_0)^2``); the
 work (``P``). Spatial tendons and tendon friction loss are not modelled: the file's notes say so
 (:mod:`urdf2links.scenes.file_constraints`).
 
-A ``limited`` tendon (MuJoCo's ``range [l_lo, l_hi]``) gets the project's tendon-limit law (E85, issue 45): a stiff
+A ``limited`` tendon (MuJoCo's ``range [l_lo, l_hi]``) gets the project's tendon-limit law (E87, issue 45): a stiff
 one-sided spring on the length past the range, ``f = -k (l - l_hi)`` above it, ``k (l_lo - l)`` below it, 0 inside,
 with ``k = m_t / (tau zeta)^2`` from the limit's ``solref (tau, zeta)`` and the tendon's effective mass
 ``m_t = 1 / (c A(q0)^-1 c)`` at the scene's initial state (:func:`limit_tendon`; MuJoCo's reference stiffness of its
@@ -25,7 +25,7 @@ import numpy as np
 
 __all__ = ["FixedTendon", "limit_tendon", "LIMIT_SUFFIX"]
 
-#: The name of a limited tendon's limit law (E85) as a tendon of its own: ``<tendon>__limit``.
+#: The name of a limited tendon's limit law (E87) as a tendon of its own: ``<tendon>__limit``.
 LIMIT_SUFFIX = "__limit"
 
 
@@ -69,13 +69,13 @@ class FixedTendon:
 
 
 def limit_tendon(model, tendon: FixedTendon, limit, q0, solref) -> FixedTendon:
-    """The tendon-limit law (E85) of ``tendon`` limited to ``limit = (l_lo, l_hi)`` (the model's coordinates) as a
+    """The tendon-limit law (E87) of ``tendon`` limited to ``limit = (l_lo, l_hi)`` (the model's coordinates) as a
     fixed tendon ``<name>__limit``: ``k = m_t / (tau zeta)^2``, ``m_t = 1 / (c A(q0)^-1 c)`` at ``q0``, the spring
     length the range (a dead band: no force inside it); no damping. ValueError for a ``solref`` that is not
     ``(tau > 0, zeta > 0)``."""
     tau, zeta = float(solref[0]), float(solref[1])
     if tau <= 0.0 or zeta <= 0.0:
-        raise ValueError(f"limit solref {list(solref)}: the limit law (E85) takes a time constant and a damping ratio, "
+        raise ValueError(f"limit solref {list(solref)}: the limit law (E87) takes a time constant and a damping ratio, "
                          "both > 0 (MuJoCo's direct form with negative numbers is not read)")
     c = np.asarray(tendon.coef, float)
     m_t = 1.0 / float(c @ np.linalg.solve(model.mass_matrix(np.asarray(q0, float)), c))
