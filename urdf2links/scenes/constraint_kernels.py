@@ -63,11 +63,10 @@ def a_solve(tree, scene, v, at, coupled):
 
 @one_signature
 @kernel
-def half_solve(tree, scene, v, at, coupled, hi):
+def half_solve(tree, scene, v, at, coupled):
     """``v[at:at + n] <- Z = L^-T v`` with the factor of A left by the evaluation (the tree's ``A = L^T D L``: from
     the leaves, a zero entry skipped, so a sparse row costs its ancestors only; coupled coordinates'
-    ``A = L L^T``: forward), so that ``J A^-1 J^T = Z^T W Z`` with :func:`weights` ``W`` (E85). ``hi``: the last
-    nonzero entry of ``v`` (the tree's coordinates come parents first: ``Z`` is zero past it too)."""
+    ``A = L L^T``: forward), so that ``J A^-1 J^T = Z^T W Z`` with :func:`weights` ``W`` (E85)."""
     SI, X = scene.SI, scene.X
     n, nt = SI[0], SI[1]
     at = nonneg(at)
@@ -82,7 +81,7 @@ def half_solve(tree, scene, v, at, coupled, hi):
     TI, W = tree.TI, tree.W
     ap, ai, rp, rs = nonneg(TI[I_ANCPTR]), nonneg(TI[I_ANCIDX]), nonneg(TI[I_RUNPTR]), nonneg(TI[I_RUNS])
     wa = nonneg(TI[W_A])
-    for kk in range(n - 1 - hi, n):         # L^T z = x: from the leaves (factor.ltdl_solve's first half)
+    for kk in range(n):                     # L^T z = x: from the leaves (factor.ltdl_solve's first half)
         k = nonneg(n - 1 - kk)
         r0 = nonneg(TI[ap + k])
         m = nonneg(TI[ap + k + 1] - 1 - r0)
@@ -97,21 +96,6 @@ def half_solve(tree, scene, v, at, coupled, hi):
         else:
             for u in range(m):
                 v[at + nonneg(TI[ai + r0 + u])] -= W[j + u] * xk
-
-
-@one_signature
-@kernel
-def _z_row(tree, scene, X, xj, xy, xb, k, n, coupled):
-    """Row ``k`` of ``Z = L^-T J^T`` into ``X[xy + k n:]`` (:func:`half_solve`) and its last nonzero index + 1
-    into ``X[xb + k]`` (n for coupled coordinates, whose factor fills forward)."""
-    hi = -1
-    for i in range(n):
-        v = X[xj + k * n + i]
-        X[xy + k * n + i] = v
-        if v != 0.0:
-            hi = i
-    half_solve(tree, scene, X, xy + k * n, coupled, hi)
-    X[xb + k] = n if coupled else hi + 1
 
 
 @one_signature
@@ -419,16 +403,16 @@ def _events(X, m, xact, xprev, xst, xev, xsel, t, piv):
 
 @one_signature
 @kernel
-def _schur(X, xy, xw, xb, xl, xs, xperm, r, m, n):
-    """``S = Z^T W Z`` (r, r) over the rows ``X[xperm:xperm + r]`` (their ``Z`` rows at ``X[xy:]``, zero past
-    ``X[xb + k]``, the weights at ``X[xw:]``), its scales set to 1; returns its largest diagonal (E85)."""
+def _schur(X, xy, xw, xl, xs, xperm, r, m, n):
+    """``S = Z^T W Z`` (r, r) over the rows ``X[xperm:xperm + r]`` (their ``Z`` rows at ``X[xy:]``, the weights at
+    ``X[xw:]``), its scales set to 1; returns its largest diagonal (E85)."""
     big = 0.0      # the pivots compare with S's largest diagonal (a row whose J vanishes is dependent too)
     for a in range(r):
         ka = int(X[xperm + a])
         for b in range(a + 1):
             kb = int(X[xperm + b])
             s = 0.0
-            for i in range(int(min(X[xb + ka], X[xb + kb]))):
+            for i in range(n):
                 s += X[xy + ka * n + i] * X[xw + i] * X[xy + kb * n + i]
             X[xl + a * m + b] = s
             X[xl + b * m + a] = s
@@ -458,8 +442,10 @@ def _choose_rows(tree, scene, coupled, tol_rel):
         r0 += SI[keep + k]
         X[xperm + k] = k
         if X[xsel + k] == 0.0:
-            _z_row(tree, scene, X, xj, xy, xc + lay[7], k, n, coupled)
-    big = _schur(X, xy, xc + lay[10], xc + lay[7], xl, xs, xperm, m, m, n)
+            for i in range(n):
+                X[xy + k * n + i] = X[xj + k * n + i]
+            half_solve(tree, scene, X, xy + k * n, coupled)
+    big = _schur(X, xy, xc + lay[10], xl, xs, xperm, m, m, n)
     rank, smallest, piv = _pivoted_cholesky(X, xl, xs, xperm, m, m, tol_rel * big, r0)
     for f in range(rank + 1, r0):       # rows to keep trying past a change point: the largest diagonals left
         p = f
@@ -498,7 +484,7 @@ def kkt(tree, scene, t, y, out, coupled):
     lay = x_layout(m, n, nt)
     xj, xy, xs, xl, xlam = xc + lay[2], xc + lay[3], xc + lay[4], xc + lay[5], xc + lay[6]
     xgam, xact, xprev, xst, xev, xperm = xc + lay[1], xc + lay[8], xc + lay[9], xc + lay[11], xc + lay[12], xc + lay[13]
-    xtmp, xsel, xb = xc + lay[10], xc + lay[15], xc + lay[7]
+    xtmp, xsel = xc + lay[10], xc + lay[15]
     constraint_terms(tree, scene, y)
     weights(tree, scene, X, xtmp, coupled)
     r = 0
@@ -509,8 +495,10 @@ def kkt(tree, scene, t, y, out, coupled):
             continue
         X[xperm + r] = k
         r += 1
-        _z_row(tree, scene, X, xj, xy, xb, k, n, coupled)      # Z = L^-T J^T, row by row
-    big = _schur(X, xy, xtmp, xb, xl, xs, xperm, r, m, n)
+        for i in range(n):
+            X[xy + k * n + i] = X[xj + k * n + i]
+        half_solve(tree, scene, X, xy + k * n, coupled)     # Z = L^-T J^T, row by row
+    big = _schur(X, xy, xtmp, xl, xs, xperm, r, m, n)
     tol_rel = SCHUR_PIVOT if SI[c0 + CMODE] == 1 else CHANGE_POINT_PIVOT
     rank, smallest, piv = _pivoted_cholesky(X, xl, xs, xperm, r, m, tol_rel * big, r)
     if rank < r or not smallest > ROW_CHOICE * big:
@@ -539,45 +527,15 @@ def kkt(tree, scene, t, y, out, coupled):
     schur_solve(X, xc, m, n, nt, rank)
     for i in range(n):              # q'' = q''_free + A^-1 J^T lambda: one solve
         X[xtmp + i] = 0.0
-    if coupled:
-        for a in range(rank):
-            k = int(X[xperm + a])
-            lam = X[xlam + k]
-            for i in range(n):
-                X[xtmp + i] += X[xj + k * n + i] * lam
-        a_solve(tree, scene, X, xtmp, coupled)
-    else:                           # A^-1 J^T lambda = L^-1 D^-1 (Z lambda): the second half of A's solve only
-        for a in range(rank):
-            k = int(X[xperm + a])
-            lam = X[xlam + k]
-            for i in range(n):
-                X[xtmp + i] += X[xy + k * n + i] * lam
-        _root_half(tree.TI, tree.W, X, xtmp)
+    for a in range(rank):
+        k = int(X[xperm + a])
+        lam = X[xlam + k]
+        for i in range(n):
+            X[xtmp + i] += X[xj + k * n + i] * lam
+    a_solve(tree, scene, X, xtmp, coupled)
     for i in range(n):
         out[n + i] += X[xtmp + i]
     return -1
-
-
-@one_signature
-@kernel
-def _root_half(TI, W, x, ix):
-    """``x[ix:ix + n] <- L^-1 D^-1 x`` with the tree's factor ``A = L^T D L`` (factor.ltdl_solve's second half)."""
-    n = TI[1]
-    ap, ai, rp, rs = nonneg(TI[I_ANCPTR]), nonneg(TI[I_ANCIDX]), nonneg(TI[I_RUNPTR]), nonneg(TI[I_RUNS])
-    wa, ix = nonneg(TI[W_A]), nonneg(ix)
-    for k in range(n):                      # D, then L y = z: from the root
-        r0 = nonneg(TI[ap + k])
-        m = nonneg(TI[ap + k + 1] - 1 - r0)
-        j = wa + r0
-        v = x[ix + k] / W[j + m]
-        if TI[rp + k + 1] - TI[rp + k] == 1:
-            c0 = ix + nonneg(TI[rs + 2 * nonneg(TI[rp + k])])
-            for u in range(m):
-                v -= W[j + u] * x[c0 + u]
-        else:
-            for u in range(m):
-                v -= W[j + u] * x[ix + nonneg(TI[ai + r0 + u])]
-        x[ix + k] = v
 
 
 @one_signature
