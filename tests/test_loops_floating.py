@@ -229,3 +229,25 @@ def test_four_spatial_loops_default_scene_agrees_with_the_file_in_mujoco():
     assert np.abs(tr.energy["error"]).max() < 1e-8 * _motion_scale(tr.energy)
     study = solref_study(plan, tr, route=2)
     assert all(r >= 5.0 for r in study["ratios"]), [r["max_error"] for r in study["runs"]]
+
+
+def test_rows_follow_the_turning_base_without_false_change_points():
+    """The biped's default scene (seed 0, 0.3 s, the file's loops on, its excited start carried onto them): the
+    root yaws and rolls, so each planar knee loop's plane turns, and the world-axis row left out at the start
+    (E73) stops being the redundant one. The compiled KKT solve (E72) chooses the rows again among all six where
+    the kept ones lose rank (constraint_kernels.kkt, ROW_CHOICE): no change point is recorded (the rank over all
+    rows never falls: none is one), the smallest Schur pivot of the rows solved stays far above the change point's
+    1e-12 (bound 1e-8: the rows are chosen again at 1e-6), the residual at rounding (1e-9), and the rows were
+    chosen again at least once. Planted wrong case (checked once): the rows kept from the start (no new choice)
+    record 21 events at t = 0.2617 s for R_knee_loop.y with a smallest pivot of 1.8e-17."""
+    from urdf2links.scenes.default_scenes import default_scene
+
+    tr = simulate(default_scene(BIPED, model=load_robot(BIPED), t_end=0.3), progress=False)
+    c = tr.stats["constraints"]
+    assert tr.t[-1] == pytest.approx(0.3)
+    assert not c["events"] and c["events_total"] == 0
+    assert c["min_schur_pivot"] > 1e-8
+    assert c["max_residual"] < 1e-9 and c["max_step_drift"] < 1e-9
+    assert c["row_changes"] >= 1 and len(c["solved_rows"]) > 4      # another row than the start's solved later
+    power = np.einsum("sn,sn->s", c["forces"], tr.qd)                # J^T lambda of the rows solved at each sample
+    assert np.abs(power).max() < 1e-8 * max(1.0, np.abs(c["forces"]).max() * np.abs(tr.qd).max())

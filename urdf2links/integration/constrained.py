@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..scenes.constraint_arrays import CM, CX, kept, reset_constraint_stats, set_keep, x_layout
+from ..scenes.constraint_arrays import CM, CX, KEV, KST, reset_constraint_stats, set_keep, x_layout
 from ..scenes.scene_arrays import S_CON
 from ..scenes.scene_kernels import scene_rhs
 from .constrained_oracle import ConstrainedRHS
@@ -110,13 +110,16 @@ def project_samples(plan, t, Y) -> None:
 
 def constraint_stats(plan, t, Y, *, initial, method: str) -> dict:
     """``Trajectory.stats["constraints"]`` (module doc) from the compiled right-hand side at every sample and
-    the run's statistics in the scene's scratch."""
+    the run's statistics in the scene's scratch. ``solved_rows``: the rows solved at some sample (the start's
+    choice, E73, and the rows chosen again where they lost rank on a floating base: ``row_changes`` times in the
+    run), ``lambda`` (S, len(solved_rows)) their multipliers (0 at a sample where a row was not solved)."""
     rhs, cset = plan.rhs, plan.constraints.cset
     n, S = plan.model.n, len(t)
-    keep = np.nonzero(kept(rhs.SI))[0] if cset.m else np.zeros(0, int)
-    lam, gen = np.zeros((S, keep.size)), np.zeros((S, n))
+    lam_all, gen = np.zeros((S, cset.m)), np.zeros((S, n))
+    solved = np.zeros(cset.m, bool)
     res, rate = np.zeros(S), np.zeros(S)
-    stats = {"min_schur_pivot": np.inf, "min_schur_pivot_t": 0.0, "events": [], "max_step_drift": 0.0}
+    stats = {"min_schur_pivot": np.inf, "min_schur_pivot_t": 0.0, "events": [], "max_step_drift": 0.0,
+             "row_changes": 0}
     if cset.m:
         m, n_, xc, lay = _layout(rhs)
         args = rhs.fresh_args()
@@ -125,18 +128,20 @@ def constraint_stats(plan, t, Y, *, initial, method: str) -> dict:
             scene_rhs(float(t[i]), np.ascontiguousarray(Y[i]), out, *args)
             phi = X[xc + lay[0]:xc + lay[0] + m]
             J = X[xc + lay[2]:xc + lay[2] + m * n].reshape(m, n)
-            lam[i] = X[xc + lay[6]:xc + lay[6] + m][keep]
-            gen[i] = J[keep].T @ lam[i]
+            solved |= X[xc + lay[8]:xc + lay[8] + m] != 0.0
+            lam_all[i] = X[xc + lay[6]:xc + lay[6] + m]      # 0 on a row not solved here
+            gen[i] = J.T @ lam_all[i]
             res[i], rate[i] = np.max(np.abs(phi)), np.max(np.abs(J @ Y[i, n:2 * n]))
         Xr = rhs.X
-        st = Xr[xc + lay[11]:xc + lay[11] + 8]
-        ev = Xr[xc + lay[12]:xc + lay[12] + 3 * int(min(st[2], 32))].reshape(-1, 3)
+        st = Xr[xc + lay[11]:xc + lay[11] + KST]
+        ev = Xr[xc + lay[12]:xc + lay[12] + 3 * int(min(st[2], KEV))].reshape(-1, 3)
         stats = {"min_schur_pivot": float(st[0]), "min_schur_pivot_t": float(st[1]), "max_step_drift": float(st[4]),
                  "events": [{"t": float(e[0]), "row": cset.rows[int(e[1])], "pivot": float(e[2]),
                              "what": f"change point: row {cset.rows[int(e[1])]!r} dependent on the others at "
                                      f"t = {e[0]:.6g} s (Schur pivot {e[2]:.3g}); dropped there, the run goes on"}
                             for e in ev],
-                 "events_total": int(st[2])}
+                 "events_total": int(st[2]), "row_changes": int(st[7])}
+    keep = np.nonzero(solved)[0]
     return {"rows": list(cset.rows), "solved_rows": [cset.rows[k] for k in keep], "residual": res,
-            "rate_residual": rate, "max_residual": float(res.max(initial=0.0)), "lambda": lam, "forces": gen,
-            "initial": initial, "method": method, **stats}
+            "rate_residual": rate, "max_residual": float(res.max(initial=0.0)), "lambda": lam_all[:, keep],
+            "forces": gen, "initial": initial, "method": method, **stats}

@@ -21,9 +21,12 @@ actuators' :data:`KA` numbers.
 
 Scratch (:func:`x_layout`, from ``CX``): Phi, gamma (m,), J (m, n), Z = L^-T J^T stored as rows (m, n), S and
 its pivoted factor (m, m), lambda, the Schur right-hand side, the rows solved and at the evaluation before (m,),
-a vector (n,), the statistics (smallest pivot, its time, events recorded, the failing row, the largest
-|Phi| before a projection, projections, 1 while a projection evaluates) and :data:`KEV`
-events (time, row, pivot), the pivot order (m,), one point's Jacobian rows in the tree's coordinates (3, nt).
+a vector (n,), the :data:`KST` statistics (smallest pivot of the rows solved, its time, events recorded, the
+failing row, the largest |Phi| before a projection, projections, 1 while a projection evaluates, the times the
+rows solved were chosen again) and :data:`KEV` events (time, row, pivot), the pivot order (m,), one point's
+Jacobian rows in the tree's coordinates (3, nt), the rows chosen for the solves (m,) (the start's ``keep``; on a
+floating base a planar loop's plane turns with the base, and the rows are chosen again among all where they
+lose rank: :func:`urdf2links.scenes.constraint_kernels.kkt`).
 """
 
 from __future__ import annotations
@@ -31,7 +34,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["S_CON", "S_XSIZE", "KA", "constraint_arrays", "x_layout", "KCH", "KCI", "KCF", "KEV", "CM", "CNC", "CNT",
+__all__ = ["S_CON", "S_XSIZE", "KA", "constraint_arrays", "x_layout", "KCH", "KCI", "KCF", "KEV", "KST", "CM", "CNC", "CNT",
            "CNA", "CMODE", "CX",
            "CX_SIZE", "CF", "CKEEP", "CREC", "CACT", "CNPOINT", "KIND_CONNECT", "KIND_WELD", "KIND_POLY", "MODES",
            "reset_constraint_stats", "set_keep", "kept", "change_point_error"]
@@ -44,6 +47,7 @@ KCH = 12
 KCI = 5          # ints per constraint before its two masks (nt,) each
 KCF = 31         # floats per constraint before its two coefficient vectors (n,) each
 KEV = 32         # events kept (the count goes on)
+KST = 8          # the statistics' slots in the scratch (module doc)
 KIND_CONNECT, KIND_WELD, KIND_POLY = 0, 1, 2
 MODES = ("continue", "stop")
 """``[constraints] change_point``: at a Schur pivot below the tolerance, drop the row there and go on, or stop."""
@@ -52,7 +56,8 @@ MODES = ("continue", "stop")
 @njit(cache=True)
 def x_layout(m, n, nt):
     """Offsets in the constraints' scratch (relative to ``CX``): ``(phi, gam, J, Y, S, L, lam, b, act, prev,
-    tmp, stats, events, perm, jt, size)``; ``jt`` one point's Jacobian rows in the tree's coordinates (3, nt)."""
+    tmp, stats, events, perm, jt, sel, size)``; ``jt`` one point's Jacobian rows in the tree's coordinates (3, nt),
+    ``sel`` (m,) the rows chosen for the solves (flags: the start's ``keep``, chosen again where they lose rank)."""
     phi = 0
     gam = phi + m
     J = gam + m
@@ -65,23 +70,26 @@ def x_layout(m, n, nt):
     prev = act + m
     tmp = prev + m
     stats = tmp + max(n, 9)     # a vector (n,), or one point's r, v, a (9,)
-    events = stats + 8
+    events = stats + KST
     perm = events + 3 * KEV
     jt = perm + m
-    size = jt + 3 * nt
-    return phi, gam, J, Y, S, L, lam, b, act, prev, tmp, stats, events, perm, jt, size
+    sel = jt + 3 * nt
+    size = sel + m
+    return phi, gam, J, Y, S, L, lam, b, act, prev, tmp, stats, events, perm, jt, sel, size
 
 
 def reset_constraint_stats(SI, X):
-    """A run's start in the scratch ``X``: no smallest pivot yet (inf), no event, no row dropped before."""
+    """A run's start in the scratch ``X``: no smallest pivot yet (inf), no event, no row dropped before, no row
+    chosen again; the rows solved are the start's ``keep`` (E73)."""
     c0 = int(SI[S_CON])
     if c0 <= 0:
         return
     m, n, nt = int(SI[c0 + CM]), int(SI[0]), int(SI[1])
     lay = x_layout(m, n, nt)
     xc = int(SI[c0 + CX])
-    X[xc + lay[11]:xc + lay[11] + 8] = (np.inf, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0)
+    X[xc + lay[11]:xc + lay[11] + KST] = (np.inf, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0)
     X[xc + lay[9]:xc + lay[9] + m] = 0.0
+    X[xc + lay[15]:xc + lay[15] + m] = kept(SI)
 
 
 def _moves(model):

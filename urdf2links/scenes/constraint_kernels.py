@@ -14,10 +14,14 @@ coordinates). Nothing is computed twice:
 - :func:`kkt`: ``Z = L^-T J^T`` (one half solve per row with A's factor ``L^T D L``, from the leaves: a
   sparse row costs its coordinates' ancestors only), ``S = J A^-1 J^T = Z^T D^-1 Z``, factorised by a
   Cholesky with diagonal pivoting (E88); ``lambda = S^-1 (-gamma - J q''_free)``, ``q'' = q''_free + A^-1
-  (J^T lambda)`` (one full solve) (E72). A pivot at or below :data:`SCHUR_PIVOT` (a row dependent on the solved
-  ones here: a change point of the loop) either drops the rows left (``[constraints] change_point =
-  "continue"``; an event (t, row, pivot) is recorded when a row starts being dropped) or fails the
-  evaluation with the row (``"stop"``: the run then raises the named DynamicsError);
+  (J^T lambda)`` (one full solve) (E72). The rows solved are the ones chosen (the start's ``keep``, E73); where
+  their smallest pivot falls below :data:`ROW_CHOICE` (on a floating base a planar loop's plane turns with the
+  base, and the world-axis row left out at the start stops being the redundant one) they are chosen again among
+  all ``m`` rows by the pivoted factor of the whole ``S``, as many as at the start, and kept for the following
+  evaluations and the projection (:func:`_choose_rows`: no event). A change point is a rank over all rows below
+  the start's (a pivot at or below :data:`SCHUR_PIVOT`): the rows left are dropped there (``[constraints]
+  change_point = "continue"``; an event (t, row, pivot) is recorded when a row starts being dropped) or the
+  evaluation fails with the row (``"stop"``: the run then raises the named DynamicsError);
 - :func:`schur_correction`: ``A^-1 J^T S^-1 v`` for rows' values ``v`` (the projection's Gauss-Newton step and its
   velocity step, E74).
 
@@ -41,6 +45,7 @@ __all__ = ["SCHUR_PIVOT", "FAIL_BASE", "tendon_forces", "constraint_terms", "kkt
 
 SCHUR_PIVOT = 1e-12     # a pivot of S at or below this fraction of its largest diagonal: the row is dependent there
 CHANGE_POINT_PIVOT = 1e-12  # the same with change_point = "continue": the row is dropped there
+ROW_CHOICE = 1e-6       # the rows solved have a pivot below this fraction of S's largest diagonal: choose again
 FAIL_BASE = 1 << 40     # the right-hand side's return value for a constraint row that stops the run: + row
 
 
@@ -338,12 +343,13 @@ def constraint_terms(tree, scene, y):
 
 @one_signature
 @kernel
-def _pivoted_cholesky(X, xl, xd, xperm, r, m, tol):
+def _pivoted_cholesky(X, xl, xd, xperm, r, m, tol, limit):
     """``P D S D P^T = L L^T`` in place (r, r) with row stride ``m`` at ``X[xl:]`` (E88): the largest diagonal
-    left first; stops at a pivot at or below ``tol``. Swaps the order ``X[xperm:]`` and the scales ``X[xd:]``
-    with the rows. Returns ``(rank, smallest pivot, the pivot where it stopped)``."""
+    left first; stops at a pivot at or below ``tol`` or after ``limit`` rows. Swaps the order ``X[xperm:]`` and
+    the scales ``X[xd:]`` with the rows. Returns ``(rank, smallest pivot of the rows factored, the pivot where it
+    stopped)`` (the smallest when it did not stop)."""
     smallest = np.inf
-    for j in range(r):
+    for j in range(min(r, limit)):
         p = j
         for i in range(j + 1, r):
             if X[xl + i * m + i] > X[xl + p * m + p]:
@@ -358,10 +364,9 @@ def _pivoted_cholesky(X, xl, xd, xperm, r, m, tol):
             X[xperm + j], X[xperm + p] = X[xperm + p], X[xperm + j]
             X[xd + j], X[xd + p] = X[xd + p], X[xd + j]
         piv = X[xl + j * m + j]
-        if piv < smallest:
-            smallest = piv
         if not piv > tol:
             return j, smallest, piv
+        smallest = min(smallest, piv)
         s = np.sqrt(piv)
         X[xl + j * m + j] = s
         for i in range(j + 1, r):
@@ -372,19 +377,20 @@ def _pivoted_cholesky(X, xl, xd, xperm, r, m, tol):
                 v = X[xl + i * m + k] - lij * X[xl + k * m + j]
                 X[xl + i * m + k] = v
                 X[xl + k * m + i] = v
-    return r, smallest, smallest
+    return min(r, limit), smallest, smallest
 
 
 @one_signature
 @kernel
-def _events(SI, X, c0, m, xact, xprev, xst, xev, keep, t, piv):
-    """A row solved at the accepted step before and dropped at this one: an event ``(t, row, pivot)`` (the
-    first :data:`KEV` kept, all counted). Only the evaluations of the projection after an accepted step count
-    (``X[xst + 6]`` set): trial stages near a change point would flicker."""
+def _events(X, m, xact, xprev, xst, xev, xsel, t, piv):
+    """A row chosen and solved at the accepted step before and dropped at this one (the rows over all ``m`` of
+    lower rank than at the start: a change point): an event ``(t, row, pivot)`` (the first :data:`KEV` kept, all
+    counted). Only the evaluations of the projection after an accepted step count (``X[xst + 6]`` set): trial
+    stages near a change point would flicker."""
     if X[xst + 6] == 0.0:
         return
     for k in range(m):
-        dropped = 1.0 if (SI[keep + k] != 0 and X[xact + k] == 0.0) else 0.0
+        dropped = 1.0 if (X[xsel + k] != 0.0 and X[xact + k] == 0.0) else 0.0
         if dropped != 0.0 and X[xprev + k] == 0.0:
             e = int(X[xst + 2])
             if e < KEV:
@@ -397,10 +403,77 @@ def _events(SI, X, c0, m, xact, xprev, xst, xev, keep, t, piv):
 
 @one_signature
 @kernel
+def _schur(X, xy, xw, xl, xs, xperm, r, m, n):
+    """``S = Z^T W Z`` (r, r) over the rows ``X[xperm:xperm + r]`` (their ``Z`` rows at ``X[xy:]``, the weights at
+    ``X[xw:]``), its scales set to 1; returns its largest diagonal (E88)."""
+    big = 0.0      # the pivots compare with S's largest diagonal (a row whose J vanishes is dependent too)
+    for a in range(r):
+        ka = int(X[xperm + a])
+        for b in range(a + 1):
+            kb = int(X[xperm + b])
+            s = 0.0
+            for i in range(n):
+                s += X[xy + ka * n + i] * X[xw + i] * X[xy + kb * n + i]
+            X[xl + a * m + b] = s
+            X[xl + b * m + a] = s
+        X[xs + a] = 1.0
+        big = max(big, X[xl + a * m + a])
+    return big
+
+
+@one_signature
+@kernel
+def _choose_rows(tree, scene, coupled, tol_rel):
+    """The rows chosen again among all ``m`` (E73 at the current state): ``Z`` of the rows not chosen before,
+    ``S`` over every row, its pivoted factor (E88) for as many rows as chosen at the start (``keep``); the new
+    choice: the rows factored, then (where the rows have lower rank here than at the start: a change point) the
+    ones left with the largest diagonals, dropped at this evaluation. Kept for the following evaluations
+    (``sel``). Returns ``(rank, smallest pivot, the pivot where it stopped, S's largest diagonal)``."""
+    SI, X = scene.SI, scene.X
+    n, nt = SI[0], SI[1]
+    c0 = SI[S_CON]
+    m = SI[c0 + CM]
+    xc = SI[c0 + CX]
+    lay = x_layout(m, n, nt)
+    xj, xy, xs, xl, xperm, xsel = xc + lay[2], xc + lay[3], xc + lay[4], xc + lay[5], xc + lay[13], xc + lay[15]
+    keep = c0 + SI[c0 + CKEEP]
+    r0 = 0
+    for k in range(m):
+        r0 += SI[keep + k]
+        X[xperm + k] = k
+        if X[xsel + k] == 0.0:
+            for i in range(n):
+                X[xy + k * n + i] = X[xj + k * n + i]
+            half_solve(tree, scene, X, xy + k * n, coupled)
+    big = _schur(X, xy, xc + lay[10], xl, xs, xperm, m, m, n)
+    rank, smallest, piv = _pivoted_cholesky(X, xl, xs, xperm, m, m, tol_rel * big, r0)
+    for f in range(rank + 1, r0):       # rows to keep trying past a change point: the largest diagonals left
+        p = f
+        for i in range(f + 1, m):
+            if X[xl + i * m + i] > X[xl + p * m + p]:
+                p = i
+        X[xperm + f], X[xperm + p] = X[xperm + p], X[xperm + f]
+        X[xl + f * m + f], X[xl + p * m + p] = X[xl + p * m + p], X[xl + f * m + f]
+    changed = False
+    for a in range(m):
+        flag = 1.0 if a < r0 else 0.0
+        k = int(X[xperm + a])
+        changed = changed or X[xsel + k] != flag
+        X[xsel + k] = flag
+    if changed:
+        X[xc + lay[11] + 7] += 1.0
+    return rank, smallest, piv, big
+
+
+@one_signature
+@kernel
 def kkt(tree, scene, t, y, out, coupled):
     """``q''`` of (E72) in place of ``q''_free`` in ``out[n:2n]`` and ``lambda`` into the scratch; returns -1,
-    or ``FAIL_BASE + row`` where a row's pivot fell at or below :data:`SCHUR_PIVOT` and the scene stops there
-    (module doc)."""
+    or ``FAIL_BASE + row`` where the rows over all ``m`` have lower rank than at the start (a pivot at or below
+    :data:`SCHUR_PIVOT`: a change point) and the scene stops there (module doc). The rows solved are the ones
+    chosen (``sel``); where their smallest pivot falls below :data:`ROW_CHOICE` (a planar loop's plane turned
+    with a floating base: the row left out at the start is no longer the redundant one) they are chosen again
+    among all rows (:func:`_choose_rows`), which is no event unless the rank over all rows fell."""
     SI, SF, X = scene
     n, nt = SI[0], SI[1]
     c0 = SI[S_CON]
@@ -411,48 +484,40 @@ def kkt(tree, scene, t, y, out, coupled):
     lay = x_layout(m, n, nt)
     xj, xy, xs, xl, xlam = xc + lay[2], xc + lay[3], xc + lay[4], xc + lay[5], xc + lay[6]
     xgam, xact, xprev, xst, xev, xperm = xc + lay[1], xc + lay[8], xc + lay[9], xc + lay[11], xc + lay[12], xc + lay[13]
-    xtmp = xc + lay[10]
-    keep = c0 + SI[c0 + CKEEP]
+    xtmp, xsel = xc + lay[10], xc + lay[15]
     constraint_terms(tree, scene, y)
     weights(tree, scene, X, xtmp, coupled)
     r = 0
     for k in range(m):
         X[xact + k] = 0.0
         X[xlam + k] = 0.0
-        if SI[keep + k] == 0:
+        if X[xsel + k] == 0.0:
             continue
         X[xperm + r] = k
         r += 1
         for i in range(n):
             X[xy + k * n + i] = X[xj + k * n + i]
         half_solve(tree, scene, X, xy + k * n, coupled)     # Z = L^-T J^T, row by row
-    for a in range(r):
-        ka = int(X[xperm + a])
-        for b in range(a + 1):
-            kb = int(X[xperm + b])
-            s = 0.0
-            for i in range(n):
-                s += X[xy + ka * n + i] * X[xtmp + i] * X[xy + kb * n + i]
-            X[xl + a * m + b] = s
-            X[xl + b * m + a] = s
-    big = 0.0      # the pivots compare with S's largest diagonal (a row whose J vanishes is dependent too)
-    for a in range(r):
-        X[xs + a] = 1.0
-        big = max(big, X[xl + a * m + a])
-    tol = (SCHUR_PIVOT if SI[c0 + CMODE] == 1 else CHANGE_POINT_PIVOT) * big
-    rank, smallest, piv = _pivoted_cholesky(X, xl, xs, xperm, r, m, tol)
+    big = _schur(X, xy, xtmp, xl, xs, xperm, r, m, n)
+    tol_rel = SCHUR_PIVOT if SI[c0 + CMODE] == 1 else CHANGE_POINT_PIVOT
+    rank, smallest, piv = _pivoted_cholesky(X, xl, xs, xperm, r, m, tol_rel * big, r)
+    if rank < r or not smallest > ROW_CHOICE * big:
+        rank, smallest, piv, big = _choose_rows(tree, scene, coupled, tol_rel)
     if big > 0.0:
         smallest /= big
         piv /= big
     if smallest < X[xst]:
         X[xst] = smallest
         X[xst + 1] = t
-    if rank < r and SI[c0 + CMODE] == 1:
+    r0 = 0
+    for k in range(m):
+        r0 += int(X[xsel + k])
+    if rank < r0 and SI[c0 + CMODE] == 1:
         X[xst + 3] = X[xperm + rank]
         return FAIL_BASE + int(X[xperm + rank])
     for a in range(rank):
         X[xact + int(X[xperm + a])] = 1.0
-    _events(SI, X, c0, m, xact, xprev, xst, xev, keep, t, piv)
+    _events(X, m, xact, xprev, xst, xev, xsel, t, piv)
     for a in range(rank):           # the Schur right-hand side -gamma - J q''_free, scaled
         k = int(X[xperm + a])
         s = -X[xgam + k]

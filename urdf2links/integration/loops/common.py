@@ -13,7 +13,7 @@ import numpy as np
 from numba import njit
 
 from ...compilation import one_signature
-from ...scenes.constraint_arrays import CKEEP, CM, CX, x_layout
+from ...scenes.constraint_arrays import CM, CX, x_layout
 from ...scenes.constraint_kernels import schur_correction
 from ...dynamics.tree_arrays import Tree
 from ...scenes.scene_arrays import S_CON, Scene
@@ -113,7 +113,7 @@ def project(t, y, f, args, counters):
     """``y = (q, q', W)`` projected in place onto ``Phi = 0`` (Gauss-Newton ``q <- q - A^-1 J^T S^-1 Phi``
     until ``max |Phi| <= PROJECTION_TOL`` or it stops decreasing) and ``Phi' = 0`` (``q' <- q' - A^-1 J^T S^-1
     J q'``, the nearest in the metric of A) (E74), every term from the compiled right-hand side's own
-    evaluation (A's factor and the pivoted factor of S); ``f`` left as ``y'`` at the projected state. Records
+    evaluation (A's factor and the pivoted factor of S, over the rows it solved); ``f`` left as ``y'`` at the projected state. Records
     the largest ``max |Phi|`` before a projection. False when an evaluation failed (``evaluate``)."""
     SI, X = args[3], args[5]
     tree, scene = Tree(args[0], args[1], args[2]), Scene(SI, args[4], X)
@@ -122,8 +122,7 @@ def project(t, y, f, args, counters):
     m = SI[c0 + CM]
     xc = SI[c0 + CX]
     lay = x_layout(m, n, nt)
-    xphi, xj, xst = xc + lay[0], xc + lay[2], xc + lay[11]
-    keep = c0 + SI[c0 + CKEEP]
+    xphi, xj, xact, xst = xc + lay[0], xc + lay[2], xc + lay[8], xc + lay[11]
     v = np.empty(m)
     dq = np.empty(n)
     last = np.inf
@@ -143,14 +142,14 @@ def project(t, y, f, args, counters):
             break
         last = res
         for k in range(m):
-            v[k] = X[xphi + k] if SI[keep + k] != 0 else 0.0
+            v[k] = X[xphi + k] if X[xact + k] != 0.0 else 0.0
         schur_correction(tree, scene, v, 0, dq)
         for i in range(n):
             y[i] -= dq[i]
     rate = 0.0
     for k in range(m):
         s = 0.0
-        if SI[keep + k] != 0:
+        if X[xact + k] != 0.0:
             for i in range(n):
                 s += X[xj + k * n + i] * y[n + i]
         v[k] = s
