@@ -98,7 +98,8 @@ def test_the_loops_are_compiled_once_whatever_the_effects():
     out = _python(_THREE_SCENES)
     assert out.returncode == 0, out.stderr
     got = json.loads(out.stdout.strip().splitlines()[-1])
-    assert got["effects"] == ["(1, None, None, None)", "(None, 1, None, None)", "(None, None, None, None)"], got
+    assert got["effects"] == ["(1, None, None, None, None)", "(None, 1, None, None, None)",
+                             "(None, None, None, None, None)"], got     # the fifth: constraints (issue 45)
     assert got["erk_chunk"] == 1 and got["initial_step"] == 1, got
 
 
@@ -145,8 +146,9 @@ def counts(fn):     # NRT_incref / NRT_decref calls in fn's own compiled code (c
 got = {f.__name__: counts(f) for f in (kernels.kinematics, kernels.dynamics, factor.ltdl, factor.ltdl_solve,
                                       IK.own_armature, MK.fd_plain)}     # kinematics: with and without q''
 from urdf2links.scenes import scene_kernels as SK
-ir = SK.rhs_function((None,) * 4).inspect_llvm()      # a scene's right-hand side, callees included
-got["scene_rhs"] = ir.count("call void @NRT_incref") + ir.count("call void @NRT_decref")
+for key, effects in (("scene_rhs", (None,) * 5), ("scene_rhs_constraints", (None,) * 4 + (1,))):
+    ir = SK.rhs_function(effects).inspect_llvm()     # a scene's right-hand side, callees included (issue 45: with
+    got[key] = ir.count("call void @NRT_incref") + ir.count("call void @NRT_decref")    # the KKT solve too)
 print(json.dumps(got))
 """
 
