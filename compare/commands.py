@@ -107,10 +107,10 @@ def _print_headline(s: dict, stream=None) -> None:
         print(f"  coverage   {s['coverage']['text']}", file=stream)
     if s.get("constraints") and "error" not in s["constraints"]:        # issue 45: the closed loops (compare/reports/loop_section.py)
         L = s["constraints"]
-        st, fa = L["study"], L["forces"]["at_our_states"]
-        print(f"  loops      max |Phi| {L['residual']['max']:.2e}, |Phi'| {L['residual']['rate_max']:.2e}; |efc_force - "
-              f"lambda| {fa['max_abs']:.2e} " + (f"({fa['relative']:.1e} of {fa['scale']:.3g})" if fa["max_abs"] >
-                                              L["forces"]["floor"] else f"(max |lambda| {fa['scale']:.2g})") + "; solref tau "
+        st, fa = L["study"], L["forces"].get("generalized") or L["forces"]["at_our_states"]
+        print(f"  loops      max |Phi| {L['residual']['max']:.2e}, |Phi'| {L['residual']['rate_max']:.2e}; |J^T efc_force - "
+              f"J^T lambda| {fa['max_abs']:.2e} " + (f"({fa['relative']:.1e} of {fa['scale']:.3g})" if fa["max_abs"] >
+                                              L["forces"]["floor"] else f"(max |J^T lambda| {fa['scale']:.2g})") + "; solref tau "
               + ", ".join(f"{r['tau']:g}" for r in st["runs"]) + " s: MuJoCo "
               + ", ".join(f"{r['max_error']:.1e}" for r in st["runs"]) + f" from ours over {st['t_end']:g} s", file=stream)
     if s.get("verdict"):

@@ -154,6 +154,11 @@ def _force_rows(s) -> list[list[str]]:
     else:
         out.append(["<b>all rows</b>", "", f"{fmt(a['max_abs'])} ({fmt(a['relative'])} of max |&lambda;| "
                     f"{fmt(a['scale'])})", f"{fmt(b['max_abs'])} ({fmt(b['relative'])})"])
+    g = f.get("generalized")
+    if g is not None:       # the bounded figure: rows a loop makes dependent share their force in any proportion
+        out.append(["<b>J<sup>T</sup>&lambda;, every coordinate</b>", "N, N m",
+                    f"{fmt(g['max_abs'])} ({fmt(g['relative'])} of max |J<sup>T</sup>&lambda;| {fmt(g['scale'])}; "
+                    f"bound {f['bound_relative']:g})", ""])
     return out
 
 
@@ -226,8 +231,11 @@ def loop_markdown(s: dict, verdict: dict) -> list[str]:
              f"| urdf2links max \\|Phi\\| / \\|Phi'\\| (bound {r['bound']:g}) | {r['max']:.2e} / {r['rate_max']:.2e} |",
              f"| MuJoCo max \\|efc_pos\\| / \\|efc_vel\\| along its run | {r['mujoco_max']:.2e} / {r['mujoco_rate_max']:.2e} |",
              f"| max \\|efc_force - lambda\\| at urdf2links' states | {a['max_abs']:.2e} ({a['relative']:.2e} of "
-             f"{a['scale']:.3g}; bound {f['bound_relative']:g}) |",
-             f"| max \\|efc_force - lambda\\| along MuJoCo's run | {b['max_abs']:.2e} ({b['relative']:.2e}) |", "",
+             f"{a['scale']:.3g}) |",
+             f"| max \\|efc_force - lambda\\| along MuJoCo's run | {b['max_abs']:.2e} ({b['relative']:.2e}) |",
+             *([f"| max \\|J^T efc_force - J^T lambda\\| at urdf2links' states (the bounded figure) | "
+                f"{f['generalized']['max_abs']:.2e} ({f['generalized']['relative']:.2e} of "
+                f"{f['generalized']['scale']:.3g}) |"] if f.get("generalized") else []), "",
              f"Forces: {f['what']}. Sign: {f['sign']}.", "",
              f"Solref study: {st['what']}.", "",
              "| tau (s) | MuJoCo dt (s) | max \\|q_MuJoCo - q\\| | ratio to the next | rate per decade |",
