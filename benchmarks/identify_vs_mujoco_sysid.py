@@ -64,20 +64,10 @@ PLANTED = {"m_panda_link3": ("mass x 1.2", None), "damping_panda_joint2": ("0.5"
 
 
 def _models(folder: Path):
-    from lxml import etree
-
     from test_identify_logs import _arm_urdf, _params
-    from corpus import NAMED, path as corpus_path
+    from corpus import panda_arm
 
-    root = etree.fromstring(corpus_path(NAMED["panda"]).read_bytes())
-    for j in root.findall("joint"):
-        if j.get("name") in ("panda_finger_joint1", "panda_finger_joint2"):
-            j.set("type", "fixed")
-            for c in list(j):
-                if c.tag in ("mimic", "limit", "axis", "dynamics"):
-                    j.remove(c)
-    desc_urdf = folder / "panda_arm.urdf"
-    desc_urdf.write_text(etree.tostring(root, encoding="unicode"))
+    desc_urdf = panda_arm(folder / "panda_arm.urdf")
     planted = _arm_urdf(folder / "panda_planted.urdf")
     return desc_urdf, planted, _params(desc_urdf), _params(planted)
 

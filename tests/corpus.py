@@ -51,3 +51,22 @@ def path(rel: str) -> Path:
     if ROOT is None:
         pytest.fail(MISSING)
     return ROOT / rel
+
+
+def panda_arm(out: Path, *, edit=None) -> Path:
+    """example-robot-data's Panda as a 7-joint arm: its two finger joints welded (``fixed``, without their mimic,
+    limit, axis and dynamics); ``edit(root)`` changes the lxml tree before it is written to ``out``."""
+    from lxml import etree
+
+    root = etree.fromstring(path(NAMED["panda"]).read_bytes())
+    for j in root.findall("joint"):
+        if j.get("name") in ("panda_finger_joint1", "panda_finger_joint2"):
+            j.set("type", "fixed")
+            for c in list(j):
+                if c.tag in ("mimic", "limit", "axis", "dynamics"):
+                    j.remove(c)
+    if edit is not None:
+        edit(root)
+    out.write_text(etree.tostring(root, encoding="unicode"))
+    return out
+

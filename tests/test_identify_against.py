@@ -29,7 +29,7 @@ import pytest
 from lxml import etree
 
 from cli_runner import run_cli
-from corpus import NAMED, path
+from corpus import panda_arm
 
 pytestmark = pytest.mark.usefixtures("corpus_installed")
 
@@ -39,15 +39,7 @@ PLANTED_JOINTS = {"panda_joint2": {"damping": 0.5, "armature": 0.1},
 
 
 def _arm_urdf(out):
-    root = etree.fromstring(path(NAMED["panda"]).read_bytes())
-    for j in root.findall("joint"):
-        if j.get("name") in ("panda_finger_joint1", "panda_finger_joint2"):
-            j.set("type", "fixed")
-            for c in list(j):
-                if c.tag in ("mimic", "limit", "axis", "dynamics"):
-                    j.remove(c)
-    out.write_text(etree.tostring(root, encoding="unicode"))
-    return out
+    return panda_arm(out)
 
 
 def _twin(urdf, out):

@@ -22,7 +22,7 @@ import pytest
 from lxml import etree
 
 from cli_runner import run_cli
-from corpus import NAMED, path as corpus_path
+from corpus import panda_arm
 
 pytestmark = pytest.mark.usefixtures("corpus_installed")
 
@@ -30,23 +30,20 @@ SEEDS = 50
 
 
 def _arm_urdf(out):
-    root = etree.fromstring(corpus_path(NAMED["panda"]).read_bytes())
-    for j in root.findall("joint"):
-        if j.get("name") in ("panda_finger_joint1", "panda_finger_joint2"):
-            j.set("type", "fixed")
-            for c in list(j):
-                if c.tag in ("mimic", "limit", "axis", "dynamics"):
-                    j.remove(c)
-        if j.get("name") == "panda_joint2":
-            j.find("dynamics").set("damping", "0.5")
-    for link in root.findall("link"):
-        if link.get("name") == "panda_link3":
-            i = link.find("inertial")
-            i.find("mass").set("value", repr(float(i.find("mass").get("value")) * 1.2))
-            o = i.find("origin")
-            o.set("xyz", " ".join(repr(float(x)) for x in np.array(o.get("xyz").split(), float) + [0.010, -0.005, 0.008]))
-    out.write_text(etree.tostring(root, encoding="unicode"))
-    return out
+    """The arm with link3's mass x 1.2 and its centre of mass moved, joint2's damping 0.5 (the planted truth)."""
+    def plant(root):
+        for j in root.findall("joint"):
+            if j.get("name") == "panda_joint2":
+                j.find("dynamics").set("damping", "0.5")
+        for link in root.findall("link"):
+            if link.get("name") == "panda_link3":
+                i = link.find("inertial")
+                i.find("mass").set("value", repr(float(i.find("mass").get("value")) * 1.2))
+                o = i.find("origin")
+                o.set("xyz", " ".join(repr(float(x)) for x in np.array(o.get("xyz").split(), float)
+                                      + [0.010, -0.005, 0.008]))
+
+    return panda_arm(out, edit=plant)
 
 
 def _params(urdf):
@@ -111,15 +108,7 @@ def _simulate(urdf, armature, seconds=10.0, seed=47):
 def arm(tmp_path_factory):
     """The description (unplanted arm), the truth, the clean simulated log."""
     folder = tmp_path_factory.mktemp("logs")
-    root = etree.fromstring(corpus_path(NAMED["panda"]).read_bytes())
-    for j in root.findall("joint"):
-        if j.get("name") in ("panda_finger_joint1", "panda_finger_joint2"):
-            j.set("type", "fixed")
-            for c in list(j):
-                if c.tag in ("mimic", "limit", "axis", "dynamics"):
-                    j.remove(c)
-    desc_urdf = folder / "panda_arm.urdf"
-    desc_urdf.write_text(etree.tostring(root, encoding="unicode"))
+    desc_urdf = panda_arm(folder / "panda_arm.urdf")
     planted = _arm_urdf(folder / "panda_planted.urdf")
     _, _, desc = _params(desc_urdf)
     _, _, truth = _params(planted)
