@@ -30,7 +30,7 @@ from ..compilation import kernel, one_signature
 from .kernels import dynamics, kinematics, set_loads
 from .tree_arrays import ARM_BALL, F_ARM, I_ARM, N_ARM, W_B, W_Q, W_SIZE, Tree, gravity_of, nonneg, scratches
 
-__all__ = ["own_armature", "id_row", "id_one", "id_batch", "id_plain", "inverse_size"]
+__all__ = ["own_armature", "id_row", "id_one", "id_batch", "id_plain", "inverse_size", "coupled_tree_state"]
 
 
 @one_signature
@@ -50,6 +50,24 @@ def own_armature(tree, qdd, qdd_at):
 
 
 @njit(cache=True, inline="always")
+def coupled_tree_state(C, d, q, qd, qdd, X):
+    """The tree's ``q = C q + d``, ``q' = C q'``, ``q'' = C q''`` of coupled coordinates (E42) into ``X``
+    (3 n_tree,): ``X[:nt]``, ``X[nt:2 nt]``, ``X[2 nt:]``."""
+    nt, n = C.shape
+    for a in range(nt):
+        s1 = d[a]
+        s2 = 0.0
+        s3 = 0.0
+        for j in range(n):
+            s1 += C[a, j] * q[j]
+            s2 += C[a, j] * qd[j]
+            s3 += C[a, j] * qdd[j]
+        X[a] = s1
+        X[nt + a] = s2
+        X[2 * nt + a] = s3
+
+
+@njit(cache=True, inline="always")
 def inverse_size(nt):
     """Scratch of a coupled row: the tree's ``q``, ``q'``, ``q''`` (3 nt,)."""
     return 3 * nt
@@ -65,18 +83,8 @@ def id_row(TI, TF, W, X, q, qd, qdd, base, has_base, gx, gy, gz, loads, C, d, co
     tree = Tree(TI, TF, W)
     nl = loads.shape[0]
     if coupled:
-        nt, n = C.shape
-        for a in range(nt):
-            s1 = d[a]
-            s2 = 0.0
-            s3 = 0.0
-            for j in range(n):
-                s1 += C[a, j] * q[j]
-                s2 += C[a, j] * qd[j]
-                s3 += C[a, j] * qdd[j]
-            X[a] = s1
-            X[nt + a] = s2
-            X[2 * nt + a] = s3
+        nt = C.shape[0]
+        coupled_tree_state(C, d, q, qd, qdd, X)
         kinematics(tree, X, 0, X, nt, True, base, 0, has_base, gx, gy, gz, X, 2 * nt)
     else:
         kinematics(tree, q, 0, qd, 0, True, base, 0, has_base, gx, gy, gz, qdd, 0)

@@ -29,6 +29,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
+from ..dynamics.inverse_kernels import coupled_tree_state
 from ..dynamics.kernels import kinematics
 from ..dynamics.model_kernels import chunks
 from ..dynamics.rows import base_rows, kernel_array
@@ -165,17 +166,7 @@ def regressor_row(TI, TF, W, X, YT, Phi, q, qd, qdd, base, has_base, gx, gy, gz,
     nt = TI[1]
     n = out.shape[0]
     if coupled:
-        for a in range(nt):
-            s1 = d[a]
-            s2 = 0.0
-            s3 = 0.0
-            for j in range(n):
-                s1 += C[a, j] * q[j]
-                s2 += C[a, j] * qd[j]
-                s3 += C[a, j] * qdd[j]
-            X[a] = s1
-            X[nt + a] = s2
-            X[2 * nt + a] = s3
+        coupled_tree_state(C, d, q, qd, qdd, X)
     else:
         for a in range(nt):
             X[a] = q[a]
