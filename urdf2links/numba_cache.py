@@ -209,7 +209,7 @@ def cache_folders(folder: Path | None = None) -> list[CacheFolder]:
         status = ("unknown" if source is None else "current" if str(source) in current else
                   "other" if source.is_dir() else "gone")
         files = [f for f in sub.rglob("*") if f.is_file()]
-        out.append(CacheFolder(sub, source, status, sum(f.stat().st_size for f in files), len(files)))
+        out.append(CacheFolder(sub, source, status, sum(_size(f) for f in files), len(files)))
     return out
 
 
@@ -228,3 +228,13 @@ def clear_cache(folder: Path | None = None, *, which: str = "stale") -> list[Cac
             shutil.rmtree(f.path, ignore_errors=True)
             removed.append(f)
     return removed
+
+
+def _size(f: Path) -> int:
+    """``f``'s size, 0 when it is gone: another process (a second command, a pytest-xdist worker) may remove a
+    stale folder's files between the listing and this ``stat``."""
+    try:
+        return f.stat().st_size
+    except OSError:
+        return 0
+
