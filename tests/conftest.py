@@ -30,6 +30,12 @@ import os
 import platform
 from pathlib import Path
 
+# One BLAS thread per test process: the suite already runs one worker per core (pytest-xdist), and OpenBLAS's own
+# threads on top of that made the numpy-heavy tests (the identification fits) twice as slow (measured: the 50-seed
+# coverage test 130 s with the default, 65 s with one thread, beside a second worker). Set before the workers start,
+# which inherit it, like every subprocess a test starts; a value the user chose stays.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
 import pytest
 from hypothesis import settings
 
