@@ -45,7 +45,9 @@ def _mapped_rows(c, J, lam, R2):
 
 def constraint_terms(plan, mj, states) -> dict:
     """Max differences over ``states`` ((q, qd) on the constraints) of ``Phi_q`` against ``efc_J``, ``lambda``
-    against ``efc_force`` and ``J^T lambda`` against ``qfrc_constraint`` (absolute, and the scales)."""
+    against ``efc_force`` (row by row) and ``J^T lambda`` of both engines through our ``Phi_q`` (MuJoCo's rows
+    mapped to ours: unique where the rows' split of a force is not, and in our coordinates) (absolute, and the
+    scales)."""
     rhs = ConstrainedRHS(plan, q0=states[0][0])
     cs = rhs.cset
     dJ = dF = dQ = 0.0
@@ -58,6 +60,7 @@ def constraint_terms(plan, mj, states) -> dict:
         d = mj.data(q, qd)
         poses = plan.model.link_poses(q)
         k = 0
+        gen_ours, gen_mj = np.zeros(plan.model.n), np.zeros(plan.model.n)
         for e, c in enumerate(cs.constraints):
             rows = equality_rows(mj.model, d, e)
             nr = len(rows)
@@ -67,14 +70,17 @@ def constraint_terms(plan, mj, states) -> dict:
             dJ, sJ = max(dJ, np.abs(Jm - Jo).max()), max(sJ, np.abs(Jo).max())
             fm = np.asarray(d.efc_force)[rows]
             dF, sF = max(dF, np.abs(fm - lo).max()), max(sF, np.abs(lo).max())
+            gen_ours += Jo.T @ lo           # both engines' forces through our Phi_q (the rows mapped alike)
+            gen_mj += Jo.T @ fm
             k += nr
-        gen = T.J[rhs.keep].T @ lam_kept
-        dQ = max(dQ, np.abs(np.asarray(d.qfrc_constraint)[mj.dof_index] - gen).max())
-        sQ = max(sQ, np.abs(gen).max())
+        dQ = max(dQ, np.abs(gen_mj - gen_ours).max())
+        sQ = max(sQ, np.abs(gen_ours).max())
     return {"states": len(states), "jacobian": {"max_abs": dJ, "scale": sJ}, "force": {"max_abs": dF, "scale": sF},
             "generalized_force": {"max_abs": dQ, "scale": sQ},
             "note": "efc_J rows of every equality against Phi_q (a weld's rotation rows mapped by 0.5 R2^T); efc_force "
-                    "against lambda; qfrc_constraint against J^T lambda; MuJoCo at solimp 0.9999: its regularizer, "
+                    "against lambda row by row (information: rows that share coordinates, a planar loop's dependent "
+                    "rows, may split one force in any proportion); J^T lambda of both engines through our Phi_q (unique, "
+                    "in our coordinates, a floating root's included); MuJoCo at solimp 0.9999: its regularizer, "
                     "(1 - d) / d = 1e-4 of the diagonal of J M^-1 J^T, shifts its forces by about that much, more "
                     "where rows share coordinates (J M^-1 J^T ill-conditioned)"}
 
@@ -159,8 +165,9 @@ def run_notes(plan, traj, mj=None) -> list[str]:
     if mj is not None and plan.constraints.cset.m and len(traj.t) >= 6:
         t = constraint_terms(plan, mj, states_of(traj))
         terms = [f"constraint terms at {t['states']} states of the run: Phi_q against MuJoCo's efc_J rows "
-                 f"{t['jacobian']['max_abs']:.2e} (of {t['jacobian']['scale']:.3g}); lambda against efc_force "
-                 f"{t['force']['max_abs']:.2e} (of {t['force']['scale']:.3g}); J^T lambda against qfrc_constraint "
+                 f"{t['jacobian']['max_abs']:.2e} (of {t['jacobian']['scale']:.3g}); lambda against efc_force row by "
+                 f"row {t['force']['max_abs']:.2e} (of {t['force']['scale']:.3g}; rows that share coordinates may "
+                 f"split one force differently); J^T lambda of both engines through Phi_q "
                  f"{t['generalized_force']['max_abs']:.2e} (of {t['generalized_force']['scale']:.3g})"]
     if not c["rows"]:       # fixed tendons alone (a stiffness, a damping): nothing to solve or project
         return [f"fixed tendons ({', '.join(td.name for td in plan.constraints.tendons)}) act on both engines "
