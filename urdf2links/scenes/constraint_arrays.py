@@ -53,11 +53,12 @@ MODES = ("continue", "stop")
 """``[constraints] change_point``: at a Schur pivot below the tolerance, drop the row there and go on, or stop."""
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def x_layout(m, n, nt):
     """Offsets in the constraints' scratch (relative to ``CX``): ``(phi, gam, J, Y, S, L, lam, b, act, prev,
     tmp, stats, events, perm, jt, sel, size)``; ``jt`` one point's Jacobian rows in the tree's coordinates (3, nt),
     ``sel`` (m,) the rows chosen for the solves (flags: the start's ``keep``, chosen again where they lose rank)."""
+    m, n, nt = max(m, 0), max(n, 0), max(nt, 0)     # never negative, said so to the compiler (no wraparound)
     phi = 0
     gam = phi + m
     J = gam + m

@@ -49,26 +49,24 @@ ROW_CHOICE = 1e-6       # the rows solved have a pivot below this fraction of S'
 FAIL_BASE = 1 << 40     # the right-hand side's return value for a constraint row that stops the run: + row
 
 
-@one_signature
-@kernel
+@njit(cache=True, inline="always")     # inlined: a call passes every array as seven words
 def a_solve(tree, scene, v, at, coupled):
     """``v[at:at + n] <- A^-1 v[at:at + n]`` with the factor of A left by the evaluation."""
     SI, X = scene.SI, scene.X
-    n, nt = SI[0], SI[1]
+    n, nt = nonneg(SI[0]), nonneg(SI[1])
     if coupled:
         cholesky_solve(X, 2 * nt + 18 + n * n, n, v, at)
     else:
         ltdl_solve(tree.TI, tree.W, v, at)
 
 
-@one_signature
-@kernel
+@njit(cache=True, inline="always")     # inlined: a call passes every array as seven words
 def half_solve(tree, scene, v, at, coupled):
     """``v[at:at + n] <- Z = L^-T v`` with the factor of A left by the evaluation (the tree's ``A = L^T D L``: from
     the leaves, a zero entry skipped, so a sparse row costs its ancestors only; coupled coordinates'
     ``A = L L^T``: forward), so that ``J A^-1 J^T = Z^T W Z`` with :func:`weights` ``W`` (E88)."""
     SI, X = scene.SI, scene.X
-    n, nt = SI[0], SI[1]
+    n, nt = nonneg(SI[0]), nonneg(SI[1])
     at = nonneg(at)
     if coupled:
         l0 = 2 * nt + 18 + n * n
@@ -98,8 +96,75 @@ def half_solve(tree, scene, v, at, coupled):
                 v[at + nonneg(TI[ai + r0 + u])] -= W[j + u] * xk
 
 
-@one_signature
-@kernel
+@njit(cache=True, inline="always")
+def _half_solves(tree, scene, X, xy, xperm, r, coupled):
+    """:func:`half_solve` of the rows ``X[xy + k n:xy + (k + 1) n]`` for ``k`` in ``X[xperm:xperm + r]``, in one pass
+    over the tree (its structure read once for all rows)."""
+    n = nonneg(scene.SI[0])
+    xy, xperm = nonneg(xy), nonneg(xperm)
+    if coupled:
+        for a in range(r):
+            half_solve(tree, scene, X, xy + nonneg(int(X[xperm + a])) * n, coupled)
+        return
+    TI, W = tree.TI, tree.W
+    ap, ai, rp, rs = nonneg(TI[I_ANCPTR]), nonneg(TI[I_ANCIDX]), nonneg(TI[I_RUNPTR]), nonneg(TI[I_RUNS])
+    wa = nonneg(TI[W_A])
+    for kk in range(n):                     # L^T z = x: from the leaves (factor.ltdl_solve's first half)
+        k = nonneg(n - 1 - kk)
+        r0 = nonneg(TI[ap + k])
+        m = nonneg(TI[ap + k + 1] - 1 - r0)
+        j = wa + r0
+        run = TI[rp + k + 1] - TI[rp + k] == 1
+        c0 = nonneg(TI[rs + 2 * nonneg(TI[rp + k])]) if run else 0
+        for a in range(r):
+            at = xy + nonneg(int(X[xperm + a])) * n
+            xk = X[at + k]
+            if xk == 0.0:
+                continue
+            if run:
+                for u in range(m):
+                    X[at + c0 + u] -= W[j + u] * xk
+            else:
+                for u in range(m):
+                    X[at + nonneg(TI[ai + r0 + u])] -= W[j + u] * xk
+
+
+@njit(cache=True, inline="always")     # inlined: a call passes every array as seven words
+def back_solve(tree, scene, v, at, coupled):
+    """``v[at:at + n] <- L^-1 v`` for the tree's ``A = L^T D L`` (from the root), ``L^-T v`` for coupled
+    coordinates' ``A = L L^T``: the other half of :func:`half_solve`, so that ``A^-1 J^T lambda = L^-1 W Z lambda``
+    (E88) reuses ``Z``."""
+    SI, X = scene.SI, scene.X
+    n, nt = nonneg(SI[0]), nonneg(SI[1])
+    at = nonneg(at)
+    if coupled:
+        l0 = 2 * nt + 18 + n * n
+        for ii in range(n):
+            i = n - 1 - ii
+            s = v[at + i]
+            for k in range(i + 1, n):
+                s -= X[l0 + k * n + i] * v[at + k]
+            v[at + i] = s / X[l0 + i * n + i]
+        return
+    TI, W = tree.TI, tree.W
+    ap, ai, rp, rs = nonneg(TI[I_ANCPTR]), nonneg(TI[I_ANCIDX]), nonneg(TI[I_RUNPTR]), nonneg(TI[I_RUNS])
+    wa = nonneg(TI[W_A])
+    for k in range(n):                      # L y = z: from the root (factor.ltdl_solve's second half, D apart)
+        r0 = nonneg(TI[ap + k])
+        m = nonneg(TI[ap + k + 1] - 1 - r0)
+        j = wa + r0
+        s = v[at + k]
+        if TI[rp + k + 1] - TI[rp + k] == 1:
+            c0 = at + nonneg(TI[rs + 2 * nonneg(TI[rp + k])])
+            for u in range(m):
+                s -= W[j + u] * v[c0 + u]
+        else:
+            for u in range(m):
+                s -= W[j + u] * v[at + nonneg(TI[ai + r0 + u])]
+        v[at + k] = s
+
+
+@njit(cache=True, inline="always")     # inlined: a call passes every array as seven words
 def weights(tree, scene, w, w_at, coupled):
     """``w[w_at:w_at + n]``: ``1 / D`` of the tree's ``A = L^T D L`` (ones for the coupled ``L L^T``), the weights of
     :func:`half_solve`'s ``Z^T W Z``."""
@@ -121,13 +186,13 @@ def tendon_forces(tree, scene, t, y, out, coupled):
     power ``l' (-b l' + sum gear F)`` (the spring is a potential)."""
     SI, SF, X = scene
     n = SI[0]
-    c0 = SI[S_CON]
-    ntd, na = SI[c0 + CNT], SI[c0 + CNA]
+    c0 = nonneg(SI[S_CON])
+    ntd, na = nonneg(SI[c0 + CNT]), nonneg(SI[c0 + CNA])
     if ntd == 0:
         return 0.0
-    m = SI[c0 + CM]
-    xt = SI[c0 + CX] + x_layout(m, n, SI[1])[10]
-    ft = SI[c0 + CF] + SI[c0 + CNC] * (KCF + 2 * n)
+    m = nonneg(SI[c0 + CM])
+    xt = nonneg(SI[c0 + CX] + x_layout(m, n, SI[1])[10])
+    ft = nonneg(SI[c0 + CF] + SI[c0 + CNC] * (KCF + 2 * n))
     fa = ft + ntd * (n + 4)
     for i in range(n):
         X[xt + i] = 0.0
@@ -143,7 +208,7 @@ def tendon_forces(tree, scene, t, y, out, coupled):
         x = l - lb if l > lb else (l - la if l < la else 0.0)
         work = -SF[a + n + 1] * ld
         for j in range(na):
-            r = c0 + SI[c0 + CACT] + 3 * j
+            r = nonneg(c0 + SI[c0 + CACT] + 3 * j)
             if SI[r] != k:
                 continue
             p = fa + KA * j
@@ -165,36 +230,36 @@ def tendon_forces(tree, scene, t, y, out, coupled):
     return P
 
 
-@one_signature
-@kernel
-def _point_row(TI, W, SI, SF, X, rec, fp, p, side, gx, gy, gz, r_out, v_out, a_out, Jt, nt):
-    """The world point of one side (``side`` 0, 1) of a connect/weld: ``r``, its velocity and acceleration at
-    ``q'' = 0`` (E32, gravity taken out), and its Jacobian rows ``+-u_i(r)`` added to ``Jt`` (3, nt)."""
-    pt = fp + 3 * side
+@njit(cache=True, inline="always")
+def _point(TI, W, SF, fp, p, side, gx, gy, gz):
+    """The world point ``r`` of one side (``side`` 0, 1) of a connect/weld and its acceleration at ``q'' = 0``
+    (E32, gravity taken out): ``(r0, r1, r2, a0, a1, a2)``, in registers."""
+    pt = nonneg(fp + 3 * side)
     if p < 0:
-        for j in range(3):
-            r_out[j] = SF[pt + j]
-            v_out[j] = 0.0
-            a_out[j] = 0.0
-        return
-    d = nonneg(TI[W_LINK]) + KL * p
-    for j in range(3):
-        r_out[j] = W[d + O_ + j]
-        for c in range(3):
-            r_out[j] += W[d + 3 * j + c] * SF[pt + c]
-    om = (W[d + WV], W[d + WV + 1], W[d + WV + 2])
-    al = (W[d + AC], W[d + AC + 1], W[d + AC + 2])
-    r0, r1, r2 = r_out[0], r_out[1], r_out[2]
-    v0 = om[1] * r2 - om[2] * r1 + W[d + WV + 3]
-    v1 = om[2] * r0 - om[0] * r2 + W[d + WV + 4]
-    v2 = om[0] * r1 - om[1] * r0 + W[d + WV + 5]
-    v_out[0], v_out[1], v_out[2] = v0, v1, v2
-    a_out[0] = al[1] * r2 - al[2] * r1 + W[d + AC + 3] + gx + om[1] * v2 - om[2] * v1
-    a_out[1] = al[2] * r0 - al[0] * r2 + W[d + AC + 4] + gy + om[2] * v0 - om[0] * v2
-    a_out[2] = al[0] * r1 - al[1] * r0 + W[d + AC + 5] + gz + om[0] * v1 - om[1] * v0
+        return SF[pt], SF[pt + 1], SF[pt + 2], 0.0, 0.0, 0.0
+    d = nonneg(TI[W_LINK]) + KL * nonneg(p)
+    p0, p1, p2 = SF[pt], SF[pt + 1], SF[pt + 2]
+    r0 = W[d + O_] + W[d] * p0 + W[d + 1] * p1 + W[d + 2] * p2
+    r1 = W[d + O_ + 1] + W[d + 3] * p0 + W[d + 4] * p1 + W[d + 5] * p2
+    r2 = W[d + O_ + 2] + W[d + 6] * p0 + W[d + 7] * p1 + W[d + 8] * p2
+    om0, om1, om2 = W[d + WV], W[d + WV + 1], W[d + WV + 2]
+    al0, al1, al2 = W[d + AC], W[d + AC + 1], W[d + AC + 2]
+    v0 = om1 * r2 - om2 * r1 + W[d + WV + 3]
+    v1 = om2 * r0 - om0 * r2 + W[d + WV + 4]
+    v2 = om0 * r1 - om1 * r0 + W[d + WV + 5]
+    a0 = al1 * r2 - al2 * r1 + W[d + AC + 3] + gx + om1 * v2 - om2 * v1
+    a1 = al2 * r0 - al0 * r2 + W[d + AC + 4] + gy + om2 * v0 - om0 * v2
+    a2 = al0 * r1 - al1 * r0 + W[d + AC + 5] + gz + om0 * v1 - om1 * v0
+    return r0, r1, r2, a0, a1, a2
+
+
+@njit(cache=True, inline="always")
+def _point_columns(TI, W, SI, rec, side, nt, r0, r1, r2, Jt):
+    """The Jacobian rows ``+-u_i(r)`` of the point ``r`` of one side, over the tree coordinates that move its link
+    (the record's mask), added to ``Jt`` (3, nt)."""
     sign = 1.0 if side == 0 else -1.0
     wc = nonneg(TI[W_COORD])
-    mk = rec + KCI + side * nt
+    mk = nonneg(rec + KCI + side * nt)
     for i in range(nt):
         if SI[mk + i] == 0:
             continue
@@ -248,8 +313,7 @@ def _weld_rows(TI, W, SI, SF, rec, fp, l1, l2, X, xphi, xgam, k, Jt, nt):
                     Jt[j, i] += sign * W[wc + j * nt + i]
 
 
-@one_signature
-@kernel
+@njit(cache=True, inline="always")     # inlined: a call passes every array as seven words
 def _poly_row(SI, SF, y, n, rec, fp, X, xphi, xgam, xj, k):
     """A polynomial row (E70): ``Phi = l_a - l_a0 - p(l_b - l_b0)``, its row ``u_a - p'(x) u_b`` (model
     coordinates), ``gamma = -p''(x) l_b'^2``; ``l = u . q`` a coordinate or a fixed tendon's length."""
@@ -279,18 +343,17 @@ def _poly_row(SI, SF, y, n, rec, fp, X, xphi, xgam, xj, k):
         X[xj + k * n + i] = SF[u1 + i] - dp * SF[u2 + i]
 
 
-@one_signature
-@kernel
+@njit(cache=True, inline="always")     # inlined into kkt, its one caller
 def constraint_terms(tree, scene, y):
     """``Phi``, ``gamma`` (m,) and ``J = Phi_q`` (m, n) into the constraints' scratch (E68)-(E71), from the
     kinematics pass already in the tree's scratch; connect/weld rows in the tree's coordinates times ``C``
     for coupled ones (E42)."""
     TI, W = tree.TI, tree.W
     SI, SF, X = scene
-    n, nt = SI[0], SI[1]
-    c0 = SI[S_CON]
-    m = SI[c0 + CM]
-    xc = SI[c0 + CX]
+    n, nt = nonneg(SI[0]), nonneg(SI[1])
+    c0 = nonneg(SI[S_CON])
+    m = nonneg(SI[c0 + CM])
+    xc = nonneg(SI[c0 + CX])
     lay = x_layout(m, n, nt)
     xphi, xgam, xj, xt = xc + lay[0], xc + lay[1], xc + lay[2], xc + lay[10]
     g = SI[S_GRAV]
@@ -298,56 +361,51 @@ def constraint_terms(tree, scene, y):
     coupled = SI[4] != 0
     Cat = SI[S_C]
     Jt = X[xc + lay[14]:xc + lay[14] + 3 * nt].reshape((3, nt))    # one point pair's rows (3, nt)
-    r1 = X[xt:xt + 3]
-    v1 = X[xt + 3:xt + 6]
-    a1 = X[xt + 6:xt + 9]
-    rec0 = c0 + SI[c0 + CREC]
+    rec0 = nonneg(c0 + SI[c0 + CREC])
     for ci in range(SI[c0 + CNC]):
         rec = rec0 + ci * (KCI + 2 * nt)
-        fp = SI[c0 + CF] + ci * (KCF + 2 * n)
-        kind, l1, l2, k = SI[rec], SI[rec + 1], SI[rec + 2], SI[rec + 3]
+        fp = nonneg(SI[c0 + CF] + ci * (KCF + 2 * n))
+        kind, l1, l2, k = SI[rec], SI[rec + 1], SI[rec + 2], nonneg(SI[rec + 3])
         if kind == KIND_POLY:
             _poly_row(SI, SF, y, n, rec, fp, X, xphi, xgam, xj, k)
             continue
         for blk in range(2 if kind == KIND_WELD else 1):
+            kr = k + 3 * blk
+            # the rows themselves (tree coordinates are the model's), else one block times C (E42)
+            T = Jt if coupled else X[xj + kr * n:xj + (kr + 3) * n].reshape((3, n))
             for j in range(3):
                 for i in range(nt):
-                    Jt[j, i] = 0.0
+                    T[j, i] = 0.0
             if blk == 0:
-                for side in range(2):
-                    _point_row(TI, W, SI, SF, X, rec, fp, l1 if side == 0 else l2, side, gx, gy, gz, r1, v1, a1,
-                               Jt, nt)
-                    for j in range(3):
-                        if side == 0:
-                            X[xphi + k + j] = r1[j]
-                            X[xgam + k + j] = a1[j]
-                        else:
-                            X[xphi + k + j] -= r1[j]
-                            X[xgam + k + j] -= a1[j]
-                kr = k
+                ra0, ra1, ra2, aa0, aa1, aa2 = _point(TI, W, SF, fp, l1, 0, gx, gy, gz)
+                rb0, rb1, rb2, ab0, ab1, ab2 = _point(TI, W, SF, fp, l2, 1, gx, gy, gz)
+                if l1 >= 0:
+                    _point_columns(TI, W, SI, rec, 0, nt, ra0, ra1, ra2, T)
+                if l2 >= 0:
+                    _point_columns(TI, W, SI, rec, 1, nt, rb0, rb1, rb2, T)
+                X[xphi + k], X[xphi + k + 1], X[xphi + k + 2] = ra0 - rb0, ra1 - rb1, ra2 - rb2
+                X[xgam + k], X[xgam + k + 1], X[xgam + k + 2] = aa0 - ab0, aa1 - ab1, aa2 - ab2
             else:
-                _weld_rows(TI, W, SI, SF, rec, fp, l1, l2, X, xphi, xgam, k + 3, Jt, nt)
-                kr = k + 3
-            for j in range(3):
-                row = xj + (kr + j) * n
-                if coupled:
+                _weld_rows(TI, W, SI, SF, rec, fp, l1, l2, X, xphi, xgam, kr, T, nt)
+            if coupled:
+                for j in range(3):
+                    row = xj + (kr + j) * n
                     for i in range(n):
                         s = 0.0
                         for a in range(nt):
                             s += Jt[j, a] * SF[Cat + a * n + i]
                         X[row + i] = s
-                else:
-                    for i in range(n):
-                        X[row + i] = Jt[j, i]
 
 
-@one_signature
-@kernel
+@njit(cache=True, inline="always")     # inlined: a call passes every array as seven words
 def _pivoted_cholesky(X, xl, xd, xperm, r, m, tol, limit):
-    """``P D S D P^T = L L^T`` in place (r, r) with row stride ``m`` at ``X[xl:]`` (E88): the largest diagonal
-    left first; stops at a pivot at or below ``tol`` or after ``limit`` rows. Swaps the order ``X[xperm:]`` and
-    the scales ``X[xd:]`` with the rows. Returns ``(rank, smallest pivot of the rows factored, the pivot where it
-    stopped)`` (the smallest when it did not stop)."""
+    """``P D S D P^T = L P_d L^T`` in place (r, r) with row stride ``m`` at ``X[xl:]`` (E88): the largest diagonal
+    left first; stops at a pivot at or below ``tol`` or after ``limit`` rows. ``L`` unit lower triangular below the
+    diagonal, the reciprocal pivots ``1 / p_j`` on it, the upper triangle the columns before scaling: no square
+    root and no division on the solves' chains (:func:`schur_solve`). Swaps the order ``X[xperm:]`` and the scales
+    ``X[xd:]`` with the rows. Returns ``(rank, smallest pivot of the rows factored, the pivot where it stopped)``
+    (the smallest when it did not stop)."""
+    xl, xd, xperm, m = nonneg(xl), nonneg(xd), nonneg(xperm), nonneg(m)
     smallest = np.inf
     for j in range(min(r, limit)):
         p = j
@@ -367,21 +425,20 @@ def _pivoted_cholesky(X, xl, xd, xperm, r, m, tol, limit):
         if not piv > tol:
             return j, smallest, piv
         smallest = min(smallest, piv)
-        s = np.sqrt(piv)
-        X[xl + j * m + j] = s
-        for i in range(j + 1, r):
-            X[xl + i * m + j] /= s
+        inv = 1.0 / piv
+        X[xl + j * m + j] = inv
+        for i in range(j + 1, r):           # l_ij = s_ij / p_j below; s_ji (unscaled) stays above
+            X[xl + i * m + j] = X[xl + j * m + i] * inv
         for i in range(j + 1, r):
             lij = X[xl + i * m + j]
             for k in range(j + 1, i + 1):
-                v = X[xl + i * m + k] - lij * X[xl + k * m + j]
+                v = X[xl + i * m + k] - lij * X[xl + j * m + k]
                 X[xl + i * m + k] = v
                 X[xl + k * m + i] = v
     return min(r, limit), smallest, smallest
 
 
-@one_signature
-@kernel
+@njit(cache=True, inline="always")     # inlined: a call passes every array as seven words
 def _events(X, m, xact, xprev, xst, xev, xsel, t, piv):
     """A row chosen and solved at the accepted step before and dropped at this one (the rows over all ``m`` of
     lower rank than at the start: a change point): an event ``(t, row, pivot)`` (the first :data:`KEV` kept, all
@@ -392,7 +449,7 @@ def _events(X, m, xact, xprev, xst, xev, xsel, t, piv):
     for k in range(m):
         dropped = 1.0 if (X[xsel + k] != 0.0 and X[xact + k] == 0.0) else 0.0
         if dropped != 0.0 and X[xprev + k] == 0.0:
-            e = int(X[xst + 2])
+            e = nonneg(int(X[xst + 2]))
             if e < KEV:
                 X[xev + 3 * e] = t
                 X[xev + 3 * e + 1] = k
@@ -401,16 +458,15 @@ def _events(X, m, xact, xprev, xst, xev, xsel, t, piv):
         X[xprev + k] = dropped
 
 
-@one_signature
-@kernel
+@njit(cache=True, inline="always")     # inlined: a call passes every array as seven words
 def _schur(X, xy, xw, xl, xs, xperm, r, m, n):
     """``S = Z^T W Z`` (r, r) over the rows ``X[xperm:xperm + r]`` (their ``Z`` rows at ``X[xy:]``, the weights at
     ``X[xw:]``), its scales set to 1; returns its largest diagonal (E88)."""
     big = 0.0      # the pivots compare with S's largest diagonal (a row whose J vanishes is dependent too)
     for a in range(r):
-        ka = int(X[xperm + a])
+        ka = nonneg(int(X[xperm + a]))
         for b in range(a + 1):
-            kb = int(X[xperm + b])
+            kb = nonneg(int(X[xperm + b]))
             s = 0.0
             for i in range(n):
                 s += X[xy + ka * n + i] * X[xw + i] * X[xy + kb * n + i]
@@ -430,13 +486,13 @@ def _choose_rows(tree, scene, coupled, tol_rel):
     ones left with the largest diagonals, dropped at this evaluation. Kept for the following evaluations
     (``sel``). Returns ``(rank, smallest pivot, the pivot where it stopped, S's largest diagonal)``."""
     SI, X = scene.SI, scene.X
-    n, nt = SI[0], SI[1]
-    c0 = SI[S_CON]
-    m = SI[c0 + CM]
-    xc = SI[c0 + CX]
+    n, nt = nonneg(SI[0]), nonneg(SI[1])
+    c0 = nonneg(SI[S_CON])
+    m = nonneg(SI[c0 + CM])
+    xc = nonneg(SI[c0 + CX])
     lay = x_layout(m, n, nt)
     xj, xy, xs, xl, xperm, xsel = xc + lay[2], xc + lay[3], xc + lay[4], xc + lay[5], xc + lay[13], xc + lay[15]
-    keep = c0 + SI[c0 + CKEEP]
+    keep = nonneg(c0 + SI[c0 + CKEEP])
     r0 = 0
     for k in range(m):
         r0 += SI[keep + k]
@@ -457,7 +513,7 @@ def _choose_rows(tree, scene, coupled, tol_rel):
     changed = False
     for a in range(m):
         flag = 1.0 if a < r0 else 0.0
-        k = int(X[xperm + a])
+        k = nonneg(int(X[xperm + a]))
         changed = changed or X[xsel + k] != flag
         X[xsel + k] = flag
     if changed:
@@ -475,12 +531,12 @@ def kkt(tree, scene, t, y, out, coupled):
     with a floating base: the row left out at the start is no longer the redundant one) they are chosen again
     among all rows (:func:`_choose_rows`), which is no event unless the rank over all rows fell."""
     SI, SF, X = scene
-    n, nt = SI[0], SI[1]
-    c0 = SI[S_CON]
-    m = SI[c0 + CM]
+    n, nt = nonneg(SI[0]), nonneg(SI[1])
+    c0 = nonneg(SI[S_CON])
+    m = nonneg(SI[c0 + CM])
     if m == 0:
         return -1
-    xc = SI[c0 + CX]
+    xc = nonneg(SI[c0 + CX])
     lay = x_layout(m, n, nt)
     xj, xy, xs, xl, xlam = xc + lay[2], xc + lay[3], xc + lay[4], xc + lay[5], xc + lay[6]
     xgam, xact, xprev, xst, xev, xperm = xc + lay[1], xc + lay[8], xc + lay[9], xc + lay[11], xc + lay[12], xc + lay[13]
@@ -497,7 +553,7 @@ def kkt(tree, scene, t, y, out, coupled):
         r += 1
         for i in range(n):
             X[xy + k * n + i] = X[xj + k * n + i]
-        half_solve(tree, scene, X, xy + k * n, coupled)     # Z = L^-T J^T, row by row
+    _half_solves(tree, scene, X, xy, xperm, r, coupled)     # Z = L^-T J^T
     big = _schur(X, xy, xtmp, xl, xs, xperm, r, m, n)
     tol_rel = SCHUR_PIVOT if SI[c0 + CMODE] == 1 else CHANGE_POINT_PIVOT
     rank, smallest, piv = _pivoted_cholesky(X, xl, xs, xperm, r, m, tol_rel * big, r)
@@ -511,55 +567,55 @@ def kkt(tree, scene, t, y, out, coupled):
         X[xst + 1] = t
     r0 = 0
     for k in range(m):
-        r0 += int(X[xsel + k])
+        r0 += nonneg(int(X[xsel + k]))
     if rank < r0 and SI[c0 + CMODE] == 1:
         X[xst + 3] = X[xperm + rank]
         return FAIL_BASE + int(X[xperm + rank])
     for a in range(rank):
-        X[xact + int(X[xperm + a])] = 1.0
+        X[xact + nonneg(int(X[xperm + a]))] = 1.0
     _events(X, m, xact, xprev, xst, xev, xsel, t, piv)
     for a in range(rank):           # the Schur right-hand side -gamma - J q''_free, scaled
-        k = int(X[xperm + a])
+        k = nonneg(int(X[xperm + a]))
         s = -X[xgam + k]
         for i in range(n):
             s -= X[xj + k * n + i] * out[n + i]
         X[xlam + k] = s
     schur_solve(X, xc, m, n, nt, rank)
-    for i in range(n):              # q'' = q''_free + A^-1 J^T lambda: one solve
-        X[xtmp + i] = 0.0
-    for a in range(rank):
-        k = int(X[xperm + a])
-        lam = X[xlam + k]
-        for i in range(n):
-            X[xtmp + i] += X[xj + k * n + i] * lam
-    a_solve(tree, scene, X, xtmp, coupled)
+    for i in range(n):              # q'' = q''_free + A^-1 J^T lambda = q''_free + L^-1 W Z lambda (E88)
+        s = 0.0
+        for a in range(rank):
+            k = nonneg(int(X[xperm + a]))
+            s += X[xy + k * n + i] * X[xlam + k]
+        X[xtmp + i] *= s            # the weights W left there by weights()
+    back_solve(tree, scene, X, xtmp, coupled)
     for i in range(n):
         out[n + i] += X[xtmp + i]
     return -1
 
 
-@one_signature
-@kernel
+@njit(cache=True, inline="always")     # inlined: a call passes every array as seven words
 def schur_solve(X, xc, m, n, nt, rank):
     """``lambda <- S^-1 lambda`` (rows by index in the ``lam`` block) over the first ``rank`` rows of the pivot
     order, with the factor left by :func:`kkt`; the other rows' entries set to 0."""
     lay = x_layout(m, n, nt)
     xs, xl, xlam, xb, xperm = xc + lay[4], xc + lay[5], xc + lay[6], xc + lay[7], xc + lay[13]
-    for a in range(rank):           # L z = D b
-        k = int(X[xperm + a])
+    for a in range(rank):           # L z = D b (L unit lower triangular)
+        k = nonneg(int(X[xperm + a]))
         v = X[xlam + k] * X[xs + a]
         for c in range(a):
             v -= X[xl + a * m + c] * X[xb + c]
-        X[xb + a] = v / X[xl + a * m + a]
+        X[xb + a] = v
+    for a in range(rank):           # the reciprocal pivots on the diagonal: independent products
+        X[xb + a] *= X[xl + a * m + a]
     for a in range(rank - 1, -1, -1):   # L^T x = z
         v = X[xb + a]
         for c in range(a + 1, rank):
             v -= X[xl + c * m + a] * X[xb + c]
-        X[xb + a] = v / X[xl + a * m + a]
+        X[xb + a] = v
     for k in range(m):
         X[xlam + k] = 0.0
     for a in range(rank):
-        X[xlam + int(X[xperm + a])] = X[xb + a] * X[xs + a]
+        X[xlam + nonneg(int(X[xperm + a]))] = X[xb + a] * X[xs + a]
 
 
 @one_signature
@@ -568,10 +624,10 @@ def schur_correction(tree, scene, v, v_at, dst):
     """``dst (n,) = A^-1 J^T S^-1 v`` for the rows' values ``v[v_at:v_at + m]`` over the rows solved at the last
     evaluation, with its factors (E74's steps); uses the ``lam`` block as its scratch."""
     SI, X = scene.SI, scene.X
-    n, nt = SI[0], SI[1]
-    c0 = SI[S_CON]
-    m = SI[c0 + CM]
-    xc = SI[c0 + CX]
+    n, nt = nonneg(SI[0]), nonneg(SI[1])
+    c0 = nonneg(SI[S_CON])
+    m = nonneg(SI[c0 + CM])
+    xc = nonneg(SI[c0 + CX])
     lay = x_layout(m, n, nt)
     xj, xlam, xact = xc + lay[2], xc + lay[6], xc + lay[8]
     rank = 0
