@@ -254,19 +254,19 @@ def _point(TI, W, SF, fp, p, side, gx, gy, gz):
 
 
 @njit(cache=True, inline="always")
-def _point_columns(TI, W, SI, rec, side, nt, r0, r1, r2, Jt):
+def _point_columns(TI, W, SI, rec, side, nt, r0, r1, r2, X, t0):
     """The Jacobian rows ``+-u_i(r)`` of the point ``r`` of one side, over the tree coordinates that move its link
-    (the record's mask), added to ``Jt`` (3, nt)."""
+    (the record's mask), added to the three rows of ``nt`` at ``X[t0:]``."""
     sign = 1.0 if side == 0 else -1.0
-    wc = nonneg(TI[W_COORD])
+    wc, t0 = nonneg(TI[W_COORD]), nonneg(t0)
     mk = nonneg(rec + KCI + side * nt)
     for i in range(nt):
         if SI[mk + i] == 0:
             continue
         w0, w1, w2 = W[wc + i], W[wc + nt + i], W[wc + 2 * nt + i]
-        Jt[0, i] += sign * (w1 * r2 - w2 * r1 + W[wc + 3 * nt + i])
-        Jt[1, i] += sign * (w2 * r0 - w0 * r2 + W[wc + 4 * nt + i])
-        Jt[2, i] += sign * (w0 * r1 - w1 * r0 + W[wc + 5 * nt + i])
+        X[t0 + i] += sign * (w1 * r2 - w2 * r1 + W[wc + 3 * nt + i])
+        X[t0 + nt + i] += sign * (w2 * r0 - w0 * r2 + W[wc + 4 * nt + i])
+        X[t0 + 2 * nt + i] += sign * (w0 * r1 - w1 * r0 + W[wc + 5 * nt + i])
 
 
 @njit(cache=True, inline="always")
@@ -289,10 +289,10 @@ def _re(W, SF, wl, l1, l2, f1, f2, a, b):
 
 @one_signature
 @kernel
-def _weld_rows(TI, W, SI, SF, rec, fp, l1, l2, X, xphi, xgam, k, Jt, nt):
+def _weld_rows(TI, W, SI, SF, rec, fp, l1, l2, X, xphi, xgam, k, t0, nt):
     """A weld's orientation rows ``k .. k + 2`` (E69): ``Phi_R = 0.5 vee(R_e - R_e^T)``, Jacobian rows ``w_i``
-    of link1's coordinates minus link2's (into ``Jt`` (3, nt)), ``gamma = alpha_1 - alpha_2``."""
-    wl, wc = nonneg(TI[W_LINK]), nonneg(TI[W_COORD])
+    of link1's coordinates minus link2's (into the three rows of ``nt`` at ``X[t0:]``), ``gamma = alpha_1 - alpha_2``."""
+    wl, wc, t0 = nonneg(TI[W_LINK]), nonneg(TI[W_COORD]), nonneg(t0)
     f1, f2 = fp + 6, fp + 15
     X[xphi + k] = 0.5 * (_re(W, SF, wl, l1, l2, f1, f2, 2, 1) - _re(W, SF, wl, l1, l2, f1, f2, 1, 2))
     X[xphi + k + 1] = 0.5 * (_re(W, SF, wl, l1, l2, f1, f2, 0, 2) - _re(W, SF, wl, l1, l2, f1, f2, 2, 0))
@@ -310,7 +310,7 @@ def _weld_rows(TI, W, SI, SF, rec, fp, l1, l2, X, xphi, xgam, k, Jt, nt):
         for i in range(nt):
             if SI[mk + i] != 0:
                 for j in range(3):
-                    Jt[j, i] += sign * W[wc + j * nt + i]
+                    X[t0 + j * nt + i] += sign * W[wc + j * nt + i]
 
 
 @njit(cache=True, inline="always")     # inlined: a call passes every array as seven words
@@ -360,7 +360,7 @@ def constraint_terms(tree, scene, y):
     gx, gy, gz = SF[g], SF[g + 1], SF[g + 2]
     coupled = SI[4] != 0
     Cat = SI[S_C]
-    Jt = X[xc + lay[14]:xc + lay[14] + 3 * nt].reshape((3, nt))    # one point pair's rows (3, nt)
+    jt = xc + lay[14]      # one point pair's rows (3, nt) in the tree's coordinates, for coupled ones
     rec0 = nonneg(c0 + SI[c0 + CREC])
     for ci in range(SI[c0 + CNC]):
         rec = rec0 + ci * (KCI + 2 * nt)
@@ -372,28 +372,28 @@ def constraint_terms(tree, scene, y):
         for blk in range(2 if kind == KIND_WELD else 1):
             kr = k + 3 * blk
             # the rows themselves (tree coordinates are the model's), else one block times C (E42)
-            T = Jt if coupled else X[xj + kr * n:xj + (kr + 3) * n].reshape((3, n))
+            t0 = jt if coupled else xj + kr * n
             for j in range(3):
                 for i in range(nt):
-                    T[j, i] = 0.0
+                    X[t0 + j * nt + i] = 0.0
             if blk == 0:
                 ra0, ra1, ra2, aa0, aa1, aa2 = _point(TI, W, SF, fp, l1, 0, gx, gy, gz)
                 rb0, rb1, rb2, ab0, ab1, ab2 = _point(TI, W, SF, fp, l2, 1, gx, gy, gz)
                 if l1 >= 0:
-                    _point_columns(TI, W, SI, rec, 0, nt, ra0, ra1, ra2, T)
+                    _point_columns(TI, W, SI, rec, 0, nt, ra0, ra1, ra2, X, t0)
                 if l2 >= 0:
-                    _point_columns(TI, W, SI, rec, 1, nt, rb0, rb1, rb2, T)
+                    _point_columns(TI, W, SI, rec, 1, nt, rb0, rb1, rb2, X, t0)
                 X[xphi + k], X[xphi + k + 1], X[xphi + k + 2] = ra0 - rb0, ra1 - rb1, ra2 - rb2
                 X[xgam + k], X[xgam + k + 1], X[xgam + k + 2] = aa0 - ab0, aa1 - ab1, aa2 - ab2
             else:
-                _weld_rows(TI, W, SI, SF, rec, fp, l1, l2, X, xphi, xgam, kr, T, nt)
+                _weld_rows(TI, W, SI, SF, rec, fp, l1, l2, X, xphi, xgam, kr, t0, nt)
             if coupled:
                 for j in range(3):
                     row = xj + (kr + j) * n
                     for i in range(n):
                         s = 0.0
                         for a in range(nt):
-                            s += Jt[j, a] * SF[Cat + a * n + i]
+                            s += X[jt + j * nt + a] * SF[Cat + a * n + i]
                         X[row + i] = s
 
 
