@@ -76,15 +76,18 @@ def angles(TI, TF, QL, CL, SL, lanes):
 
 @kernel
 def _angle(q, off, linear, c, s, lanes):
+    """``x = off + q`` (one row); a translation's ``x`` into ``c``, else ``cos x``, ``sin x`` into ``c``, ``s``:
+    libm's calls, one per lane, the scalar rows' own (docs/speed.md, "Lanes": branch-free polynomials within
+    1 ulp were measured, and rejected)."""
     LW = len(lanes)
     if linear:
         for l in range(LW):
             c[l] = off + q[l]
-    else:
-        for l in range(LW):
-            x = off + q[l]
-            c[l] = np.cos(x)
-            s[l] = np.sin(x)
+        return
+    for l in range(LW):
+        x = off + q[l]
+        c[l] = np.cos(x)
+        s[l] = np.sin(x)
 
 
 @kernel
@@ -137,21 +140,50 @@ def _constant(TF, f, D, lanes):
 
 
 @kernel
-def _turn(D, k, c, s, lanes):
-    """A rotation about the local axis ``k`` turns two columns ``a, b`` of the record's R by ``(c, s)``
-    (E48): ``a, b`` = 1, 2 about x; 2, 0 about y; 0, 1 about z (the row kernel's ``_turn``). The columns
+def _constant_from(TF, f, P, D, lanes):
+    """A link's first factor, constant: the record ``D`` gets the parent's (``P``) pose times the constant
+    transform at ``TF[f:]``, and its twist and acceleration (one pass instead of a copy and :func:`_constant`)."""
+    LW = len(lanes)
+    f = small(f)
+    C00, C01, C02, C10, C11, C12 = TF[f + 1], TF[f + 2], TF[f + 3], TF[f + 4], TF[f + 5], TF[f + 6]
+    C20, C21, C22, p0, p1, p2 = TF[f + 7], TF[f + 8], TF[f + 9], TF[f + 10], TF[f + 11], TF[f + 12]
+    for l in range(LW):
+        R00, R01, R02 = P[l], P[LW + l], P[2 * LW + l]
+        R10, R11, R12 = P[3 * LW + l], P[4 * LW + l], P[5 * LW + l]
+        R20, R21, R22 = P[6 * LW + l], P[7 * LW + l], P[8 * LW + l]
+        D[O_ * LW + l] = P[O_ * LW + l] + R00 * p0 + R01 * p1 + R02 * p2
+        D[(O_ + 1) * LW + l] = P[(O_ + 1) * LW + l] + R10 * p0 + R11 * p1 + R12 * p2
+        D[(O_ + 2) * LW + l] = P[(O_ + 2) * LW + l] + R20 * p0 + R21 * p1 + R22 * p2
+        D[l] = R00 * C00 + R01 * C10 + R02 * C20
+        D[LW + l] = R00 * C01 + R01 * C11 + R02 * C21
+        D[2 * LW + l] = R00 * C02 + R01 * C12 + R02 * C22
+        D[3 * LW + l] = R10 * C00 + R11 * C10 + R12 * C20
+        D[4 * LW + l] = R10 * C01 + R11 * C11 + R12 * C21
+        D[5 * LW + l] = R10 * C02 + R11 * C12 + R12 * C22
+        D[6 * LW + l] = R20 * C00 + R21 * C10 + R22 * C20
+        D[7 * LW + l] = R20 * C01 + R21 * C11 + R22 * C21
+        D[8 * LW + l] = R20 * C02 + R21 * C12 + R22 * C22
+        for j in range(WV, AC + 6):
+            D[j * LW + l] = P[j * LW + l]
+
+
+@kernel
+def _rotation(D, k, c, s, xd, S, lanes):
+    """A rotation slot about the local axis ``k`` on the record ``D`` (E48): R's columns ``a, b`` (1, 2 about
+    x; 2, 0 about y; 0, 1 about z) turned by ``(c, s)`` (the row kernel's ``_turn``), the unit twist
+    ``s = (w, o x w)`` (``w = R e_k``) into ``S`` (6 rows), and its rates ``xd`` (:func:`_rates`). The columns
     are constants in each branch: rows of one view at distances known only at run time stop the vectorizer."""
     LW = len(lanes)
     if k == 0:
-        _turn_columns(D, 1, 2, c, s, LW)
+        _rotation_about(D, 0, 1, 2, c, s, xd, S, LW)
     elif k == 1:
-        _turn_columns(D, 2, 0, c, s, LW)
+        _rotation_about(D, 1, 2, 0, c, s, xd, S, LW)
     else:
-        _turn_columns(D, 0, 1, c, s, LW)
+        _rotation_about(D, 2, 0, 1, c, s, xd, S, LW)
 
 
 @njit(cache=True, inline="always")
-def _turn_columns(D, a, b, c, s, LW):
+def _rotation_about(D, k, a, b, c, s, xd, S, LW):
     for l in range(LW):
         co, sn = c[l], s[l]
         Ra0, Ra1, Ra2 = D[a * LW + l], D[(3 + a) * LW + l], D[(6 + a) * LW + l]
@@ -162,78 +194,59 @@ def _turn_columns(D, a, b, c, s, LW):
         D[b * LW + l] = -sn * Ra0 + co * Rb0
         D[(3 + b) * LW + l] = -sn * Ra1 + co * Rb1
         D[(6 + b) * LW + l] = -sn * Ra2 + co * Rb2
-
-
-@kernel
-def _twist(D, k, linear, S, lanes):
-    """The unit twist ``s`` (E27) of a slot along / about the local axis ``k`` into ``S`` (6 rows):
-    ``(0, R e_k)`` for a translation (whose ``o += R e_k x`` is :func:`_slide`), ``(w, o x w)`` with
-    ``w = R e_k`` for a rotation."""
-    LW = len(lanes)
-    if linear:
-        for l in range(LW):
-            S[l] = 0.0
-            S[LW + l] = 0.0
-            S[2 * LW + l] = 0.0
-            S[3 * LW + l] = D[k * LW + l]
-            S[4 * LW + l] = D[(3 + k) * LW + l]
-            S[5 * LW + l] = D[(6 + k) * LW + l]
-        return
-    for l in range(LW):
         w0, w1, w2 = D[k * LW + l], D[(3 + k) * LW + l], D[(6 + k) * LW + l]
         o0, o1, o2 = D[O_ * LW + l], D[(O_ + 1) * LW + l], D[(O_ + 2) * LW + l]
-        S[l] = w0
-        S[LW + l] = w1
-        S[2 * LW + l] = w2
-        S[3 * LW + l] = o1 * w2 - o2 * w1
-        S[4 * LW + l] = o2 * w0 - o0 * w2
-        S[5 * LW + l] = o0 * w1 - o1 * w0
+        _rates(D, S, l, LW, w0, w1, w2, o1 * w2 - o2 * w1, o2 * w0 - o0 * w2, o0 * w1 - o1 * w0, xd[l])
 
 
 @kernel
-def _slide(D, k, x, lanes):
-    """``o += R e_k x``: a translation along the local axis ``k`` by ``x`` (one row); ``k`` a constant in
-    each branch (:func:`_turn`)."""
+def _translation(D, k, x, xd, S, lanes):
+    """A translation slot along the local axis ``k`` by ``x`` (one row) on the record ``D``: ``o += R e_k x``,
+    the unit twist ``s = (0, R e_k)`` into ``S`` and its rates; ``k`` a constant in each branch (:func:`_rotation`)."""
     LW = len(lanes)
     if k == 0:
-        _slide_column(D, 0, x, LW)
+        _translation_along(D, 0, x, xd, S, LW)
     elif k == 1:
-        _slide_column(D, 1, x, LW)
+        _translation_along(D, 1, x, xd, S, LW)
     else:
-        _slide_column(D, 2, x, LW)
+        _translation_along(D, 2, x, xd, S, LW)
 
 
 @njit(cache=True, inline="always")
-def _slide_column(D, k, x, LW):
+def _translation_along(D, k, x, xd, S, LW):
     for l in range(LW):
-        D[O_ * LW + l] = D[O_ * LW + l] + D[k * LW + l] * x[l]
-        D[(O_ + 1) * LW + l] = D[(O_ + 1) * LW + l] + D[(3 + k) * LW + l] * x[l]
-        D[(O_ + 2) * LW + l] = D[(O_ + 2) * LW + l] + D[(6 + k) * LW + l] * x[l]
+        e0, e1, e2 = D[k * LW + l], D[(3 + k) * LW + l], D[(6 + k) * LW + l]
+        D[O_ * LW + l] = D[O_ * LW + l] + e0 * x[l]
+        D[(O_ + 1) * LW + l] = D[(O_ + 1) * LW + l] + e1 * x[l]
+        D[(O_ + 2) * LW + l] = D[(O_ + 2) * LW + l] + e2 * x[l]
+        _rates(D, S, l, LW, 0.0, 0.0, 0.0, e0, e1, e2, xd[l])
 
 
-@kernel
-def _add_rates(D, S, xd, lanes):
-    """``V + s xd`` and ``Acc + (V x s) xd`` on the record ``D`` (E33 at q'' = 0), with
-    ``V x s = (omega x w, omega x v_s + v x w)``; always computed (the row kernel skips ``xd = 0``)."""
-    LW = len(lanes)
-    for l in range(LW):
-        x = xd[l]
-        s0, s1, s2 = S[l], S[LW + l], S[2 * LW + l]
-        s3, s4, s5 = S[3 * LW + l], S[4 * LW + l], S[5 * LW + l]
-        om0, om1, om2 = D[WV * LW + l], D[(WV + 1) * LW + l], D[(WV + 2) * LW + l]
-        v0, v1, v2 = D[(WV + 3) * LW + l], D[(WV + 4) * LW + l], D[(WV + 5) * LW + l]
-        D[AC * LW + l] = D[AC * LW + l] + (om1 * s2 - om2 * s1) * x
-        D[(AC + 1) * LW + l] = D[(AC + 1) * LW + l] + (om2 * s0 - om0 * s2) * x
-        D[(AC + 2) * LW + l] = D[(AC + 2) * LW + l] + (om0 * s1 - om1 * s0) * x
-        D[(AC + 3) * LW + l] = D[(AC + 3) * LW + l] + (om1 * s5 - om2 * s4 + v1 * s2 - v2 * s1) * x
-        D[(AC + 4) * LW + l] = D[(AC + 4) * LW + l] + (om2 * s3 - om0 * s5 + v2 * s0 - v0 * s2) * x
-        D[(AC + 5) * LW + l] = D[(AC + 5) * LW + l] + (om0 * s4 - om1 * s3 + v0 * s1 - v1 * s0) * x
-        D[WV * LW + l] = om0 + s0 * x
-        D[(WV + 1) * LW + l] = om1 + s1 * x
-        D[(WV + 2) * LW + l] = om2 + s2 * x
-        D[(WV + 3) * LW + l] = v0 + s3 * x
-        D[(WV + 4) * LW + l] = v1 + s4 * x
-        D[(WV + 5) * LW + l] = v2 + s5 * x
+@njit(cache=True, inline="always")
+def _rates(D, S, l, LW, s0, s1, s2, s3, s4, s5, x):
+    """Lane ``l``: the unit twist ``s`` into ``S``, then ``V + s xd`` and ``Acc + (V x s) xd`` on the record
+    ``D`` (E33 at q'' = 0), ``V x s = (omega x w, omega x v_s + v x w)``; always computed (the row kernel
+    skips ``xd = 0``: adding ``s 0`` changes no value)."""
+    S[l] = s0
+    S[LW + l] = s1
+    S[2 * LW + l] = s2
+    S[3 * LW + l] = s3
+    S[4 * LW + l] = s4
+    S[5 * LW + l] = s5
+    om0, om1, om2 = D[WV * LW + l], D[(WV + 1) * LW + l], D[(WV + 2) * LW + l]
+    v0, v1, v2 = D[(WV + 3) * LW + l], D[(WV + 4) * LW + l], D[(WV + 5) * LW + l]
+    D[AC * LW + l] = D[AC * LW + l] + (om1 * s2 - om2 * s1) * x
+    D[(AC + 1) * LW + l] = D[(AC + 1) * LW + l] + (om2 * s0 - om0 * s2) * x
+    D[(AC + 2) * LW + l] = D[(AC + 2) * LW + l] + (om0 * s1 - om1 * s0) * x
+    D[(AC + 3) * LW + l] = D[(AC + 3) * LW + l] + (om1 * s5 - om2 * s4 + v1 * s2 - v2 * s1) * x
+    D[(AC + 4) * LW + l] = D[(AC + 4) * LW + l] + (om2 * s3 - om0 * s5 + v2 * s0 - v0 * s2) * x
+    D[(AC + 5) * LW + l] = D[(AC + 5) * LW + l] + (om0 * s4 - om1 * s3 + v0 * s1 - v1 * s0) * x
+    D[WV * LW + l] = om0 + s0 * x
+    D[(WV + 1) * LW + l] = om1 + s1 * x
+    D[(WV + 2) * LW + l] = om2 + s2 * x
+    D[(WV + 3) * LW + l] = v0 + s3 * x
+    D[(WV + 4) * LW + l] = v1 + s4 * x
+    D[(WV + 5) * LW + l] = v2 + s5 * x
 
 
 @kernel
@@ -248,24 +261,27 @@ def lane_kinematics(TI, TF, WL, CL, SL, QDL, gx, gy, gz, lanes):
     for p in range(L):
         s = TI[par + p]
         D = rows(WL, wl + KL * p, KL, LW)
-        _copy(rows(WL, wb if s < 0 else wl + KL * small(s), 24, LW), D, lanes)
+        P = rows(WL, wb if s < 0 else wl + KL * small(s), 24, LW)
         s0 = small(TI[sp + p])
         for u in range(TI[sp + p + 1] - s0):
             seg = s0 + u
             slot = TI[ss + seg]
             if slot == CONSTANT:
-                _constant(TF, fs + KS * seg, D, lanes)
+                if u == 0:
+                    _constant_from(TF, fs + KS * seg, P, D, lanes)
+                else:
+                    _constant(TF, fs + KS * seg, D, lanes)
                 continue
+            if u == 0:
+                _copy(P, D, lanes)
             i = small(TI[sc + seg])
-            S = rows(WL, wc + 6 * i, 6, LW)
+            S, xd = rows(WL, wc + 6 * i, 6, LW), rows(QDL, i, 1, LW)
             if slot < 3:
-                _slide(D, slot, rows(CL, seg, 1, LW), lanes)
-                _twist(D, slot, True, S, lanes)
+                _translation(D, slot, rows(CL, seg, 1, LW), xd, S, lanes)
             else:
-                k = slot - 3
-                _turn(D, k, rows(CL, seg, 1, LW), rows(SL, seg, 1, LW), lanes)
-                _twist(D, k, False, S, lanes)
-            _add_rates(D, S, rows(QDL, i, 1, LW), lanes)
+                _rotation(D, slot - 3, rows(CL, seg, 1, LW), rows(SL, seg, 1, LW), xd, S, lanes)
+        if TI[sp + p + 1] == s0:
+            _copy(P, D, lanes)
 
 
 # -- leaves to root ---------------------------------------------------------------------------------
