@@ -31,7 +31,7 @@ from .tree_arrays import N_ARM, W_B, W_SIZE
 __all__ = ["LaneWidth", "lane_width", "fd_lanes", "supports", "chunks"]
 
 #: Blocks per vector register: a block of two registers' worth of doubles measured fastest (docs/speed.md, "Lanes").
-REGISTERS_PER_BLOCK = 2
+REGISTERS_PER_BLOCK = 4
 
 
 @dataclass(frozen=True)

@@ -22,6 +22,12 @@ from .tree_arrays import I_ANCIDX, I_ANCPTR, I_ANCROW, I_RUNPTR, I_RUNS, W_A
 __all__ = ["lane_ltdl", "lane_solve"]
 
 
+def ieee(fn):
+    """A kernel whose divisions follow IEEE (a zero pivot of a failing lane gives inf or nan, as the lane goes on,
+    where numba's default raises ZeroDivisionError): its check of every divisor also stops the vectorizer."""
+    return kernel(fn, error_model="numpy")
+
+
 # The small lane loops below take ``LW`` as a plain integer (one_signature): with a constant trip count LLVM
 # unrolls a loop this small before its loop vectorizer runs, and the unrolled code is not vectorized
 # (the rows are distinct arguments that may overlap for all it knows); a loop of unknown count is
@@ -55,7 +61,7 @@ def _floors(TI, WL, T, lanes):
         T[l] = 10.0 * EPS * max(T[LW + l], 1e-300) * n
 
 
-@kernel
+@ieee
 def _eliminate(K, A1, A2, t, T, lanes):
     """Eliminate the pivot of row ``K`` (its slots ``0..t``) from its ancestor rows ``A1`` (slot ``t``) and
     ``A2`` (slot ``t - 1``), every lane, the pivots in ``T[3]``: the row kernel's two-at-a-time update (E47)."""
@@ -77,7 +83,7 @@ def _eliminate(K, A1, A2, t, T, lanes):
 
 
 @one_signature
-@kernel
+@ieee
 def _eliminate_one(K, A1, T, LW):
     """The last single ancestor (slot 0) of :func:`_eliminate`."""
     for l in range(LW):
@@ -119,7 +125,7 @@ def _update(y, a, x, LW):
 
 
 @one_signature
-@kernel
+@ieee
 def _divide(y, a, LW):
     for l in range(LW):
         y[l] = y[l] / a[l]

@@ -35,7 +35,8 @@ from numba import njit
 from ..compilation import kernel
 
 from .tree_arrays import (
-    AC, CC, CJ, CM, CONSTANT, F_LINK, F_SEG, FI, FX, I_ANCIDX, I_ANCPTR, I_COORDLINK, I_PARENT, I_SEGCOORD,
+    AC, CC, CJ, CM, CONSTANT, F_LINK, F_SEG, FI, FX, I_ANCIDX, I_ANCPTR, I_COORDLINK, I_PARENT, I_RUNPTR,
+    I_RUNS, I_SEGCOORD,
     I_SEGPTR, I_SEGSLOT, KF, KL, KS, O_, W_A, W_B, W_BASE, W_COORD, W_LINK, WV,
 )
 
@@ -415,6 +416,19 @@ def _mass_entry(D, S, a, lanes):
 
 
 @kernel
+def _mass_row(D, S, a, m, lanes):
+    """``m`` entries of a row of ``A`` whose coordinates are consecutive (one run): ``S`` their unit twists
+    (6 m rows), ``a`` the row's ``m`` slots: :func:`_mass_entry` for each, in one call."""
+    LW = len(lanes)
+    for u in range(m):
+        e = 6 * u * LW
+        for l in range(LW):
+            a[u * LW + l] = (S[e + 3 * LW + l] * D[FX * LW + l] + S[e + 4 * LW + l] * D[(FX + 1) * LW + l]
+                             + S[e + 5 * LW + l] * D[(FX + 2) * LW + l] + S[e + l] * D[(FX + 3) * LW + l]
+                             + S[e + LW + l] * D[(FX + 4) * LW + l] + S[e + 2 * LW + l] * D[(FX + 5) * LW + l])
+
+
+@kernel
 def lane_dynamics(TI, TF, WL, lanes):
     """Leaves to root after :func:`lane_kinematics`, every lane: ``b = -(e + G)`` (E34) at ``W_B`` and the
     packed mass matrix (E31) at ``W_A``, as :func:`~urdf2links.dynamics.kernels.dynamics` (no loads, no
@@ -439,10 +453,15 @@ def lane_dynamics(TI, TF, WL, lanes):
         if s >= 0:
             _accumulate(rows(WL, wl + KL * p, KL, LW), rows(WL, wl + KL * small(s), KL, LW), lanes)
     cl, ap, ai = small(TI[I_COORDLINK]), small(TI[I_ANCPTR]), small(TI[I_ANCIDX])
-    wa, wbv = small(TI[W_A]), small(TI[W_B])
+    wa, wbv, rp, rs = small(TI[W_A]), small(TI[W_B]), small(TI[I_RUNPTR]), small(TI[I_RUNS])
     for i in range(n):
         D = rows(WL, wl + KL * small(TI[cl + i]), KL, LW)
         _momenta(D, rows(WL, wc + 6 * i, 6, LW), rows(WL, wbv + i, 1, LW), lanes)
         j0 = small(TI[ap + i])
-        for u in range(TI[ap + i + 1] - j0):
+        m = small(TI[ap + i + 1] - j0)
+        if TI[rp + i + 1] - TI[rp + i] == 1:       # the row is one run of coordinates c0, c0 + 1, ...
+            c0 = small(TI[rs + 2 * small(TI[rp + i])])
+            _mass_row(D, rows(WL, wc + 6 * c0, 6 * m, LW), rows(WL, wa + j0, m, LW), m, lanes)
+            continue
+        for u in range(m):
             _mass_entry(D, rows(WL, wc + 6 * small(TI[ai + j0 + u]), 6, LW), rows(WL, wa + j0 + u, 1, LW), lanes)
