@@ -169,6 +169,51 @@ def _constant_from(TF, f, P, D, lanes):
 
 
 @kernel
+def _constant_rotation(TF, f, P, D, k, c, s, xd, S, lanes):
+    """A link whose factors are a constant transform then a rotation about the local axis ``k`` (most joints):
+    :func:`_constant_from` and :func:`_rotation` in one pass, the pose kept in registers between them."""
+    LW = len(lanes)
+    f = small(f)
+    C = (TF[f + 1], TF[f + 2], TF[f + 3], TF[f + 4], TF[f + 5], TF[f + 6], TF[f + 7], TF[f + 8], TF[f + 9])
+    p = (TF[f + 10], TF[f + 11], TF[f + 12])
+    if k == 0:
+        _constant_rotation_about(C, p, P, D, 0, 1, 2, c, s, xd, S, LW)
+    elif k == 1:
+        _constant_rotation_about(C, p, P, D, 1, 2, 0, c, s, xd, S, LW)
+    else:
+        _constant_rotation_about(C, p, P, D, 2, 0, 1, c, s, xd, S, LW)
+
+
+@njit(cache=True, inline="always")
+def _constant_rotation_about(C, p, P, D, k, a, b, c, s, xd, S, LW):
+    C00, C01, C02, C10, C11, C12, C20, C21, C22 = C
+    p0, p1, p2 = p
+    for l in range(LW):
+        R00, R01, R02 = P[l], P[LW + l], P[2 * LW + l]
+        R10, R11, R12 = P[3 * LW + l], P[4 * LW + l], P[5 * LW + l]
+        R20, R21, R22 = P[6 * LW + l], P[7 * LW + l], P[8 * LW + l]
+        o0 = P[O_ * LW + l] + R00 * p0 + R01 * p1 + R02 * p2
+        o1 = P[(O_ + 1) * LW + l] + R10 * p0 + R11 * p1 + R12 * p2
+        o2 = P[(O_ + 2) * LW + l] + R20 * p0 + R21 * p1 + R22 * p2
+        M = (R00 * C00 + R01 * C10 + R02 * C20, R00 * C01 + R01 * C11 + R02 * C21, R00 * C02 + R01 * C12 + R02 * C22,
+             R10 * C00 + R11 * C10 + R12 * C20, R10 * C01 + R11 * C11 + R12 * C21, R10 * C02 + R11 * C12 + R12 * C22,
+             R20 * C00 + R21 * C10 + R22 * C20, R20 * C01 + R21 * C11 + R22 * C21, R20 * C02 + R21 * C12 + R22 * C22)
+        co, sn = c[l], s[l]
+        for r in range(3):
+            Ra, Rb = M[3 * r + a], M[3 * r + b]
+            D[(3 * r + a) * LW + l] = co * Ra + sn * Rb
+            D[(3 * r + b) * LW + l] = -sn * Ra + co * Rb
+            D[(3 * r + k) * LW + l] = M[3 * r + k]
+        D[O_ * LW + l] = o0
+        D[(O_ + 1) * LW + l] = o1
+        D[(O_ + 2) * LW + l] = o2
+        for j in range(WV, AC + 6):
+            D[j * LW + l] = P[j * LW + l]
+        w0, w1, w2 = M[k], M[3 + k], M[6 + k]
+        _rates(D, S, l, LW, w0, w1, w2, o1 * w2 - o2 * w1, o2 * w0 - o0 * w2, o0 * w1 - o1 * w0, xd[l])
+
+
+@kernel
 def _rotation(D, k, c, s, xd, S, lanes):
     """A rotation slot about the local axis ``k`` on the record ``D`` (E48): R's columns ``a, b`` (1, 2 about
     x; 2, 0 about y; 0, 1 about z) turned by ``(c, s)`` (the row kernel's ``_turn``), the unit twist
@@ -264,11 +309,22 @@ def lane_kinematics(TI, TF, WL, CL, SL, QDL, gx, gy, gz, lanes):
         D = rows(WL, wl + KL * p, KL, LW)
         P = rows(WL, wb if s < 0 else wl + KL * small(s), 24, LW)
         s0 = small(TI[sp + p])
-        for u in range(TI[sp + p + 1] - s0):
+        n_seg = TI[sp + p + 1] - s0
+        skip = False
+        for u in range(n_seg):
+            if skip:        # done with the constant before it
+                skip = False
+                continue
             seg = s0 + u
             slot = TI[ss + seg]
             if slot == CONSTANT:
-                if u == 0:
+                if u == 0 and u + 1 < n_seg and 3 <= TI[ss + seg + 1] < CONSTANT:      # constant, then rotation
+                    i = small(TI[sc + seg + 1])
+                    _constant_rotation(TF, fs + KS * seg, P, D, TI[ss + seg + 1] - 3, rows(CL, seg + 1, 1, LW),
+                                       rows(SL, seg + 1, 1, LW), rows(QDL, i, 1, LW), rows(WL, wc + 6 * i, 6, LW),
+                                       lanes)
+                    skip = True
+                elif u == 0:
                     _constant_from(TF, fs + KS * seg, P, D, lanes)
                 else:
                     _constant(TF, fs + KS * seg, D, lanes)
