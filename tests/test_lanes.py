@@ -6,9 +6,9 @@ The lanes do the scalar rows' operations in the same order, without fastmath, an
 The check allows 1e-14 relative to the largest ``|q''|`` of the row (the issue's tolerance: rounding of a
 reordered sum would stay far below it on these robots, whose ``q''`` the scalar rows give to ~1e-13 of MuJoCo's).
 Planted wrong cases, each seen to fail once: ``_rates`` in ``lane_kernels`` with ``+ v2 * s1`` for ``- v2 * s1``
-in the first linear acceleration row (all twelve robots failed at ~1e-2 relative); the padded tail block loading
-row ``B - 2`` instead of ``B - 1`` (the tail test failed); the lane pivot test recording every failing pivot
-instead of the first (the singular-row test failed: another coordinate).
+in the first linear acceleration row (all twelve robots failed); the padded tail block loading row ``B - 2``
+instead of ``B - 1`` (five of the six tail cases failed, all but B = 1); the lanes' pivot status not written
+back (status -1 for every row: the singular-row test failed, no DynamicsError).
 """
 
 from __future__ import annotations
