@@ -26,9 +26,9 @@ from numba import get_num_threads, njit, prange
 
 from .lane_factor import lane_ltdl, lane_solve
 from .lane_kernels import angles, lane_dynamics, lane_kinematics, small
-from .tree_arrays import N_ARM, W_B, W_SIZE
+from .tree_arrays import W_B, W_SIZE
 
-__all__ = ["LaneWidth", "lane_width", "fd_lanes", "supports", "chunks"]
+__all__ = ["LaneWidth", "lane_width", "fd_lanes", "chunks"]
 
 #: Blocks per vector register: a block of two registers' worth of doubles measured fastest (docs/speed.md, "Lanes").
 REGISTERS_PER_BLOCK = 4
@@ -64,11 +64,6 @@ def lane_width() -> LaneWidth:
                      f"registers per block = {w} states")
 
 
-def supports(TI, has_base: bool, loads: bool, coupled: bool) -> bool:
-    """The batches :func:`fd_lanes` computes: a fixed base, no loads, no coupling, no armature."""
-    return not has_base and not loads and not coupled and TI[N_ARM] == 0
-
-
 def chunks(B: int, LW: int) -> int:
     """Chunks of the ``ceil(B / LW)`` blocks of a batch: a few per thread, each with its own scratch
     (:func:`urdf2links.dynamics.model_kernels.chunks` for blocks)."""
@@ -98,7 +93,7 @@ def _block(TI, TF, Q, QD, TAU, has_tau, gx, gy, gz, OUT, status, b0, S, lanes):
     _load(QD, b0, B, QDL, lanes)
     angles(TI, TF, QL, CL, SL, lanes)
     lane_kinematics(TI, TF, WL, CL, SL, QDL, gx, gy, gz, lanes)
-    lane_dynamics(TI, TF, WL, lanes)
+    lane_dynamics(TI, WL, lanes)
     wb = small(TI[W_B])
     for i in range(n):
         for l in range(LW):

@@ -298,7 +298,9 @@ def _rates(D, S, l, LW, s0, s1, s2, s3, s4, s5, x):
 @kernel
 def lane_kinematics(TI, TF, WL, CL, SL, QDL, gx, gy, gz, lanes):
     """Root to leaves (E33) in every lane: pose, twist and acceleration at ``q'' = 0`` of every link
-    into its record, the unit twists of every coordinate; after :func:`angles`. ``QDL`` (n, LW) the rates."""
+    into its record, the unit twists of every coordinate; after :func:`angles`. ``QDL`` (n, LW) the rates.
+    Each link's own (m, c, J) and inertial wrench (:func:`_body`) follow its pose at once, for
+    :func:`lane_dynamics`."""
     LW = len(lanes)
     L = TI[0]
     par, sp, ss, sc = small(TI[I_PARENT]), small(TI[I_SEGPTR]), small(TI[I_SEGSLOT]), small(TI[I_SEGCOORD])
@@ -339,6 +341,7 @@ def lane_kinematics(TI, TF, WL, CL, SL, QDL, gx, gy, gz, lanes):
                 _rotation(D, slot - 3, rows(CL, seg, 1, LW), rows(SL, seg, 1, LW), xd, S, lanes)
         if TI[sp + p + 1] == s0:
             _copy(P, D, lanes)
+        _body(TI, TF, p, D, lanes)      # while the record is in the cache
 
 
 # -- leaves to root ---------------------------------------------------------------------------------
@@ -485,39 +488,54 @@ def _mass_row(D, S, a, m, lanes):
 
 
 @kernel
-def lane_dynamics(TI, TF, WL, lanes):
-    """Leaves to root after :func:`lane_kinematics`, every lane: ``b = -(e + G)`` (E34) at ``W_B`` and the
-    packed mass matrix (E31) at ``W_A``, as :func:`~urdf2links.dynamics.kernels.dynamics` (no loads, no
-    armature)."""
+def _body(TI, TF, p, D, lanes):
+    """Link ``p``'s (m, c, J) about {0} and inertial wrench into its record ``D`` (:func:`_body_wrench`), or zeros
+    and the wrench of nothing for a link without mass: the row kernel's skip, on the tree's constants (the same
+    in every lane)."""
+    f = small(TI[F_LINK]) + KF * small(p)
+    massless = True
+    for j in range(10):
+        if TF[f + j] != 0.0:
+            massless = False
+    if massless:
+        _zero_body(D, lanes)
+    else:
+        _body_wrench(TF, f, D, lanes)
+
+
+@kernel
+def _coordinate(TI, WL, i, D, lanes):
+    """Coordinate ``i`` of the link whose subtree sums are in ``D``: ``b_i`` (E34) and row ``i`` of ``A`` (E31)."""
+    LW = len(lanes)
+    i = small(i)
+    wc, ap, ai = small(TI[W_COORD]), small(TI[I_ANCPTR]), small(TI[I_ANCIDX])
+    wa, wbv, rp, rs = small(TI[W_A]), small(TI[W_B]), small(TI[I_RUNPTR]), small(TI[I_RUNS])
+    _momenta(D, rows(WL, wc + 6 * i, 6, LW), rows(WL, wbv + i, 1, LW), lanes)
+    j0 = small(TI[ap + i])
+    m = small(TI[ap + i + 1] - j0)
+    if TI[rp + i + 1] - TI[rp + i] == 1:       # the row is one run of coordinates c0, c0 + 1, ...
+        c0 = small(TI[rs + 2 * small(TI[rp + i])])
+        _mass_row(D, rows(WL, wc + 6 * c0, 6 * m, LW), rows(WL, wa + j0, m, LW), m, lanes)
+        return
+    for u in range(m):
+        _mass_entry(D, rows(WL, wc + 6 * small(TI[ai + j0 + u]), 6, LW), rows(WL, wa + j0 + u, 1, LW), lanes)
+
+
+@kernel
+def lane_dynamics(TI, WL, lanes):
+    """Leaves to root after :func:`lane_kinematics` (which leaves every link's own (m, c, J) and inertial wrench in
+    its record), every lane: the subtree sums (E30), ``b = -(e + G)`` (E34) at ``W_B`` and the packed mass matrix
+    (E31) at ``W_A``, as :func:`~urdf2links.dynamics.kernels.dynamics` (no loads, no armature). A link's
+    coordinates are done as soon as its subtree is summed (its children have larger indices), while its record
+    is in the cache."""
     LW = len(lanes)
     L, n = TI[0], TI[1]
-    wl, wc = small(TI[W_LINK]), small(TI[W_COORD])
-    fl, par = small(TI[F_LINK]), small(TI[I_PARENT])
-    for p in range(L):
+    wl, par, cl = small(TI[W_LINK]), small(TI[I_PARENT]), small(TI[I_COORDLINK])
+    for p in range(L - 1, -1, -1):
         D = rows(WL, wl + KL * p, KL, LW)
-        f = fl + KF * p
-        massless = True
-        for j in range(10):         # the row kernel's skip, on the tree's constants: the same in every lane
-            if TF[f + j] != 0.0:
-                massless = False
-        if massless:
-            _zero_body(D, lanes)
-        else:
-            _body_wrench(TF, f, D, lanes)
-    for p in range(L - 1, 0, -1):   # (E30): sums over the subtree
+        for i in range(n):
+            if TI[cl + i] == p:
+                _coordinate(TI, WL, i, D, lanes)
         s = TI[par + p]
-        if s >= 0:
-            _accumulate(rows(WL, wl + KL * p, KL, LW), rows(WL, wl + KL * small(s), KL, LW), lanes)
-    cl, ap, ai = small(TI[I_COORDLINK]), small(TI[I_ANCPTR]), small(TI[I_ANCIDX])
-    wa, wbv, rp, rs = small(TI[W_A]), small(TI[W_B]), small(TI[I_RUNPTR]), small(TI[I_RUNS])
-    for i in range(n):
-        D = rows(WL, wl + KL * small(TI[cl + i]), KL, LW)
-        _momenta(D, rows(WL, wc + 6 * i, 6, LW), rows(WL, wbv + i, 1, LW), lanes)
-        j0 = small(TI[ap + i])
-        m = small(TI[ap + i + 1] - j0)
-        if TI[rp + i + 1] - TI[rp + i] == 1:       # the row is one run of coordinates c0, c0 + 1, ...
-            c0 = small(TI[rs + 2 * small(TI[rp + i])])
-            _mass_row(D, rows(WL, wc + 6 * c0, 6 * m, LW), rows(WL, wa + j0, m, LW), m, lanes)
-            continue
-        for u in range(m):
-            _mass_entry(D, rows(WL, wc + 6 * small(TI[ai + j0 + u]), 6, LW), rows(WL, wa + j0 + u, 1, LW), lanes)
+        if p > 0 and s >= 0:
+            _accumulate(D, rows(WL, wl + KL * small(s), KL, LW), lanes)

@@ -523,7 +523,8 @@ class Model:
 
 
 def _lanes_for(TI, has_base, loads, coupled) -> bool:
-    """A batch the lanes compute (:func:`urdf2links.dynamics.lane_batch.supports`), without importing them."""
+    """A batch :func:`urdf2links.dynamics.lane_batch.fd_lanes` computes: a fixed base, no loads, no coupled
+    coordinates, no armature (decided without importing the lanes)."""
     from .tree_arrays import N_ARM
 
     return not has_base and not loads and not coupled and TI[N_ARM] == 0
