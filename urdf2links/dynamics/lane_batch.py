@@ -114,8 +114,9 @@ def _block(TI, TF, Q, QD, TAU, has_tau, gx, gy, gz, OUT, status, b0, S, lanes):
 @njit(cache=True, parallel=True)
 def fd_lanes(TI, TF, Q, QD, TAU, has_tau, gx, gy, gz, OUT, status, nc, lanes):
     """``q''`` (E24) of every row of ``Q``, ``QD`` (and ``TAU`` when ``has_tau``) (B, n) into ``OUT`` (B, n),
-    ``status[b]`` the failing pivot of row ``b`` or -1; blocks of ``LW`` rows (:func:`lane_width`, a
-    compile-time constant: one compiled variant per width) in ``nc`` chunks (``prange``)."""
+    ``status[b]`` the failing pivot of row ``b`` or -1; blocks of ``LW`` rows, ``lanes`` a tuple of ``LW``
+    booleans (its length is a compile-time constant: one compiled variant per width, :func:`lane_width`), in
+    ``nc`` chunks (``prange``, :func:`chunks`)."""
     LW = len(lanes)
     B = Q.shape[0]
     nb = (B + LW - 1) // LW

@@ -1,14 +1,15 @@
 """The recursive form in SIMD lanes: :mod:`urdf2links.dynamics.kernels`' passes for a block of ``LW`` states at once.
 
-The scratch of a block is ``WL`` (W_SIZE, LW): the rows are the single-state scratch ``W``'s entries, at
+The scratch of a block is ``WL`` (W_SIZE, LW), flat: the rows are the single-state scratch ``W``'s entries, at
 the same header offsets (:mod:`urdf2links.dynamics.tree_arrays`), and the state index (the lane) is
 innermost and contiguous. Every scalar operation of the row kernels becomes a loop ``for l in range(LW)``
 over contiguous memory, which LLVM turns into vector instructions (4 doubles per AVX2 register, 8 per
 AVX-512 one). What depends on the tree alone (slot kinds, parents, which links have mass) is the same in
 every lane and stays outside the lane loops; nothing inside them branches on the data: the scalar
 kernels' skips of a zero rate (``if xd != 0.0``) are gone (adding ``s 0`` changes no value but the sign
-of a zero). ``LW`` reaches these functions as a compile-time constant (numba's ``literally`` in the
-batch entry, :mod:`urdf2links.dynamics.lane_batch`): the loops then have a constant trip count. Each lane
+of a zero). ``LW`` reaches these functions as a compile-time constant: the length of the type of their
+argument ``lanes``, a tuple of ``LW`` booleans (one compiled variant per width; numba's ``literally`` would
+cost a failed compilation at every call from Python): the loops then have a constant trip count. Each lane
 loop is a small function whose arguments are views of a few rows (a link's record :func:`rows`, a
 coordinate's unit twist, a row of ``A``): inside it every access is a constant row of one view, and the
 views are distinct arguments, which LLVM checks for overlap once per call and then vectorizes. (Offsets
