@@ -325,7 +325,8 @@ def plot(data):
                 med = np.array([s["median"] * 1e6 / B for s in spreads])
                 err = np.array([[(s["median"] - s["min"]) * 1e6 / B, (s["max"] - s["median"]) * 1e6 / B]
                                 for s in spreads]).T
-                label = (f"urdf2links forward_dynamics, {k} thread(s)" if side == "urdf2links"
+                label = (f"urdf2links forward_dynamics{' (lanes)' if data.get('lanes') else ''}, {k} thread(s)"
+                         if side == "urdf2links"
                          else f"faster MuJoCo way, {k} thread(s)")
                 ax.bar(x + (j - 1.5) * 0.2, med, 0.19, color=colours[side][ki % 2], label=label, yerr=err, capsize=2)
                 j += 1
