@@ -7,8 +7,10 @@ same rounds, the order reversed every other round; median (min-max) over the rou
 spread is wide is measured again):
 
 * ``urdf2links``: one call ``model.forward_dynamics(Q, QD)`` with ``Q``, ``QD`` (B, n) (gravity,
-  no torques): argument checks, the compiled batch (numba ``prange`` over chunks of rows) and the
-  (B, n) result, with ``numba.set_num_threads(k)``.
+  no torques): argument checks, the compiled batch in SIMD lanes (blocks of states, numba ``prange`` over
+  chunks of blocks, issue 48) and the (B, n) result, with ``numba.set_num_threads(k)``.
+* ``scalar rows``: the same call with ``lanes=False``: one state after another (``prange`` over chunks of
+  rows), the batch before issue 48, for the lanes' gain.
 * ``Batch.forward``: ``mujoco.batch.Batch(m, nsim=B, nthread=k).forward()``: ``mj_forward`` of every
   row on MuJoCo's thread pool, each row's state loaded into an ``MjData`` and ``qacc`` copied out
   (bound before timing); the route-1 model, energy flag off.
@@ -132,9 +134,11 @@ def _key(name, k, side):
     return f"{name}|{k}|{side}"
 
 
-def measure_batch(B, ms, threads, n_rounds, log) -> list[dict]:
-    """Every model at batch size B: all models, thread counts and engines interleaved in one set of rounds."""
-    ks = sorted({1, threads})
+SIDES = ("urdf2links", "rows")       # lanes (the default call) and the scalar rows (lanes=False)
+
+
+def measure_batch(B, ms, ks, n_rounds, log) -> list[dict]:
+    """Every model at batch size B: all models, thread counts ``ks`` and engines interleaved in one set of rounds."""
     rng = np.random.default_rng(0)
     setups, variants = [], {}
     for model in ms:
@@ -143,6 +147,7 @@ def measure_batch(B, ms, threads, n_rounds, log) -> list[dict]:
         states = MujocoStates(model, Q, QD)
         out = {}
         setups.append((model, Q, QD, states, out))
+        model.forward_dynamics(Q[:2], QD[:2], lanes=False)
         for k in ks:
             def ours(k=k, model=model, Q=Q, QD=QD, out=out):
                 numba.set_num_threads(k)
@@ -150,10 +155,17 @@ def measure_batch(B, ms, threads, n_rounds, log) -> list[dict]:
                 out[k] = model.forward_dynamics(Q, QD)
                 return time.perf_counter() - t0
 
+            def rows(k=k, model=model, Q=Q, QD=QD, out=out):
+                numba.set_num_threads(k)
+                t0 = time.perf_counter()
+                out[-k] = model.forward_dynamics(Q, QD, lanes=False)
+                return time.perf_counter() - t0
+
             variants[_key(model.name, k, "urdf2links")] = ours
+            variants[_key(model.name, k, "rows")] = rows
             for way, fn in states.ways(k).items():
                 variants[_key(model.name, k, way)] = fn
-    log(f"B = {B}: {len(ms)} models x threads {ks} x 3 ways, interleaved")
+    log(f"B = {B}: {len(ms)} models x threads {ks} x 4 ways, interleaved")
     try:
         times = rounds(variants, n_rounds)
         attempts = {model.name: 1 for model in ms}
@@ -170,37 +182,64 @@ def measure_batch(B, ms, threads, n_rounds, log) -> list[dict]:
             row = {"robot": model.name, "n": model.n, "B": B, "attempts": attempts[model.name]}
             for k in ks:
                 t = {"threads": k, **{f"{side}_s": spread(times[_key(model.name, k, side)])
-                                      for side in ("urdf2links", *MUJOCO_WAYS)}}
+                                      for side in (*SIDES, *MUJOCO_WAYS)}}
                 ref = states.qdd_forward(k)
                 t["max_rel_difference"] = {
                     "Batch.forward": float(np.abs(out[k] - ref).max() / np.abs(ref).max()),
-                    "rollout": float(np.abs(out[k] - states.qdd_rollout()).max() / np.abs(ref).max())}
+                    "rollout": float(np.abs(out[k] - states.qdd_rollout()).max() / np.abs(ref).max()),
+                    "rows": float(np.abs(out[k] - out[-k]).max() / np.abs(out[-k]).max())}
                 t.update(comparisons(t))
                 row[f"threads_{k}"] = t
-                log(f"{model.name[:20]:20s} n {model.n:3d} B {B:6d} threads {k}: urdf2links "
-                    f"{fmt_spread(t['urdf2links_s'], 1e3)} ms, Batch.forward {fmt_spread(t['Batch.forward_s'], 1e3)} ms, "
-                    f"rollout {fmt_spread(t['rollout_s'], 1e3)} ms: / {t['mujoco']} {fmt_ratio(t['vs_mujoco'])}")
+                us = per_state_us(t, B)
+                log(f"{model.name[:20]:20s} n {model.n:3d} B {B:6d} threads {k}: per state: lanes {us['urdf2links']:.3g} us, "
+                    f"scalar rows {us['rows']:.3g} us, {t['mujoco']} {us['mujoco']:.3g} us; batch: lanes "
+                    f"{fmt_spread(t['urdf2links_s'], 1e3)} ms, rows {fmt_spread(t['rows_s'], 1e3)} ms, Batch.forward "
+                    f"{fmt_spread(t['Batch.forward_s'], 1e3)} ms, rollout {fmt_spread(t['rollout_s'], 1e3)} ms: "
+                    f"lanes / {t['mujoco']} {fmt_ratio(t['vs_mujoco'])}, lanes / rows {fmt_ratio(t['vs_rows'])}")
             rows.append(row)
         return rows
     finally:
-        numba.set_num_threads(threads)
+        numba.set_num_threads(max(ks))
         for *_, states, _out in setups:
             states.close()
 
 
+def per_state_us(t, B) -> dict:
+    """Microseconds per state (medians): lanes, scalar rows (when timed) and the faster MuJoCo way."""
+    out = {"urdf2links": 1e6 * t["urdf2links_s"]["median"] / B, "mujoco": 1e6 * t[f"{t['mujoco']}_s"]["median"] / B}
+    if "rows_s" in t:
+        out["rows"] = 1e6 * t["rows_s"]["median"] / B
+    return out
+
+
 def comparisons(t) -> dict:
     """The faster MuJoCo way of a row and thread count, and urdf2links against it and against each way
-    under the tie rule (from the spreads: the render recomputes them)."""
+    under the tie rule (from the spreads: the render recomputes them); the lanes against the scalar rows."""
     way = fastest({w: t[f"{w}_s"] for w in MUJOCO_WAYS})
-    return {"mujoco": way, "vs_mujoco": compare(t["urdf2links_s"], t[f"{way}_s"]),
-            "vs_ways": {w: compare(t["urdf2links_s"], t[f"{w}_s"]) for w in MUJOCO_WAYS}}
+    out = {"mujoco": way, "vs_mujoco": compare(t["urdf2links_s"], t[f"{way}_s"]),
+           "vs_ways": {w: compare(t["urdf2links_s"], t[f"{w}_s"]) for w in MUJOCO_WAYS}}
+    if "rows_s" in t:
+        out["vs_rows"] = compare(t["urdf2links_s"], t["rows_s"])
+    return out
 
 
 def _thread_keys(data):
-    return [f"threads_{k}" for k in sorted({1, data["threads"]})]
+    return [f"threads_{k}" for k in data.get("thread_counts", sorted({1, data["threads"]}))]
+
+
+def lanes_line(data) -> str:
+    """The CPU's vector width and the lanes' block width, as measured (empty for a JSON from before issue 48)."""
+    w = data.get("lanes")
+    if not w:
+        return ""
+    return (f"Lanes: {w['vector_doubles']} doubles per vector register ({w['isa']}), blocks of {w['width']} states "
+            f"({w['reason']}); numba may use {data['cpu_threads']} threads (NUMBA_NUM_THREADS), os.cpu_count() "
+            f"{data['cpu_count']}.")
 
 
 def table(data) -> str:
+    if data.get("lanes"):
+        return table_lanes(data)
     head = ["robot", "n", "B", "threads", "urdf2links ms", "Batch.forward ms", "rollout nstep=1 ms", "faster MuJoCo",
             "urdf2links / faster MuJoCo", "max rel. difference of q''"]
     body = []
@@ -229,6 +268,44 @@ def table(data) -> str:
               f"OMP_WAIT_POLICY {spin['OMP_WAIT_POLICY']}): CPU taken from whatever runs next, MuJoCo's threads here.")
 
 
+def table_lanes(data) -> str:
+    """The table of a JSON with the lanes (issue 48): lanes, scalar rows, both MuJoCo ways, per-state times."""
+    head = ["robot", "n", "B", "threads", "urdf2links lanes ms", "scalar rows ms", "Batch.forward ms",
+            "rollout nstep=1 ms", "us per state: lanes / rows / faster MuJoCo", "faster MuJoCo",
+            "lanes / faster MuJoCo", "lanes / rows", "max rel. difference of q'' (MuJoCo; rows)"]
+    body = []
+    for r in data["rows"]:
+        for key in _thread_keys(data):
+            t = r[key]
+            us = per_state_us(t, r["B"])
+            d = t["max_rel_difference"]
+            body.append([r["robot"], r["n"], r["B"], t["threads"], fmt_spread(t["urdf2links_s"], 1e3),
+                         fmt_spread(t["rows_s"], 1e3), fmt_spread(t["Batch.forward_s"], 1e3),
+                         fmt_spread(t["rollout_s"], 1e3), f"{us['urdf2links']:.3g} / {us['rows']:.3g} / {us['mujoco']:.3g}",
+                         t["mujoco"], fmt_ratio(t["vs_mujoco"]), fmt_ratio(t["vs_rows"]),
+                         f"{d['Batch.forward']:.1e}; {d['rows']:.1e}"])
+    again = [f"{r['robot']} at B = {r['B']} ({r['attempts']} attempts)" for r in data["rows"] if r["attempts"] > 1]
+    spin = data["after_a_call"]
+    return ("# Batched forward dynamics against MuJoCo's batched calls\n\n"
+            f"Milliseconds per batch of B states, median (min-max) over {data['rounds']} rounds in one process; at each "
+            "B every model, thread count and engine runs in the same rounds (interleaved, the order reversed every "
+            "other round). urdf2links lanes: one call model.forward_dynamics(Q, QD) (gravity, fixed base): blocks of "
+            "states in SIMD lanes (issue 48); scalar rows: the same call with lanes=False, one state after another. "
+            "Numba threads set with numba.set_num_threads. Batch.forward: mujoco.batch.Batch(m, B, nthread).forward(), "
+            "mj_forward of every row on MuJoCo's thread pool, qacc copied out. rollout nstep=1: "
+            "Rollout(nthread).rollout(..., nstep=1) from the same states (Euler, dt 1e-4 s): one mj_step per row and "
+            "its state copied out (more work than q''). Ratios: of the medians, (min: of the minima), and the tie "
+            "rule's verdict (faster or slower only when the spreads do not overlap). Last column: largest "
+            "difference of our q'' from Batch.forward's qacc, and of the lanes from the scalar rows, relative to "
+            "the largest entry.\n\n"
+            + lanes_line(data) + "\n\n"
+            + markdown_table(head, body) + "\n\n"
+            + (f"Measured again for a wide spread (max/min > {data['wide']:g}): {', '.join(again)}.\n\n" if again else "")
+            + f"After a batched call on {data['threads']} threads numba's worker threads burnt "
+              f"{spin['spin_cpu_ms']:.1f} ms of CPU in the next 50 ms (threading layer {spin['threading_layer']}, "
+              f"OMP_WAIT_POLICY {spin['OMP_WAIT_POLICY']}): CPU taken from whatever runs next, MuJoCo's threads here.")
+
+
 def plot(data):
     from urdf2links.compare.figures import figure
 
@@ -248,9 +325,10 @@ def plot(data):
                 med = np.array([s["median"] * 1e6 / B for s in spreads])
                 err = np.array([[(s["median"] - s["min"]) * 1e6 / B, (s["max"] - s["median"]) * 1e6 / B]
                                 for s in spreads]).T
-                label = (f"urdf2links forward_dynamics, {k} thread(s)" if side == "urdf2links"
+                label = (f"urdf2links forward_dynamics{' (lanes)' if data.get('lanes') else ''}, {k} thread(s)"
+                         if side == "urdf2links"
                          else f"faster MuJoCo way, {k} thread(s)")
-                ax.bar(x + (j - 1.5) * 0.2, med, 0.19, color=colours[side][ki], label=label, yerr=err, capsize=2)
+                ax.bar(x + (j - 1.5) * 0.2, med, 0.19, color=colours[side][ki % 2], label=label, yerr=err, capsize=2)
                 j += 1
         for xi, r in zip(x, sub):
             for ki, key in enumerate(keys):
@@ -269,10 +347,29 @@ def plot(data):
     return fig
 
 
+def thread_counts(spec) -> list[int]:
+    """``--threads`` as numbers: ``all`` is every thread numba may use (``numba.config.NUMBA_NUM_THREADS``)."""
+    out = set()
+    for x in spec:
+        k = numba.config.NUMBA_NUM_THREADS if x == "all" else int(x)
+        if not 1 <= k <= numba.config.NUMBA_NUM_THREADS:
+            raise SystemExit(f"--threads {x}: numba may use 1 to {numba.config.NUMBA_NUM_THREADS} threads here "
+                             "(NUMBA_NUM_THREADS); give a number in that range or all")
+        out.add(k)
+    return sorted(out)
+
+
 def measure_all(args, log) -> dict:
-    threads = numba.get_num_threads()
+    from urdf2links.dynamics.lane_batch import lane_width
+
+    ks = thread_counts(args.threads)
+    threads = max(ks)
+    w = lane_width()
+    lanes = {"width": w.width, "vector_doubles": w.vector_doubles, "isa": w.isa, "reason": w.reason}
+    log(f"lanes: {w.reason}; threads {ks} (numba may use {numba.config.NUMBA_NUM_THREADS}, os.cpu_count() "
+        f"{os.cpu_count()})")
     ms = models()
-    rows = [r for B in args.batches for r in measure_batch(B, ms, threads, args.rounds, log)]
+    rows = [r for B in args.batches for r in measure_batch(B, ms, ks, args.rounds, log)]
     model = ms[-1]
     rng = np.random.default_rng(1)
     Q, QD = rng.uniform(-1, 1, (1000, model.n)), rng.normal(size=(1000, model.n))
@@ -281,7 +378,8 @@ def measure_all(args, log) -> dict:
     numba.set_num_threads(threads)
     log(f"after a batched call: {after['spin_cpu_ms']:.1f} ms of CPU burnt in 50 ms")
     return {"rounds": args.rounds, "wide": WIDE, "batches": list(args.batches), "threads": threads, "dt": DT,
-            "after_a_call": after, "rows": rows}
+            "thread_counts": ks, "cpu_threads": numba.config.NUMBA_NUM_THREADS, "cpu_count": os.cpu_count(),
+            "lanes": lanes, "after_a_call": after, "rows": rows}
 
 
 def render(data):
@@ -293,6 +391,8 @@ def render(data):
 
 def options(p):
     p.add_argument("--batches", type=int, nargs="+", default=[1000, 10000], help="batch sizes (default 1000 10000)")
+    p.add_argument("--threads", nargs="+", default=["1", "all"],
+                   help="numba thread counts, numbers or all (NUMBA_NUM_THREADS) (default 1 all)")
 
 
 if __name__ == "__main__":

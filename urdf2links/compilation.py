@@ -299,7 +299,7 @@ def one_signature(dispatcher):
     return dispatcher
 
 
-def kernel(fn):
+def kernel(fn, *, error_model: str = "python"):
     """``fn`` compiled like ``njit(cache=True)``, without numba's reference counting (its ``_nrt=False``
     option), for a function that allocates nothing and only reads and writes the arrays it is given
     (the passes over the tree, the factorizations, the scene's terms). numba otherwise adds an atomic
@@ -309,7 +309,9 @@ def kernel(fn):
     threads share the counts. A function that allocates is refused at compilation ("NRT required but
     not enabled", or a typing error for ``np.zeros``), so the option cannot hide a leak.
     ``tests/test_cold_start.py`` checks that the compiled kernels carry no reference counting;
-    ``tests/test_numba_hooks.py`` that the private option still works (module doc)."""
+    ``tests/test_numba_hooks.py`` that the private option still works (module doc). ``error_model="numpy"``:
+    a division by zero gives inf or nan (IEEE) instead of raising, for loops that must stay vectorizable
+    and may divide by a lane's zero pivot (:mod:`urdf2links.dynamics.lane_factor`)."""
     from numba import njit
 
-    return njit(cache=True, _nrt=False)(fn)
+    return njit(cache=True, _nrt=False, error_model=error_model)(fn)

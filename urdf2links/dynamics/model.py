@@ -355,9 +355,14 @@ class Model:
         return T
 
     def forward_dynamics(self, q, qd, tau=None, *, loads: Iterable[Wrench] = (), t=0.0,
-                         base=None, gravity: bool = True, method: str = "recursive") -> np.ndarray:
+                         base=None, gravity: bool = True, method: str = "recursive", lanes: bool = True) -> np.ndarray:
         """q'' (n,), or (B, n) for a batch, from (E24), ``A q'' = Q - G - e``, by the tree-sparse
         factorization (E47) (dense Cholesky (E46) for coupled coordinates).
+
+        A batch with a fixed base, no loads, no coupled coordinates and no armature is computed in SIMD
+        lanes, blocks of states at once (:mod:`urdf2links.dynamics.lane_batch`: the scalar rows' results to
+        rounding); ``lanes=False`` computes it row by row (:func:`~urdf2links.dynamics.model_kernels.fd_batch`,
+        the comparison of benchmarks/batch_cost.py and tests/test_lanes.py).
 
         ``tau`` (n,) or (B, n) are generalized forces added to Q (joint torques and forces); ``loads``
         applied wrenches (the same for every row); ``gravity=False`` leaves G out; ``method`` as for
@@ -376,7 +381,7 @@ class Model:
                 return out
         if method != "recursive":
             return self._forward_oracle(method, q, qd, tau, list(loads), t, base, gravity)
-        return self._forward_dynamics(q, qd, tau, list(loads), t, base, gravity)
+        return self._forward_dynamics(q, qd, tau, list(loads), t, base, gravity, lanes)
 
     def inverse_dynamics(self, q, qd, qdd, *, t=0.0, base=None, loads: Iterable[Wrench] = (), gravity: bool = True,
                          method: str = "recursive") -> np.ndarray:
@@ -439,7 +444,7 @@ class Model:
             rhs = rhs + self.vector(tau, "tau")
         return self.solve_mass_matrix(self.reduce(terms["A"]), rhs, q=q)
 
-    def _forward_dynamics(self, q, qd, tau, loads, t, base, gravity):
+    def _forward_dynamics(self, q, qd, tau, loads, t, base, gravity, lanes=True):
         rows = self._rows([("q", q), ("qd", qd), ("tau", tau)])
         Q, QD, TAU = rows.arrays
         B = Q.shape[0]
@@ -451,7 +456,14 @@ class Model:
         TI, TF = self.compiled.TI, self.compiled.TF
         if rows.batched:
             status = np.empty(B, np.int64)
-            MK.fd_batch(TI, TF, Q, QD, Q if tau is None else TAU, *args, OUT, status, MK.chunks(B))
+            if lanes and _lanes_for(TI, has_base, bool(loads), self._C is not None):
+                from . import lane_batch as LB       # here: a single state neither imports nor compiles it
+
+                lw = LB.lane_width().width
+                LB.fd_lanes(TI, TF, Q, QD, Q if tau is None else TAU, tau is not None, g[0], g[1], g[2], OUT, status,
+                            LB.chunks(B, lw), (False,) * lw)
+            else:
+                MK.fd_batch(TI, TF, Q, QD, Q if tau is None else TAU, *args, OUT, status, MK.chunks(B))
             bad = np.flatnonzero(status >= 0)
             if bad.size:
                 b = int(bad[0])
@@ -508,6 +520,14 @@ class Model:
             "give the link a physical inertia.",
             q=q, coordinates=names, row=row,
         )
+
+
+def _lanes_for(TI, has_base, loads, coupled) -> bool:
+    """A batch :func:`urdf2links.dynamics.lane_batch.fd_lanes` computes: a fixed base, no loads, no coupled
+    coordinates, no armature (decided without importing the lanes)."""
+    from .tree_arrays import N_ARM
+
+    return not has_base and not loads and not coupled and TI[N_ARM] == 0
 
 
 def _unphysical(tree) -> str:
