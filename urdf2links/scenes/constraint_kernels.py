@@ -49,7 +49,8 @@ ROW_CHOICE = 1e-6       # the rows solved have a pivot below this fraction of S'
 FAIL_BASE = 1 << 40     # the right-hand side's return value for a constraint row that stops the run: + row
 
 
-@njit(cache=True, inline="always")     # inlined: a call passes every array as seven words
+@one_signature
+@kernel
 def a_solve(tree, scene, v, at, coupled):
     """``v[at:at + n] <- A^-1 v[at:at + n]`` with the factor of A left by the evaluation."""
     SI, X = scene.SI, scene.X
@@ -60,7 +61,8 @@ def a_solve(tree, scene, v, at, coupled):
         ltdl_solve(tree.TI, tree.W, v, at)
 
 
-@njit(cache=True, inline="always")     # inlined: a call passes every array as seven words
+@one_signature
+@kernel
 def half_solve(tree, scene, v, at, coupled):
     """``v[at:at + n] <- Z = L^-T v`` with the factor of A left by the evaluation (the tree's ``A = L^T D L``: from
     the leaves, a zero entry skipped, so a sparse row costs its ancestors only; coupled coordinates'
@@ -96,7 +98,7 @@ def half_solve(tree, scene, v, at, coupled):
                 v[at + nonneg(TI[ai + r0 + u])] -= W[j + u] * xk
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always")     # inlined into kkt, its one caller (a call passes every array as seven words)
 def _half_solves(tree, scene, X, xy, xperm, r, coupled):
     """:func:`half_solve` of the rows ``X[xy + k n:xy + (k + 1) n]`` for ``k`` in ``X[xperm:xperm + r]``, in one pass
     over the tree (its structure read once for all rows)."""
@@ -129,7 +131,7 @@ def _half_solves(tree, scene, X, xy, xperm, r, coupled):
                     X[at + nonneg(TI[ai + r0 + u])] -= W[j + u] * xk
 
 
-@njit(cache=True, inline="always")     # inlined: a call passes every array as seven words
+@njit(cache=True, inline="always")     # inlined into kkt, its one caller (a call passes every array as seven words)
 def back_solve(tree, scene, v, at, coupled):
     """``v[at:at + n] <- L^-1 v`` for the tree's ``A = L^T D L`` (from the root), ``L^-T v`` for coupled
     coordinates' ``A = L L^T``: the other half of :func:`half_solve`, so that ``A^-1 J^T lambda = L^-1 W Z lambda``
@@ -164,7 +166,7 @@ def back_solve(tree, scene, v, at, coupled):
         v[at + k] = s
 
 
-@njit(cache=True, inline="always")     # inlined: a call passes every array as seven words
+@njit(cache=True, inline="always")     # inlined into kkt, its one caller (a call passes every array as seven words)
 def weights(tree, scene, w, w_at, coupled):
     """``w[w_at:w_at + n]``: ``1 / D`` of the tree's ``A = L^T D L`` (ones for the coupled ``L L^T``), the weights of
     :func:`half_solve`'s ``Z^T W Z``."""
@@ -313,7 +315,7 @@ def _weld_rows(TI, W, SI, SF, rec, fp, l1, l2, X, xphi, xgam, k, t0, nt):
                     X[t0 + j * nt + i] += sign * W[wc + j * nt + i]
 
 
-@njit(cache=True, inline="always")     # inlined: a call passes every array as seven words
+@njit(cache=True, inline="always")     # inlined into kkt, its one caller (a call passes every array as seven words)
 def _poly_row(SI, SF, y, n, rec, fp, X, xphi, xgam, xj, k):
     """A polynomial row (E70): ``Phi = l_a - l_a0 - p(l_b - l_b0)``, its row ``u_a - p'(x) u_b`` (model
     coordinates), ``gamma = -p''(x) l_b'^2``; ``l = u . q`` a coordinate or a fixed tendon's length."""
@@ -343,7 +345,7 @@ def _poly_row(SI, SF, y, n, rec, fp, X, xphi, xgam, xj, k):
         X[xj + k * n + i] = SF[u1 + i] - dp * SF[u2 + i]
 
 
-@njit(cache=True, inline="always")     # inlined into kkt, its one caller
+@njit(cache=True, inline="always")     # inlined into kkt, its one caller (a call passes every array as seven words)
 def constraint_terms(tree, scene, y):
     """``Phi``, ``gamma`` (m,) and ``J = Phi_q`` (m, n) into the constraints' scratch (E68)-(E71), from the
     kinematics pass already in the tree's scratch; connect/weld rows in the tree's coordinates times ``C``
@@ -397,7 +399,8 @@ def constraint_terms(tree, scene, y):
                         X[row + i] = s
 
 
-@njit(cache=True, inline="always")     # inlined: a call passes every array as seven words
+@one_signature
+@kernel
 def _pivoted_cholesky(X, xl, xd, xperm, r, m, tol, limit):
     """``P D S D P^T = L P_d L^T`` in place (r, r) with row stride ``m`` at ``X[xl:]`` (E88): the largest diagonal
     left first; stops at a pivot at or below ``tol`` or after ``limit`` rows. ``L`` unit lower triangular below the
@@ -438,7 +441,7 @@ def _pivoted_cholesky(X, xl, xd, xperm, r, m, tol, limit):
     return min(r, limit), smallest, smallest
 
 
-@njit(cache=True, inline="always")     # inlined: a call passes every array as seven words
+@njit(cache=True, inline="always")     # inlined into kkt, its one caller (a call passes every array as seven words)
 def _events(X, m, xact, xprev, xst, xev, xsel, t, piv):
     """A row chosen and solved at the accepted step before and dropped at this one (the rows over all ``m`` of
     lower rank than at the start: a change point): an event ``(t, row, pivot)`` (the first :data:`KEV` kept, all
@@ -458,7 +461,8 @@ def _events(X, m, xact, xprev, xst, xev, xsel, t, piv):
         X[xprev + k] = dropped
 
 
-@njit(cache=True, inline="always")     # inlined: a call passes every array as seven words
+@one_signature
+@kernel
 def _schur(X, xy, xw, xl, xs, xperm, r, m, n):
     """``S = Z^T W Z`` (r, r) over the rows ``X[xperm:xperm + r]`` (their ``Z`` rows at ``X[xy:]``, the weights at
     ``X[xw:]``), its scales set to 1; returns its largest diagonal (E88)."""
@@ -593,7 +597,8 @@ def kkt(tree, scene, t, y, out, coupled):
     return -1
 
 
-@njit(cache=True, inline="always")     # inlined: a call passes every array as seven words
+@one_signature
+@kernel
 def schur_solve(X, xc, m, n, nt, rank):
     """``lambda <- S^-1 lambda`` (rows by index in the ``lam`` block) over the first ``rank`` rows of the pivot
     order, with the factor left by :func:`kkt`; the other rows' entries set to 0."""
