@@ -105,30 +105,6 @@ def pytest_make_collect_report(collector):
     _refuse_skip(outcome.get_result())
 
 
-def _measured_seconds() -> dict:
-    """Seconds per test file in the last measured run of the suite (the slowest tests of
-    reports/benchmarks/suite_durations.json, written by benchmarks/suite_durations.py), summed by file."""
-    path = Path(__file__).resolve().parent.parent / "reports" / "benchmarks" / "suite_durations.json"
-    try:
-        slowest = json.loads(path.read_text(encoding="utf-8")).get("slowest", ())
-    except (OSError, ValueError):
-        return {}
-    total: dict = {}
-    for entry in slowest:
-        name = str(entry["test"]).split("::")[0]
-        total[name] = total.get(name, 0.0) + float(entry["s"])
-    return total
-
-
-def pytest_collection_modifyitems(config, items):
-    """The files that took longest in the last measured run first (the others in their order): pytest-xdist hands
-    whole files to the workers in this order, and a long file handed out last kept one worker busy for minutes
-    while the other had nothing left (the end of a run was the package installs and the README's report)."""
-    seconds = _measured_seconds()
-    if seconds:
-        items.sort(key=lambda item: -seconds.get(item.nodeid.split("::")[0], 0.0))     # stable: a file stays whole
-
-
 def _command(config, stem):
     marks = config.getoption("markexpr")
     return (f"python -m pytest tests/test_{stem}.py --figures {config.getoption('--figures')}"
