@@ -39,6 +39,24 @@ NAMED = {
 }
 
 
+#: The twelve example-robot-data robots the equality tests run on (the regressor against inverse dynamics and
+#: Pinocchio, the lanes against the scalar rows): arms, humanoids, quadrupeds, a mobile manipulator.
+TWELVE = {
+    "ur5": "ur_description/urdf/ur5_robot.urdf",
+    "panda": "panda_description/urdf/panda.urdf",
+    "talos": "talos_data/robots/talos_reduced.urdf",
+    "g1": "g1_description/urdf/g1_29dof_rev_1_0.urdf",
+    "kinova": "kinova_description/robots/kinova.urdf",
+    "z1": "z1_description/urdf/z1.urdf",
+    "xarm7": "xarm_description/urdf/xarm7.urdf",
+    "solo12": "solo_description/robots/solo12.urdf",
+    "anymal_c": "anymal_c_simple_description/urdf/anymal.urdf",
+    "hyq": "hyq_description/robots/hyq_no_sensors.urdf",
+    "tiago": "tiago_description/robots/tiago.urdf",
+    "baxter": "baxter_description/urdf/baxter.urdf",
+}
+
+
 def corpus_files() -> list[str]:
     """The corpus's URDF files (relative paths); without the corpus one placeholder, whose test fails
     in :func:`path` (an empty parametrization would be skipped silently)."""

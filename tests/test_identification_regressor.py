@@ -34,20 +34,7 @@ import pinocchio as pin  # noqa: E402 -- in the test extra
 
 TOL, TOL_PEER = 1e-12, 1e-10
 
-ROBOTS = {
-    "ur5": "ur_description/urdf/ur5_robot.urdf",
-    "panda": "panda_description/urdf/panda.urdf",
-    "talos": "talos_data/robots/talos_reduced.urdf",
-    "g1": "g1_description/urdf/g1_29dof_rev_1_0.urdf",
-    "kinova": "kinova_description/robots/kinova.urdf",
-    "z1": "z1_description/urdf/z1.urdf",
-    "xarm7": "xarm_description/urdf/xarm7.urdf",
-    "solo12": "solo_description/robots/solo12.urdf",
-    "anymal_c": "anymal_c_simple_description/urdf/anymal.urdf",
-    "hyq": "hyq_description/robots/hyq_no_sensors.urdf",
-    "tiago": "tiago_description/robots/tiago.urdf",
-    "baxter": "baxter_description/urdf/baxter.urdf",
-}
+ROBOTS = corpus.TWELVE       # the twelve example-robot-data robots of the equality tests
 
 
 def _load(rel, **kw):
